@@ -1,0 +1,58 @@
+#include "tests/test_util.h"
+
+#include <array>
+#include <atomic>
+#include <vector>
+#include <cstdio>
+#include <cstdlib>
+#include <sys/wait.h>
+#include <unistd.h>
+
+namespace cwloc::test {
+
+std::mt19937_64& Rng() {
+  static std::mt19937_64 rng;
+  return rng;
+}
+
+std::optional<std::filesystem::path> SharedDataDir(const std::string& name) {
+  std::vector<std::filesystem::path> roots;
+  if (const char* env = std::getenv("CWLOC_SHARED_DATA")) roots.emplace_back(env);
+  if (const char* src = std::getenv("CWLOC_SOURCE_DIR")) roots.push_back(std::filesystem::path(src) / ".." / "shared" / "data");
+  for (const auto& root : roots) {
+    std::error_code ec;
+    if (std::filesystem::is_directory(root / name, ec)) return std::filesystem::canonical(root / name);
+  }
+  return std::nullopt;
+}
+
+TempDir::TempDir() {
+  static std::atomic<int> counter{0};
+  path_ = std::filesystem::temp_directory_path() /
+          ("cwloc_test_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
+  std::filesystem::remove_all(path_);
+  std::filesystem::create_directories(path_);
+}
+
+TempDir::~TempDir() {
+  std::error_code ec;
+  std::filesystem::remove_all(path_, ec);
+}
+
+std::filesystem::path ToolPath(const std::string& name) {
+  const char* dir = std::getenv("CWLOC_BIN_DIR");
+  return std::filesystem::path(dir ? dir : "build/bin") / name;
+}
+
+int RunCommand(const std::string& command, std::string* output) {
+  output->clear();
+  FILE* pipe = ::popen((command + " 2>&1").c_str(), "r");
+  if (!pipe) return -1;
+  std::array<char, 4096> buffer;
+  size_t n;
+  while ((n = std::fread(buffer.data(), 1, buffer.size(), pipe)) > 0) output->append(buffer.data(), n);
+  const int status = ::pclose(pipe);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+}  // namespace cwloc::test

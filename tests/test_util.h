@@ -1,0 +1,44 @@
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <random>
+#include <string>
+
+namespace cwloc::test {
+
+// The PRNG every test draws from; test_main reseeds it before each test so a failure
+// reproduces with --gtest_filter alone. The seed is printed when it differs from the default.
+std::mt19937_64& Rng();
+
+// ../shared/data/<name> next to the source tree (or $CWLOC_SHARED_DATA/<name>), if present.
+std::optional<std::filesystem::path> SharedDataDir(const std::string& name);
+
+// A fresh empty directory under the build tree's temp area, removed at the end of the test.
+class TempDir {
+ public:
+  TempDir();
+  ~TempDir();
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  const std::filesystem::path& path() const { return path_; }
+  std::filesystem::path operator/(const std::string& name) const { return path_ / name; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+// Path of an executable of ours in build/bin ($CWLOC_BIN_DIR, set by CTest).
+std::filesystem::path ToolPath(const std::string& name);
+
+// Runs a shell command, captures stdout+stderr, returns the exit code.
+int RunCommand(const std::string& command, std::string* output);
+
+}  // namespace cwloc::test
+
+// Skips the current test with a message CTest shows, when shared data is absent.
+#define CWLOC_REQUIRE_SHARED_DATA(var, name)                                                   \
+  const auto var##_opt = ::cwloc::test::SharedDataDir(name);                                   \
+  if (!var##_opt) GTEST_SKIP() << "shared data '" << name << "' not found next to the source " \
+                                  "tree (../shared/data); skipping";                           \
+  const std::filesystem::path var = *var##_opt

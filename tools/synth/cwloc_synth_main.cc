@@ -1,0 +1,1 @@
+int main() { return 3; }  // replaced by the generator
