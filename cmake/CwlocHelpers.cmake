@@ -30,6 +30,5 @@ function(cwloc_add_test name)
   target_link_libraries(${name} PRIVATE cwloc_test_main ${ARG_LINK})
   set_target_properties(${name} PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${PROJECT_BINARY_DIR}/tests)
   gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60
-    PROPERTIES SKIP_REGULAR_EXPRESSION "\\[  SKIPPED \\]"
-      ENVIRONMENT "CWLOC_SOURCE_DIR=${PROJECT_SOURCE_DIR};CWLOC_BIN_DIR=${PROJECT_BINARY_DIR}/bin")
+    PROPERTIES SKIP_REGULAR_EXPRESSION "\\[  SKIPPED \\]")
 endfunction()

@@ -76,7 +76,6 @@ inline constexpr uint32_t kDescriptors = SectionTag("DESC");      // view descri
 inline constexpr uint32_t kViewPoint = SectionTag("V2PT");        // view -> point
 inline constexpr uint32_t kViewKeypoints = SectionTag("VKXY");    // view keypoint x, y
 inline constexpr uint32_t kViewNeighbor = SectionTag("VNND");     // v_NN distance in its cluster
-inline constexpr uint32_t kImageCluster = SectionTag("ICLU");
 inline constexpr uint32_t kKdNodes = SectionTag("KDND");
 inline constexpr uint32_t kKdLeaves = SectionTag("KDLF");
 inline constexpr uint32_t kKdRoots = SectionTag("KDRT");
@@ -84,7 +83,7 @@ inline constexpr uint32_t kCovisOffsets = SectionTag("CVOF");     // CSR row off
 inline constexpr uint32_t kCovisEdges = SectionTag("CVED");       // (image, shared points)
 inline constexpr uint32_t kAll[] = {kManifest, kCameras, kImages, kStrings, kPoints, kTracks,
                                     kDescriptors, kViewPoint, kViewKeypoints, kViewNeighbor,
-                                    kImageCluster, kKdNodes, kKdLeaves, kKdRoots, kCovisOffsets,
+                                    kKdNodes, kKdLeaves, kKdRoots, kCovisOffsets,
                                     kCovisEdges};
 }  // namespace section
 

@@ -1,30 +1,299 @@
 // cwloc-localize: opens a cwloc index read-only and estimates query camera poses.
 #include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <fstream>
 #include <iostream>
+#include <memory>
+#include <mutex>
+#include <sstream>
+#include <thread>
 
 #include "cwloc/version.h"
 #include "format/error.h"
+#include "format/index.h"
+#include "format/progress.h"
 #include "format/tool_main.h"
+#include "localizer/input/camera_spec.h"
+#include "localizer/input/feature_file.h"
+#include "localizer/localizer.h"
+#include "localizer/result_json.h"
+#ifdef CWLOC_WITH_COLMAP_DB
+#include "localizer/input/database_queries.h"
+#endif
+
+namespace cwloc {
+namespace {
+
+// One query to run: a database image name or a feature file, with an optional camera.
+struct QuerySource {
+  std::string name;
+  std::filesystem::path feature_file;  // empty for database queries
+  std::string camera_spec;             // "MODEL W H PARAMS" from the query list, if any
+};
+
+struct CliOptions {
+  std::string index_path;
+  std::string database_path;
+  std::vector<std::string> query_names;
+  std::string query_list;
+  std::vector<std::string> feature_files;
+  std::string camera_spec;
+  std::string image_size;
+  bool unknown_focal = false;
+  std::string output_path;
+  std::string poses_path;
+  int threads = 1;
+  bool verify = false;
+  bool quiet = false;
+};
+
+std::vector<QuerySource> CollectQueries(const CliOptions& cli) {
+  std::vector<QuerySource> sources;
+  for (const std::string& name : cli.query_names) sources.push_back({name, {}, {}});
+  for (const std::string& file : cli.feature_files) {
+    sources.push_back({std::filesystem::path(file).filename().string(), file, {}});
+  }
+  if (!cli.query_list.empty()) {
+    std::ifstream in(cli.query_list);
+    if (!in) throw InputError(cli.query_list + ": cannot open query list");
+    const std::filesystem::path base = std::filesystem::path(cli.query_list).parent_path();
+    std::string line;
+    for (int number = 1; std::getline(in, line); ++number) {
+      std::istringstream fields(line);
+      std::string name;
+      if (!(fields >> name) || name[0] == '#') continue;
+      std::string camera;
+      std::getline(fields, camera);
+      camera.erase(0, camera.find_first_not_of(" \t"));
+      QuerySource source{name, {}, camera};
+      if (cli.database_path.empty()) source.feature_file = base / name;
+      sources.push_back(source);
+    }
+  }
+  if (sources.empty()) throw InputError("no queries: give --query, --query-list or --features");
+  return sources;
+}
+
+class QueryLoader {
+ public:
+  explicit QueryLoader(const CliOptions& cli) : cli_(cli) {
+    if (!cli.camera_spec.empty()) default_camera_ = ParseCameraSpec(cli.camera_spec, "--camera");
+    if (!cli.image_size.empty()) default_camera_ = ParseImageSize(cli.image_size, "--image-size");
+#ifdef CWLOC_WITH_COLMAP_DB
+    if (!cli.database_path.empty()) database_ = std::make_unique<DatabaseQueries>(cli.database_path);
+#endif
+  }
+
+  Query Load(const QuerySource& source) const {
+    Query query;
+    if (!source.feature_file.empty()) {
+      ReadFeatureFile(source.feature_file, &query);
+      query.name = source.name;
+      if (!source.camera_spec.empty()) {
+        query.camera = ParseCameraSpec(source.camera_spec, cli_.query_list + " (" + source.name + ")");
+      } else if (default_camera_) {
+        query.camera = *default_camera_;
+      } else {
+        throw InputError(source.feature_file.string() +
+                         ": no camera: give --camera \"MODEL W H PARAMS\", --image-size \"W H\", or a camera in the "
+                         "query list");
+      }
+      if (query.NumFeatures() == 0) throw InputError(source.feature_file.string() + ": the query has no features");
+    } else {
+#ifdef CWLOC_WITH_COLMAP_DB
+      if (!database_) throw InputError("query '" + source.name + "': give --database to read it from");
+      query = database_->Load(source.name, /*focal_known=*/true);
+      if (!source.camera_spec.empty()) {
+        query.camera = ParseCameraSpec(source.camera_spec, cli_.query_list + " (" + source.name + ")");
+      } else if (default_camera_) {
+        query.camera = *default_camera_;
+      }
+#else
+      throw InputError("query '" + source.name + "': this cwloc-localize was built without COLMAP database input");
+#endif
+    }
+    if (cli_.unknown_focal) query.camera = WithUnknownFocal(query.camera);
+    return query;
+  }
+
+ private:
+  const CliOptions& cli_;
+  std::optional<QueryCamera> default_camera_;
+#ifdef CWLOC_WITH_COLMAP_DB
+  std::unique_ptr<DatabaseQueries> database_;
+#endif
+};
+
+// Writes each finished query's record: JSON lines to --output (stdout by default), a pose line
+// to --poses, a readable line to stdout when the JSON goes to a file.
+class ResultSink {
+ public:
+  explicit ResultSink(const CliOptions& cli) : cli_(cli) {
+    if (!cli.output_path.empty() && cli.output_path != "-") OpenOrThrow(&json_file_, cli.output_path);
+    if (!cli.poses_path.empty()) OpenOrThrow(&poses_file_, cli.poses_path);
+  }
+
+  void Write(const LocalizationResult& result, const LocalizerOptions& options) {
+    std::lock_guard lock(mutex_);
+    const std::string json = ResultToJson(result, options).dump();
+    if (json_file_.is_open()) {
+      json_file_ << json << "\n" << std::flush;
+      if (!cli_.quiet) {
+        if (result.success) {
+          std::printf("%s: localized, %u inliers / %u correspondences, %.1f ms\n", result.name.c_str(),
+                      result.num_inliers, result.correspondences, result.times.total * 1e3);
+        } else {
+          std::printf("%s: not localized: %s\n", result.name.c_str(), result.failure_reason.c_str());
+        }
+        std::fflush(stdout);
+      }
+    } else {
+      std::cout << json << "\n" << std::flush;
+    }
+    if (poses_file_.is_open() && result.success) poses_file_ << PoseLine(result) << "\n" << std::flush;
+  }
+
+  void WriteError(const std::string& name, const std::string& error) {
+    std::lock_guard lock(mutex_);
+    const std::string json = ErrorToJson(name, error).dump();
+    if (json_file_.is_open()) {
+      json_file_ << json << "\n" << std::flush;
+    } else {
+      std::cout << json << "\n" << std::flush;
+    }
+    std::fprintf(stderr, "cwloc-localize: error: %s\n", error.c_str());
+  }
+
+ private:
+  static void OpenOrThrow(std::ofstream* file, const std::string& path) {
+    file->open(path, std::ios::trunc);
+    if (!*file) throw InputError(path + ": cannot write");
+  }
+
+  const CliOptions& cli_;
+  std::ofstream json_file_;
+  std::ofstream poses_file_;
+  std::mutex mutex_;
+};
+
+int Run(const CliOptions& cli, const LocalizerOptions& options) {
+  ValidateLocalizerOptions(options);
+  if (cli.threads < 1 || cli.threads > 1024) throw InputError("--threads must be between 1 and 1024");
+  const Index index = Index::Open(cli.index_path);
+  if (cli.verify) {
+    index.file().VerifyChecksums();
+    index.Validate();
+  }
+  const std::vector<QuerySource> sources = CollectQueries(cli);
+  const QueryLoader loader(cli);
+  ResultSink sink(cli);
+  const Localizer localizer(index);
+
+  std::atomic<size_t> next{0};
+  std::atomic<int> localized{0}, failed{0}, errors{0};
+  std::vector<double> times(sources.size(), -1);
+  Progress progress("localizing", sources.size());
+  auto worker = [&] {
+    for (size_t i = next++; i < sources.size(); i = next++) {
+      try {
+        const Query query = loader.Load(sources[i]);
+        const LocalizationResult result = localizer.Localize(query, options);
+        times[i] = result.times.total;
+        (result.success ? localized : failed)++;
+        sink.Write(result, options);
+      } catch (const InputError& e) {
+        ++errors;
+        sink.WriteError(sources[i].name, e.what());
+      }
+      progress.Advance();
+    }
+  };
+  std::vector<std::thread> pool;
+  const int threads = std::min<int>(cli.threads, static_cast<int>(sources.size()));
+  for (int t = 1; t < threads; ++t) pool.emplace_back(worker);
+  worker();
+  for (auto& thread : pool) thread.join();
+  progress.Finish();
+
+  std::vector<double> finished;
+  for (double t : times) {
+    if (t >= 0) finished.push_back(t);
+  }
+  std::sort(finished.begin(), finished.end());
+  if (!cli.quiet) {
+    std::fprintf(stderr, "cwloc-localize: localized %d of %zu queries", localized.load(), sources.size());
+    if (errors > 0) std::fprintf(stderr, " (%d bad input)", errors.load());
+    if (!finished.empty()) std::fprintf(stderr, ", median %.1f ms per query", finished[finished.size() / 2] * 1e3);
+    std::fprintf(stderr, "\n");
+  }
+  if (errors > 0) return kExitBadInput;
+  return failed > 0 ? kExitNotLocalized : kExitOk;
+}
+
+}  // namespace
+}  // namespace cwloc
 
 int main(int argc, char** argv) {
   CLI::App app{"cwloc-localize: 6-DoF camera poses of query images against a cwloc index"};
   app.set_version_flag("--version", std::string("cwloc-localize ") + cwloc::kToolVersion);
+  cwloc::CliOptions cli;
+  cwloc::LocalizerOptions options;
 
-  std::string index_path, query;
-  app.add_option("--index", index_path, "Index file built by cwloc-index")->required();
-  app.add_option("--query", query, "Query image, feature file or image name in --database");
+  app.add_option("--index", cli.index_path, "Index file built by cwloc-index")->required();
 #ifdef CWLOC_WITH_COLMAP_DB
-  std::string database_path;
-  app.add_option("--database", database_path, "COLMAP database holding the queries' features");
+  app.add_option("--database", cli.database_path, "COLMAP database holding the queries' keypoints and descriptors");
 #endif
+  app.add_option("--query", cli.query_names, "Query image name in --database (repeatable)");
+  app.add_option("--query-list", cli.query_list,
+                 "File of queries, one per line: a name in --database (or a feature file), optionally followed by "
+                 "'MODEL W H PARAMS' (hloc's queries_with_intrinsics.txt)");
+  app.add_option("--features", cli.feature_files,
+                 "COLMAP text feature file ('N 128', then 'x y scale orientation d1..d128' lines; repeatable)");
+  auto* camera = app.add_option("--camera", cli.camera_spec, "Query camera 'MODEL W H PARAMS...' (known focal)");
+  app.add_option("--image-size", cli.image_size, "Query image size 'W H' when the focal length is unknown (P4Pf)")
+      ->excludes(camera);
+  app.add_flag("--unknown-focal", cli.unknown_focal, "Ignore the known focal length and estimate it (P4Pf)");
+  app.add_option("-o,--output", cli.output_path, "JSON lines output (default: stdout)");
+  app.add_option("--poses", cli.poses_path, "Also write 'NAME QW QX QY QZ TX TY TZ' lines of localized queries");
+  app.add_option("--threads", cli.threads, "Queries localized in parallel")->capture_default_str();
+  app.add_flag("--verify", cli.verify, "Verify the index's checksums and stored indices before localizing");
+  app.add_flag("-q,--quiet", cli.quiet, "No summary or readable lines");
+
+  std::string matcher = "cluster-wise";
+  app.add_option("--matcher", matcher, "cluster-wise (the paper) or global-ratio (diagnostic baseline)")
+      ->check(CLI::IsMember({"cluster-wise", "global-ratio"}))
+      ->capture_default_str();
+  app.add_option("--k", options.k, "Nearest neighbours per query feature (k; k+1 are searched)")->capture_default_str();
+  app.add_option("--checks", options.checks, "kd-forest leaf checks per search")->capture_default_str();
+  app.add_option("--ratio", options.ratio, "Ratio test threshold tau")->capture_default_str();
+  app.add_option("--nf", options.forward_matches, "N_F: forward matches passing both ratio tests")
+      ->capture_default_str();
+  app.add_option("--nb", options.back_matches, "N_B: back-matches to collect")->capture_default_str();
+  app.add_option("--max-back-images", options.max_back_images, "Clusters to back-match at most")
+      ->capture_default_str();
+  app.add_option("--min-vote-matches", options.min_matches_to_vote,
+                 "Back-matches a cluster needs to cast co-visibility votes")
+      ->capture_default_str();
+  app.add_option("--query-checks", options.query_tree_checks, "Leaf checks in the query features' kd-forest")
+      ->capture_default_str();
+  app.add_option("--min-inliers", options.min_inliers, "Inliers needed for success")->capture_default_str();
+  app.add_option("--max-error", options.max_error_px, "Inlier reprojection error threshold, pixels")
+      ->capture_default_str();
+  app.add_option("--max-ransac-iterations", options.max_ransac_iterations, "RANSAC iteration cap")
+      ->capture_default_str();
+  app.add_option("--seed", options.seed, "Seed of the feature order and RANSAC")->capture_default_str();
+  app.add_flag("!--no-refine", options.refine, "Skip the final Ceres refinement");
 
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? cwloc::kExitOk : cwloc::kExitBadInput;
   }
-  return cwloc::RunTool("cwloc-localize", [&]() -> int {
-    throw cwloc::InputError("localization is not available in this build yet: it lands with issue 4");
-  });
+  options.matcher = matcher == "global-ratio" ? cwloc::Matcher::kGlobalRatio : cwloc::Matcher::kClusterWise;
+  return cwloc::RunTool("cwloc-localize", [&] { return cwloc::Run(cli, options); });
 }

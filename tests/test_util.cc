@@ -15,10 +15,15 @@ std::mt19937_64& Rng() {
   return rng;
 }
 
+std::filesystem::path SourceDir() {
+  const char* env = std::getenv("CWLOC_SOURCE_DIR");
+  return env ? env : CWLOC_TEST_SOURCE_DIR;
+}
+
 std::optional<std::filesystem::path> SharedDataDir(const std::string& name) {
   std::vector<std::filesystem::path> roots;
   if (const char* env = std::getenv("CWLOC_SHARED_DATA")) roots.emplace_back(env);
-  if (const char* src = std::getenv("CWLOC_SOURCE_DIR")) roots.push_back(std::filesystem::path(src) / ".." / "shared" / "data");
+  roots.push_back(SourceDir() / ".." / "shared" / "data");
   for (const auto& root : roots) {
     std::error_code ec;
     if (std::filesystem::is_directory(root / name, ec)) return std::filesystem::canonical(root / name);
@@ -41,7 +46,7 @@ TempDir::~TempDir() {
 
 std::filesystem::path ToolPath(const std::string& name) {
   const char* dir = std::getenv("CWLOC_BIN_DIR");
-  return std::filesystem::path(dir ? dir : "build/bin") / name;
+  return std::filesystem::path(dir ? dir : CWLOC_TEST_BIN_DIR) / name;
 }
 
 int RunCommand(const std::string& command, std::string* output) {

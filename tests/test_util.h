@@ -11,6 +11,9 @@ namespace cwloc::test {
 // reproduces with --gtest_filter alone. The seed is printed when it differs from the default.
 std::mt19937_64& Rng();
 
+// The source tree ($CWLOC_SOURCE_DIR or the configured one): schemas, tools.
+std::filesystem::path SourceDir();
+
 // ../shared/data/<name> next to the source tree (or $CWLOC_SHARED_DATA/<name>), if present.
 std::optional<std::filesystem::path> SharedDataDir(const std::string& name);
 
@@ -28,7 +31,7 @@ class TempDir {
   std::filesystem::path path_;
 };
 
-// Path of an executable of ours in build/bin ($CWLOC_BIN_DIR, set by CTest).
+// Path of an executable of ours in build/bin ($CWLOC_BIN_DIR or the configured one).
 std::filesystem::path ToolPath(const std::string& name);
 
 // Runs a shell command, captures stdout+stderr, returns the exit code.

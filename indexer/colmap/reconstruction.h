@@ -19,6 +19,12 @@ struct Rigid3d {
   bool operator==(const Rigid3d&) const = default;
 };
 
+// c_from_a = c_from_b * b_from_a, as COLMAP's Rigid3d product. The quaternion is used as
+// stored (COLMAP keeps them normalized); the readers compute rig-layout image poses with it.
+Rigid3d operator*(const Rigid3d& c_from_b, const Rigid3d& b_from_a);
+Rigid3d Inverse(const Rigid3d& b_from_a);  // a_from_b
+std::array<double, 3> operator*(const Rigid3d& b_from_a, const std::array<double, 3>& x_in_a);
+
 struct Camera {
   camera_t camera_id = 0;
   CameraModelId model_id = CameraModelId::kSimplePinhole;
@@ -76,8 +82,9 @@ struct RigSensor {
 
 struct Rig {
   rig_t rig_id = 0;
-  SensorId ref_sensor;               // its sensor_from_rig is identity
-  std::vector<RigSensor> sensors;    // the non-reference sensors
+  SensorId ref_sensor;             // its sensor_from_rig is identity; type kInvalid when
+                                   // the rig has no sensors at all
+  std::vector<RigSensor> sensors;  // the non-reference sensors, in file order
   bool operator==(const Rig&) const = default;
 };
 
@@ -91,12 +98,16 @@ struct Frame {
   frame_t frame_id = 0;
   rig_t rig_id = 0;
   Rigid3d rig_from_world;
-  std::vector<FrameDataId> data_ids;
+  std::vector<FrameDataId> data_ids;  // in file order
   bool operator==(const Frame&) const = default;
 };
 
 // A COLMAP sparse model. Containers are keyed by id so that writing is deterministic.
 // `rigs` and `frames` are empty for a model in the classic layout (COLMAP <= 3.11).
+// Invariants the readers guarantee: every image's camera exists; each point2D with a
+// point3D_id appears exactly once in that point's track and each track element points back
+// to it; in the rig layout each image is in one frame and its cam_from_world equals
+// sensor_from_rig * frame.rig_from_world.
 struct Reconstruction {
   std::map<camera_t, Camera> cameras;
   std::map<image_t, Image> images;

@@ -50,7 +50,7 @@ class IndexFileTest : public testing::Test {
   std::vector<SectionData> Sections() const {
     return {MakeSection<float>(section::kViewNeighbor, floats_),
             MakeSection<uint8_t>(section::kDescriptors, bytes_),
-            MakeSection<uint32_t>(section::kImageCluster, ids_)};
+            MakeSection<uint32_t>(section::kCovisOffsets, ids_)};
   }
 
   void Write(const std::filesystem::path& path) const { WriteIndexFile(path, Sections()); }
@@ -70,7 +70,7 @@ TEST_F(IndexFileTest, RoundTripsEverySection) {
   EXPECT_TRUE(std::equal(floats.begin(), floats.end(), floats_.begin(), floats_.end()));
   const auto bytes = file.Section<uint8_t>(section::kDescriptors);
   EXPECT_TRUE(std::equal(bytes.begin(), bytes.end(), bytes_.begin(), bytes_.end()));
-  const auto ids = file.Section<uint32_t>(section::kImageCluster);
+  const auto ids = file.Section<uint32_t>(section::kCovisOffsets);
   EXPECT_TRUE(std::equal(ids.begin(), ids.end(), ids_.begin(), ids_.end()));
   for (const SectionEntry& entry : file.sections()) EXPECT_EQ(entry.offset % kSectionAlignment, 0u);
   EXPECT_NO_THROW(file.VerifyChecksums());

@@ -1,0 +1,614 @@
+// cwloc-knn-bench: FLANN 1.9's randomized kd-trees (the paper's matcher) against our flat
+// kd-forest, in one process on the same descriptors and queries. Prints build time, index
+// memory, thread-CPU microseconds per query (median of --reps passes over all queries, one
+// thread; the passes of all methods interleaved), recall of the true 1st and 2nd neighbours
+// (exact brute force on a query subset) and the speed ratio against FLANN.
+// docs/kd_forest.md records results with the commands.
+//
+// Data: a COLMAP database.db (--database; query images from --query-list, else every 5th
+// image), or generated SIFT-like descriptors (--synthetic N; see GenerateSynthetic).
+
+#include <flann/flann.hpp>
+#include <sqlite3.h>
+#include <sys/mman.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <ctime>
+#include <fstream>
+#include <iostream>
+#include <functional>
+#include <map>
+#include <memory>
+#include <numeric>
+#include <random>
+#include <set>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "format/descriptor_distance.h"
+#include "format/kd_forest.h"
+#include "indexer/kd_forest_builder.h"
+
+namespace cwloc {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double Seconds(Clock::time_point since) {
+  return std::chrono::duration<double>(Clock::now() - since).count();
+}
+
+struct Dataset {
+  std::string description;
+  std::vector<uint8_t> base;     // N x 128
+  std::vector<uint8_t> queries;  // Q x 128
+  size_t NumBase() const { return base.size() / kDescriptorDim; }
+  size_t NumQueries() const { return queries.size() / kDescriptorDim; }
+};
+
+// ---------------------------------------------------------------------------------------------
+// COLMAP database
+
+[[noreturn]] void Fail(const std::string& message) {
+  std::cerr << "cwloc-knn-bench: " << message << "\n";
+  std::exit(2);
+}
+
+Dataset LoadColmapDatabase(const std::string& path, const std::string& query_list) {
+  sqlite3* db = nullptr;
+  if (sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READONLY, nullptr) != SQLITE_OK) {
+    Fail(path + ": cannot open as SQLite: " + (db ? sqlite3_errmsg(db) : "out of memory"));
+  }
+  auto prepare = [&](const char* sql) {
+    sqlite3_stmt* stmt = nullptr;
+    if (sqlite3_prepare_v2(db, sql, -1, &stmt, nullptr) != SQLITE_OK) {
+      Fail(path + ": " + sql + ": " + sqlite3_errmsg(db));
+    }
+    return stmt;
+  };
+  std::map<int64_t, std::string> names;
+  sqlite3_stmt* stmt = prepare("SELECT image_id, name FROM images");
+  while (sqlite3_step(stmt) == SQLITE_ROW) {
+    const unsigned char* name = sqlite3_column_text(stmt, 1);
+    names[sqlite3_column_int64(stmt, 0)] = name ? reinterpret_cast<const char*>(name) : "";
+  }
+  sqlite3_finalize(stmt);
+
+  std::set<std::string> query_names;
+  if (!query_list.empty()) {
+    std::ifstream in(query_list);
+    if (!in) Fail(query_list + ": cannot open");
+    for (std::string line; std::getline(in, line);) {
+      while (!line.empty() && (line.back() == '\r' || line.back() == ' ')) line.pop_back();
+      if (!line.empty()) query_names.insert(line);
+    }
+  } else {
+    // Every 5th image (in name order) is a query, like the shared data sets' held-out images.
+    std::vector<std::string> sorted;
+    for (const auto& [id, name] : names) sorted.push_back(name);
+    std::sort(sorted.begin(), sorted.end());
+    for (size_t i = 2; i < sorted.size(); i += 5) query_names.insert(sorted[i]);
+  }
+
+  Dataset data;
+  size_t base_images = 0, query_images = 0;
+  stmt = prepare("SELECT image_id, rows, cols, data FROM descriptors ORDER BY image_id");
+  while (sqlite3_step(stmt) == SQLITE_ROW) {
+    const int64_t image_id = sqlite3_column_int64(stmt, 0);
+    const int64_t rows = sqlite3_column_int64(stmt, 1);
+    const int64_t cols = sqlite3_column_int64(stmt, 2);
+    const void* blob = sqlite3_column_blob(stmt, 3);
+    const int64_t bytes = sqlite3_column_bytes(stmt, 3);
+    if (rows == 0) continue;
+    if (cols != 128 || rows < 0 || bytes != rows * cols || !blob) {
+      Fail(path + ": descriptors of image_id " + std::to_string(image_id) + ": rows=" +
+           std::to_string(rows) + " cols=" + std::to_string(cols) + " blob=" +
+           std::to_string(bytes) + " bytes, expected cols=128 and rows*128 bytes of uint8");
+    }
+    const auto it = names.find(image_id);
+    const bool is_query = it != names.end() && query_names.count(it->second);
+    std::vector<uint8_t>& out = is_query ? data.queries : data.base;
+    const uint8_t* p = static_cast<const uint8_t*>(blob);
+    out.insert(out.end(), p, p + bytes);
+    ++(is_query ? query_images : base_images);
+  }
+  sqlite3_finalize(stmt);
+  sqlite3_close(db);
+  if (data.base.empty() || data.queries.empty()) {
+    Fail(path + ": need descriptors of both base and query images (found " +
+         std::to_string(base_images) + " base and " + std::to_string(query_images) +
+         " query images)");
+  }
+  data.description = "COLMAP SIFT from " + path + ": " + std::to_string(base_images) +
+                     " base images, " + std::to_string(query_images) + " query images";
+  return data;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Generated SIFT-like descriptors
+
+class Rng {
+ public:
+  explicit Rng(uint64_t seed) : state_(seed) {}
+  uint64_t Next() {
+    uint64_t z = (state_ += 0x9e3779b97f4a7c15ULL);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+    return z ^ (z >> 31);
+  }
+  float Uniform() { return float(Next() >> 40) * 0x1.0p-24f; }  // [0, 1)
+  // Sum of four uniforms, rescaled: an approximately standard normal, cheap enough for 10^9.
+  float Normal() {
+    const uint64_t r = Next();
+    const float s = float(r & 0xFFFF) + float((r >> 16) & 0xFFFF) + float((r >> 32) & 0xFFFF) +
+                    float(r >> 48);
+    return (s * (1.0f / 65536.0f) - 2.0f) * 1.7320508f;
+  }
+
+ private:
+  uint64_t state_;
+};
+
+using Vec = std::array<float, kDescriptorDim>;
+
+// SIFT's normalization: unit L2, clamp at 0.2, unit L2 again.
+void SiftNormalize(Vec& v) {
+  for (int pass = 0; pass < 2; ++pass) {
+    float norm = 0;
+    for (float& x : v) {
+      x = std::max(x, 0.0f);
+      norm += x * x;
+    }
+    norm = std::sqrt(std::max(norm, 1e-12f));
+    for (float& x : v) x = std::min(x / norm, pass == 0 ? 0.2f : 1.0f);
+  }
+}
+
+void Quantize(const Vec& v, uint8_t* out) {  // COLMAP: round(512 x), clamped to 255
+  for (size_t d = 0; d < kDescriptorDim; ++d) {
+    out[d] = uint8_t(std::min(255.0f, 512.0f * v[d] + 0.5f));  // v >= 0
+  }
+}
+
+// A three-level hierarchy imitating what makes SIFT matching hard: motifs (repeated structure:
+// windows, bricks) -> 3D points (instances of a motif) -> views (re-detections of a point).
+// A motif is a sparse non-negative histogram (35% zero bins, exponential magnitudes). Each
+// point adds noise of L2 norm ~0.55 to its motif, each view ~0.30 to its point (unit domain;
+// x512 in uint8 units, so two views of a point are ~200 apart, like true SIFT matches, and
+// points of one motif ~300). Base descriptors are 2..6 views of each point; queries are new
+// views, 70% of base points and 30% of unseen points of the same motifs (distractors).
+Dataset GenerateSynthetic(size_t num_base, size_t num_queries, uint64_t seed, uint32_t threads) {
+  constexpr float kPointNoise = 0.55f / 11.3137f;  // per dimension: norm / sqrt(128)
+  constexpr float kViewNoise = 0.30f / 11.3137f;
+  constexpr size_t kPointsPerMotif = 20;
+  Dataset data;
+  // Points and their view counts, decided serially (cheap); descriptors in parallel.
+  Rng rng(seed);
+  std::vector<uint32_t> point_views;
+  size_t total = 0;
+  while (total < num_base) {
+    const uint32_t views = 2 + uint32_t(rng.Next() % 5);
+    point_views.push_back(uint32_t(std::min<size_t>(views, num_base - total)));
+    total += point_views.back();
+  }
+  const size_t num_points = point_views.size();
+  const size_t num_new_points = num_queries * 3 / 10 + 1;
+  const size_t num_all_points = num_points + num_new_points;
+  const size_t num_motifs = num_all_points / kPointsPerMotif + 1;
+  std::vector<size_t> first_view(num_points + 1, 0);
+  for (size_t p = 0; p < num_points; ++p) first_view[p + 1] = first_view[p] + point_views[p];
+
+  auto motif = [&](size_t m, Vec& v) {
+    Rng r(seed ^ (0x6d6f746966ULL + m * 0x100000001b3ULL));
+    for (float& x : v) x = r.Uniform() < 0.35f ? 0.0f : -std::log(1.0f - r.Uniform());
+    SiftNormalize(v);
+  };
+  auto point = [&](size_t p, Vec& v) {
+    Rng r(seed ^ (0x706f696e74ULL + p * 0x9e3779b97f4a7c15ULL));
+    motif(r.Next() % num_motifs, v);
+    for (float& x : v) x += kPointNoise * r.Normal();
+    SiftNormalize(v);
+  };
+  auto view = [&](const Vec& point_vec, uint64_t view_seed, uint8_t* out) {
+    Rng r(view_seed);
+    Vec v = point_vec;
+    for (float& x : v) x += kViewNoise * r.Normal();
+    SiftNormalize(v);
+    Quantize(v, out);
+  };
+
+  data.base.resize(num_base * kDescriptorDim);
+  data.queries.resize(num_queries * kDescriptorDim);
+  std::atomic<size_t> next{0};
+  constexpr size_t kChunk = 4096;
+  auto work = [&] {
+    Vec pv;
+    for (size_t begin; (begin = next.fetch_add(kChunk)) < num_points;) {
+      for (size_t p = begin; p < std::min(num_points, begin + kChunk); ++p) {
+        point(p, pv);
+        for (size_t i = first_view[p]; i < first_view[p + 1]; ++i) {
+          view(pv, seed ^ (0x76696577ULL + i * 0xd6e8feb86659fd93ULL),
+               data.base.data() + i * kDescriptorDim);
+        }
+      }
+    }
+  };
+  std::vector<std::thread> pool;
+  for (uint32_t t = 1; t < std::max(1u, threads); ++t) pool.emplace_back(work);
+  work();
+  for (auto& t : pool) t.join();
+  Rng qrng(seed ^ 0x7175657279ULL);
+  Vec pv;
+  for (size_t q = 0; q < num_queries; ++q) {
+    const bool seen = qrng.Uniform() < 0.7f;
+    const size_t p = seen ? qrng.Next() % num_points : num_points + qrng.Next() % num_new_points;
+    point(p, pv);
+    view(pv, qrng.Next(), data.queries.data() + q * kDescriptorDim);
+  }
+  // Base rows stay grouped by point, as an index groups them by image.
+  data.description = "generated SIFT-like: " + std::to_string(num_base) + " base (" +
+                     std::to_string(num_points) + " points, " + std::to_string(num_motifs) +
+                     " motifs), " + std::to_string(num_queries) + " queries";
+  return data;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Ground truth and measurement
+
+struct TrueNeighbors {
+  uint32_t first, second;
+};
+
+std::vector<TrueNeighbors> BruteForce(const Dataset& data, size_t num_queries, uint32_t threads) {
+  std::vector<TrueNeighbors> truth(num_queries);
+  const DistanceFunctions& dist = BestDistanceFunctions();
+  std::atomic<size_t> next{0};
+  auto work = [&] {
+    const size_t n = data.NumBase();
+    for (size_t q; (q = next.fetch_add(1)) < num_queries;) {
+      const uint8_t* query = data.queries.data() + q * kDescriptorDim;
+      std::pair<uint32_t, uint32_t> best{UINT32_MAX, 0}, second{UINT32_MAX, 0};
+      for (size_t i = 0; i < n; ++i) {
+        const std::pair<uint32_t, uint32_t> c{dist.one(query, data.base.data() + i * kDescriptorDim),
+                                              uint32_t(i)};
+        if (c < second) {
+          second = c;
+          if (second < best) std::swap(best, second);
+        }
+      }
+      truth[q] = TrueNeighbors{best.second, second.second};
+    }
+  };
+  std::vector<std::thread> pool;
+  for (uint32_t t = 1; t < std::max(1u, threads); ++t) pool.emplace_back(work);
+  work();
+  for (auto& t : pool) t.join();
+  return truth;
+}
+
+struct Row {
+  std::string method;
+  double build_s = 0;
+  double memory_mb = 0;
+  double us_per_query = 0;
+  double recall1 = 0, recall2 = 0;
+  double checks = 0;         // mean distance computations per query (ours)
+  double us_unchecked = -1;  // same search without the range checks
+};
+
+double Median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+// CPU time of this thread: on a shared machine it leaves out the time other processes hold
+// the core (their cache pollution still counts).
+double ThreadSeconds() {
+  timespec ts;
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+}
+
+// CPU time of all threads of the process.
+double ProcessCpuSeconds() {
+  timespec ts;
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+}
+
+// One timed pass of `search(q)` over all queries: thread-CPU µs per query.
+template <typename Search>
+double TimeQueries(size_t num_queries, Search&& search) {
+  const double start = ThreadSeconds();
+  for (size_t q = 0; q < num_queries; ++q) search(q);
+  return (ThreadSeconds() - start) * 1e6 / double(num_queries);
+}
+
+void Recall(const std::vector<TrueNeighbors>& truth, const std::vector<uint32_t>& found, int k,
+            Row* row) {
+  size_t hits1 = 0, hits2 = 0;
+  for (size_t q = 0; q < truth.size(); ++q) {
+    const uint32_t* f = found.data() + q * k;
+    hits1 += std::find(f, f + k, truth[q].first) != f + k;
+    hits2 += std::find(f, f + k, truth[q].second) != f + k;
+  }
+  row->recall1 = double(hits1) / double(truth.size());
+  row->recall2 = double(hits2) / double(truth.size());
+}
+
+void PrintTable(const std::vector<Row>& rows, double flann_us) {
+  std::printf("\n| %-34s | %8s | %9s | %9s | %8s | %8s | %8s | %9s | %9s |\n", "method", "build s",
+              "index MB", "us/query", "recall@1", "recall@2", "dist/q", "vs FLANN",
+              "unchecked");
+  std::printf("|%s|%s|%s|%s|%s|%s|%s|%s|%s|\n", std::string(36, '-').c_str(),
+              std::string(10, '-').c_str(), std::string(11, '-').c_str(),
+              std::string(11, '-').c_str(), std::string(10, '-').c_str(),
+              std::string(10, '-').c_str(), std::string(10, '-').c_str(),
+              std::string(11, '-').c_str(), std::string(11, '-').c_str());
+  for (const Row& r : rows) {
+    char ratio[32] = "-";
+    if (flann_us > 0) std::snprintf(ratio, sizeof(ratio), "%.2fx", flann_us / r.us_per_query);
+    char unchecked[32] = "-";
+    if (r.us_unchecked > 0) std::snprintf(unchecked, sizeof(unchecked), "%.2f", r.us_unchecked);
+    char checks[32] = "-";
+    if (r.checks > 0) std::snprintf(checks, sizeof(checks), "%.0f", r.checks);
+    std::printf("| %-34s | %8.2f | %9.1f | %9.2f | %8.4f | %8.4f | %8s | %9s | %9s |\n",
+                r.method.c_str(), r.build_s, r.memory_mb, r.us_per_query, r.recall1, r.recall2,
+                checks, ratio, unchecked);
+  }
+}
+
+std::vector<uint32_t> ParseList(const std::string& text) {
+  std::vector<uint32_t> out;
+  std::stringstream in(text);
+  for (std::string item; std::getline(in, item, ',');) {
+    if (!item.empty()) out.push_back(uint32_t(std::stoul(item)));
+  }
+  return out;
+}
+
+int Main(int argc, char** argv) {
+  CLI::App app{"Compare FLANN's randomized kd-trees with cwloc's flat kd-forest (kNN of SIFT)"};
+  std::string database, query_list, checks_text = "64,128,256", kernel_name;
+  size_t synthetic = 2000000, num_queries = 20000, gt_queries = 2000;
+  uint32_t trees = 4, leaf_size = 8, threads = 0, flann_checks = 128, interleave = 4;
+  int k = 6, reps = 3;
+  uint64_t seed = 1;
+  bool no_flann = false, build_only = false, hugepages = false;
+  app.add_option("--database", database, "COLMAP database.db to read SIFT descriptors from");
+  app.add_option("--query-list", query_list,
+                 "image names (one a line) whose descriptors are the queries; default: every "
+                 "5th image of --database");
+  app.add_option("--synthetic,--base-size", synthetic,
+                 "number of generated base descriptors when no --database is given");
+  app.add_option("--queries", num_queries, "query descriptors timed (a random subset)");
+  app.add_option("--gt-queries", gt_queries, "queries with brute-force ground truth for recall");
+  app.add_option("--trees", trees, "trees in both forests");
+  app.add_option("--leaf-size", leaf_size, "our forest's maximum leaf bucket");
+  app.add_option("--checks", checks_text, "our forest's check budgets, comma-separated");
+  app.add_option("--flann-checks", flann_checks, "FLANN's checks (the paper: 128)");
+  app.add_option("-k", k, "neighbours per query (the paper: k+1 = 6)");
+  app.add_option("--reps", reps, "timed repetitions (median is reported)");
+  app.add_option("--threads", threads, "threads for our build, data generation and brute force "
+                                       "(0 = all cores; searches are single-threaded)");
+  app.add_option("--seed", seed, "seed for data generation, query sampling and our build");
+  app.add_option("--kernel", kernel_name, "distance kernel: scalar, avx2, avx512, avx512vnni");
+  app.add_option("--interleave", interleave, "descents our search keeps in flight (1 = FLANN order)");
+  app.add_flag("--no-flann", no_flann, "skip FLANN");
+  app.add_flag("--hugepages", hugepages,
+               "put the base descriptors on transparent huge pages (both methods)");
+  app.add_flag("--build-only", build_only, "only build our forest and report time and memory");
+  CLI11_PARSE(app, argc, argv);
+  if (threads == 0) threads = std::max(1u, std::thread::hardware_concurrency());
+  const std::vector<uint32_t> budgets = ParseList(checks_text);
+  if (k < 2) Fail("-k must be at least 2 (recall@2)");
+
+  const DistanceFunctions* distance = &BestDistanceFunctions();
+  if (!kernel_name.empty()) {
+    const std::map<std::string, DistanceKernel> kernels{
+        {"scalar", DistanceKernel::kScalar}, {"avx2", DistanceKernel::kAvx2},
+        {"avx512", DistanceKernel::kAvx512}, {"avx512vnni", DistanceKernel::kAvx512Vnni}};
+    const auto it = kernels.find(kernel_name);
+    if (it == kernels.end()) Fail("unknown --kernel " + kernel_name);
+    distance = DistanceFunctionsFor(it->second);
+    if (!distance) Fail("this CPU does not support --kernel " + kernel_name);
+  }
+
+  auto start = Clock::now();
+  Dataset data = database.empty()
+                     ? GenerateSynthetic(synthetic, std::max(num_queries, gt_queries), seed, threads)
+                     : LoadColmapDatabase(database, query_list);
+  std::printf("data: %s (%.1f s)\n", data.description.c_str(), Seconds(start));
+  // A random subset of the queries, in random order (the localizer shuffles its features too).
+  {
+    std::vector<size_t> order(data.NumQueries());
+    std::iota(order.begin(), order.end(), 0);
+    std::shuffle(order.begin(), order.end(), std::mt19937_64(seed));
+    order.resize(std::min(order.size(), std::max(num_queries, gt_queries)));
+    std::vector<uint8_t> picked(order.size() * kDescriptorDim);
+    for (size_t i = 0; i < order.size(); ++i) {
+      std::memcpy(picked.data() + i * kDescriptorDim,
+                  data.queries.data() + order[i] * kDescriptorDim, kDescriptorDim);
+    }
+    data.queries.swap(picked);
+  }
+  const size_t n = data.NumBase();
+  const size_t nq = std::min(num_queries, data.NumQueries());
+  gt_queries = std::min(gt_queries, data.NumQueries());
+  std::printf("base %zu descriptors (%.1f MB), %zu timed queries, %zu with ground truth; "
+              "k=%d, %u trees, leaf <= %u, distance kernel %s, build threads %u\n",
+              n, double(data.base.size()) / 1e6, nq, gt_queries, k, trees, leaf_size,
+              std::string(distance->name).c_str(), threads);
+
+  // The matrix both indexes search. Optionally on transparent huge pages: a random row then
+  // costs no page walk (the index file is mapped with 4 KB pages unless copied like this).
+  std::span<const uint8_t> base = data.base;
+  std::unique_ptr<uint8_t, std::function<void(uint8_t*)>> huge;
+  if (hugepages) {
+    constexpr size_t k2M = size_t(1) << 21;
+    const size_t bytes = (data.base.size() + k2M - 1) / k2M * k2M;
+    void* p = mmap(nullptr, bytes, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+    if (p == MAP_FAILED) Fail("mmap for --hugepages failed");
+    if (madvise(p, bytes, MADV_HUGEPAGE) != 0) std::printf("madvise(MADV_HUGEPAGE) failed\n");
+    huge = {static_cast<uint8_t*>(p), [bytes](uint8_t* q) { munmap(q, bytes); }};
+    std::memcpy(huge.get(), data.base.data(), data.base.size());
+    base = {huge.get(), data.base.size()};
+  }
+
+  // Our forest.
+  KdForestBuildOptions build_options;
+  build_options.num_trees = trees;
+  build_options.max_leaf_size = leaf_size;
+  build_options.seed = seed;
+  build_options.num_threads = threads;
+  start = Clock::now();
+  const double build_cpu_start = ProcessCpuSeconds();
+  const KdForest forest = BuildKdForest(base, build_options);
+  const double build_s = Seconds(start);
+  const KdForestView view = forest.View(base);
+  const double build_cpu_s = ProcessCpuSeconds() - build_cpu_start;
+  uint64_t checksum = 0xcbf29ce484222325ULL;  // FNV-1a of the arrays: same data+seed, same forest
+  auto hash = [&checksum](const void* p, size_t bytes) {
+    for (size_t i = 0; i < bytes; ++i) {
+      checksum = (checksum ^ static_cast<const uint8_t*>(p)[i]) * 0x100000001b3ULL;
+    }
+  };
+  hash(forest.nodes.data(), forest.nodes.size() * sizeof(KdNode));
+  hash(forest.leaves.data(), forest.leaves.size() * sizeof(uint32_t));
+  hash(forest.roots.data(), forest.roots.size() * sizeof(uint32_t));
+  std::printf("our build: %.2f s wall, %.2f s CPU, %zu nodes, %.1f MB (%.2f bytes/descriptor), "
+              "checksum %016llx\n",
+              build_s, build_cpu_s, forest.nodes.size(), double(forest.MemoryBytes()) / 1e6,
+              double(forest.MemoryBytes()) / double(std::max<size_t>(n, 1)),
+              static_cast<unsigned long long>(checksum));
+  start = Clock::now();
+  std::string error;
+  if (!ValidateKdForest(view, &error)) Fail("our forest does not validate: " + error);
+  std::printf("ValidateKdForest: %.3f s\n", Seconds(start));
+  if (build_only) return 0;
+
+  start = Clock::now();
+  const std::vector<TrueNeighbors> truth = BruteForce(data, gt_queries, threads);
+  std::printf("brute force ground truth: %.1f s\n", Seconds(start));
+
+  // Every method is a row plus a search function; the timed passes of all methods are
+  // interleaved (rep 1 of each, rep 2 of each, ...) so that load drift on a shared machine hits
+  // them alike, and the median pass is reported.
+  std::vector<Row> rows;
+  std::vector<std::function<void(size_t)>> timed;
+  std::vector<std::vector<uint32_t>> found;  // ground-truth queries' results, k per query
+
+  std::unique_ptr<flann::Index<flann::L2<unsigned char>>> flann_index;
+  std::vector<size_t> flann_indices(k);
+  std::vector<float> flann_dists(k);
+  const flann::SearchParams flann_params{int(flann_checks)};
+  if (!no_flann) {
+    Row row;
+    row.method = "FLANN 1.9 kd " + std::to_string(trees) + " trees, " +
+                 std::to_string(flann_checks) + " checks";
+    flann::Matrix<unsigned char> dataset(const_cast<uint8_t*>(base.data()), n, kDescriptorDim);
+    flann_index = std::make_unique<flann::Index<flann::L2<unsigned char>>>(
+        dataset, flann::KDTreeIndexParams(int(trees)));
+    start = Clock::now();
+    flann_index->buildIndex();
+    row.build_s = Seconds(start);
+    // FLANN's pools plus its array of row pointers (the descriptors themselves are shared).
+    row.memory_mb = (double(flann_index->usedMemory()) + double(n) * sizeof(void*)) / 1e6;
+    std::printf("FLANN build: %.2f s\n", row.build_s);
+    std::fflush(stdout);
+    auto search = [&](size_t q) {
+      flann::Matrix<unsigned char> query(data.queries.data() + q * kDescriptorDim, 1,
+                                         kDescriptorDim);
+      flann::Matrix<size_t> idx(flann_indices.data(), 1, k);
+      flann::Matrix<float> dst(flann_dists.data(), 1, k);
+      flann_index->knnSearch(query, idx, dst, k, flann_params);
+    };
+    std::vector<uint32_t> f(gt_queries * k);
+    for (size_t q = 0; q < gt_queries; ++q) {
+      search(q);
+      for (int j = 0; j < k; ++j) f[q * k + j] = uint32_t(flann_indices[j]);
+    }
+    Recall(truth, f, k, &row);
+    rows.push_back(row);
+    timed.push_back(search);
+  }
+
+  KdForestSearcher searcher(view, *distance);
+  std::vector<KdNeighbor> out(k);
+  std::vector<size_t> checked_row(budgets.size()), unchecked_row(budgets.size());
+  for (size_t b = 0; b < budgets.size(); ++b) {
+    Row row;
+    row.method = "flat kd-forest " + std::to_string(trees) + " trees, " +
+                 std::to_string(budgets[b]) + " checks";
+    row.build_s = build_s;
+    row.memory_mb = double(forest.MemoryBytes()) / 1e6;
+    KdSearchOptions options;
+    options.max_checks = budgets[b];
+    options.interleave = interleave;
+    std::vector<uint32_t> f(gt_queries * k, UINT32_MAX);
+    uint64_t total_checks = 0;
+    for (size_t q = 0; q < nq; ++q) {
+      const KdSearchResult r =
+          searcher.Search(data.queries.data() + q * kDescriptorDim, options, out);
+      if (r.corrupt) Fail("search reported a corrupt forest");
+      total_checks += r.checks;
+      if (q < gt_queries) {
+        for (uint32_t j = 0; j < r.num_neighbors; ++j) f[q * k + j] = out[j].index;
+      }
+    }
+    row.checks = double(total_checks) / double(nq);
+    Recall(truth, f, k, &row);
+    checked_row[b] = rows.size();
+    rows.push_back(row);
+    timed.push_back([&searcher, &out, &data, options](size_t q) {
+      searcher.Search(data.queries.data() + q * kDescriptorDim, options, out);
+    });
+    KdSearchOptions unchecked = options;
+    unchecked.skip_range_checks = true;
+    unchecked_row[b] = timed.size();
+    timed.push_back([&searcher, &out, &data, unchecked](size_t q) {
+      searcher.Search(data.queries.data() + q * kDescriptorDim, unchecked, out);
+    });
+  }
+
+  std::vector<std::vector<double>> times(timed.size());
+  for (int r = 0; r < reps; ++r) {
+    for (size_t m = 0; m < timed.size(); ++m) times[m].push_back(TimeQueries(nq, timed[m]));
+  }
+  const size_t first_ours = no_flann ? 0 : 1;
+  double flann_us = 0;
+  if (!no_flann) rows[0].us_per_query = flann_us = Median(times[0]);
+  std::vector<std::string> check_costs;
+  for (size_t b = 0; b < budgets.size(); ++b) {
+    const std::vector<double>& with = times[first_ours + 2 * b];
+    const std::vector<double>& without = times[unchecked_row[b]];
+    rows[checked_row[b]].us_per_query = Median(with);
+    rows[checked_row[b]].us_unchecked = Median(without);
+    // Passes of one repetition ran back to back: their ratio is robust to load drift.
+    std::vector<double> ratios;
+    for (int r = 0; r < reps; ++r) ratios.push_back(with[r] / without[r] - 1);
+    std::sort(ratios.begin(), ratios.end());
+    char text[160];
+    std::snprintf(text, sizeof(text), "%u checks: %+.1f%% (per-pass range %+.1f%% .. %+.1f%%)",
+                  budgets[b], 100 * Median(ratios), 100 * ratios.front(), 100 * ratios.back());
+    check_costs.push_back(text);
+  }
+  PrintTable(rows, flann_us);
+  std::printf("\ncost of the range checks (median over passes of checked / unchecked - 1):\n");
+  for (const std::string& line : check_costs) std::printf("  %s\n", line.c_str());
+  return 0;
+}
+
+}  // namespace
+}  // namespace cwloc
+
+int main(int argc, char** argv) { return cwloc::Main(argc, argv); }

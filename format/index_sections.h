@@ -1,0 +1,69 @@
+#pragma once
+
+// Element layouts of the index sections (format 1.x). Each is trivially copyable, fixed-width,
+// little-endian, and read in place from the mapping; docs/format.md is the byte-level spec.
+
+#include <cstddef>
+#include <cstdint>
+#include <type_traits>
+
+namespace cwloc {
+
+inline constexpr int kDescriptorBytes = 128;
+inline constexpr int kMaxCameraParams = 16;
+inline constexpr uint32_t kNoNeighborView = 0xFFFFFFFFu;
+
+// CAMS: one per camera of the model.
+struct IndexCamera {
+  uint32_t camera_id;       // COLMAP's id
+  int32_t model_id;         // COLMAP's camera model id
+  uint32_t width;
+  uint32_t height;
+  uint32_t num_params;      // the model's parameter count, <= kMaxCameraParams
+  uint32_t reserved;        // zero
+  double params[kMaxCameraParams];  // COLMAP's order; unused entries zero
+};
+static_assert(sizeof(IndexCamera) == 152 && std::is_trivially_copyable_v<IndexCamera>);
+
+// IMGS: one per model image, ordered by image_id; its views are DESC rows
+// [first_view, first_view + num_views), so one image's views are contiguous.
+struct IndexImage {
+  uint32_t image_id;        // COLMAP's id
+  uint32_t camera_index;    // row in CAMS
+  uint32_t name_offset;     // bytes into STRS
+  uint32_t name_size;       // bytes, no terminator
+  double cam_from_world_rotation[4];     // quaternion w, x, y, z
+  double cam_from_world_translation[3];
+  uint32_t first_view;
+  uint32_t num_views;
+  uint32_t cluster;         // cluster id in [0, manifest.clustering.num_clusters)
+  uint32_t reserved;        // zero
+};
+static_assert(sizeof(IndexImage) == 88 && std::is_trivially_copyable_v<IndexImage>);
+static_assert(offsetof(IndexImage, first_view) == 72);
+
+// PNTS: one per 3D point with at least one indexed view; TRKS holds its views
+// [first_track, first_track + track_length).
+struct IndexPoint {
+  double xyz[3];
+  uint32_t first_track;
+  uint32_t track_length;
+};
+static_assert(sizeof(IndexPoint) == 32 && std::is_trivially_copyable_v<IndexPoint>);
+
+// VKXY: the view's keypoint in its model image (COLMAP pixel convention).
+struct ViewKeypoint {
+  float x;
+  float y;
+};
+static_assert(sizeof(ViewKeypoint) == 8);
+
+// CVED: an edge of the co-visibility graph; CVOF[i]..CVOF[i+1] are image i's edges,
+// sorted by image index.
+struct CovisibilityEdge {
+  uint32_t image_index;     // row in IMGS
+  uint32_t shared_points;   // 3D points both images see
+};
+static_assert(sizeof(CovisibilityEdge) == 8);
+
+}  // namespace cwloc

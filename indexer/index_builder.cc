@@ -1,0 +1,168 @@
+#include "indexer/index_builder.h"
+
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <fstream>
+
+#include "cwloc/version.h"
+#include "format/error.h"
+#include "format/index_file.h"
+#include "format/progress.h"
+#include "format/xxhash64.h"
+#include "indexer/colmap/reconstruction_io.h"
+#include "indexer/covisibility.h"
+#include "indexer/kd_forest_builder.h"
+#include "indexer/model_views.h"
+#include "indexer/neighbor_distances.h"
+#include "indexer/parallel_for.h"
+
+namespace cwloc {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double SecondsSince(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+std::string HexDigest(uint64_t value) {
+  char buffer[24];
+  std::snprintf(buffer, sizeof(buffer), "xxh64:%016llx", static_cast<unsigned long long>(value));
+  return buffer;
+}
+
+// XXH64 over the model files in name order: ties the index to the exact model it came from.
+std::string FingerprintModel(const std::filesystem::path& dir) {
+  std::vector<std::filesystem::path> files;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    const std::string ext = entry.path().extension().string();
+    if (entry.is_regular_file() && (ext == ".bin" || ext == ".txt")) files.push_back(entry.path());
+  }
+  std::sort(files.begin(), files.end());
+  uint64_t hash = 0;
+  for (const auto& file : files) {
+    std::ifstream in(file, std::ios::binary);
+    std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)), {});
+    const std::string name = file.filename().string();
+    hash = XxHash64({reinterpret_cast<const uint8_t*>(name.data()), name.size()}, hash);
+    hash = XxHash64(bytes, hash);
+  }
+  return HexDigest(hash);
+}
+
+template <typename T>
+std::span<const T> Span(const std::vector<T>& v) { return {v.data(), v.size()}; }
+
+}  // namespace
+
+IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
+  const auto start = Clock::now();
+  IndexBuildReport report;
+  if (options.kd_trees < 1 || options.kd_trees > 64) {
+    throw InputError("--trees " + std::to_string(options.kd_trees) + ": expected 1 to 64");
+  }
+  if (options.kd_leaf_size < 1 || options.kd_leaf_size > 255) {
+    throw InputError("--leaf-size " + std::to_string(options.kd_leaf_size) + ": expected 1 to 255");
+  }
+  const int threads = ResolveThreads(options.threads);
+
+  auto stage = Clock::now();
+  const colmap::Reconstruction model = colmap::ReadReconstruction(options.model_dir);
+  const colmap::DatabaseReader database(options.database_path);
+  ModelViews views = GatherModelViews(model, database);
+  if (views.num_views() == 0) {
+    throw InputError(options.model_dir.string() + ": the model has no 3D points with views; nothing to index");
+  }
+  if (views.num_views() >= UINT32_MAX) throw InputError("more than 2^32 - 1 views; split the model");
+  report.seconds_read = SecondsSince(stage);
+
+  stage = Clock::now();
+  const CovisibilityGraph graph =
+      BuildCovisibilityGraph(views.images, views.points, views.tracks, views.view_points, threads);
+  report.seconds_covisibility = SecondsSince(stage);
+
+  stage = Clock::now();
+  const Clustering clustering = ClusterImages(options.clustering, views, graph);
+  for (size_t i = 0; i < views.images.size(); ++i) views.images[i].cluster = clustering.cluster_of_image[i];
+  report.seconds_clustering = SecondsSince(stage);
+
+  stage = Clock::now();
+  const std::vector<float> neighbor_distances = ComputeViewNeighborDistances(views, clustering, threads);
+  report.seconds_neighbor_distances = SecondsSince(stage);
+
+  stage = Clock::now();
+  KdForestBuildOptions forest_options;
+  forest_options.num_trees = options.kd_trees;
+  forest_options.max_leaf_size = options.kd_leaf_size;
+  forest_options.seed = options.seed;
+  forest_options.num_threads = static_cast<uint32_t>(threads);
+  Progress forest_progress("kd-forest", 1000);
+  double reported = 0;
+  forest_options.progress = [&](double fraction) {
+    const double delta = fraction - reported;
+    if (delta >= 0.001) {
+      forest_progress.Advance(static_cast<uint64_t>(delta * 1000));
+      reported += static_cast<uint64_t>(delta * 1000) / 1000.0;
+    }
+  };
+  const KdForest forest = BuildKdForest(views.descriptors, forest_options);
+  forest_progress.Finish();
+  report.seconds_kd_forest = SecondsSince(stage);
+
+  report.num_cameras = views.cameras.size();
+  report.num_images = views.images.size();
+  report.num_points = views.points.size();
+  report.num_views = views.num_views();
+  report.num_clusters = clustering.num_clusters;
+  report.num_covisibility_edges = graph.edges.size();
+
+  nlohmann::ordered_json manifest;
+  manifest["format_version"] = std::to_string(kFormatMajor) + "." + std::to_string(kFormatMinor);
+  manifest["tool"] = "cwloc-index";
+  manifest["tool_version"] = kToolVersion;
+  manifest["counts"] = {{"cameras", report.num_cameras},       {"images", report.num_images},
+                        {"points", report.num_points},         {"views", report.num_views},
+                        {"clusters", report.num_clusters},     {"covisibility_edges", report.num_covisibility_edges},
+                        {"kd_nodes", forest.nodes.size()}};
+  nlohmann::ordered_json clustering_json = {{"method", clustering.method}, {"num_clusters", clustering.num_clusters}};
+  if (options.clustering.method == ClusteringMethod::kFile) clustering_json["file"] = options.clustering.file.string();
+  if (options.clustering.method == ClusteringMethod::kCovisibility) {
+    clustering_json["target_clusters"] = options.clustering.target_clusters;
+  }
+  manifest["build_parameters"] = {{"kd_trees", options.kd_trees},
+                                  {"kd_leaf_size", options.kd_leaf_size},
+                                  {"seed", options.seed},
+                                  {"clustering", clustering_json},
+                                  {"view_neighbor", "nearest view of another 3D point in the same cluster"}};
+  manifest["source"] = {{"model", {{"path", options.model_dir.string()},
+                                   {"layout", model.rigs.empty() ? "classic" : "rigs"},
+                                   {"fingerprint", FingerprintModel(options.model_dir)}}},
+                        {"database", {{"path", options.database_path.string()}}}};
+  manifest["georeference"] = nullptr;
+  const std::string manifest_text = manifest.dump(2) + "\n";
+
+  stage = Clock::now();
+  const std::vector<SectionData> sections = {
+      MakeSection<char>(section::kManifest, {manifest_text.data(), manifest_text.size()}),
+      MakeSection(section::kCameras, Span(views.cameras)),
+      MakeSection(section::kImages, Span(views.images)),
+      MakeSection<char>(section::kStrings, {views.strings.data(), views.strings.size()}),
+      MakeSection(section::kPoints, Span(views.points)),
+      MakeSection(section::kTracks, Span(views.tracks)),
+      SectionData{section::kDescriptors, kSectionRequired, kDescriptorBytes, views.num_views(), views.descriptors},
+      MakeSection(section::kViewPoint, Span(views.view_points)),
+      MakeSection(section::kViewKeypoints, Span(views.view_keypoints)),
+      MakeSection(section::kViewNeighbor, Span(neighbor_distances)),
+      MakeSection(section::kKdNodes, Span(forest.nodes)),
+      MakeSection(section::kKdRoots, Span(forest.roots)),
+      MakeSection(section::kKdLeaves, Span(forest.leaves)),
+      MakeSection(section::kCovisOffsets, Span(graph.offsets)),
+      MakeSection(section::kCovisEdges, Span(graph.edges)),
+  };
+  WriteIndexFile(options.output_path, sections);
+  report.seconds_write = SecondsSince(stage);
+  report.file_bytes = std::filesystem::file_size(options.output_path);
+  report.seconds_total = SecondsSince(start);
+  return report;
+}
+
+}  // namespace cwloc

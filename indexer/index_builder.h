@@ -1,0 +1,35 @@
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+
+#include "indexer/clustering.h"
+
+namespace cwloc {
+
+// Parameters of `cwloc-index build`; all are recorded in the manifest.
+struct IndexBuildOptions {
+  std::filesystem::path model_dir;
+  std::filesystem::path database_path;
+  std::filesystem::path output_path;
+  ClusteringOptions clustering;
+  uint32_t kd_trees = 4;      // the paper's FLANN setting
+  uint32_t kd_leaf_size = 8;  // descriptors per leaf bucket
+  uint64_t seed = 0;          // kd-forest randomization and k-means initialisation
+  int threads = 0;            // 0 = all cores
+};
+
+struct IndexBuildReport {
+  size_t num_cameras = 0, num_images = 0, num_points = 0, num_views = 0;
+  size_t num_clusters = 0, num_covisibility_edges = 0;
+  uint64_t file_bytes = 0;
+  double seconds_read = 0, seconds_covisibility = 0, seconds_clustering = 0;
+  double seconds_neighbor_distances = 0, seconds_kd_forest = 0, seconds_write = 0, seconds_total = 0;
+};
+
+// Reads the model and database, computes every section, writes the index atomically.
+// Throws InputError on bad input.
+IndexBuildReport BuildIndex(const IndexBuildOptions& options);
+
+}  // namespace cwloc

@@ -1,0 +1,137 @@
+#include "indexer/model_views.h"
+
+#include <algorithm>
+#include <cstring>
+#include <unordered_map>
+
+#include "format/camera_models.h"
+#include "format/error.h"
+#include "format/progress.h"
+
+namespace cwloc {
+namespace {
+
+IndexCamera ToIndexCamera(const colmap::Camera& camera) {
+  IndexCamera out{};
+  out.camera_id = camera.camera_id;
+  out.model_id = static_cast<int32_t>(camera.model_id);
+  out.width = static_cast<uint32_t>(camera.width);
+  out.height = static_cast<uint32_t>(camera.height);
+  if (camera.params.size() > kMaxCameraParams) {
+    throw InputError("camera " + std::to_string(camera.camera_id) + " has " + std::to_string(camera.params.size()) +
+                     " parameters; the index stores at most " + std::to_string(kMaxCameraParams));
+  }
+  out.num_params = static_cast<uint32_t>(camera.params.size());
+  std::copy(camera.params.begin(), camera.params.end(), out.params);
+  return out;
+}
+
+}  // namespace
+
+ModelViews GatherModelViews(const colmap::Reconstruction& model, const colmap::DatabaseReader& database) {
+  const std::string db_name = database.path().string();
+  ModelViews views;
+
+  std::unordered_map<camera_t, uint32_t> camera_index;
+  for (const auto& [camera_id, camera] : model.cameras) {
+    camera_index[camera_id] = static_cast<uint32_t>(views.cameras.size());
+    views.cameras.push_back(ToIndexCamera(camera));
+  }
+
+  // Point index of every observed point, in id order; tracks are filled after the views.
+  std::unordered_map<point3D_t, uint32_t> point_index;
+  point_index.reserve(model.points3D.size());
+  for (const auto& [point_id, point] : model.points3D) {
+    point_index[point_id] = static_cast<uint32_t>(views.points.size());
+    IndexPoint p{};
+    std::copy(point.xyz.begin(), point.xyz.end(), p.xyz);
+    views.points.push_back(p);
+    views.point_ids.push_back(point_id);
+  }
+
+  const size_t total_views = model.NumObservations();
+  views.descriptors.reserve(total_views * kDescriptorBytes);
+  views.view_points.reserve(total_views);
+  views.view_keypoints.reserve(total_views);
+
+  Progress progress("reading descriptors", model.images.size());
+  for (const auto& [image_id, image] : model.images) {
+    const auto stored = database.FindImage(image.name);
+    if (!stored) {
+      throw InputError(db_name + ": model image " + std::to_string(image_id) + " '" + image.name +
+                       "' is not in the database");
+    }
+    if (stored->image_id != image_id) {
+      throw InputError(db_name + ": model image " + std::to_string(image_id) + " '" + image.name +
+                       "' has image_id " + std::to_string(stored->image_id) + " in the database");
+    }
+    const colmap::Descriptors descriptors = database.ReadDescriptors(image_id);
+    if (descriptors.rows != image.points2D.size()) {
+      throw InputError(db_name + ": image " + std::to_string(image_id) + " '" + image.name + "' has " +
+                       std::to_string(descriptors.rows) + " descriptors but " + std::to_string(image.points2D.size()) +
+                       " 2D points in the model (the model and the database do not belong together)");
+    }
+    const auto camera = camera_index.find(image.camera_id);
+    if (camera == camera_index.end()) {
+      throw InputError("model image " + std::to_string(image_id) + " refers to missing camera " +
+                       std::to_string(image.camera_id));
+    }
+
+    IndexImage row{};
+    row.image_id = image_id;
+    row.camera_index = camera->second;
+    row.name_offset = static_cast<uint32_t>(views.strings.size());
+    row.name_size = static_cast<uint32_t>(image.name.size());
+    views.strings += image.name;
+    std::copy(image.cam_from_world.rotation.begin(), image.cam_from_world.rotation.end(), row.cam_from_world_rotation);
+    std::copy(image.cam_from_world.translation.begin(), image.cam_from_world.translation.end(),
+              row.cam_from_world_translation);
+    row.first_view = static_cast<uint32_t>(views.view_points.size());
+    for (size_t i = 0; i < image.points2D.size(); ++i) {
+      const colmap::Point2D& point2D = image.points2D[i];
+      if (point2D.point3D_id == kInvalidPoint3DId) continue;
+      const auto point = point_index.find(point2D.point3D_id);
+      if (point == point_index.end()) {
+        throw InputError("model image " + std::to_string(image_id) + " point2D " + std::to_string(i) +
+                         " refers to missing 3D point " + std::to_string(point2D.point3D_id));
+      }
+      views.view_points.push_back(point->second);
+      views.view_keypoints.push_back({static_cast<float>(point2D.x), static_cast<float>(point2D.y)});
+      const uint8_t* row_bytes = descriptors.Row(static_cast<uint32_t>(i));
+      views.descriptors.insert(views.descriptors.end(), row_bytes, row_bytes + kDescriptorBytes);
+    }
+    row.num_views = static_cast<uint32_t>(views.view_points.size()) - row.first_view;
+    views.images.push_back(row);
+    progress.Advance();
+  }
+  progress.Finish();
+
+  // Tracks as CSR over views, grouped by point (counting sort keeps view order within a point).
+  std::vector<uint32_t> counts(views.points.size() + 1, 0);
+  for (uint32_t point : views.view_points) ++counts[point + 1];
+  for (size_t p = 0; p < views.points.size(); ++p) counts[p + 1] += counts[p];
+  views.tracks.resize(views.view_points.size());
+  std::vector<uint32_t> cursor(counts.begin(), counts.end() - 1);
+  for (uint32_t v = 0; v < views.view_points.size(); ++v) views.tracks[cursor[views.view_points[v]]++] = v;
+
+  // Drop points without views (none in a consistent model) and renumber.
+  std::vector<uint32_t> new_index(views.points.size(), UINT32_MAX);
+  std::vector<IndexPoint> kept_points;
+  std::vector<point3D_t> kept_ids;
+  for (size_t p = 0; p < views.points.size(); ++p) {
+    const uint32_t length = counts[p + 1] - counts[p];
+    if (length == 0) continue;
+    new_index[p] = static_cast<uint32_t>(kept_points.size());
+    IndexPoint point = views.points[p];
+    point.first_track = counts[p];
+    point.track_length = length;
+    kept_points.push_back(point);
+    kept_ids.push_back(views.point_ids[p]);
+  }
+  for (uint32_t& point : views.view_points) point = new_index[point];
+  views.points = std::move(kept_points);
+  views.point_ids = std::move(kept_ids);
+  return views;
+}
+
+}  // namespace cwloc

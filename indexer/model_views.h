@@ -1,0 +1,36 @@
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "format/index_sections.h"
+#include "indexer/colmap/database.h"
+#include "indexer/colmap/reconstruction.h"
+
+namespace cwloc {
+
+// Everything the index stores about the model, gathered from a COLMAP model and its database:
+// only views that belong to a 3D point, grouped by image (images in id order), so that one
+// image's views are contiguous.
+struct ModelViews {
+  std::vector<IndexCamera> cameras;
+  std::vector<IndexImage> images;       // cluster left 0; filled by the clustering step
+  std::string strings;                  // image names
+  std::vector<IndexPoint> points;       // 3D points with at least one view, in id order
+  std::vector<point3D_t> point_ids;     // COLMAP id of each point
+  std::vector<uint32_t> tracks;         // view indices, grouped by point
+  std::vector<uint8_t> descriptors;     // views x 128
+  std::vector<uint32_t> view_points;    // point index of each view
+  std::vector<ViewKeypoint> view_keypoints;
+
+  size_t num_views() const { return view_points.size(); }
+};
+
+// Reads each model image's descriptors from the database. Images of the database that are not
+// in the model are ignored (they may be queries). Throws InputError when a model image is
+// missing from the database, has another name there, or its descriptor count differs from its
+// number of 2D points.
+ModelViews GatherModelViews(const colmap::Reconstruction& model, const colmap::DatabaseReader& database);
+
+}  // namespace cwloc

@@ -1,0 +1,101 @@
+#include "localizer/back_matching.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "format/error.h"
+#include "indexer/kd_forest_builder.h"
+#include "localizer/cluster_ratio_test.h"
+
+namespace cwloc {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+}  // namespace
+
+ClusterImages::ClusterImages(const Index& index) {
+  uint32_t num_clusters = 0;
+  for (const IndexImage& image : index.images()) num_clusters = std::max(num_clusters, image.cluster + 1);
+  offsets.assign(num_clusters + 1, 0);
+  for (const IndexImage& image : index.images()) ++offsets[image.cluster + 1];
+  for (uint32_t c = 0; c < num_clusters; ++c) offsets[c + 1] += offsets[c];
+  images.resize(index.images().size());
+  std::vector<uint32_t> cursor(offsets.begin(), offsets.end() - 1);
+  for (uint32_t i = 0; i < index.images().size(); ++i) images[cursor[index.images()[i].cluster]++] = i;
+}
+
+BackMatchingResult MatchBack(const Index& index, const ClusterImages& clusters, const Query& query,
+                             std::span<const FeatureMatch> forward_matches, const LocalizerOptions& options) {
+  BackMatchingResult result;
+  result.cluster_votes.assign(clusters.num_clusters(), 0);
+  std::vector<uint32_t>& votes = result.cluster_votes;
+  std::vector<uint32_t> voted;  // clusters with votes, to find the best without scanning all
+  auto vote = [&](uint32_t cluster) {
+    if (cluster >= votes.size()) return;
+    if (votes[cluster]++ == 0) voted.push_back(cluster);
+  };
+  for (const FeatureMatch& match : forward_matches) vote(ClusterOfView(index, match.view));
+  if (voted.empty() || query.NumFeatures() < 2) return result;
+
+  auto start = Clock::now();
+  KdForestBuildOptions tree_options;
+  tree_options.num_trees = 4;
+  tree_options.num_threads = 1;
+  tree_options.seed = options.seed;
+  const std::span<const uint8_t> query_descriptors(query.descriptors.data(), size_t{query.NumFeatures()} * 128);
+  const KdForest query_forest = BuildKdForest(query_descriptors, tree_options);
+  KdForestSearcher searcher(query_forest.View(query_descriptors));
+  result.seconds_query_tree = std::chrono::duration<double>(Clock::now() - start).count();
+
+  start = Clock::now();
+  const KdSearchOptions search_options{options.query_tree_checks};
+  const float ratio_squared = static_cast<float>(options.ratio * options.ratio);
+  std::vector<bool> visited(clusters.num_clusters(), false);
+  std::vector<KdNeighbor> neighbors(2);
+  std::vector<uint32_t> track_clusters;
+  while (result.matches.size() < options.back_matches && result.visited.size() < options.max_back_images) {
+    uint32_t best = UINT32_MAX;
+    for (uint32_t cluster : voted) {
+      if (!visited[cluster] && (best == UINT32_MAX || votes[cluster] > votes[best] ||
+                                (votes[cluster] == votes[best] && cluster < best))) {
+        best = cluster;
+      }
+    }
+    if (best == UINT32_MAX) break;
+    visited[best] = true;
+    const size_t first_match = result.matches.size();
+    for (uint32_t i = clusters.offsets[best]; i < clusters.offsets[best + 1]; ++i) {
+      const IndexImage& image = index.images()[clusters.images[i]];
+      for (uint32_t view = image.first_view; view < image.first_view + image.num_views; ++view) {
+        if (view >= index.num_views()) break;  // a corrupt range; verify names it
+        const KdSearchResult found = searcher.Search(index.descriptor(view), search_options, neighbors);
+        if (found.num_neighbors < 2) continue;
+        if (static_cast<float>(neighbors[0].distance) > ratio_squared * static_cast<float>(neighbors[1].distance)) {
+          continue;
+        }
+        result.matches.push_back({neighbors[0].index, view, std::sqrt(static_cast<float>(neighbors[0].distance))});
+      }
+    }
+    const uint32_t found_here = static_cast<uint32_t>(result.matches.size() - first_match);
+    result.visited.push_back({best, votes[best], found_here});
+    if (found_here < options.min_matches_to_vote) continue;
+    // Co-visibility votes: every other cluster that sees a matched 3D point, once per match.
+    for (size_t m = first_match; m < result.matches.size(); ++m) {
+      track_clusters.clear();
+      for (const uint32_t other_view : index.TrackOf(index.view_points()[result.matches[m].view])) {
+        const uint32_t cluster = ClusterOfView(index, other_view);
+        if (cluster == best || cluster == UINT32_MAX) continue;
+        if (std::find(track_clusters.begin(), track_clusters.end(), cluster) == track_clusters.end()) {
+          track_clusters.push_back(cluster);
+          vote(cluster);
+        }
+      }
+    }
+  }
+  result.seconds_matching = std::chrono::duration<double>(Clock::now() - start).count();
+  return result;
+}
+
+}  // namespace cwloc

@@ -1,0 +1,74 @@
+#include "localizer/forward_matching.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numeric>
+
+#include "format/error.h"
+#include "localizer/cluster_ratio_test.h"
+
+namespace cwloc {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+void ThrowCorrupt(const Index& index) {
+  throw InputError(index.file().path().string() +
+                   ": the kd-forest holds an out-of-range index; the file is corrupt (run cwloc-index verify)");
+}
+
+}  // namespace
+
+std::vector<FeatureMatch> MatchForward(const Index& index, const Query& query, const LocalizerOptions& options,
+                                       std::mt19937_64& rng, KdForestSearcher& searcher,
+                                       ForwardMatchingStats* stats) {
+  std::vector<uint32_t> order(query.NumFeatures());
+  std::iota(order.begin(), order.end(), 0u);
+  std::shuffle(order.begin(), order.end(), rng);
+
+  std::vector<KdNeighbor> neighbors(options.k + 1);
+  const KdSearchOptions search_options{options.checks};
+  const float ratio_squared = static_cast<float>(options.ratio * options.ratio);
+  std::vector<FeatureMatch> matches;
+  for (const uint32_t feature : order) {
+    if (matches.size() >= options.forward_matches) break;
+    const auto knn_start = Clock::now();
+    const KdSearchResult result = searcher.Search(query.Descriptor(feature), search_options, neighbors);
+    stats->seconds_knn += std::chrono::duration<double>(Clock::now() - knn_start).count();
+    ++stats->features_searched;
+    if (result.corrupt) ThrowCorrupt(index);
+    if (result.num_neighbors < options.k + 1) continue;  // a model smaller than k+1 views
+    // k-ratio ||q - v1|| / ||q - v_{k+1}|| <= tau, on squared distances.
+    if (static_cast<float>(neighbors[0].distance) > ratio_squared * static_cast<float>(neighbors[options.k].distance)) {
+      continue;
+    }
+    ++stats->passed_k_ratio;
+    const auto ratio_start = Clock::now();
+    ClusterWiseRatioTest(index, feature, neighbors, options.ratio, &matches, stats);
+    stats->seconds_ratio_test += std::chrono::duration<double>(Clock::now() - ratio_start).count();
+  }
+  return matches;
+}
+
+std::vector<FeatureMatch> MatchGlobalRatio(const Index& index, const Query& query, const LocalizerOptions& options,
+                                           KdForestSearcher& searcher, ForwardMatchingStats* stats) {
+  std::vector<KdNeighbor> neighbors(2);
+  const KdSearchOptions search_options{options.checks};
+  const float ratio_squared = static_cast<float>(options.ratio * options.ratio);
+  std::vector<FeatureMatch> matches;
+  const auto start = Clock::now();
+  for (uint32_t feature = 0; feature < query.NumFeatures(); ++feature) {
+    const KdSearchResult result = searcher.Search(query.Descriptor(feature), search_options, neighbors);
+    ++stats->features_searched;
+    if (result.corrupt) ThrowCorrupt(index);
+    if (result.num_neighbors < 2) continue;
+    if (static_cast<float>(neighbors[0].distance) > ratio_squared * static_cast<float>(neighbors[1].distance)) continue;
+    ++stats->passed_k_ratio;
+    matches.push_back({feature, neighbors[0].index, std::sqrt(static_cast<float>(neighbors[0].distance))});
+  }
+  stats->seconds_knn = std::chrono::duration<double>(Clock::now() - start).count();
+  return matches;
+}
+
+}  // namespace cwloc

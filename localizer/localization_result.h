@@ -1,0 +1,52 @@
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "localizer/localizer_options.h"
+#include "localizer/query.h"
+
+namespace cwloc {
+
+struct RankedImage {
+  uint32_t image_id = 0;
+  std::string name;
+  uint32_t votes = 0;
+};
+
+// Wall-clock seconds per pipeline stage.
+struct StageTimes {
+  double forward_knn = 0;      // kd-forest searches of the query features
+  double ratio_test = 0;       // cluster-wise ratio tests
+  double query_tree = 0;       // building the kd-forest over the query features
+  double back_matching = 0;    // prioritized back-matching and co-visibility votes
+  double pose = 0;             // LO-RANSAC with the minimal solvers, then the Ceres refinement
+  double total = 0;
+};
+
+struct LocalizationResult {
+  std::string name;
+  bool success = false;
+  std::string failure_reason;  // empty on success
+  // COLMAP's cam_from_world: X_cam = R(q) X_world + t; q = (w, x, y, z).
+  std::array<double, 4> rotation{1, 0, 0, 0};
+  std::array<double, 3> translation{0, 0, 0};
+  std::array<double, 3> center{0, 0, 0};
+  QueryCamera camera;           // as used; the estimated focal when it was unknown
+  bool focal_estimated = false;
+  uint32_t num_features = 0;
+  uint32_t features_searched = 0;
+  uint32_t forward_matches = 0;
+  uint32_t back_matches = 0;
+  uint32_t correspondences = 0;  // unique 2D-3D pairs given to RANSAC
+  uint32_t num_inliers = 0;
+  double inlier_ratio = 0;
+  uint32_t ransac_iterations = 0;
+  uint32_t back_matched_images = 0;
+  std::vector<RankedImage> ranked_images;
+  StageTimes times;
+};
+
+}  // namespace cwloc

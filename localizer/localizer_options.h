@@ -1,0 +1,42 @@
+#pragma once
+
+#include <cstdint>
+
+namespace cwloc {
+
+enum class Matcher {
+  kClusterWise,  // the paper: k-ratio + cluster-wise ratio tests, voting, back-matching
+  kGlobalRatio,  // diagnostic baseline: plain 1-ratio against the global tree, then RANSAC
+};
+
+// Every threshold and count of the pipeline; defaults are the paper's (section 4,
+// "Experimental details").
+struct LocalizerOptions {
+  Matcher matcher = Matcher::kClusterWise;
+  // Forward matching (Algorithm 1): k nearest neighbours plus one for the k-ratio test.
+  uint32_t k = 5;
+  // Descriptor distance computations per kd-forest search. Our leaves hold up to 8 views, so
+  // 384 reaches the recall of the paper's FLANN setting (128 checks of 1-view leaves);
+  // docs/kd_forest.md has the measurements.
+  uint32_t checks = 384;
+  double ratio = 0.7;               // tau, used by every ratio test
+  // N_F: forward matching stops once this many (query feature, view) matches have passed the
+  // k-ratio *and* the cluster-wise ratio test (docs/algorithm.md explains this reading).
+  uint32_t forward_matches = 200;
+  // Back-matching (Algorithm 3).
+  uint32_t back_matches = 200;      // N_B: stop once this many back-matches are found
+  uint32_t max_back_images = 20;    // ... or this many clusters were back-matched
+  uint32_t min_matches_to_vote = 12;  // a back-matched cluster votes for co-visible ones
+  uint32_t query_tree_checks = 64;  // leaf checks in the per-query kd-forest
+  // Robust pose.
+  uint32_t min_inliers = 12;
+  double max_error_px = 6.0;
+  uint32_t max_ransac_iterations = 10000;
+  double ransac_confidence = 0.9999;
+  bool refine = true;
+  // Output.
+  uint32_t ranked_images = 10;      // model images listed for location recognition
+  uint64_t seed = 0;                // query feature order and RANSAC sampling
+};
+
+}  // namespace cwloc

@@ -1,0 +1,38 @@
+#pragma once
+
+#include <cstdint>
+#include <span>
+
+#include <Eigen/Core>
+
+#include "localizer/pose/camera_pose.h"
+
+namespace cwloc {
+
+// A small Levenberg-Marquardt on reprojection error for RANSAC's local optimisation steps,
+// where Ceres' per-problem setup would dominate (the final refinement uses Ceres, see
+// refine_pose.h). The rotation is updated on the left, R <- exp([w]x) R, translation and
+// focal length additively; damping is Marquardt's (scaled by the diagonal of J^T J).
+struct LocalOptimizationOptions {
+  int max_iterations = 10;  // LM iterations (accepted or rejected steps)
+  // Cauchy loss scale in residual units: rho(r^2) = s^2 log(1 + r^2 / s^2). 0: plain least
+  // squares.
+  double loss_scale = 0.0;
+};
+
+// Minimises sum_i rho(|pi(R X_i + t) - x_i|^2) over i in `indices`, with pi(X) = X.xy / X.z and
+// x_i in normalised image coordinates (a calibrated camera). Points behind the camera are
+// skipped. Returns the number of iterations run.
+int OptimizePose(std::span<const Eigen::Vector2d> points2D,
+                 std::span<const Eigen::Vector3d> points3D, std::span<const uint32_t> indices,
+                 const LocalOptimizationOptions& options, CameraPose* pose);
+
+// The same with an unknown focal length: residual f * pi(R X_i + t) - p_i with p_i relative to
+// the principal point (pixels), over the pose and f.
+int OptimizePoseAndFocal(std::span<const Eigen::Vector2d> centered_pixels,
+                         std::span<const Eigen::Vector3d> points3D,
+                         std::span<const uint32_t> indices,
+                         const LocalOptimizationOptions& options, CameraPose* pose,
+                         double* focal_length);
+
+}  // namespace cwloc

@@ -1,0 +1,135 @@
+#include "localizer/pose/pose_estimators.h"
+
+#include <array>
+
+#include "localizer/pose/p3p.h"
+#include "localizer/pose/p4pf.h"
+
+namespace cwloc {
+namespace {
+
+// MSAC score sum_i min(r_i^2, max_sq) of f * pi(R X_i + t) - x_i; a point behind the camera
+// counts as an outlier.
+double MsacScore(std::span<const Eigen::Vector2d> points2D,
+                 std::span<const Eigen::Vector3d> points3D, const CameraPose& pose, double f,
+                 double max_sq, uint32_t* num_inliers) {
+  const Eigen::Matrix3d rot = pose.rotation.toRotationMatrix();
+  const Eigen::Vector3d& t = pose.translation;
+  double score = 0.0;
+  uint32_t inliers = 0;
+  for (size_t i = 0; i < points2D.size(); ++i) {
+    const Eigen::Vector3d z = rot * points3D[i] + t;
+    if (z(2) > 0.0) {
+      const double inv_z = f / z(2);
+      const double dx = z(0) * inv_z - points2D[i](0);
+      const double dy = z(1) * inv_z - points2D[i](1);
+      const double r2 = dx * dx + dy * dy;
+      if (r2 < max_sq) {
+        score += r2;
+        ++inliers;
+        continue;
+      }
+    }
+    score += max_sq;
+  }
+  *num_inliers = inliers;
+  return score;
+}
+
+void CollectInliers(std::span<const Eigen::Vector2d> points2D,
+                    std::span<const Eigen::Vector3d> points3D, const CameraPose& pose, double f,
+                    double max_sq, std::vector<uint32_t>* inliers) {
+  inliers->clear();
+  const Eigen::Matrix3d rot = pose.rotation.toRotationMatrix();
+  for (size_t i = 0; i < points2D.size(); ++i) {
+    const Eigen::Vector3d z = rot * points3D[i] + pose.translation;
+    if (z(2) > 0.0 && (f * z.hnormalized() - points2D[i]).squaredNorm() < max_sq) {
+      inliers->push_back(static_cast<uint32_t>(i));
+    }
+  }
+}
+
+}  // namespace
+
+AbsolutePoseEstimator::AbsolutePoseEstimator(std::span<const Eigen::Vector2d> points2D,
+                                             std::span<const Eigen::Vector3d> points3D,
+                                             double max_error,
+                                             const LocalOptimizationOptions& lo_options)
+    : points2D_(points2D),
+      points3D_(points3D),
+      max_error_sq_(max_error * max_error),
+      lo_options_(lo_options) {
+  bearings_.reserve(points2D.size());
+  for (const Eigen::Vector2d& x : points2D) bearings_.push_back(x.homogeneous().normalized());
+}
+
+void AbsolutePoseEstimator::GenerateModels(std::span<const uint32_t> sample,
+                                           std::vector<Model>* models) const {
+  const std::array<Eigen::Vector3d, 3> bearings = {bearings_[sample[0]], bearings_[sample[1]],
+                                                   bearings_[sample[2]]};
+  const std::array<Eigen::Vector3d, 3> points = {points3D_[sample[0]], points3D_[sample[1]],
+                                                 points3D_[sample[2]]};
+  P3P(bearings, points, models);
+}
+
+double AbsolutePoseEstimator::Score(const Model& model, uint32_t* num_inliers) const {
+  return MsacScore(points2D_, points3D_, model, 1.0, max_error_sq_, num_inliers);
+}
+
+void AbsolutePoseEstimator::Refine(Model* model) const {
+  Inliers(*model, &scratch_);
+  if (scratch_.size() <= kSampleSize) return;  // the minimal solution is already exact
+  OptimizePose(points2D_, points3D_, scratch_, lo_options_, model);
+}
+
+void AbsolutePoseEstimator::Inliers(const Model& model, std::vector<uint32_t>* inliers) const {
+  CollectInliers(points2D_, points3D_, model, 1.0, max_error_sq_, inliers);
+}
+
+AbsolutePoseFocalEstimator::AbsolutePoseFocalEstimator(
+    std::span<const Eigen::Vector2d> centered_pixels, std::span<const Eigen::Vector3d> points3D,
+    double max_error_px, double min_focal_px, double max_focal_px,
+    const LocalOptimizationOptions& lo_options)
+    : points2D_(centered_pixels),
+      points3D_(points3D),
+      max_error_sq_(max_error_px * max_error_px),
+      min_focal_(min_focal_px),
+      max_focal_(max_focal_px),
+      lo_options_(lo_options) {}
+
+void AbsolutePoseFocalEstimator::GenerateModels(std::span<const uint32_t> sample,
+                                                std::vector<Model>* models) const {
+  std::array<Eigen::Vector2d, 4> image;
+  std::array<Eigen::Vector3d, 4> world;
+  for (int i = 0; i < 4; ++i) {
+    image[i] = points2D_[sample[i]];
+    world[i] = points3D_[sample[i]];
+  }
+  P4Pf(image, world, &pose_scratch_, &focal_scratch_);
+  models->clear();
+  for (size_t k = 0; k < pose_scratch_.size(); ++k) {
+    const double f = focal_scratch_[k];
+    if (f >= min_focal_ && f <= max_focal_) models->push_back({pose_scratch_[k], f});
+  }
+}
+
+double AbsolutePoseFocalEstimator::Score(const Model& model, uint32_t* num_inliers) const {
+  return MsacScore(points2D_, points3D_, model.pose, model.focal_length, max_error_sq_,
+                   num_inliers);
+}
+
+void AbsolutePoseFocalEstimator::Refine(Model* model) const {
+  Inliers(*model, &scratch_);
+  if (scratch_.size() <= kSampleSize) return;
+  PoseAndFocal refined = *model;
+  OptimizePoseAndFocal(points2D_, points3D_, scratch_, lo_options_, &refined.pose,
+                       &refined.focal_length);
+  if (refined.focal_length >= min_focal_ && refined.focal_length <= max_focal_) *model = refined;
+}
+
+void AbsolutePoseFocalEstimator::Inliers(const Model& model,
+                                         std::vector<uint32_t>* inliers) const {
+  CollectInliers(points2D_, points3D_, model.pose, model.focal_length, max_error_sq_, inliers);
+}
+
+}  // namespace cwloc

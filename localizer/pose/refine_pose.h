@@ -1,0 +1,40 @@
+#pragma once
+
+#include <cstdint>
+#include <span>
+
+#include <Eigen/Core>
+
+#include "localizer/pose/camera_pose.h"
+
+namespace cwloc {
+
+// Final non-linear refinement of an absolute pose (and optionally the focal length) with
+// Ceres: sum_i rho(|f * pi(R X_i + t) - p_i|^2) over the given correspondences, with a Cauchy
+// loss rho(s) = a^2 log(1 + s / a^2) so that the remaining outliers among the inliers of a
+// 6 px threshold pull little. The rotation is a Ceres quaternion on ceres::QuaternionManifold;
+// Ceres orders quaternions (w, x, y, z) while Eigen stores (x, y, z, w), so the parameter
+// block is filled with w(), x(), y(), z() explicitly.
+struct PoseRefinementOptions {
+  double loss_scale_px = 1.0;        // Cauchy scale a, pixels
+  bool refine_focal_length = false;  // else the focal length is held constant
+  int max_iterations = 50;           // Levenberg-Marquardt iterations
+};
+
+struct PoseRefinementSummary {
+  bool usable = false;  // Ceres' IsSolutionUsable()
+  int iterations = 0;
+  double initial_cost = 0.0;  // robust cost, 0.5 * sum rho, pixels^2
+  double final_cost = 0.0;
+};
+
+// centered_pixels: pixel minus principal point (for a known focal length, normalised image
+// coordinates times f); indices: the correspondences to use (typically RANSAC's inliers, all
+// in front of the camera). Updates *pose and *focal_length_px in place when Ceres reports a
+// usable solution and returns whether it did. Needs at least 4 correspondences (5 with focal).
+bool RefinePose(std::span<const Eigen::Vector2d> centered_pixels,
+                std::span<const Eigen::Vector3d> points3D, std::span<const uint32_t> indices,
+                const PoseRefinementOptions& options, CameraPose* pose, double* focal_length_px,
+                PoseRefinementSummary* summary = nullptr);
+
+}  // namespace cwloc

@@ -1,0 +1,131 @@
+// cwloc-index as a user runs it: build, info (--json against its schema), verify, and the
+// exit code and message for each kind of damaged file.
+#include <gmock/gmock.h>
+#include <nlohmann/json.hpp>
+
+#include <fstream>
+#include <iterator>
+
+#include "format/index_file.h"
+#include "tests/indexer/indexer_fixture.h"
+
+namespace cwloc {
+namespace {
+
+using testing::HasSubstr;
+
+class IndexCliTest : public test::IndexerFixture {
+ protected:
+  int Run(const std::string& args, std::string* output) const {
+    return test::RunCommand(test::ToolPath("cwloc-index").string() + " " + args, output);
+  }
+
+  void Build() {
+    std::string output;
+    ASSERT_EQ(Run("build --model " + model_dir_.string() + " --database " + database_path_.string() + " -o " +
+                      index_path_.string(),
+                  &output),
+              0)
+        << output;
+  }
+
+  std::vector<uint8_t> Bytes() const {
+    std::ifstream in(index_path_, std::ios::binary);
+    return {std::istreambuf_iterator<char>(in), {}};
+  }
+
+  void WriteCorrupt(const std::vector<uint8_t>& bytes) const {
+    std::ofstream(dir_ / "corrupt.cwl", std::ios::binary)
+        .write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  }
+};
+
+TEST_F(IndexCliTest, BuildInfoAndVerifySucceed) {
+  ASSERT_NO_FATAL_FAILURE(Build());
+  std::string output;
+  EXPECT_EQ(Run("info " + index_path_.string(), &output), 0) << output;
+  EXPECT_THAT(output, HasSubstr("10 images, 400 points"));
+  EXPECT_EQ(Run("verify " + index_path_.string(), &output), 0) << output;
+  EXPECT_THAT(output, HasSubstr(": OK: 15 section checksums and every stored index verified"));
+}
+
+TEST_F(IndexCliTest, InfoJsonValidatesAgainstItsSchema) {
+  ASSERT_NO_FATAL_FAILURE(Build());
+  std::string output;
+  ASSERT_EQ(Run("info --json " + index_path_.string(), &output), 0) << output;
+  const auto info = nlohmann::json::parse(output);
+  EXPECT_EQ(info["manifest"]["counts"]["images"], 10);
+  EXPECT_EQ(info["manifest"]["build_parameters"]["kd_trees"], 4);
+  EXPECT_EQ(info["manifest"]["build_parameters"]["clustering"]["method"], "image");
+  std::ofstream(dir_ / "info.json") << output;
+  const auto schema = test::SourceDir() / "schemas" / "index-info.schema.json";
+  const auto validator = test::SourceDir() / "tools" / "validate_json.py";
+  std::string validation;
+  EXPECT_EQ(test::RunCommand("/usr/bin/python3 " + validator.string() + " " + schema.string() + " " +
+                                 (dir_ / "info.json").string(),
+                             &validation),
+            0)
+      << validation;
+}
+
+TEST_F(IndexCliTest, VerifyReportsAFlippedByteInEverySection) {
+  ASSERT_NO_FATAL_FAILURE(Build());
+  const std::vector<uint8_t> original = Bytes();
+  std::vector<SectionEntry> entries;
+  {
+    const IndexFile file = IndexFile::Open(index_path_);
+    entries.assign(file.sections().begin(), file.sections().end());
+  }
+  ASSERT_EQ(entries.size(), 15u);
+  for (const SectionEntry& entry : entries) {
+    std::vector<uint8_t> bytes = original;
+    bytes[entry.offset + entry.size / 2] ^= 0x20;
+    WriteCorrupt(bytes);
+    std::string output;
+    EXPECT_EQ(Run("verify " + (dir_ / "corrupt.cwl").string(), &output), 2) << SectionTagName(entry.tag);
+    EXPECT_THAT(output, HasSubstr("'" + SectionTagName(entry.tag) + "': checksum mismatch")) << output;
+  }
+}
+
+TEST_F(IndexCliTest, DamagedFilesGiveTheirOwnErrors) {
+  ASSERT_NO_FATAL_FAILURE(Build());
+  const std::vector<uint8_t> original = Bytes();
+  const std::string corrupt = (dir_ / "corrupt.cwl").string();
+  std::string output;
+
+  std::vector<uint8_t> truncated(original.begin(), original.begin() + original.size() / 2);
+  WriteCorrupt(truncated);
+  EXPECT_EQ(Run("info " + corrupt, &output), 2);
+  EXPECT_THAT(output, HasSubstr("cwloc-index: error: " + corrupt + ": truncated or extended: the header says " +
+                                std::to_string(original.size()) + " bytes, the file has " +
+                                std::to_string(truncated.size())));
+
+  std::vector<uint8_t> magic = original;
+  magic[3] = 'X';
+  WriteCorrupt(magic);
+  EXPECT_EQ(Run("verify " + corrupt, &output), 2);
+  EXPECT_THAT(output, HasSubstr(corrupt + ": not a cwloc index (wrong magic"));
+
+  std::vector<uint8_t> newer = original;
+  newer[12] = 3;
+  WriteCorrupt(newer);
+  EXPECT_EQ(Run("info " + corrupt, &output), 2);
+  EXPECT_THAT(output, HasSubstr("index format 3.0 is not readable by this cwloc, which reads format 1.x"));
+
+  EXPECT_EQ(Run("info " + (dir_ / "missing.cwl").string(), &output), 2);
+  EXPECT_THAT(output, HasSubstr("missing.cwl: cannot open: No such file or directory"));
+}
+
+TEST_F(IndexCliTest, BuildFromAMissingModelIsABadInputError) {
+  std::string output;
+  EXPECT_EQ(Run("build --model " + (dir_ / "nope").string() + " --database " + database_path_.string() + " -o " +
+                    index_path_.string(),
+                &output),
+            2);
+  EXPECT_THAT(output, HasSubstr("cwloc-index: error: "));
+  EXPECT_THAT(output, HasSubstr("nope"));
+  EXPECT_FALSE(std::filesystem::exists(index_path_));
+}
+
+}  // namespace
+}  // namespace cwloc
