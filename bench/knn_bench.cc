@@ -36,7 +36,7 @@
 
 #include "format/descriptor_distance.h"
 #include "format/kd_forest.h"
-#include "indexer/kd_forest_builder.h"
+#include "format/kd_forest_builder.h"
 
 namespace cwloc {
 namespace {

@@ -12,7 +12,7 @@
 #include "format/xxhash64.h"
 #include "indexer/colmap/reconstruction_io.h"
 #include "indexer/covisibility.h"
-#include "indexer/kd_forest_builder.h"
+#include "format/kd_forest_builder.h"
 #include "indexer/model_views.h"
 #include "indexer/neighbor_distances.h"
 #include "indexer/parallel_for.h"

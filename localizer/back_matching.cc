@@ -5,7 +5,7 @@
 #include <cmath>
 
 #include "format/error.h"
-#include "indexer/kd_forest_builder.h"
+#include "format/kd_forest_builder.h"
 #include "localizer/cluster_ratio_test.h"
 
 namespace cwloc {

@@ -12,7 +12,7 @@
 #include <unistd.h>
 #endif
 
-#include "indexer/kd_forest_builder.h"
+#include "format/kd_forest_builder.h"
 #include "tests/test_util.h"
 
 namespace cwloc {

@@ -1,4 +1,4 @@
-#include "indexer/kd_forest_builder.h"
+#include "format/kd_forest_builder.h"
 
 #include <algorithm>
 #include <atomic>
