@@ -277,10 +277,12 @@ bool KdForestSearcher::StepNode(Cursor& c) {
       return true;
     }
     // The left child follows its parent: on the same cache line, keep going; otherwise fetch
-    // it and let the other descents run meanwhile.
+    // it and let the other descents run meanwhile. Lines are counted from the array's start
+    // (64-byte aligned in the index file), not from its address, so that the order of the
+    // descents, and hence the result, never depends on where the array was allocated.
     const bool went_left = best == node_index + 1;
     node_index = best;
-    if (went_left && (reinterpret_cast<uintptr_t>(nodes + best) & 63) != 0) continue;
+    if (went_left && (size_t{best} * sizeof(KdNode)) % 64 != 0) continue;
     Prefetch(nodes + best);
     c.node = best;
     c.bound = bound;
