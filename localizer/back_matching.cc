@@ -15,7 +15,7 @@ using Clock = std::chrono::steady_clock;
 
 }  // namespace
 
-ClusterImages::ClusterImages(const Index& index) {
+ClusterMembers::ClusterMembers(const Index& index) {
   uint32_t num_clusters = 0;
   for (const IndexImage& image : index.images()) num_clusters = std::max(num_clusters, image.cluster + 1);
   offsets.assign(num_clusters + 1, 0);
@@ -26,7 +26,7 @@ ClusterImages::ClusterImages(const Index& index) {
   for (uint32_t i = 0; i < index.images().size(); ++i) images[cursor[index.images()[i].cluster]++] = i;
 }
 
-BackMatchingResult MatchBack(const Index& index, const ClusterImages& clusters, const Query& query,
+BackMatchingResult MatchBack(const Index& index, const ClusterMembers& clusters, const Query& query,
                              std::span<const FeatureMatch> forward_matches, const LocalizerOptions& options) {
   BackMatchingResult result;
   result.cluster_votes.assign(clusters.num_clusters(), 0);

@@ -13,8 +13,8 @@
 namespace cwloc {
 
 // The clusters of an index as lists of image rows, computed once per index.
-struct ClusterImages {
-  explicit ClusterImages(const Index& index);
+struct ClusterMembers {
+  explicit ClusterMembers(const Index& index);
   std::vector<uint32_t> offsets;  // cluster c's images: images[offsets[c] .. offsets[c+1])
   std::vector<uint32_t> images;
   uint32_t num_clusters() const { return static_cast<uint32_t>(offsets.size() - 1); }
@@ -39,7 +39,7 @@ struct BackMatchingResult {
 // with at least options.min_matches_to_vote back-matches votes, through each matched view's
 // 3D point, for every cluster that sees that point. Stops at options.back_matches matches or
 // options.max_back_images clusters, or when no cluster has votes left.
-BackMatchingResult MatchBack(const Index& index, const ClusterImages& clusters, const Query& query,
+BackMatchingResult MatchBack(const Index& index, const ClusterMembers& clusters, const Query& query,
                              std::span<const FeatureMatch> forward_matches, const LocalizerOptions& options);
 
 }  // namespace cwloc

@@ -23,7 +23,7 @@ class Localizer {
 
  private:
   const Index& index_;
-  ClusterImages clusters_;
+  ClusterMembers clusters_;
 };
 
 // Checks options against absurd values; throws InputError naming the option.

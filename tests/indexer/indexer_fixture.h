@@ -33,6 +33,11 @@ class IndexerFixture : public testing::Test {
       descriptors.data.resize(size_t{descriptors.rows} * 128);
       for (auto& byte : descriptors.data) byte = static_cast<uint8_t>(Rng()() % 64);
       descriptors_[id] = descriptors;
+      std::vector<colmap::Keypoint> keypoints;
+      for (const colmap::Point2D& point : image.points2D) {
+        keypoints.push_back({static_cast<float>(point.x), static_cast<float>(point.y)});
+      }
+      writer.WriteKeypoints(id, keypoints);
       writer.WriteDescriptors(id, descriptors);
     }
     // A query image that is in the database but not in the model must be ignored.

@@ -1,0 +1,143 @@
+// The real data set: 5 held-out photos of the Herz-Jesu facade localized against the
+// 20-image COLMAP model, compared with COLMAP's own poses (../shared/data/herz_jesu_p25).
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <fstream>
+#include <sstream>
+
+#include "format/index.h"
+#include "indexer/index_builder.h"
+#include "localizer/input/camera_spec.h"
+#include "localizer/input/database_queries.h"
+#include "localizer/localizer.h"
+#include "tests/test_util.h"
+
+namespace cwloc {
+namespace {
+
+constexpr double kMetresPerUnit = 2.772965906;  // scale_to_metres.txt
+constexpr double kColmapFocal = 1375.7714362748345;
+
+struct GroundTruth {
+  Eigen::Quaterniond rotation;
+  Eigen::Vector3d translation;
+  std::string camera;  // "MODEL W H PARAMS"
+};
+
+std::map<std::string, GroundTruth> ReadGroundTruth(const std::filesystem::path& path) {
+  std::map<std::string, GroundTruth> truth;
+  std::ifstream in(path);
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream fields(line);
+    std::string name;
+    double qw, qx, qy, qz, tx, ty, tz;
+    fields >> name >> qw >> qx >> qy >> qz >> tx >> ty >> tz;
+    std::string camera;
+    std::getline(fields, camera);
+    truth[name] = {Eigen::Quaterniond(qw, qx, qy, qz), {tx, ty, tz}, camera};
+  }
+  return truth;
+}
+
+class HerzJesuTest : public testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    const auto data = test::SharedDataDir("herz_jesu_p25");
+    if (!data) return;
+    data_ = *data;
+    dir_ = new test::TempDir;
+    IndexBuildOptions options;
+    options.model_dir = data_ / "mapping_model" / "bin";
+    options.database_path = data_ / "database.db";
+    options.output_path = *dir_ / "herz_jesu.cwl";
+    BuildIndex(options);
+    index_ = new Index(Index::Open(options.output_path));
+  }
+  static void TearDownTestSuite() {
+    delete index_;
+    delete dir_;
+    index_ = nullptr;
+    dir_ = nullptr;
+  }
+
+  void SetUp() override {
+    if (index_ == nullptr) GTEST_SKIP() << "shared data 'herz_jesu_p25' not found next to the source tree; skipping";
+    truth_ = ReadGroundTruth(data_ / "queries_gt.txt");
+    ASSERT_EQ(truth_.size(), 5u);
+  }
+
+  static void ExpectPoseClose(const LocalizationResult& result, const GroundTruth& truth, double max_metres,
+                              double max_degrees) {
+    ASSERT_TRUE(result.success) << result.name << ": " << result.failure_reason;
+    const Eigen::Quaterniond rotation(result.rotation[0], result.rotation[1], result.rotation[2], result.rotation[3]);
+    const Eigen::Vector3d center(result.center[0], result.center[1], result.center[2]);
+    const Eigen::Vector3d true_center = -(truth.rotation.conjugate() * truth.translation);
+    const double metres = (center - true_center).norm() * kMetresPerUnit;
+    const double degrees = rotation.angularDistance(truth.rotation) * 180.0 / M_PI;
+    EXPECT_LE(metres, max_metres) << result.name;
+    EXPECT_LE(degrees, max_degrees) << result.name;
+    EXPECT_GE(result.num_inliers, 12u);
+  }
+
+  static inline std::filesystem::path data_;
+  static inline test::TempDir* dir_ = nullptr;
+  static inline Index* index_ = nullptr;
+  std::map<std::string, GroundTruth> truth_;
+};
+
+TEST_F(HerzJesuTest, AllQueriesLocalizeWithKnownFocal) {
+  const DatabaseQueries queries(data_ / "database.db");
+  const Localizer localizer(*index_);
+  for (const auto& [name, truth] : truth_) {
+    Query query = queries.Load(name, /*focal_known=*/true);
+    query.camera = ParseCameraSpec(truth.camera, "queries_gt.txt");  // the database holds the initial guess
+    const LocalizationResult result = localizer.Localize(query, LocalizerOptions{});
+    // Issue bound: 5 cm, 0.5 degrees; measured: under 4 mm and 0.02 degrees.
+    ExpectPoseClose(result, truth, 0.05, 0.5);
+    EXPECT_FALSE(result.ranked_images.empty());
+  }
+}
+
+TEST_F(HerzJesuTest, AllQueriesLocalizeWithUnknownFocalAndRecoverIt) {
+  const DatabaseQueries queries(data_ / "database.db");
+  const Localizer localizer(*index_);
+  for (const auto& [name, truth] : truth_) {
+    const Query query = queries.Load(name, /*focal_known=*/false);
+    const LocalizationResult result = localizer.Localize(query, LocalizerOptions{});
+    ExpectPoseClose(result, truth, 0.05, 0.5);
+    ASSERT_TRUE(result.focal_estimated);
+    EXPECT_NEAR(result.camera.params[0], kColmapFocal, 0.02 * kColmapFocal) << name;
+  }
+}
+
+TEST_F(HerzJesuTest, GlobalRatioBaselineAlsoLocalizesThisSmallModel) {
+  const DatabaseQueries queries(data_ / "database.db");
+  const Localizer localizer(*index_);
+  LocalizerOptions options;
+  options.matcher = Matcher::kGlobalRatio;
+  for (const auto& [name, truth] : truth_) {
+    Query query = queries.Load(name, true);
+    query.camera = ParseCameraSpec(truth.camera, "queries_gt.txt");
+    const LocalizationResult result = localizer.Localize(query, options);
+    ExpectPoseClose(result, truth, 0.05, 0.5);
+    EXPECT_EQ(result.back_matches, 0u);
+  }
+}
+
+TEST_F(HerzJesuTest, SameSeedGivesTheSamePose) {
+  const DatabaseQueries queries(data_ / "database.db");
+  const Localizer localizer(*index_);
+  Query query = queries.Load("0012.jpg", true);
+  query.camera = ParseCameraSpec(truth_["0012.jpg"].camera, "queries_gt.txt");
+  const LocalizationResult a = localizer.Localize(query, LocalizerOptions{});
+  const LocalizationResult b = localizer.Localize(query, LocalizerOptions{});
+  EXPECT_EQ(a.rotation, b.rotation);
+  EXPECT_EQ(a.translation, b.translation);
+  EXPECT_EQ(a.num_inliers, b.num_inliers);
+}
+
+}  // namespace
+}  // namespace cwloc

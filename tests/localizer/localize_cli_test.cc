@@ -1,0 +1,161 @@
+// cwloc-localize as a user runs it: JSON lines against the schema, the poses file, exit codes,
+// and an error record per bad query while the others finish.
+#include <gmock/gmock.h>
+#include <nlohmann/json.hpp>
+
+#include <fstream>
+#include <sstream>
+
+#include "indexer/index_builder.h"
+#include "tests/indexer/indexer_fixture.h"
+
+namespace cwloc {
+namespace {
+
+using testing::HasSubstr;
+
+std::vector<nlohmann::json> JsonLines(const std::string& text) {
+  std::vector<nlohmann::json> lines;
+  std::istringstream in(text);
+  std::string line;
+  while (std::getline(in, line)) {
+    if (!line.empty() && line[0] == '{') lines.push_back(nlohmann::json::parse(line));
+  }
+  return lines;
+}
+
+int ValidateAgainstSchema(const std::filesystem::path& json_lines, std::string* output) {
+  return test::RunCommand("/usr/bin/python3 " + (test::SourceDir() / "tools" / "validate_json.py").string() + " " +
+                              (test::SourceDir() / "schemas" / "localization-result.schema.json").string() + " " +
+                              json_lines.string() + " --lines",
+                          output);
+}
+
+class LocalizeCliTest : public test::IndexerFixture {
+ protected:
+  void SetUp() override {
+    IndexerFixture::SetUp();
+    IndexBuildOptions options;
+    options.model_dir = model_dir_;
+    options.database_path = database_path_;
+    options.output_path = index_path_;
+    BuildIndex(options);
+  }
+
+  int Run(const std::string& args, std::string* output) const {
+    return test::RunCommand(test::ToolPath("cwloc-localize").string() + " --index " + index_path_.string() + " " + args,
+                            output);
+  }
+
+  std::string FirstImageName() const { return model_.images.begin()->second.name; }
+};
+
+TEST_F(LocalizeCliTest, BadQueryGetsAnErrorRecordAndTheOthersFinish) {
+  std::string output;
+  const auto jsonl = dir_ / "out.jsonl";
+  const int code = Run("--database " + database_path_.string() + " --query nope.jpg --query " + FirstImageName() +
+                           " -o " + jsonl.string(),
+                       &output);
+  EXPECT_EQ(code, 2) << output;
+  EXPECT_THAT(output, HasSubstr("cwloc-localize: error: " + database_path_.string() + ": no image named 'nope.jpg'"));
+  std::ifstream in(jsonl);
+  const std::string text((std::istreambuf_iterator<char>(in)), {});
+  const auto lines = JsonLines(text);
+  ASSERT_EQ(lines.size(), 2u) << text;
+  int errors = 0, results = 0;
+  for (const auto& line : lines) {
+    if (line.contains("error")) {
+      ++errors;
+      EXPECT_EQ(line["name"], "nope.jpg");
+    } else {
+      ++results;
+      EXPECT_EQ(line["name"], FirstImageName());
+    }
+  }
+  EXPECT_EQ(errors, 1) << text;
+  EXPECT_EQ(results, 1);
+  std::string validation;
+  EXPECT_EQ(ValidateAgainstSchema(jsonl, &validation), 0) << validation;
+}
+
+TEST_F(LocalizeCliTest, CorruptOrMissingIndexIsAClearError) {
+  std::string output;
+  EXPECT_EQ(test::RunCommand(test::ToolPath("cwloc-localize").string() + " --index " + (dir_ / "none.cwl").string() +
+                                 " --query x",
+                             &output),
+            2);
+  EXPECT_THAT(output, HasSubstr("none.cwl: cannot open: No such file or directory"));
+
+  std::fstream file(index_path_, std::ios::in | std::ios::out | std::ios::binary);
+  file.seekp(200);
+  file.put('\x7f');
+  file.close();
+  EXPECT_EQ(Run("--verify --database " + database_path_.string() + " --query " + FirstImageName(), &output), 2);
+  EXPECT_THAT(output, HasSubstr("checksum mismatch"));
+}
+
+TEST_F(LocalizeCliTest, QueryWithNoFeaturesIsAnError) {
+  const auto features = dir_ / "empty.txt";
+  std::ofstream(features) << "0 128\n";
+  std::string output;
+  EXPECT_EQ(Run("--features " + features.string() + " --camera \"SIMPLE_PINHOLE 640 480 500 320 240\"", &output), 2);
+  EXPECT_THAT(output, HasSubstr(features.string() + ": the query has no features"));
+  EXPECT_THAT(output, HasSubstr("\"error\""));
+}
+
+TEST_F(LocalizeCliTest, UnknownCameraModelNamesTheKnownOnes) {
+  const auto features = dir_ / "one.txt";
+  std::string line = "1 128\n1 2 3 4";
+  for (int i = 0; i < 128; ++i) line += " 1";
+  std::ofstream(features) << line << "\n";
+  std::string output;
+  EXPECT_EQ(Run("--features " + features.string() + " --camera \"FISH 640 480 500\"", &output), 2);
+  EXPECT_THAT(output, HasSubstr("--camera: unknown camera model 'FISH' (known: SIMPLE_PINHOLE, PINHOLE"));
+}
+
+TEST_F(LocalizeCliTest, AbsurdParametersAreRejected) {
+  std::string output;
+  EXPECT_EQ(Run("--database " + database_path_.string() + " --query x --ratio 2", &output), 2);
+  EXPECT_THAT(output, HasSubstr("--ratio 2.000000: expected a value in (0, 1]"));
+  EXPECT_EQ(Run("--database " + database_path_.string() + " --query x --k 0", &output), 2);
+  EXPECT_THAT(output, HasSubstr("--k 0: expected 1 to 63"));
+  EXPECT_EQ(Run("--database " + database_path_.string() + " --query x --matcher nearest", &output), 2);
+  EXPECT_THAT(output, HasSubstr("--matcher"));
+  EXPECT_EQ(Run("", &output), 2);
+  EXPECT_THAT(output, HasSubstr("no queries"));
+}
+
+TEST(LocalizeCliHerzJesu, LocalizesEveryQueryWithValidJsonAndPoses) {
+  CWLOC_REQUIRE_SHARED_DATA(data, "herz_jesu_p25");
+  test::TempDir dir;
+  std::string output;
+  ASSERT_EQ(test::RunCommand(test::ToolPath("cwloc-index").string() + " build --model " +
+                                 (data / "mapping_model" / "bin").string() + " --database " +
+                                 (data / "database.db").string() + " -o " + (dir / "hj.cwl").string(),
+                             &output),
+            0)
+      << output;
+  const int code = test::RunCommand(test::ToolPath("cwloc-localize").string() + " --index " +
+                                        (dir / "hj.cwl").string() + " --database " + (data / "database.db").string() +
+                                        " --query-list " + (data / "queries_with_intrinsics.txt").string() +
+                                        " --threads 2 -o " + (dir / "out.jsonl").string() + " --poses " +
+                                        (dir / "poses.txt").string(),
+                                    &output);
+  EXPECT_EQ(code, 0) << output;
+  EXPECT_THAT(output, HasSubstr("localized 5 of 5 queries"));
+  std::string validation;
+  EXPECT_EQ(ValidateAgainstSchema(dir / "out.jsonl", &validation), 0) << validation;
+  std::ifstream poses(dir / "poses.txt");
+  int lines = 0;
+  for (std::string line; std::getline(poses, line); ++lines) {
+    std::istringstream fields(line);
+    std::string name;
+    double values[7];
+    fields >> name;
+    for (double& value : values) ASSERT_TRUE(fields >> value) << line;
+  }
+  EXPECT_EQ(lines, 5);
+}
+
+}  // namespace
+}  // namespace cwloc
