@@ -27,7 +27,9 @@ Index Index::Open(const std::filesystem::path& path) {
   const auto rows = file.Section<DescriptorRow>(section::kDescriptors);
   index.descriptors_ = {reinterpret_cast<const uint8_t*>(rows.data()), rows.size() * kDescriptorBytes};
   index.view_points_ = file.Section<uint32_t>(section::kViewPoint);
-  index.view_keypoints_ = file.Section<ViewKeypoint>(section::kViewKeypoints);
+  if (file.FindSection(section::kViewKeypoints) != nullptr) {
+    index.view_keypoints_ = file.Section<ViewKeypoint>(section::kViewKeypoints);
+  }
   index.view_neighbor_distances_ = file.Section<float>(section::kViewNeighbor);
   index.covisibility_offsets_ = file.Section<uint32_t>(section::kCovisOffsets);
   index.covisibility_edges_ = file.Section<CovisibilityEdge>(section::kCovisEdges);
@@ -43,7 +45,7 @@ Index Index::Open(const std::filesystem::path& path) {
     }
   };
   require_views("V2PT", index.view_points_.size());
-  require_views("VKXY", index.view_keypoints_.size());
+  if (!index.view_keypoints_.empty()) require_views("VKXY", index.view_keypoints_.size());
   require_views("VNND", index.view_neighbor_distances_.size());
   require_views("TRKS", index.tracks_.size());
   if (index.covisibility_offsets_.size() != index.images_.size() + 1) {

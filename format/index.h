@@ -30,6 +30,7 @@ class Index {
   std::span<const uint32_t> tracks() const { return tracks_; }  // view indices
   std::span<const uint8_t> descriptors() const { return descriptors_; }
   std::span<const uint32_t> view_points() const { return view_points_; }
+  // Empty unless the index was built with --keypoints.
   std::span<const ViewKeypoint> view_keypoints() const { return view_keypoints_; }
   std::span<const float> view_neighbor_distances() const { return view_neighbor_distances_; }
   std::span<const uint32_t> covisibility_offsets() const { return covisibility_offsets_; }

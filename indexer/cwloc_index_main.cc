@@ -136,6 +136,8 @@ int main(int argc, char** argv) {
   build->add_option("--leaf-size", options.kd_leaf_size, "Descriptors per kd leaf bucket")->capture_default_str();
   build->add_option("--seed", options.seed, "Seed of the kd-forest and clustering randomization")->capture_default_str();
   build->add_option("--threads", options.threads, "Worker threads (0 = all cores)")->capture_default_str();
+  build->add_flag("--keypoints", options.keypoints,
+                  "Also store each view's keypoint (8 bytes per view; the localizer does not need them)");
   build->add_flag("--json", json, "Print the build report as JSON");
 
   std::string index_path;

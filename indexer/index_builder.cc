@@ -131,6 +131,7 @@ IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
   manifest["build_parameters"] = {{"kd_trees", options.kd_trees},
                                   {"kd_leaf_size", options.kd_leaf_size},
                                   {"seed", options.seed},
+                                  {"keypoints", options.keypoints},
                                   {"clustering", clustering_json},
                                   {"view_neighbor", "nearest view of another 3D point in the same cluster"}};
   manifest["source"] = {{"model", {{"path", options.model_dir.string()},
@@ -141,7 +142,7 @@ IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
   const std::string manifest_text = manifest.dump(2) + "\n";
 
   stage = Clock::now();
-  const std::vector<SectionData> sections = {
+  std::vector<SectionData> sections = {
       MakeSection<char>(section::kManifest, {manifest_text.data(), manifest_text.size()}),
       MakeSection(section::kCameras, Span(views.cameras)),
       MakeSection(section::kImages, Span(views.images)),
@@ -150,7 +151,6 @@ IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
       MakeSection(section::kTracks, Span(views.tracks)),
       SectionData{section::kDescriptors, kSectionRequired, kDescriptorBytes, views.num_views(), views.descriptors},
       MakeSection(section::kViewPoint, Span(views.view_points)),
-      MakeSection(section::kViewKeypoints, Span(views.view_keypoints)),
       MakeSection(section::kViewNeighbor, Span(neighbor_distances)),
       MakeSection(section::kKdNodes, Span(forest.nodes)),
       MakeSection(section::kKdRoots, Span(forest.roots)),
@@ -158,6 +158,10 @@ IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
       MakeSection(section::kCovisOffsets, Span(graph.offsets)),
       MakeSection(section::kCovisEdges, Span(graph.edges)),
   };
+  if (options.keypoints) {
+    // Optional: the localizer does not read model keypoints; tools that draw matches do.
+    sections.push_back(MakeSection(section::kViewKeypoints, Span(views.view_keypoints), /*flags=*/0));
+  }
   WriteIndexFile(options.output_path, sections);
   report.seconds_write = SecondsSince(stage);
   report.file_bytes = std::filesystem::file_size(options.output_path);

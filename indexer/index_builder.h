@@ -17,6 +17,7 @@ struct IndexBuildOptions {
   uint32_t kd_trees = 4;      // the paper's FLANN setting
   uint32_t kd_leaf_size = 8;  // descriptors per leaf bucket
   uint64_t seed = 0;          // kd-forest randomization and k-means initialisation
+  bool keypoints = false;     // also store each view's keypoint (optional section VKXY, 8 B/view)
   int threads = 0;            // 0 = all cores
 };
 

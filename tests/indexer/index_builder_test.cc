@@ -32,7 +32,9 @@ class IndexBuilderTest : public test::IndexerFixture {
 };
 
 TEST_F(IndexBuilderTest, StoresEveryObservedViewWithItsDescriptorPointAndImage) {
-  const IndexBuildReport report = BuildIndex(Options());
+  IndexBuildOptions options = Options();
+  options.keypoints = true;
+  const IndexBuildReport report = BuildIndex(options);
   const Index index = Index::Open(index_path_);
   EXPECT_NO_THROW(index.Validate());
   EXPECT_NO_THROW(index.file().VerifyChecksums());
@@ -64,6 +66,21 @@ TEST_F(IndexBuilderTest, StoresEveryObservedViewWithItsDescriptorPointAndImage) 
     }
     EXPECT_EQ(view, stored.first_view + stored.num_views);
   }
+}
+
+TEST_F(IndexBuilderTest, KeypointsAreAnOptionalSection) {
+  BuildIndex(Options());
+  const Index without = Index::Open(index_path_);
+  EXPECT_TRUE(without.view_keypoints().empty());
+  EXPECT_EQ(without.file().FindSection(section::kViewKeypoints), nullptr);
+  IndexBuildOptions options = Options();
+  options.keypoints = true;
+  options.output_path = dir_ / "with.cwl";
+  BuildIndex(options);
+  const Index with = Index::Open(options.output_path);
+  EXPECT_EQ(with.view_keypoints().size(), with.num_views());
+  EXPECT_EQ(with.file().FindSection(section::kViewKeypoints)->flags & kSectionRequired, 0u);
+  EXPECT_NO_THROW(with.Validate());
 }
 
 TEST_F(IndexBuilderTest, ViewNeighborDistanceIsTheExactNearestOtherPointInTheImage) {
