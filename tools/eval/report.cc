@@ -1,0 +1,279 @@
+#include "tools/eval/report.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+#include <unordered_map>
+
+#include "cwloc/version.h"
+
+namespace cwloc::eval {
+namespace {
+
+using nlohmann::ordered_json;
+
+std::string Format(const char* format, double value) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof(buffer), format, value);
+  return buffer;
+}
+
+// Enough digits for both centimetre errors in metres and sub-degree rotations.
+std::string Number(double value) {
+  const double magnitude = std::abs(value);
+  if (magnitude != 0 && magnitude < 0.01) return Format("%.2g", value);
+  if (magnitude < 10) return Format("%.3f", value);
+  if (magnitude < 1000) return Format("%.1f", value);
+  return Format("%.0f", value);
+}
+
+std::string QuartileCell(const std::optional<Quartiles>& q) {
+  if (!q) return "-";
+  return Number(q->q1) + " / " + Number(q->median) + " / " + Number(q->q3);
+}
+
+std::string Percent(int count, int total) {
+  return total == 0 ? "-" : Format("%.1f%%", 100.0 * count / total);
+}
+
+ordered_json QuartilesJson(const std::optional<Quartiles>& q) {
+  if (!q) return nullptr;
+  return {{"q1", q->q1}, {"median", q->median}, {"q3", q->q3}};
+}
+
+std::string ThresholdName(const Threshold& t, const char* unit) {
+  // Appending rather than "(" + string sidesteps a GCC 12 -Wrestrict false positive.
+  std::string name = "(";
+  name += Format("%g", t.position);
+  name += std::string(" ") + unit + ", " + Format("%g", t.rotation_deg) + " deg)";
+  return name;
+}
+
+// Left-aligned text columns separated by two spaces.
+std::string Columns(const std::vector<std::vector<std::string>>& rows) {
+  std::vector<size_t> width;
+  for (const auto& row : rows) {
+    width.resize(std::max(width.size(), row.size()));
+    for (size_t c = 0; c < row.size(); ++c) width[c] = std::max(width[c], row[c].size());
+  }
+  std::string out;
+  for (const auto& row : rows) {
+    std::string line = "  ";
+    for (size_t c = 0; c < row.size(); ++c) {
+      line += row[c];
+      if (c + 1 < row.size()) line += std::string(width[c] - row[c].size() + 2, ' ');
+    }
+    out += line + "\n";
+  }
+  return out;
+}
+
+}  // namespace
+
+double Quantile(const std::vector<double>& sorted, double p) {
+  const double h = p * double(sorted.size() - 1);
+  const size_t lo = size_t(std::floor(h));
+  const size_t hi = std::min(lo + 1, sorted.size() - 1);
+  return sorted[lo] + (h - double(lo)) * (sorted[hi] - sorted[lo]);
+}
+
+std::optional<Quartiles> ComputeQuartiles(std::vector<double> values) {
+  if (values.empty()) return std::nullopt;
+  std::sort(values.begin(), values.end());
+  return Quartiles{Quantile(values, 0.25), Quantile(values, 0.5), Quantile(values, 0.75)};
+}
+
+const char* QueryStatusName(QueryStatus status) {
+  switch (status) {
+    case QueryStatus::kLocalized: return "localized";
+    case QueryStatus::kNotLocalized: return "not_localized";
+    case QueryStatus::kError: return "error";
+    case QueryStatus::kMissing: return "missing";
+  }
+  return "missing";
+}
+
+RunReport EvaluateRun(const std::vector<NamedPose>& ground_truth, const RunResults& run, double scale,
+                      const std::string& label) {
+  RunReport report;
+  report.label = label;
+  report.path = run.path;
+  report.format = run.format;
+  report.queries = int(ground_truth.size());
+
+  std::unordered_map<std::string, const QueryResult*> by_name;
+  for (const QueryResult& result : run.queries) by_name.emplace(result.name, &result);
+
+  std::vector<double> position_errors, rotation_errors;
+  for (const NamedPose& truth : ground_truth) {
+    QueryOutcome outcome;
+    outcome.name = truth.name;
+    const auto it = by_name.find(truth.name);
+    if (it == by_name.end()) {
+      outcome.status = QueryStatus::kMissing;
+      ++report.missing;
+    } else if (it->second->status == ResultStatus::kError) {
+      outcome.status = QueryStatus::kError;
+      ++report.errors;
+    } else if (it->second->status == ResultStatus::kNotLocalized) {
+      outcome.status = QueryStatus::kNotLocalized;
+      ++report.not_localized;
+    } else {
+      outcome.status = QueryStatus::kLocalized;
+      outcome.position_error = scale * PositionError(*it->second->pose, truth.pose);
+      outcome.rotation_error_deg = RotationErrorDeg(*it->second->pose, truth.pose);
+      position_errors.push_back(outcome.position_error);
+      rotation_errors.push_back(outcome.rotation_error_deg);
+      for (size_t t = 0; t < kThresholds.size(); ++t) {
+        if (outcome.position_error <= kThresholds[t].position &&
+            outcome.rotation_error_deg <= kThresholds[t].rotation_deg) {
+          ++report.within[t];
+        }
+      }
+      ++report.localized;
+    }
+    report.per_query.push_back(std::move(outcome));
+  }
+
+  std::unordered_map<std::string, bool> in_truth;
+  for (const NamedPose& truth : ground_truth) in_truth.emplace(truth.name, true);
+  std::array<std::vector<double>, kStageNames.size()> stage_values;
+  for (const QueryResult& result : run.queries) {
+    if (!in_truth.contains(result.name)) ++report.unknown_names;
+    // Timing does not depend on the ground truth, so every timed record counts.
+    if (!result.times_ms) continue;
+    ++report.timed_records;
+    for (size_t s = 0; s < kStageNames.size(); ++s) stage_values[s].push_back((*result.times_ms)[s]);
+  }
+  report.position_error = ComputeQuartiles(std::move(position_errors));
+  report.rotation_error_deg = ComputeQuartiles(std::move(rotation_errors));
+  if (report.timed_records > 0) {
+    std::array<Quartiles, kStageNames.size()> times;
+    for (size_t s = 0; s < kStageNames.size(); ++s) times[s] = *ComputeQuartiles(std::move(stage_values[s]));
+    report.times_ms = times;
+  }
+  return report;
+}
+
+nlohmann::ordered_json ReportToJson(const EvalReport& report) {
+  ordered_json json;
+  json["tool"] = "cwloc-eval";
+  json["version"] = kToolVersion;
+  json["ground_truth"] = {{"path", report.ground_truth_path.string()}, {"queries", report.queries}};
+  json["unit"] = report.Unit();
+  json["scale"] = report.scale;
+  json["scale_path"] = report.scale_path ? ordered_json(report.scale_path->string()) : ordered_json(nullptr);
+  json["quantile_method"] = "linear";
+  ordered_json thresholds = ordered_json::array();
+  for (const Threshold& t : kThresholds) thresholds.push_back({{"position", t.position}, {"rotation_deg", t.rotation_deg}});
+  json["thresholds"] = thresholds;
+
+  ordered_json runs = ordered_json::array();
+  for (const RunReport& run : report.runs) {
+    ordered_json r;
+    r["label"] = run.label;
+    r["path"] = run.path.string();
+    r["format"] = ResultFormatName(run.format);
+    r["queries"] = run.queries;
+    r["localized"] = run.localized;
+    r["not_localized"] = run.not_localized;
+    r["errors"] = run.errors;
+    r["missing"] = run.missing;
+    r["unknown_names"] = run.unknown_names;
+    r["localized_share"] = run.queries ? double(run.localized) / run.queries : 0.0;
+    r["position_error"] = QuartilesJson(run.position_error);
+    r["rotation_error_deg"] = QuartilesJson(run.rotation_error_deg);
+    ordered_json within = ordered_json::array();
+    for (size_t t = 0; t < kThresholds.size(); ++t) {
+      within.push_back({{"position", kThresholds[t].position},
+                        {"rotation_deg", kThresholds[t].rotation_deg},
+                        {"count", run.within[t]},
+                        {"share", run.queries ? double(run.within[t]) / run.queries : 0.0}});
+    }
+    r["within"] = within;
+    r["timed_records"] = run.timed_records;
+    if (run.times_ms) {
+      ordered_json times;
+      for (size_t s = 0; s < kStageNames.size(); ++s) times[kStageNames[s]] = QuartilesJson((*run.times_ms)[s]);
+      r["times_ms"] = times;
+    } else {
+      r["times_ms"] = nullptr;
+    }
+    ordered_json per_query = ordered_json::array();
+    for (const QueryOutcome& q : run.per_query) {
+      ordered_json entry = {{"name", q.name}, {"status", QueryStatusName(q.status)}};
+      if (q.status == QueryStatus::kLocalized) {
+        entry["position_error"] = q.position_error;
+        entry["rotation_error_deg"] = q.rotation_error_deg;
+      }
+      per_query.push_back(entry);
+    }
+    r["per_query"] = per_query;
+    runs.push_back(r);
+  }
+  json["runs"] = runs;
+  return json;
+}
+
+std::string FormatTable(const EvalReport& report) {
+  std::ostringstream out;
+  const char* unit = report.Metric() ? "m" : "units";
+  out << "cwloc-eval: " << report.queries << " ground-truth queries from " << report.ground_truth_path.string()
+      << "\n";
+  if (report.Metric()) {
+    out << "distances in metres (scale " << Format("%.10g", report.scale) << " from " << report.scale_path->string()
+        << ")\n";
+  } else {
+    out << "distances in model units (no --scale given); the thresholds below use the metre values as model units\n";
+  }
+  out << "errors: Q1 / median / Q3 over localized queries; shares: of all ground-truth queries\n\n";
+
+  std::vector<std::vector<std::string>> rows;
+  std::vector<std::string> header = {"run", "localized", std::string("position error (") + unit + ")",
+                                     "rotation error (deg)"};
+  for (const Threshold& t : kThresholds) header.push_back(ThresholdName(t, unit));
+  rows.push_back(header);
+  for (const RunReport& run : report.runs) {
+    std::vector<std::string> row = {run.label, std::to_string(run.localized) + "/" + std::to_string(run.queries),
+                                    QuartileCell(run.position_error), QuartileCell(run.rotation_error_deg)};
+    for (size_t t = 0; t < kThresholds.size(); ++t) row.push_back(Percent(run.within[t], run.queries));
+    rows.push_back(row);
+  }
+  out << Columns(rows);
+
+  // Why a query is not localized matters when comparing runs.
+  for (const RunReport& run : report.runs) {
+    if (run.not_localized + run.errors + run.missing > 0) {
+      out << "  " << run.label << ": not localized " << run.not_localized << ", error records " << run.errors
+          << ", missing from results " << run.missing << "\n";
+    }
+  }
+  for (const RunReport& run : report.runs) {
+    if (run.unknown_names > 0) {
+      out << "  warning: " << run.label << ": " << run.unknown_names
+          << " result(s) for names not in the ground truth (ignored)\n";
+    }
+  }
+
+  bool any_times = false;
+  for (const RunReport& run : report.runs) any_times = any_times || run.times_ms.has_value();
+  if (any_times) {
+    out << "\ntimes (ms), Q1 / median / Q3 over the result records that carry times_ms\n";
+    std::vector<std::vector<std::string>> time_rows;
+    std::vector<std::string> time_header = {"run", "records"};
+    for (const char* stage : kStageNames) time_header.push_back(stage);
+    time_rows.push_back(time_header);
+    for (const RunReport& run : report.runs) {
+      std::vector<std::string> row = {run.label, std::to_string(run.timed_records)};
+      for (size_t s = 0; s < kStageNames.size(); ++s) {
+        row.push_back(run.times_ms ? QuartileCell((*run.times_ms)[s]) : "-");
+      }
+      time_rows.push_back(row);
+    }
+    out << Columns(time_rows);
+  }
+  return out.str();
+}
+
+}  // namespace cwloc::eval

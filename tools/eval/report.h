@@ -1,0 +1,84 @@
+#pragma once
+
+#include <array>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "tools/eval/ground_truth.h"
+#include "tools/eval/result_reader.h"
+
+namespace cwloc::eval {
+
+struct Quartiles {
+  double q1 = 0;
+  double median = 0;
+  double q3 = 0;
+};
+
+// The p-quantile (0 <= p <= 1) of sorted values by linear interpolation between closest
+// ranks, numpy's default: h = p (n - 1), Q = x[floor h] + (h - floor h) (x[floor h + 1] - x[floor h]).
+double Quantile(const std::vector<double>& sorted, double p);
+
+// Q1, median and Q3 as above; nullopt for no values.
+std::optional<Quartiles> ComputeQuartiles(std::vector<double> values);
+
+// visuallocalization.net's (position, rotation) thresholds.
+struct Threshold {
+  double position;
+  double rotation_deg;
+};
+inline constexpr std::array<Threshold, 3> kThresholds = {{{0.25, 2.0}, {0.5, 5.0}, {5.0, 10.0}}};
+
+enum class QueryStatus { kLocalized, kNotLocalized, kError, kMissing };
+const char* QueryStatusName(QueryStatus status);  // "localized", "not_localized", "error", "missing"
+
+struct QueryOutcome {
+  std::string name;
+  QueryStatus status = QueryStatus::kMissing;
+  double position_error = 0;      // in the report's unit; only when localized
+  double rotation_error_deg = 0;  // only when localized
+};
+
+struct RunReport {
+  std::string label;
+  std::filesystem::path path;
+  ResultFormat format = ResultFormat::kPoses;
+  int queries = 0;        // ground-truth queries
+  int localized = 0;
+  int not_localized = 0;  // "success": false without "error"
+  int errors = 0;         // error records
+  int missing = 0;        // ground-truth queries with no result
+  int unknown_names = 0;  // results for names not in the ground truth (ignored)
+  std::optional<Quartiles> position_error;      // over localized queries
+  std::optional<Quartiles> rotation_error_deg;  // over localized queries
+  std::array<int, kThresholds.size()> within{};  // localized queries inside each threshold
+  int timed_records = 0;  // result records that carry times_ms
+  std::optional<std::array<Quartiles, kStageNames.size()>> times_ms;
+  std::vector<QueryOutcome> per_query;  // in ground-truth order
+};
+
+struct EvalReport {
+  std::filesystem::path ground_truth_path;
+  int queries = 0;
+  std::optional<std::filesystem::path> scale_path;
+  double scale = 1.0;  // model units -> report unit
+  std::vector<RunReport> runs;
+
+  bool Metric() const { return scale_path.has_value(); }
+  const char* Unit() const { return Metric() ? "m" : "model units"; }
+};
+
+// Compares one run with the ground truth; distances are multiplied by scale.
+RunReport EvaluateRun(const std::vector<NamedPose>& ground_truth, const RunResults& run, double scale,
+                      const std::string& label);
+
+// The report as described by schemas/eval-report.schema.json.
+nlohmann::ordered_json ReportToJson(const EvalReport& report);
+
+// The human-readable table that cwloc-eval prints.
+std::string FormatTable(const EvalReport& report);
+
+}  // namespace cwloc::eval

@@ -1,0 +1,126 @@
+#include "tools/eval/result_reader.h"
+
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <unordered_map>
+
+#include "format/error.h"
+#include "tools/eval/ground_truth.h"
+
+namespace cwloc::eval {
+namespace {
+
+using nlohmann::json;
+
+std::string_view LeftTrimmed(const std::string& s) {
+  const size_t begin = s.find_first_not_of(" \t");
+  return begin == std::string::npos ? std::string_view() : std::string_view(s).substr(begin);
+}
+
+// Reads a fixed-size array of finite numbers, or throws with the field's name.
+template <size_t N>
+std::array<double, N> NumberArray(const json& object, const char* key, const std::string& where,
+                                  const char* field) {
+  const auto it = object.find(key);
+  std::array<double, N> values{};
+  const bool ok = it != object.end() && it->is_array() && it->size() == N;
+  for (size_t i = 0; ok && i < N; ++i) {
+    if (!(*it)[i].is_number() || !std::isfinite(values[i] = (*it)[i].get<double>())) {
+      throw InputError(where + "\"" + field + "\" must be an array of " + std::to_string(N) + " finite numbers");
+    }
+  }
+  if (!ok) throw InputError(where + "\"" + field + "\" must be an array of " + std::to_string(N) + " finite numbers");
+  return values;
+}
+
+QueryResult ParseJsonLine(const std::string& line, const std::string& where) {
+  const json record = json::parse(line, nullptr, /*allow_exceptions=*/false);
+  if (record.is_discarded()) throw InputError(where + "not valid JSON");
+  if (!record.is_object()) throw InputError(where + "expected a JSON object (one cwloc-localize result per line)");
+  QueryResult result;
+  const auto name = record.find("name");
+  if (name == record.end() || !name->is_string() || name->get<std::string>().empty()) {
+    throw InputError(where + "expected a non-empty string \"name\"");
+  }
+  result.name = name->get<std::string>();
+  const auto success = record.find("success");
+  if (success == record.end() || !success->is_boolean()) throw InputError(where + "expected a boolean \"success\"");
+
+  if (success->get<bool>()) {
+    const auto pose = record.find("pose");
+    if (pose == record.end() || !pose->is_object()) {
+      throw InputError(where + "\"success\" is true but there is no \"pose\" object");
+    }
+    const auto q = NumberArray<4>(*pose, "qvec", where, "pose.qvec");
+    const auto t = NumberArray<3>(*pose, "tvec", where, "pose.tvec");
+    const Eigen::Quaterniond qvec(q[0], q[1], q[2], q[3]);
+    if (qvec.norm() < 1e-12) throw InputError(where + "\"pose.qvec\" is zero");
+    result.pose = Pose{qvec.normalized(), Eigen::Vector3d(t[0], t[1], t[2])};
+    result.status = ResultStatus::kLocalized;
+  } else {
+    result.status = record.contains("error") ? ResultStatus::kError : ResultStatus::kNotLocalized;
+  }
+
+  if (const auto times = record.find("times_ms"); times != record.end()) {
+    if (!times->is_object()) throw InputError(where + "\"times_ms\" must be an object");
+    StageTimes stage_times{};
+    for (size_t s = 0; s < kStageNames.size(); ++s) {
+      const auto value = times->find(kStageNames[s]);
+      if (value == times->end() || !value->is_number() || !std::isfinite(value->get<double>())) {
+        throw InputError(where + "\"times_ms." + kStageNames[s] + "\" must be a number");
+      }
+      stage_times[s] = value->get<double>();
+    }
+    result.times_ms = stage_times;
+  }
+  return result;
+}
+
+}  // namespace
+
+const char* ResultFormatName(ResultFormat format) {
+  return format == ResultFormat::kJsonLines ? "json-lines" : "poses";
+}
+
+RunResults ReadResults(const std::filesystem::path& path) {
+  RunResults run;
+  run.path = path;
+  const std::vector<std::string> lines = ReadLines(path);
+  for (const std::string& line : lines) {
+    const std::string_view trimmed = LeftTrimmed(line);
+    if (trimmed.empty() || trimmed[0] == '#') continue;
+    run.format = trimmed[0] == '{' ? ResultFormat::kJsonLines : ResultFormat::kPoses;
+    break;
+  }
+
+  if (run.format == ResultFormat::kJsonLines) {
+    for (size_t i = 0; i < lines.size(); ++i) {
+      if (LeftTrimmed(lines[i]).empty()) continue;
+      QueryResult result = ParseJsonLine(lines[i], Where(path, int(i) + 1));
+      result.line = int(i) + 1;
+      run.queries.push_back(std::move(result));
+    }
+  } else {
+    for (NamedPose& entry : ReadPosesFile(path)) {
+      QueryResult result;
+      result.name = std::move(entry.name);
+      result.status = ResultStatus::kLocalized;
+      result.pose = entry.pose;
+      result.line = entry.line;
+      run.queries.push_back(std::move(result));
+    }
+  }
+
+  // Two answers for one query would make the counts ambiguous.
+  std::unordered_map<std::string, int> first_line;
+  for (const QueryResult& result : run.queries) {
+    const auto [it, inserted] = first_line.emplace(result.name, result.line);
+    if (!inserted) {
+      throw InputError(Where(path, result.line) + "duplicate result for " + result.name + " (first on line " +
+                       std::to_string(it->second) + ")");
+    }
+  }
+  return run;
+}
+
+}  // namespace cwloc::eval

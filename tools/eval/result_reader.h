@@ -1,0 +1,43 @@
+#pragma once
+
+#include <array>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "tools/eval/pose_error.h"
+
+namespace cwloc::eval {
+
+// The per-stage times of cwloc-localize's "times_ms", in the schema's order.
+inline constexpr std::array<const char*, 6> kStageNames = {"forward_knn",   "ratio_test", "query_tree",
+                                                           "back_matching", "pose",       "total"};
+using StageTimes = std::array<double, kStageNames.size()>;
+
+enum class ResultStatus { kLocalized, kNotLocalized, kError };
+
+// One query of a run, whatever file it came from.
+struct QueryResult {
+  std::string name;
+  ResultStatus status = ResultStatus::kNotLocalized;
+  std::optional<Pose> pose;  // set when localized
+  std::optional<StageTimes> times_ms;
+  int line = 0;
+};
+
+enum class ResultFormat { kJsonLines, kPoses };
+const char* ResultFormatName(ResultFormat format);  // "json-lines" / "poses"
+
+struct RunResults {
+  std::filesystem::path path;
+  ResultFormat format = ResultFormat::kPoses;
+  std::vector<QueryResult> queries;
+};
+
+// Reads cwloc-localize JSON lines or a poses file, telling them apart by content: the first
+// line that is not blank or a '#' comment starts with '{' for JSON lines. Throws InputError
+// naming the file and line for malformed input and for a query name given twice.
+RunResults ReadResults(const std::filesystem::path& path);
+
+}  // namespace cwloc::eval
