@@ -21,8 +21,8 @@ namespace cwloc {
 // P ~ diag(fx, fy, 1) [R | t], which thus lies in a 4-dimensional null space (a DLT with four
 // points). Requiring the three rows of P's left 3x3 block to be mutually orthogonal gives three
 // quadrics in the three null space coordinates with up to 8 solutions (the formulation with
-// independent fx, fy of Kukelova, Heller, Bujnak, Fitzgibbon and Pajdla, "Efficient Intersection
-// of Three Quadrics and Applications in Computer Vision", CVPR 2016; cf. the general P4Pf of
+// independent fx, fy of Kukelova, Heller and Fitzgibbon, "Efficient Intersection of Three
+// Quadrics and Applications in Computer Vision", CVPR 2016; cf. the general P4Pf of
 // Bujnak, Kukelova and Pajdla, "A general solution to the P4P problem for camera with unknown
 // focal length", CVPR 2008, which the cluster-wise ratio test paper uses). The quadrics are
 // solved with our own action-matrix solver (three_quadrics.h). With exact data the true solution
