@@ -15,12 +15,6 @@
 namespace cwloc {
 namespace {
 
-std::string Hex(uint64_t value) {
-  char buffer[19];
-  std::snprintf(buffer, sizeof(buffer), "%016llx", static_cast<unsigned long long>(value));
-  return buffer;
-}
-
 std::string Describe(const SectionEntry& entry, size_t index) {
   return "section " + std::to_string(index) + " '" + SectionTagName(entry.tag) + "'";
 }
@@ -77,8 +71,8 @@ IndexFile IndexFile::Open(const std::filesystem::path& path) {
     throw InputError(name + ": not a cwloc index (wrong magic; expected \"CWLOCIDX\")");
   }
   if (header.byte_order_mark != kByteOrderMark) {
-    throw InputError(name + ": wrong byte-order mark 0x" + Hex(header.byte_order_mark) +
-                     " (expected 0x" + Hex(kByteOrderMark) + ")");
+    throw InputError(name + ": wrong byte-order mark 0x" + HashHex(header.byte_order_mark) +
+                     " (expected 0x" + HashHex(kByteOrderMark) + ")");
   }
   if (header.format_major != kFormatMajor) {
     throw InputError(name + ": index format " + std::to_string(header.format_major) + "." +
@@ -90,8 +84,8 @@ IndexFile IndexFile::Open(const std::filesystem::path& path) {
   const uint64_t header_checksum =
       XxHash64({file.data_, offsetof(FileHeader, header_checksum)});
   if (header_checksum != header.header_checksum) {
-    throw InputError(name + ": header checksum mismatch (stored " + Hex(header.header_checksum) +
-                     ", computed " + Hex(header_checksum) + "): the file is corrupt");
+    throw InputError(name + ": header checksum mismatch (stored " + HashHex(header.header_checksum) +
+                     ", computed " + HashHex(header_checksum) + "): the file is corrupt");
   }
   if (header.file_size != file_size) {
     throw InputError(name + ": truncated or extended: the header says " + std::to_string(header.file_size) +
@@ -104,7 +98,7 @@ IndexFile IndexFile::Open(const std::filesystem::path& path) {
   }
   const uint64_t unknown_features = header.required_features & ~kKnownRequiredFeatures;
   if (unknown_features != 0) {
-    throw InputError(name + ": requires features unknown to this cwloc (bits 0x" + Hex(unknown_features) +
+    throw InputError(name + ": requires features unknown to this cwloc (bits 0x" + HashHex(unknown_features) +
                      "); upgrade cwloc");
   }
   const uint64_t table_offset = header.section_table_offset;
@@ -116,8 +110,8 @@ IndexFile IndexFile::Open(const std::filesystem::path& path) {
   }
   const uint64_t table_checksum = XxHash64({file.data_ + table_offset, table_bytes});
   if (table_checksum != header.section_table_checksum) {
-    throw InputError(name + ": section table checksum mismatch (stored " + Hex(header.section_table_checksum) +
-                     ", computed " + Hex(table_checksum) + "): the file is corrupt");
+    throw InputError(name + ": section table checksum mismatch (stored " + HashHex(header.section_table_checksum) +
+                     ", computed " + HashHex(table_checksum) + "): the file is corrupt");
   }
   file.sections_ = {reinterpret_cast<const SectionEntry*>(file.data_ + table_offset), header.section_count};
 
@@ -194,7 +188,7 @@ void IndexFile::VerifyChecksums() const {
     const uint64_t checksum = XxHash64({data_ + entry.offset, static_cast<size_t>(entry.size)});
     if (checksum != entry.checksum) {
       throw InputError(path_.string() + ": " + Describe(entry, i) + ": checksum mismatch (stored " +
-                       Hex(entry.checksum) + ", computed " + Hex(checksum) + "): the section is corrupt");
+                       HashHex(entry.checksum) + ", computed " + HashHex(checksum) + "): the section is corrupt");
     }
   }
 }

@@ -42,6 +42,13 @@ inline uint64_t MergeRound(uint64_t acc, uint64_t value) {
 
 }  // namespace
 
+std::string HashHex(uint64_t hash) {
+  static constexpr char kDigits[] = "0123456789abcdef";
+  std::string hex(16, '0');
+  for (int i = 15; i >= 0; --i, hash >>= 4) hex[i] = kDigits[hash & 15];
+  return hex;
+}
+
 uint64_t XxHash64(std::span<const uint8_t> bytes, uint64_t seed) {
   const uint8_t* p = bytes.data();
   const uint8_t* const end = p + bytes.size();

@@ -10,16 +10,11 @@
 #include "format/error.h"
 #include "format/index.h"
 #include "format/tool_main.h"
+#include "format/xxhash64.h"
 #include "indexer/index_builder.h"
 
 namespace cwloc {
 namespace {
-
-std::string Hex(uint64_t value) {
-  char buffer[19];
-  std::snprintf(buffer, sizeof(buffer), "%016llx", static_cast<unsigned long long>(value));
-  return buffer;
-}
 
 nlohmann::ordered_json ParseManifest(const Index& index) {
   auto manifest = nlohmann::ordered_json::parse(index.manifest_json(), nullptr, /*allow_exceptions=*/false);
@@ -70,7 +65,7 @@ int RunInfo(const std::string& path, bool json) {
       out["sections"].push_back({{"tag", SectionTagName(entry.tag)}, {"offset", entry.offset}, {"bytes", entry.size},
                                  {"count", entry.count}, {"element_bytes", entry.element_size},
                                  {"required", (entry.flags & kSectionRequired) != 0},
-                                 {"checksum", "xxh64:" + Hex(entry.checksum)}});
+                                 {"checksum", "xxh64:" + HashHex(entry.checksum)}});
     }
     out["manifest"] = manifest;
     std::cout << out.dump(2) << "\n";

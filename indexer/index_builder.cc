@@ -24,12 +24,6 @@ using Clock = std::chrono::steady_clock;
 
 double SecondsSince(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
-std::string HexDigest(uint64_t value) {
-  char buffer[24];
-  std::snprintf(buffer, sizeof(buffer), "xxh64:%016llx", static_cast<unsigned long long>(value));
-  return buffer;
-}
-
 // XXH64 over the model files in name order: ties the index to the exact model it came from.
 std::string FingerprintModel(const std::filesystem::path& dir) {
   std::vector<std::filesystem::path> files;
@@ -46,7 +40,7 @@ std::string FingerprintModel(const std::filesystem::path& dir) {
     hash = XxHash64({reinterpret_cast<const uint8_t*>(name.data()), name.size()}, hash);
     hash = XxHash64(bytes, hash);
   }
-  return HexDigest(hash);
+  return "xxh64:" + HashHex(hash);
 }
 
 template <typename T>

@@ -404,11 +404,59 @@ void WriteReconstruction(const Reconstruction& reconstruction, const fs::path& d
       if (ec) throw InputError(stale.string() + ": cannot remove stale file: " + ec.message());
     }
   }
-  if (format == ModelFormat::kBinary) {
-    detail::WriteReconstructionBinary(reconstruction, dir, layout);
-  } else {
-    detail::WriteReconstructionText(reconstruction, dir, layout);
-  }
+  detail::WriteModel(reconstruction, dir, format, layout);
 }
+
+namespace detail {
+namespace {
+
+const ModelFileCodec& CodecOf(ModelFormat format) {
+  return format == ModelFormat::kBinary ? BinaryCodec() : TextCodec();
+}
+
+}  // namespace
+
+Reconstruction ReadModel(const fs::path& dir, ModelFormat format) {
+  const ModelFileCodec& codec = CodecOf(format);
+  ModelFiles files = FilesOf(dir, format);
+  std::error_code ec;
+  const bool has_rigs = fs::exists(files.rigs, ec);
+  const bool has_frames = fs::exists(files.frames, ec);
+  if (has_rigs != has_frames) {
+    const std::string rigs = files.rigs.filename().string(), frames = files.frames.filename().string();
+    throw InputError(dir.string() + ": has " + (has_rigs ? rigs + " but no " + frames : frames + " but no " + rigs) +
+                     " (a COLMAP >= 3.12 model needs both)");
+  }
+  files.has_rigs = has_rigs;
+  Reconstruction rec;
+  codec.read_cameras(files.cameras, &rec);
+  if (files.has_rigs) {
+    codec.read_rigs(files.rigs, &rec);
+    codec.read_frames(files.frames, &rec);
+  }
+  codec.read_images(files.images, &rec);
+  codec.read_points3D(files.points3D, &rec);
+  FinishReconstruction(files, &rec);
+  return rec;
+}
+
+void WriteModel(const Reconstruction& rec, const fs::path& dir, ModelFormat format, ModelLayout layout) {
+  const ModelFileCodec& codec = CodecOf(format);
+  const ModelFiles files = FilesOf(dir, format);
+  if (layout == ModelLayout::kRigs) {
+    std::map<rig_t, Rig> rigs;
+    std::map<frame_t, Frame> frames;
+    RigsAndFramesToWrite(rec, &rigs, &frames);
+    codec.write_rigs(rigs, files.rigs);
+    codec.write_cameras(rec, files.cameras);
+    codec.write_frames(frames, files.frames);
+  } else {
+    codec.write_cameras(rec, files.cameras);
+  }
+  codec.write_images(rec, files.images);
+  codec.write_points3D(rec, files.points3D);
+}
+
+}  // namespace detail
 
 }  // namespace cwloc::colmap

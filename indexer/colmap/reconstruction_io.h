@@ -54,11 +54,23 @@ ModelFiles FilesOf(const std::filesystem::path& dir, ModelFormat format);
 // cam_from_world from its frame. Throws InputError naming the offending file and record.
 void FinishReconstruction(const ModelFiles& files, Reconstruction* reconstruction);
 
-// The per-format writers behind WriteReconstruction (`dir` exists).
-void WriteReconstructionBinary(const Reconstruction& reconstruction,
-                               const std::filesystem::path& dir, ModelLayout layout);
-void WriteReconstructionText(const Reconstruction& reconstruction, const std::filesystem::path& dir,
-                             ModelLayout layout);
+// The per-file readers and writers of one format; ReadModel and WriteModel do the rest
+// (which files exist, their order, the rig layout) the same way for binary and text.
+struct ModelFileCodec {
+  using Reader = void (*)(const std::filesystem::path&, Reconstruction*);
+  using Writer = void (*)(const Reconstruction&, const std::filesystem::path&);
+  Reader read_cameras, read_rigs, read_frames, read_images, read_points3D;
+  Writer write_cameras, write_images, write_points3D;
+  void (*write_rigs)(const std::map<rig_t, Rig>&, const std::filesystem::path&);
+  void (*write_frames)(const std::map<frame_t, Frame>&, const std::filesystem::path&);
+};
+const ModelFileCodec& BinaryCodec();
+const ModelFileCodec& TextCodec();
+
+Reconstruction ReadModel(const std::filesystem::path& dir, ModelFormat format);
+// `dir` exists.
+void WriteModel(const Reconstruction& reconstruction, const std::filesystem::path& dir,
+                ModelFormat format, ModelLayout layout);
 
 // The rigs and frames written for the rig layout: the model's own, or one trivial rig per
 // camera and one frame per image when it has none.

@@ -506,44 +506,15 @@ void WriteFrames(const std::map<frame_t, Frame>& frames, const fs::path& path) {
 }  // namespace
 
 Reconstruction ReadReconstructionText(const fs::path& dir) {
-  detail::ModelFiles files = detail::FilesOf(dir, ModelFormat::kText);
-  std::error_code ec;
-  const bool has_rigs = fs::exists(files.rigs, ec);
-  const bool has_frames = fs::exists(files.frames, ec);
-  if (has_rigs != has_frames) {
-    throw InputError(dir.string() + ": has " +
-                     (has_rigs ? "rigs.txt but no frames.txt" : "frames.txt but no rigs.txt") +
-                     " (a COLMAP >= 3.12 model needs both)");
-  }
-  files.has_rigs = has_rigs;
-  Reconstruction rec;
-  ReadCameras(files.cameras, &rec);
-  if (files.has_rigs) {
-    ReadRigs(files.rigs, &rec);
-    ReadFrames(files.frames, &rec);
-  }
-  ReadImages(files.images, &rec);
-  ReadPoints3D(files.points3D, &rec);
-  detail::FinishReconstruction(files, &rec);
-  return rec;
+  return detail::ReadModel(dir, ModelFormat::kText);
 }
 
 namespace detail {
 
-void WriteReconstructionText(const Reconstruction& rec, const fs::path& dir, ModelLayout layout) {
-  const ModelFiles files = FilesOf(dir, ModelFormat::kText);
-  if (layout == ModelLayout::kRigs) {
-    std::map<rig_t, Rig> rigs;
-    std::map<frame_t, Frame> frames;
-    RigsAndFramesToWrite(rec, &rigs, &frames);
-    WriteRigs(rigs, files.rigs);
-    WriteCameras(rec, files.cameras);
-    WriteFrames(frames, files.frames);
-  } else {
-    WriteCameras(rec, files.cameras);
-  }
-  WriteImages(rec, files.images);
-  WritePoints3D(rec, files.points3D);
+const ModelFileCodec& TextCodec() {
+  static const ModelFileCodec codec{ReadCameras,  ReadRigs,    ReadFrames,     ReadImages, ReadPoints3D,
+                                    WriteCameras, WriteImages, WritePoints3D, WriteRigs,  WriteFrames};
+  return codec;
 }
 
 }  // namespace detail

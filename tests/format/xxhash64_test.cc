@@ -22,5 +22,10 @@ TEST(XxHash64, MatchesReferenceImplementation) {
   EXPECT_EQ(XxHash64(pattern), 0x25275608a9cfc168ULL);
 }
 
+TEST(XxHash64, HexHasSixteenLowerCaseDigits) {
+  EXPECT_EQ(HashHex(0xef46db3751d8e999ULL), "ef46db3751d8e999");
+  EXPECT_EQ(HashHex(0x1ULL), "0000000000000001");
+}
+
 }  // namespace
 }  // namespace cwloc

@@ -5,6 +5,7 @@
 #include "format/descriptor_distance.h"
 #include "indexer/colmap/database.h"
 #include "indexer/colmap/reconstruction_io.h"
+#include "indexer/index_builder.h"
 #include "tests/colmap/synthetic_model.h"
 #include "tests/test_util.h"
 
@@ -44,6 +45,15 @@ class IndexerFixture : public testing::Test {
     writer.WriteImage({9999, "query.jpg", model_.cameras.begin()->first});
     writer.Commit();
     index_path_ = dir_ / "model.cwl";
+  }
+
+  // Builds index_path_ from the fixture's model and database with default options.
+  void BuildFixtureIndex() const {
+    IndexBuildOptions options;
+    options.model_dir = model_dir_;
+    options.database_path = database_path_;
+    options.output_path = index_path_;
+    BuildIndex(options);
   }
 
   TempDir dir_;

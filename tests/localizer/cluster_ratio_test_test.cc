@@ -14,11 +14,7 @@ class ClusterRatioTest : public test::IndexerFixture {
  protected:
   void SetUp() override {
     IndexerFixture::SetUp();
-    IndexBuildOptions options;
-    options.model_dir = model_dir_;
-    options.database_path = database_path_;
-    options.output_path = index_path_;
-    BuildIndex(options);
+    BuildFixtureIndex();
     index_.emplace(Index::Open(index_path_));
   }
 

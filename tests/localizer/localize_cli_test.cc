@@ -35,11 +35,7 @@ class LocalizeCliTest : public test::IndexerFixture {
  protected:
   void SetUp() override {
     IndexerFixture::SetUp();
-    IndexBuildOptions options;
-    options.model_dir = model_dir_;
-    options.database_path = database_path_;
-    options.output_path = index_path_;
-    BuildIndex(options);
+    BuildFixtureIndex();
   }
 
   int Run(const std::string& args, std::string* output) const {
