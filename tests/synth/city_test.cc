@@ -517,10 +517,8 @@ TEST_F(SynthCliTest, JsonSummaryAndStatsValidateAgainstTheSchema) {
   EXPECT_EQ(summary["counts"]["queries"], 3);
   EXPECT_EQ(summary["output"], fs::canonical(out).string());
   std::ofstream(dir_ / "summary.json") << output;
-  const char* source = std::getenv("CWLOC_SOURCE_DIR");
-  if (!source) GTEST_SKIP() << "CWLOC_SOURCE_DIR is not set (run through ctest)";
-  const fs::path schema = fs::path(source) / "schemas" / "synth-summary.schema.json";
-  const fs::path validator = fs::path(source) / "tools" / "validate_json.py";
+  const fs::path schema = test::SourceDir() / "schemas" / "synth-summary.schema.json";
+  const fs::path validator = test::SourceDir() / "tools" / "validate_json.py";
   for (const fs::path& json : {dir_ / "summary.json", out / "stats.json"}) {
     std::string validation;
     EXPECT_EQ(test::RunCommand("/usr/bin/python3 " + validator.string() + " " + schema.string() + " " + json.string(),

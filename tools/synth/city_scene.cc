@@ -11,7 +11,7 @@
 #include <Eigen/Geometry>
 
 #include "format/camera_models.h"
-#include "tools/synth/parallel_for.h"
+#include "format/parallel_for.h"
 
 namespace cwloc::synth {
 namespace {
@@ -35,6 +35,7 @@ enum Stream : uint64_t {
 constexpr double kMinKeypointScale = 1.3;  // pixels; smaller blobs are not detected
 constexpr double kMaxKeypointScale = 80;
 constexpr double kReferenceDistance = 12;  // metres; the distance a feature's canonical look is from
+constexpr double kKeypointScaleError = 0.13;  // log2, sigma; the descriptor sees the same error
 constexpr double kMinDepth = 0.3;
 constexpr int kMaxQueryDraws = 64;
 
@@ -361,7 +362,7 @@ std::vector<CityScene::Observation> CityScene::Observe(const CameraPose& pose, u
       o.y = float(pixel[1] + TruncatedGaussian(rng, options_.keypoint_noise));
       o.x = std::clamp(o.x, 0.5f, float(width - 0.5));
       o.y = std::clamp(o.y, 0.5f, float(height - 0.5));
-      o.scale = float(scale * std::exp(0.05 * rng.Gaussian()));
+      o.scale = float(scale * std::exp2(kKeypointScaleError * rng.Gaussian()));
       o.orientation = float(std::remainder(orientation, 2 * std::numbers::pi));
       o.score = float(scale * cos_obliquity * std::exp(0.25 * rng.Gaussian()));
       out.push_back(o);
@@ -449,7 +450,11 @@ void CityScene::Describe(const SceneImage& image, size_t feature_index, uint8_t*
     const double ca = std::cos(p.angle), sa = std::sin(p.angle);
     view.u = u * ca + w * sa;
     view.v = -u * sa + w * ca;
-    view.log2_scale = std::log2(kReferenceDistance / dist);
+    // The keypoint's scale error (its scale over the projected size) also shifts the window
+    // the descriptor is computed over, and the scale the patch is seen at.
+    const double depth = (image.pose.cam_from_world_rotation.row(2) * -to_camera)(0);
+    view.log2_detection_error = std::log2(f.scale / (p.size * focal_ / depth));
+    view.log2_scale = std::log2(kReferenceDistance / depth) + view.log2_detection_error;
   }
   SiftVector descriptor;
   sift_.Describe(appearance, view, view_rng, &descriptor);

@@ -16,7 +16,7 @@
 #include "format/error.h"
 #include "indexer/colmap/database.h"
 #include "indexer/colmap/reconstruction_io.h"
-#include "tools/synth/parallel_for.h"
+#include "format/parallel_for.h"
 
 namespace cwloc::synth {
 namespace fs = std::filesystem;

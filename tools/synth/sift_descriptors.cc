@@ -164,6 +164,21 @@ void NormalizeL2(SiftVector* d) {
   for (float& x : *d) x *= inv;
 }
 
+// Normal quantiles at (i + 0.5) / 256, by bisection on erfc: exact to float precision.
+std::array<float, 256> MakeNormalQuantiles() {
+  std::array<float, 256> table;
+  for (int i = 0; i < 256; ++i) {
+    const double p = (i + 0.5) / 256;
+    double lo = -6, hi = 6;
+    for (int it = 0; it < 60; ++it) {
+      const double mid = 0.5 * (lo + hi);
+      (0.5 * std::erfc(-mid / std::numbers::sqrt2) < p ? lo : hi) = mid;
+    }
+    table[i] = float(0.5 * (lo + hi));
+  }
+  return table;
+}
+
 // Adds a gradient to the orientation bins of one cell with a triangular kernel of half-width
 // `width` bins (1 = SIFT's linear interpolation between the two nearest bins).
 inline void AddToCell(float magnitude, float vx, float vy, float width, float inv_width,
@@ -193,25 +208,6 @@ float Rng::Normal() {
   // A sum of four U(0,1) has mean 2 and variance 1/3.
   return (float(sum) * (1.0f / 65536.0f) - 2.0f) * 1.7320508f;
 }
-
-namespace {
-
-// Normal quantiles at (i + 0.5) / 256, by bisection on erfc: exact to float precision.
-std::array<float, 256> MakeNormalQuantiles() {
-  std::array<float, 256> table;
-  for (int i = 0; i < 256; ++i) {
-    const double p = (i + 0.5) / 256;
-    double lo = -6, hi = 6;
-    for (int it = 0; it < 60; ++it) {
-      const double mid = 0.5 * (lo + hi);
-      (0.5 * std::erfc(-mid / std::numbers::sqrt2) < p ? lo : hi) = mid;
-    }
-    table[i] = float(0.5 * (lo + hi));
-  }
-  return table;
-}
-
-}  // namespace
 
 void Rng::FillNormal(float* out, int n) {
   static const std::array<float, 256> kQuantiles = MakeNormalQuantiles();
@@ -264,7 +260,9 @@ void SiftGenerator::Describe(const Appearance& appearance, const ViewChange& vie
   const double psi = std::atan2(-t01, t11);
   const double rotation =
       -psi + noise_model_.orientation_error_deg * std::numbers::pi / 180 * view_rng.Normal();
-  const double scale = std::exp2(noise_model_.scale_error * view_rng.Normal());
+  // A detected scale too large by 2^e makes the descriptor window cover 2^e more of the patch.
+  const double scale =
+      std::exp2(-view.log2_detection_error + noise_model_.scale_error * view_rng.Normal());
   const double cr = std::cos(rotation) * scale, sr = std::sin(rotation) * scale;
   {
     const double a00 = cr * t00 - sr * t10, a01 = cr * t01 - sr * t11;

@@ -51,24 +51,26 @@ class Rng {
 struct PatchModel {
   double dominant_amplitude = 2.57;    // the edge whose gradient set the keypoint orientation
   double opposite_probability = 0.93;  // a bar: the dominant edge's other side (bin 4)
-  double extra_structures = 6.4;      // mean number of further edges and blobs
+  double extra_structures = 6.4;       // mean number of further edges and blobs
   double blob_probability = 0.42;      // share of blobs among the further structures
   double texture_density = 10.4;       // mean texture gradients per cell (point-like details)
   double texture_amplitude = 0.39;     // their mean magnitude relative to the structures
   double texture_spread = 0.66;        // log-normal spread of the texture amount between patches
-  double window_sigma = 1.9;          // SIFT's Gaussian window, in cells
+  double window_sigma = 1.9;           // SIFT's Gaussian window, in cells
   double orientation_width = 1.16;     // half-width of a gradient's orientation kernel, in bins
 };
 
-// Errors of one detection and how much the view may differ; calibrated on real true matches.
+// Errors of one detection and how the look changes with the view; calibrated on real true
+// matches (docs/synth.md).
 struct ViewNoiseModel {
   double orientation_error_deg = 2;  // keypoint orientation error (sigma)
   double shift_error = 0.05;         // keypoint localization error, in descriptor cells (sigma)
-  double scale_error = 0.13;         // detected scale error, log2 (sigma)
-  double scale_texture = 0.0;       // texture change per octave of scale change (radians of a
+  double scale_error = 0;            // extra detected-scale error, log2 (sigma); the city passes
+                                     // each keypoint's own error in ViewChange instead
+  double scale_texture = 0.6;        // texture change per octave of scale change (radians of a
                                      // rotation between two texture magnitudes)
   double relief = 2.0;               // texture change per unit of sin(obliquity) (radians)
-  double pixel_noise = 0.0285;         // i.i.d. image noise, expected L2 norm in the unit domain
+  double pixel_noise = 0.0285;       // i.i.d. image noise, expected L2 norm in the unit domain
 };
 
 // Which patch a feature shows. Instances of one motif share `patch_seed` and differ by their
@@ -82,8 +84,9 @@ struct Appearance {
 // The viewpoint relative to the feature's own frame (its x axis is the direction of its
 // dominant gradient on the facade).
 struct ViewChange {
-  double u = 0, v = 0;     // viewing ray components along the feature's axes (|(u,v)| = sin obliquity)
-  double log2_scale = 0;   // log2 of the detected scale over the feature's reference scale
+  double u = 0, v = 0;              // viewing ray along the feature's axes (|(u,v)| = sin obliquity)
+  double log2_scale = 0;            // log2: the scale the patch is seen at / its reference scale
+  double log2_detection_error = 0;  // log2: detected / true keypoint scale
 };
 
 // Renders descriptors of views; holds the tables that make that fast. Thread-safe (const).

@@ -33,7 +33,7 @@ struct Preset {
 Preset FindPreset(const std::string& name) {
   if (name.empty()) return {};
   if (name == "demo") {
-    // A 2x2 city of small blocks: ~35k views, written in a few seconds.
+    // A 2x2 city of small blocks: ~26k views, written in a second or two.
     Preset p;
     p.blocks = 4;
     p.queries = 20;
