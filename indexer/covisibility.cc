@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-#include "indexer/parallel_for.h"
+#include "format/parallel_for.h"
 
 namespace cwloc {
 

@@ -15,7 +15,7 @@
 #include "format/kd_forest_builder.h"
 #include "indexer/model_views.h"
 #include "indexer/neighbor_distances.h"
-#include "indexer/parallel_for.h"
+#include "format/parallel_for.h"
 
 namespace cwloc {
 namespace {

@@ -5,7 +5,7 @@
 
 #include "format/descriptor_distance.h"
 #include "format/progress.h"
-#include "indexer/parallel_for.h"
+#include "format/parallel_for.h"
 
 namespace cwloc {
 
