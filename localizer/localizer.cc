@@ -27,7 +27,8 @@ std::vector<FeatureMatch> UniqueCorrespondences(const Index& index, std::vector<
   });
   std::vector<FeatureMatch> unique;
   for (const FeatureMatch& match : matches) {
-    if (match.view >= index.num_views()) continue;
+    // Views come from range-checked searches; their point is checked here, where it is read.
+    if (match.view >= index.num_views() || index.view_points()[match.view] >= index.points().size()) continue;
     if (!unique.empty() && unique.back().feature == match.feature) continue;
     unique.push_back(match);
   }

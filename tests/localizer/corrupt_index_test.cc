@@ -1,0 +1,79 @@
+// A corrupt index must give an error or a (meaningless) result, never a crash or an
+// out-of-bounds read: the localizer reads big arrays without verifying checksums first.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <fstream>
+#include <iterator>
+
+#include "format/index.h"
+#include "localizer/input/database_queries.h"
+#include "localizer/localizer.h"
+#include "tests/test_util.h"
+
+namespace cwloc {
+namespace {
+
+std::vector<char> ReadAll(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), {}};
+}
+
+TEST(CorruptIndex, RandomWordsInAnySectionNeverCrashTheLocalizer) {
+  test::TempDir dir;
+  std::string output;
+  ASSERT_EQ(test::RunCommand(test::ToolPath("cwloc-synth").string() + " --preset demo --queries 3 -o " +
+                                 (dir / "city").string(),
+                             &output),
+            0)
+      << output;
+  ASSERT_EQ(test::RunCommand(test::ToolPath("cwloc-index").string() + " build --model " +
+                                 (dir / "city" / "mapping_model" / "bin").string() + " --database " +
+                                 (dir / "city" / "database.db").string() + " -o " + (dir / "city.cwl").string(),
+                             &output),
+            0)
+      << output;
+  const DatabaseQueries database(dir / "city" / "database.db");
+  std::vector<Query> queries;
+  std::ifstream list(dir / "city" / "query_list.txt");
+  for (std::string name; std::getline(list, name);) queries.push_back(database.Load(name, true));
+  ASSERT_EQ(queries.size(), 3u);
+
+  const std::vector<char> original = ReadAll(dir / "city.cwl");
+  std::vector<SectionEntry> sections;
+  {
+    const Index index = Index::Open(dir / "city.cwl");
+    sections.assign(index.file().sections().begin(), index.file().sections().end());
+  }
+  std::mt19937_64& rng = test::Rng();
+  int errors = 0, results = 0;
+  for (const SectionEntry& section : sections) {
+    if (section.tag == section::kManifest || section.size < 4) continue;
+    for (int trial = 0; trial < 3; ++trial) {
+      std::vector<char> bytes = original;
+      // Overwrite a few 32-bit words with large or random values: out-of-range indices.
+      for (int word = 0; word < 8; ++word) {
+        const uint64_t at = section.offset + (rng() % (section.size / 4)) * 4;
+        const uint32_t value = (rng() & 1) ? static_cast<uint32_t>(rng()) : 0xFFFFFFF0u + (rng() % 16);
+        std::memcpy(bytes.data() + at, &value, 4);
+      }
+      const auto path = dir / "corrupt.cwl";
+      std::filesystem::remove(path);
+      std::ofstream(path, std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+      try {
+        const Index index = Index::Open(path);
+        const Localizer localizer(index);
+        for (const Query& query : queries) {
+          localizer.Localize(query, LocalizerOptions{});
+          ++results;
+        }
+      } catch (const InputError&) {
+        ++errors;
+      }
+    }
+  }
+  EXPECT_GT(results + errors, 0);
+}
+
+}  // namespace
+}  // namespace cwloc
