@@ -44,10 +44,23 @@ TEST_F(IndexBuilderTest, StoresEveryObservedViewWithItsDescriptorPointAndImage) 
   EXPECT_EQ(index.points().size(), model_.points3D.size());
   EXPECT_EQ(index.cameras().size(), model_.cameras.size());
 
+  size_t camera_row = 0;
+  for (const auto& [camera_id, camera] : model_.cameras) {
+    const IndexCamera& stored = index.cameras()[camera_row++];
+    EXPECT_EQ(stored.camera_id, camera_id);
+    EXPECT_EQ(stored.model_id, static_cast<int32_t>(camera.model_id));
+    EXPECT_EQ(stored.width, camera.width);
+    EXPECT_EQ(stored.height, camera.height);
+    ASSERT_EQ(stored.num_params, camera.params.size());
+    for (size_t p = 0; p < camera.params.size(); ++p) EXPECT_EQ(stored.params[p], camera.params[p]);
+  }
   size_t row = 0;
   for (const auto& [image_id, image] : model_.images) {
     const IndexImage& stored = index.images()[row++];
     EXPECT_EQ(stored.image_id, image_id);
+    EXPECT_EQ(index.cameras()[stored.camera_index].camera_id, image.camera_id);
+    for (int i = 0; i < 4; ++i) EXPECT_EQ(stored.cam_from_world_rotation[i], image.cam_from_world.rotation[i]);
+    for (int i = 0; i < 3; ++i) EXPECT_EQ(stored.cam_from_world_translation[i], image.cam_from_world.translation[i]);
     EXPECT_EQ(index.ImageName(stored), image.name);
     EXPECT_EQ(stored.cluster, row - 1);  // one cluster per image by default
     uint32_t view = stored.first_view;
