@@ -14,6 +14,7 @@
 
 #include "indexer/colmap/reconstruction_io.h"
 #include "tests/colmap/synthetic_model.h"
+#include "tests/colmap/text_records.h"
 #include "tests/test_util.h"
 
 namespace cwloc::colmap {
@@ -65,23 +66,6 @@ std::map<std::string, uint64_t> AnalyzerCounts(const std::string& output) {
   return counts;
 }
 
-std::vector<std::string> SortedRecords(const fs::path& path, int lines_per_record) {
-  std::ifstream in(path);
-  std::vector<std::string> records;
-  std::string line, record;
-  int n = 0;
-  while (std::getline(in, line)) {
-    if (n == 0 && !line.empty() && line[0] == '#') continue;
-    record += line + '\n';
-    if (++n == lines_per_record) {
-      records.push_back(record);
-      record.clear();
-      n = 0;
-    }
-  }
-  std::sort(records.begin(), records.end());
-  return records;
-}
 
 Reconstruction CompatModel() {
   test::SyntheticModelOptions options;
@@ -123,7 +107,7 @@ TEST(ColmapCompatTest, ColmapConvertsOurBinaryToTextAndBack) {
   WriteReconstruction(model, ours_txt, ModelFormat::kText);
   for (const auto& [name, lines] : std::vector<std::pair<std::string, int>>{
            {"cameras.txt", 1}, {"images.txt", 2}, {"points3D.txt", 1}}) {
-    EXPECT_TRUE(SortedRecords(ours_txt / name, lines) == SortedRecords(colmap_txt / name, lines))
+    EXPECT_TRUE(test::SortedRecords(ours_txt / name, lines) == test::SortedRecords(colmap_txt / name, lines))
         << name << " differs between our writer and colmap's";
     EXPECT_EQ(fs::file_size(ours_txt / name), fs::file_size(colmap_txt / name)) << name;
   }

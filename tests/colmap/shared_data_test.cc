@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "indexer/colmap/reconstruction_io.h"
+#include "tests/colmap/text_records.h"
 #include "tests/test_util.h"
 
 namespace cwloc::colmap {
@@ -25,25 +26,6 @@ std::string ReadFile(const fs::path& path) {
   return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
-// A text model file as a sorted list of records (lines_per_record lines each, comments
-// dropped): COLMAP 3.8 writes records in hash-map order, we write them sorted by id.
-std::vector<std::string> SortedRecords(const fs::path& path, int lines_per_record) {
-  std::istringstream in(ReadFile(path));
-  std::vector<std::string> records;
-  std::string line, record;
-  int n = 0;
-  while (std::getline(in, line)) {
-    if (n == 0 && !line.empty() && line[0] == '#') continue;
-    record += line + '\n';
-    if (++n == lines_per_record) {
-      records.push_back(record);
-      record.clear();
-      n = 0;
-    }
-  }
-  std::sort(records.begin(), records.end());
-  return records;
-}
 
 std::vector<std::string> HeaderLines(const fs::path& path) {
   std::istringstream in(ReadFile(path));
@@ -107,8 +89,8 @@ TEST(SharedDataTest, OurWritersReproduceColmapFiles) {
   for (const auto& [name, lines_per_record] : std::vector<std::pair<std::string, int>>{
            {"cameras.txt", 1}, {"images.txt", 2}, {"points3D.txt", 1}}) {
     EXPECT_EQ(HeaderLines(out / name), HeaderLines(txt_dir / name)) << name;
-    EXPECT_TRUE(SortedRecords(out / name, lines_per_record) ==
-                SortedRecords(txt_dir / name, lines_per_record))
+    EXPECT_TRUE(test::SortedRecords(out / name, lines_per_record) ==
+                test::SortedRecords(txt_dir / name, lines_per_record))
         << name << " records differ from colmap's";
     EXPECT_EQ(fs::file_size(out / name), fs::file_size(txt_dir / name)) << name;
   }
