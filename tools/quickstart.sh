@@ -28,7 +28,8 @@ if [ "$mode" = demo ]; then
     -o "$demo/results.jsonl" --poses "$demo/poses.txt" -q || status=$?
   [ "$status" -le 1 ] || exit "$status"  # 1 = some queries not localized: still report them
   build/bin/cwloc-eval --results "$demo/results.jsonl" --gt "$demo/city/queries_gt.txt" \
-    --scale "$demo/city/scale_to_metres.txt" --label cwloc
+    --scale "$demo/city/scale_to_metres.txt" --label cwloc \
+    --model "$demo/city/mapping_model/bin" --gt-points "$demo/city/queries_gt_points.txt"
 else
   ctest --test-dir build --output-on-failure -j "$(nproc)"
 fi

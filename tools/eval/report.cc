@@ -210,6 +210,18 @@ nlohmann::ordered_json ReportToJson(const EvalReport& report) {
       per_query.push_back(entry);
     }
     r["per_query"] = per_query;
+    if (run.recognition) {
+      const RecognitionScores& scores = *run.recognition;
+      ordered_json top = ordered_json::object();
+      for (size_t k = 0; k < kRecognitionRanks.size(); ++k) {
+        top["top" + std::to_string(kRecognitionRanks[k])] = {
+            {"count", scores.hits[k]}, {"share", scores.queries ? double(scores.hits[k]) / scores.queries : 0.0}};
+      }
+      r["recognition"] = {{"min_shared_points", report.recognition_min_shared},
+                          {"queries", scores.queries},
+                          {"with_right_image", scores.with_right_image},
+                          {"top", top}};
+    }
     runs.push_back(r);
   }
   json["runs"] = runs;
@@ -254,6 +266,22 @@ std::string FormatTable(const EvalReport& report) {
       out << "  warning: " << run.label << ": " << run.unknown_names
           << " result(s) for names not in the ground truth (ignored)\n";
     }
+  }
+
+  if (report.recognition_min_shared > 0) {
+    out << "\nlocation recognition: a ranked image is right when it sees >= " << report.recognition_min_shared
+        << " of the query's ground-truth 3D points; shares of all ground-truth queries\n";
+    std::vector<std::vector<std::string>> recognition_rows;
+    std::vector<std::string> header = {"run", "queries with a right image"};
+    for (int k : kRecognitionRanks) header.push_back("top-" + std::to_string(k));
+    recognition_rows.push_back(header);
+    for (const RunReport& run : report.runs) {
+      if (!run.recognition) continue;
+      std::vector<std::string> row = {run.label, std::to_string(run.recognition->with_right_image)};
+      for (int hits : run.recognition->hits) row.push_back(Percent(hits, run.recognition->queries));
+      recognition_rows.push_back(row);
+    }
+    out << Columns(recognition_rows);
   }
 
   bool any_times = false;

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "tools/eval/ground_truth.h"
+#include "tools/eval/recognition.h"
 #include "tools/eval/result_reader.h"
 
 namespace cwloc::eval {
@@ -58,6 +59,7 @@ struct RunReport {
   int timed_records = 0;  // result records that carry times_ms
   std::optional<std::array<Quartiles, kStageNames.size()>> times_ms;
   std::vector<QueryOutcome> per_query;  // in ground-truth order
+  std::optional<RecognitionScores> recognition;  // with --model and query points
 };
 
 struct EvalReport {
@@ -66,6 +68,7 @@ struct EvalReport {
   std::optional<std::filesystem::path> scale_path;
   double scale = 1.0;  // model units -> report unit
   std::vector<RunReport> runs;
+  int recognition_min_shared = 0;  // set when location recognition was scored
 
   bool Metric() const { return scale_path.has_value(); }
   const char* Unit() const { return Metric() ? "m" : "model units"; }

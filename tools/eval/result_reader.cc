@@ -73,6 +73,16 @@ QueryResult ParseJsonLine(const std::string& line, const std::string& where) {
     }
     result.times_ms = stage_times;
   }
+  if (const auto ranked = record.find("ranked_images"); ranked != record.end()) {
+    if (!ranked->is_array()) throw InputError(where + "\"ranked_images\" must be an array");
+    for (const auto& image : *ranked) {
+      const auto id = image.is_object() ? image.find("image_id") : image.end();
+      if (id == image.end() || !id->is_number_unsigned()) {
+        throw InputError(where + "\"ranked_images\" entries need a non-negative integer \"image_id\"");
+      }
+      result.ranked_image_ids.push_back(id->get<uint32_t>());
+    }
+  }
   return result;
 }
 

@@ -23,6 +23,7 @@ struct QueryResult {
   ResultStatus status = ResultStatus::kNotLocalized;
   std::optional<Pose> pose;  // set when localized
   std::optional<StageTimes> times_ms;
+  std::vector<uint32_t> ranked_image_ids;  // "ranked_images", best first (JSON lines only)
   int line = 0;
 };
 
