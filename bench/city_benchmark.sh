@@ -40,4 +40,5 @@ done
 echo "## evaluation"
 "$bin/cwloc-eval" --results "$work/results_cluster-wise.jsonl" --label cluster-wise \
   --results "$work/results_global-ratio.jsonl" --label global-ratio \
-  --gt "$city/queries_gt.txt" --scale "$city/scale_to_metres.txt"
+  --gt "$city/queries_gt.txt" --scale "$city/scale_to_metres.txt" \
+  --model "$city/mapping_model/bin" --gt-points "$city/queries_gt_points.txt"
