@@ -59,7 +59,6 @@ BackMatchingResult MatchBack(const Index& index, const ClusterMembers& clusters,
 
   start = Clock::now();
   const KdSearchOptions search_options{options.query_tree_checks};
-  const float ratio_squared = static_cast<float>(options.ratio * options.ratio);
   std::vector<bool> visited(clusters.num_clusters(), false);
   std::vector<KdNeighbor> neighbors(2);
   std::vector<uint32_t> track_clusters;
@@ -80,9 +79,7 @@ BackMatchingResult MatchBack(const Index& index, const ClusterMembers& clusters,
         if (view >= index.num_views()) break;  // a corrupt range; verify names it
         const KdSearchResult found = searcher.Search(index.descriptor(view), search_options, neighbors);
         if (found.num_neighbors < 2) continue;
-        if (static_cast<float>(neighbors[0].distance) > ratio_squared * static_cast<float>(neighbors[1].distance)) {
-          continue;
-        }
+        if (!PassesRatioTest(neighbors[0].distance, neighbors[1].distance, options.ratio)) continue;
         result.matches.push_back({neighbors[0].index, view, std::sqrt(static_cast<float>(neighbors[0].distance))});
       }
     }

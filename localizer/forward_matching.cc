@@ -29,7 +29,6 @@ std::vector<FeatureMatch> MatchForward(const Index& index, const Query& query, c
 
   std::vector<KdNeighbor> neighbors(options.k + 1);
   const KdSearchOptions search_options{options.checks};
-  const float ratio_squared = static_cast<float>(options.ratio * options.ratio);
   std::vector<FeatureMatch> matches;
   for (const uint32_t feature : order) {
     if (matches.size() >= options.forward_matches) break;
@@ -39,10 +38,8 @@ std::vector<FeatureMatch> MatchForward(const Index& index, const Query& query, c
     ++stats->features_searched;
     if (result.corrupt) ThrowCorrupt(index);
     if (result.num_neighbors < options.k + 1) continue;  // a model smaller than k+1 views
-    // k-ratio ||q - v1|| / ||q - v_{k+1}|| <= tau, on squared distances.
-    if (static_cast<float>(neighbors[0].distance) > ratio_squared * static_cast<float>(neighbors[options.k].distance)) {
-      continue;
-    }
+    // k-ratio ||q - v1|| / ||q - v_{k+1}|| <= tau.
+    if (!PassesRatioTest(neighbors[0].distance, neighbors[options.k].distance, options.ratio)) continue;
     ++stats->passed_k_ratio;
     const auto ratio_start = Clock::now();
     ClusterWiseRatioTest(index, feature, neighbors, options.ratio, &matches, stats);
@@ -55,7 +52,6 @@ std::vector<FeatureMatch> MatchGlobalRatio(const Index& index, const Query& quer
                                            KdForestSearcher& searcher, ForwardMatchingStats* stats) {
   std::vector<KdNeighbor> neighbors(2);
   const KdSearchOptions search_options{options.checks};
-  const float ratio_squared = static_cast<float>(options.ratio * options.ratio);
   std::vector<FeatureMatch> matches;
   const auto start = Clock::now();
   for (uint32_t feature = 0; feature < query.NumFeatures(); ++feature) {
@@ -63,7 +59,7 @@ std::vector<FeatureMatch> MatchGlobalRatio(const Index& index, const Query& quer
     ++stats->features_searched;
     if (result.corrupt) ThrowCorrupt(index);
     if (result.num_neighbors < 2) continue;
-    if (static_cast<float>(neighbors[0].distance) > ratio_squared * static_cast<float>(neighbors[1].distance)) continue;
+    if (!PassesRatioTest(neighbors[0].distance, neighbors[1].distance, options.ratio)) continue;
     ++stats->passed_k_ratio;
     matches.push_back({feature, neighbors[0].index, std::sqrt(static_cast<float>(neighbors[0].distance))});
   }

@@ -11,6 +11,11 @@
 
 namespace cwloc {
 
+// The ratio test ||q - a|| / ||q - b|| <= tau, on the squared distances the kd-forest returns.
+inline bool PassesRatioTest(uint32_t nearest_squared, uint32_t other_squared, double ratio) {
+  return static_cast<double>(nearest_squared) <= ratio * ratio * static_cast<double>(other_squared);
+}
+
 // A 2D-3D candidate: a query feature matched to a model view (hence to the view's 3D point).
 struct FeatureMatch {
   uint32_t feature = 0;
