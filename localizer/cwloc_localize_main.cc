@@ -140,36 +140,33 @@ class ResultSink {
 
   void Write(const LocalizationResult& result, const LocalizerOptions& options) {
     std::lock_guard lock(mutex_);
-    const std::string json = ResultToJson(result, options).dump();
-    if (json_file_.is_open()) {
-      json_file_ << json << "\n" << std::flush;
-      if (!cli_.quiet) {
-        if (result.success) {
-          std::printf("%s: localized, %u inliers / %u correspondences, %.1f ms\n", result.name.c_str(),
-                      result.num_inliers, result.correspondences, result.times.total * 1e3);
-        } else {
-          std::printf("%s: not localized: %s\n", result.name.c_str(), result.failure_reason.c_str());
-        }
-        std::fflush(stdout);
+    EmitJsonLine(ResultToJson(result, options).dump());
+    // With the JSON in a file, stdout gets a readable line per query.
+    if (json_file_.is_open() && !cli_.quiet) {
+      if (result.success) {
+        std::printf("%s: localized, %u inliers / %u correspondences, %.1f ms\n", result.name.c_str(),
+                    result.num_inliers, result.correspondences, result.times.total * 1e3);
+      } else {
+        std::printf("%s: not localized: %s\n", result.name.c_str(), result.failure_reason.c_str());
       }
-    } else {
-      std::cout << json << "\n" << std::flush;
+      std::fflush(stdout);
     }
     if (poses_file_.is_open() && result.success) poses_file_ << PoseLine(result) << "\n" << std::flush;
   }
 
   void WriteError(const std::string& name, const std::string& error) {
     std::lock_guard lock(mutex_);
-    const std::string json = ErrorToJson(name, error).dump();
-    if (json_file_.is_open()) {
-      json_file_ << json << "\n" << std::flush;
-    } else {
-      std::cout << json << "\n" << std::flush;
-    }
+    EmitJsonLine(ErrorToJson(name, error).dump());
     std::fprintf(stderr, "cwloc-localize: error: %s\n", error.c_str());
   }
 
  private:
+  // One record per line to --output, or stdout without it; the caller holds mutex_.
+  void EmitJsonLine(const std::string& json) {
+    std::ostream& out = json_file_.is_open() ? static_cast<std::ostream&>(json_file_) : std::cout;
+    out << json << "\n" << std::flush;
+  }
+
   static void OpenOrThrow(std::ofstream* file, const std::string& path) {
     file->open(path, std::ios::trunc);
     if (!*file) throw InputError(path + ": cannot write");
