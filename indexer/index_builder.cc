@@ -90,12 +90,12 @@ IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
   forest_options.seed = options.seed;
   forest_options.num_threads = static_cast<uint32_t>(threads);
   Progress forest_progress("kd-forest", 1000);
-  double reported = 0;
+  uint64_t permille_shown = 0;
   forest_options.progress = [&](double fraction) {
-    const double delta = fraction - reported;
-    if (delta >= 0.001) {
-      forest_progress.Advance(static_cast<uint64_t>(delta * 1000));
-      reported += static_cast<uint64_t>(delta * 1000) / 1000.0;
+    const auto permille = static_cast<uint64_t>(fraction * 1000);
+    if (permille > permille_shown) {
+      forest_progress.Advance(permille - permille_shown);
+      permille_shown = permille;
     }
   };
   const KdForest forest = BuildKdForest(views.descriptors, forest_options);
