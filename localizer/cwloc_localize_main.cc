@@ -262,8 +262,10 @@ int main(int argc, char** argv) {
   app.add_flag("-q,--quiet", cli.quiet, "No summary or readable lines");
 
   std::string matcher = "cluster-wise";
-  app.add_option("--matcher", matcher, "cluster-wise (the paper) or global-ratio (diagnostic baseline)")
-      ->check(CLI::IsMember({"cluster-wise", "global-ratio"}))
+  app.add_option("--matcher", matcher,
+                 "cluster-wise (the paper), global-ratio (diagnostic baseline) or cluster-exhaustive (the "
+                 "paper's brute-force gold standard; slow)")
+      ->check(CLI::IsMember(std::vector<std::string>(cwloc::kMatcherNames.begin(), cwloc::kMatcherNames.end())))
       ->capture_default_str();
   app.add_option("--k", options.k, "Nearest neighbours per query feature (k; k+1 are searched)")->capture_default_str();
   app.add_option("--checks", options.checks, "kd-forest leaf checks per search")->capture_default_str();
@@ -291,6 +293,6 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? cwloc::kExitOk : cwloc::kExitBadInput;
   }
-  options.matcher = matcher == "global-ratio" ? cwloc::Matcher::kGlobalRatio : cwloc::Matcher::kClusterWise;
+  options.matcher = *cwloc::ParseMatcher(matcher);
   return cwloc::RunTool("cwloc-localize", [&] { return cwloc::Run(cli, options); });
 }

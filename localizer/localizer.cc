@@ -9,6 +9,7 @@
 #include "format/camera_models.h"
 #include "format/error.h"
 #include "localizer/cluster_ratio_test.h"
+#include "localizer/exhaustive_matching.h"
 #include "localizer/forward_matching.h"
 #include "localizer/pose/absolute_pose.h"
 
@@ -71,6 +72,46 @@ void CheckQueryCamera(const Query& query) {
   }
 }
 
+// LO-RANSAC with the minimal solver the camera calls for: P3P with a known focal length, P4Pf
+// without. *used counts the correspondences that could be normalized.
+AbsolutePoseResult EstimateQueryPose(const Index& index, const Query& query,
+                                     std::span<const FeatureMatch> correspondences, const LocalizerOptions& options,
+                                     bool refine, uint32_t* used) {
+  std::vector<Eigen::Vector2d> points2D;
+  std::vector<Eigen::Vector3d> points3D;
+  points2D.reserve(correspondences.size());
+  points3D.reserve(correspondences.size());
+  const QueryCamera& camera = query.camera;
+  for (const FeatureMatch& match : correspondences) {
+    const std::array<double, 2> pixel = {query.keypoints[2 * match.feature], query.keypoints[2 * match.feature + 1]};
+    Eigen::Vector2d point2D;
+    if (camera.focal_known) {
+      std::array<double, 2> normalized;
+      if (!PixelToNormalized(camera.model_id, camera.params, pixel, &normalized)) continue;
+      point2D = {normalized[0], normalized[1]};
+    } else {
+      point2D = {pixel[0] - camera.width / 2.0, pixel[1] - camera.height / 2.0};
+    }
+    const IndexPoint& point = index.points()[index.view_points()[match.view]];
+    points2D.push_back(point2D);
+    points3D.emplace_back(point.xyz[0], point.xyz[1], point.xyz[2]);
+  }
+  *used = static_cast<uint32_t>(points2D.size());
+
+  AbsolutePoseOptions pose_options;
+  pose_options.max_error_px = options.max_error_px;
+  pose_options.min_inliers = options.min_inliers;
+  pose_options.max_iterations = options.max_ransac_iterations;
+  pose_options.confidence = options.ransac_confidence;
+  pose_options.seed = options.seed;
+  pose_options.refine = refine;
+  if (camera.focal_known) {
+    return EstimateAbsolutePose(points2D, points3D, MeanFocalLength(camera.model_id, camera.params), pose_options);
+  }
+  pose_options.image_diagonal_px = std::hypot(double(camera.width), double(camera.height));
+  return EstimateAbsolutePoseUnknownFocal(points2D, points3D, pose_options);
+}
+
 }  // namespace
 
 void ValidateLocalizerOptions(const LocalizerOptions& o) {
@@ -108,6 +149,7 @@ LocalizationResult Localizer::Localize(const Query& query, const LocalizerOption
   ForwardMatchingStats forward_stats;
   std::vector<FeatureMatch> forward;
   std::vector<FeatureMatch> back;
+  std::vector<ClusterMatches> exhaustive;
   if (options.matcher == Matcher::kClusterWise) {
     forward = MatchForward(index_, query, options, rng, searcher, &forward_stats);
     const BackMatchingResult back_result = MatchBack(index_, clusters_, query, forward, options);
@@ -115,8 +157,13 @@ LocalizationResult Localizer::Localize(const Query& query, const LocalizerOption
     result.back_matched_images = static_cast<uint32_t>(back_result.visited.size());
     result.times.query_tree = back_result.seconds_query_tree;
     result.times.back_matching = back_result.seconds_matching;
-  } else {
+  } else if (options.matcher == Matcher::kGlobalRatio) {
     forward = MatchGlobalRatio(index_, query, options, searcher, &forward_stats);
+  } else {
+    exhaustive = MatchEachClusterExhaustively(index_, clusters_, query, options.ratio, &forward_stats);
+    for (const ClusterMatches& cluster : exhaustive) {
+      forward.insert(forward.end(), cluster.matches.begin(), cluster.matches.end());
+    }
   }
   result.times.forward_knn = forward_stats.seconds_knn;
   result.times.ratio_test = forward_stats.seconds_ratio_test;
@@ -125,51 +172,46 @@ LocalizationResult Localizer::Localize(const Query& query, const LocalizerOption
   result.back_matches = static_cast<uint32_t>(back.size());
   result.ranked_images = RankImages(index_, forward, back, options.ranked_images);
 
-  // The paper fits the pose to the back-matches; the global-ratio baseline to its matches.
-  const std::vector<FeatureMatch> correspondences =
-      UniqueCorrespondences(index_, options.matcher == Matcher::kClusterWise ? back : forward);
-  result.correspondences = static_cast<uint32_t>(correspondences.size());
+  // The paper fits the pose to the back-matches; the global-ratio baseline to its matches; the
+  // exhaustive matcher to one cluster's matches, chosen below.
+  std::vector<FeatureMatch> correspondences;
+  if (options.matcher != Matcher::kClusterExhaustive) {
+    correspondences = UniqueCorrespondences(index_, options.matcher == Matcher::kClusterWise ? back : forward);
+  }
 
   const auto pose_start = Clock::now();
-  std::vector<Eigen::Vector2d> points2D;
-  std::vector<Eigen::Vector3d> points3D;
-  points2D.reserve(correspondences.size());
-  points3D.reserve(correspondences.size());
+  AbsolutePoseResult pose;
+  uint32_t pose_inputs = 0;
+  if (options.matcher == Matcher::kClusterExhaustive) {
+    // Table 1's gold standard: RANSAC in every cluster that could reach min_inliers; the
+    // cluster with the most inliers wins, and only its pose is refined.
+    const std::vector<FeatureMatch>* best = nullptr;
+    int best_inliers = 0;
+    for (const ClusterMatches& cluster : exhaustive) {
+      if (cluster.matches.size() < options.min_inliers) continue;
+      uint32_t used = 0;
+      const AbsolutePoseResult candidate = EstimateQueryPose(index_, query, cluster.matches, options, false, &used);
+      if (candidate.success && candidate.num_inliers > best_inliers) {
+        best_inliers = candidate.num_inliers;
+        best = &cluster.matches;
+      }
+    }
+    if (best != nullptr) {
+      correspondences = *best;
+      pose = EstimateQueryPose(index_, query, correspondences, options, options.refine, &pose_inputs);
+    } else {
+      pose.failure_reason = "no cluster gave " + std::to_string(options.min_inliers) + " inliers";
+    }
+  } else {
+    pose = EstimateQueryPose(index_, query, correspondences, options, options.refine, &pose_inputs);
+  }
+  result.correspondences = static_cast<uint32_t>(correspondences.size());
+  result.times.pose = Seconds(pose_start);
   const QueryCamera& camera = query.camera;
   const double cx = camera.width / 2.0, cy = camera.height / 2.0;
-  for (const FeatureMatch& match : correspondences) {
-    const std::array<double, 2> pixel = {query.keypoints[2 * match.feature], query.keypoints[2 * match.feature + 1]};
-    Eigen::Vector2d point2D;
-    if (camera.focal_known) {
-      std::array<double, 2> normalized;
-      if (!PixelToNormalized(camera.model_id, camera.params, pixel, &normalized)) continue;
-      point2D = {normalized[0], normalized[1]};
-    } else {
-      point2D = {pixel[0] - cx, pixel[1] - cy};
-    }
-    const IndexPoint& point = index_.points()[index_.view_points()[match.view]];
-    points2D.push_back(point2D);
-    points3D.emplace_back(point.xyz[0], point.xyz[1], point.xyz[2]);
-  }
-
-  AbsolutePoseOptions pose_options;
-  pose_options.max_error_px = options.max_error_px;
-  pose_options.min_inliers = options.min_inliers;
-  pose_options.max_iterations = options.max_ransac_iterations;
-  pose_options.confidence = options.ransac_confidence;
-  pose_options.seed = options.seed;
-  pose_options.refine = options.refine;
-  AbsolutePoseResult pose;
-  if (camera.focal_known) {
-    pose = EstimateAbsolutePose(points2D, points3D, MeanFocalLength(camera.model_id, camera.params), pose_options);
-  } else {
-    pose_options.image_diagonal_px = std::hypot(double(camera.width), double(camera.height));
-    pose = EstimateAbsolutePoseUnknownFocal(points2D, points3D, pose_options);
-  }
-  result.times.pose = Seconds(pose_start);
 
   result.num_inliers = static_cast<uint32_t>(pose.num_inliers);
-  result.inlier_ratio = points2D.empty() ? 0.0 : double(pose.num_inliers) / double(points2D.size());
+  result.inlier_ratio = pose_inputs == 0 ? 0.0 : double(pose.num_inliers) / double(pose_inputs);
   result.ransac_iterations = pose.stats.iterations;
   result.success = pose.success;
   if (pose.success) {

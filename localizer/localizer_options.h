@@ -1,13 +1,31 @@
 #pragma once
 
+#include <array>
 #include <cstdint>
+#include <optional>
+#include <string_view>
 
 namespace cwloc {
 
 enum class Matcher {
   kClusterWise,  // the paper: k-ratio + cluster-wise ratio tests, voting, back-matching
   kGlobalRatio,  // diagnostic baseline: plain 1-ratio against the global tree, then RANSAC
+  kClusterExhaustive,  // diagnostic gold standard (Table 1): brute-force 1-ratio inside each
+                       // cluster, RANSAC per cluster, the cluster with most inliers wins
 };
+
+// The names the CLI takes and the JSON reports, in enum order.
+inline constexpr std::array<std::string_view, 3> kMatcherNames = {"cluster-wise", "global-ratio",
+                                                                  "cluster-exhaustive"};
+
+inline std::string_view MatcherName(Matcher matcher) { return kMatcherNames[static_cast<size_t>(matcher)]; }
+
+inline std::optional<Matcher> ParseMatcher(std::string_view name) {
+  for (size_t i = 0; i < kMatcherNames.size(); ++i) {
+    if (kMatcherNames[i] == name) return static_cast<Matcher>(i);
+  }
+  return std::nullopt;
+}
 
 // Every threshold and count of the pipeline; defaults are the paper's (section 4,
 // "Experimental details").

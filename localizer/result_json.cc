@@ -7,7 +7,7 @@
 namespace cwloc {
 
 nlohmann::ordered_json OptionsToJson(const LocalizerOptions& options) {
-  return {{"matcher", options.matcher == Matcher::kClusterWise ? "cluster-wise" : "global-ratio"},
+  return {{"matcher", std::string(MatcherName(options.matcher))},
           {"k", options.k},
           {"checks", options.checks},
           {"ratio", options.ratio},

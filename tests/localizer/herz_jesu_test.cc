@@ -127,6 +127,24 @@ TEST_F(HerzJesuTest, GlobalRatioBaselineAlsoLocalizesThisSmallModel) {
   }
 }
 
+TEST_F(HerzJesuTest, ExhaustivePerClusterMatchingLocalizesFromOneCluster) {
+  const DatabaseQueries queries(data_ / "database.db");
+  const Localizer localizer(*index_);
+  LocalizerOptions options;
+  options.matcher = Matcher::kClusterExhaustive;
+  // Two queries: brute force compares every feature with all 63,727 views.
+  for (const std::string name : {"0002.jpg", "0017.jpg"}) {
+    Query query = queries.Load(name, true);
+    query.camera = ParseCameraSpec(truth_[name].camera, "queries_gt.txt");
+    const LocalizationResult result = localizer.Localize(query, options);
+    ExpectPoseClose(result, truth_[name], 0.05, 0.5);
+    EXPECT_EQ(result.features_searched, query.NumFeatures());
+    // One image per cluster: the winning cluster's matches are a part of all clusters' matches.
+    EXPECT_LT(result.correspondences, result.forward_matches);
+    EXPECT_EQ(result.back_matches, 0u);
+  }
+}
+
 TEST_F(HerzJesuTest, SameSeedGivesTheSamePose) {
   const DatabaseQueries queries(data_ / "database.db");
   const Localizer localizer(*index_);

@@ -74,6 +74,25 @@ TEST_F(LocalizeCliTest, BadQueryGetsAnErrorRecordAndTheOthersFinish) {
   EXPECT_EQ(ValidateAgainstSchema(jsonl, &validation), 0) << validation;
 }
 
+TEST_F(LocalizeCliTest, EveryMatcherNameRunsAndIsReported) {
+  for (const std::string matcher : {"cluster-wise", "global-ratio", "cluster-exhaustive"}) {
+    std::string output;
+    const auto jsonl = dir_ / (matcher + ".jsonl");
+    EXPECT_LE(Run("--database " + database_path_.string() + " --query " + FirstImageName() + " --matcher " + matcher +
+                      " -o " + jsonl.string(),
+                  &output),
+              1)
+        << output;
+    std::ifstream in(jsonl);
+    const std::string text((std::istreambuf_iterator<char>(in)), {});
+    const auto lines = JsonLines(text);
+    ASSERT_EQ(lines.size(), 1u) << text;
+    EXPECT_EQ(lines[0]["parameters"]["matcher"], matcher);
+    std::string validation;
+    EXPECT_EQ(ValidateAgainstSchema(jsonl, &validation), 0) << validation;
+  }
+}
+
 TEST_F(LocalizeCliTest, CorruptOrMissingIndexIsAClearError) {
   std::string output;
   EXPECT_EQ(test::RunCommand(test::ToolPath("cwloc-localize").string() + " --index " + (dir_ / "none.cwl").string() +
