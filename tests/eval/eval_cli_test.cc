@@ -105,7 +105,16 @@ TEST(EvalCli, JsonReportMatchesSchemaAndComparesRuns) {
   EXPECT_NEAR(units["runs"][0]["position_error"]["median"].get<double>(), 0.65, 1e-9);
   EXPECT_NEAR(units["runs"][1]["position_error"]["median"].get<double>(), 0.65, 1e-9);
   EXPECT_DOUBLE_EQ(units["runs"][0]["within"][1]["share"].get<double>(), 0.4);
-  EXPECT_DOUBLE_EQ(units["runs"][0]["times_ms"]["total"]["median"].get<double>(), 25.0);
+  const nlohmann::json& total = units["runs"][0]["times_ms"]["total"];
+  EXPECT_DOUBLE_EQ(total["q1"].get<double>(), 17.5);
+  EXPECT_DOUBLE_EQ(total["median"].get<double>(), 25.0);
+  EXPECT_DOUBLE_EQ(total["q3"].get<double>(), 32.5);
+  EXPECT_DOUBLE_EQ(total["p90"].get<double>(), 37.0);
+  for (const auto& [stage, quantiles] : units["runs"][0]["times_ms"].items()) {
+    EXPECT_EQ(quantiles.size(), 4u) << stage;
+    EXPECT_TRUE(quantiles.contains("p90")) << stage;
+  }
+  EXPECT_DOUBLE_EQ(units["runs"][0]["times_ms"]["pose"]["p90"].get<double>(), 4.0);
   const nlohmann::json metres = ReadJson(dir / "metres.json");
   EXPECT_EQ(metres["unit"], "m");
   EXPECT_NEAR(metres["runs"][0]["position_error"]["median"].get<double>(), 1.3, 1e-9);
@@ -117,6 +126,17 @@ TEST(EvalCli, JsonReportMatchesSchemaAndComparesRuns) {
   EXPECT_NE(table.find("poses "), std::string::npos) << table;
   EXPECT_NE(table.find("distances in metres (scale 2 from"), std::string::npos) << table;
   EXPECT_NE(table.find("forward_knn"), std::string::npos) << table;
+  EXPECT_NE(table.find("times (ms), Q1 / median / Q3 / p90"), std::string::npos) << table;
+  EXPECT_NE(table.find("17.5 / 25.0 / 32.5 / 37.0"), std::string::npos) << table;
+
+  // The schema requires p90 in every stage's times.
+  nlohmann::json without_p90 = units;
+  without_p90["runs"][0]["times_ms"]["ratio_test"].erase("p90");
+  std::ofstream(dir / "without_p90.json") << without_p90.dump(2);
+  std::string output;
+  EXPECT_EQ(ValidateReport(dir / "without_p90.json", &output), 1) << output;
+  // times_ms is oneOf null or the stages, so the error is reported on times_ms as a whole.
+  EXPECT_NE(output.find("document 1: /runs/0/times_ms: "), std::string::npos) << output;
 }
 
 TEST(EvalCli, HerzJesuGroundTruthAgainstItself) {

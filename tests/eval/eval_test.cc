@@ -52,6 +52,29 @@ TEST(Quartiles, LinearInterpolationBetweenClosestRanks) {
   EXPECT_FALSE(ComputeQuartiles({}));
 }
 
+TEST(Quartiles, TimeQuantilesAddThe90thPercentile) {
+  // numpy.quantile([1, 2, 3, 4], [.25, .5, .75, .9]) = 1.75, 2.5, 3.25, 3.7 (h = 2.7)
+  auto q = ComputeTimeQuantiles({4, 1, 3, 2});
+  ASSERT_TRUE(q);
+  EXPECT_DOUBLE_EQ(q->q1, 1.75);
+  EXPECT_DOUBLE_EQ(q->median, 2.5);
+  EXPECT_DOUBLE_EQ(q->q3, 3.25);
+  EXPECT_DOUBLE_EQ(q->p90, 3.7);
+  // 1 2 3 5 10: h = 3.6, 5 + 0.6 (10 - 5) = 8.
+  q = ComputeTimeQuantiles({10, 3, 1, 5, 2});
+  EXPECT_DOUBLE_EQ(q->median, 3);
+  EXPECT_DOUBLE_EQ(q->p90, 8);
+  // Eleven values 0..100 step 10: h = 9 falls on an element.
+  q = ComputeTimeQuantiles({100, 90, 80, 70, 60, 50, 40, 30, 20, 10, 0});
+  EXPECT_DOUBLE_EQ(q->median, 50);
+  EXPECT_DOUBLE_EQ(q->p90, 90);
+  q = ComputeTimeQuantiles({0, 10});
+  EXPECT_DOUBLE_EQ(q->p90, 9);
+  q = ComputeTimeQuantiles({7});
+  EXPECT_DOUBLE_EQ(q->p90, 7);
+  EXPECT_FALSE(ComputeTimeQuantiles({}));
+}
+
 TEST(PoseError, RotationAngleOfRelativeRotation) {
   const Eigen::Quaterniond gt(Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, -2, 0.5).normalized()));
   const Pose truth = PoseFromCenter(gt, Eigen::Vector3d(1, 2, 3));
@@ -106,7 +129,10 @@ TEST(Report, KnownErrorsGiveKnownQuartilesAndShares) {
   EXPECT_DOUBLE_EQ((*r.times_ms)[5].q1, 17.5);
   EXPECT_DOUBLE_EQ((*r.times_ms)[5].median, 25);
   EXPECT_DOUBLE_EQ((*r.times_ms)[5].q3, 32.5);
+  // {10, 20, 30, 40}: h = 0.9 * 3 = 2.7, 30 + 0.7 * 10.
+  EXPECT_DOUBLE_EQ((*r.times_ms)[5].p90, 37);
   EXPECT_DOUBLE_EQ((*r.times_ms)[0].median, 1.0);
+  EXPECT_DOUBLE_EQ((*r.times_ms)[0].p90, 1.0);
   EXPECT_EQ(r.per_query[4].status, QueryStatus::kMissing);
 }
 

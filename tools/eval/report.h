@@ -26,6 +26,14 @@ double Quantile(const std::vector<double>& sorted, double p);
 // Q1, median and Q3 as above; nullopt for no values.
 std::optional<Quartiles> ComputeQuartiles(std::vector<double> values);
 
+// Stage times also get the 90th percentile (the tail the scale benchmark reports).
+struct TimeQuantiles : Quartiles {
+  double p90 = 0;
+};
+
+// Q1, median, Q3 and Q(0.9) as above; nullopt for no values.
+std::optional<TimeQuantiles> ComputeTimeQuantiles(std::vector<double> values);
+
 // visuallocalization.net's (position, rotation) thresholds.
 struct Threshold {
   double position;
@@ -57,7 +65,7 @@ struct RunReport {
   std::optional<Quartiles> rotation_error_deg;  // over localized queries
   std::array<int, kThresholds.size()> within{};  // localized queries inside each threshold
   int timed_records = 0;  // result records that carry times_ms
-  std::optional<std::array<Quartiles, kStageNames.size()>> times_ms;
+  std::optional<std::array<TimeQuantiles, kStageNames.size()>> times_ms;
   std::vector<QueryOutcome> per_query;  // in ground-truth order
   std::optional<RecognitionScores> recognition;  // with --model and query points
 };
