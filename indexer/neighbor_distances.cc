@@ -1,49 +1,111 @@
 #include "indexer/neighbor_distances.h"
 
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 #include "format/descriptor_distance.h"
-#include "format/progress.h"
+#include "format/kd_forest_builder.h"
 #include "format/parallel_for.h"
+#include "format/progress.h"
 
 namespace cwloc {
+namespace {
+
+constexpr uint32_t kNone = std::numeric_limits<uint32_t>::max();
+
+// Smallest squared distance from each member to a member of another 3D point, each pair once.
+std::vector<uint32_t> ExactNearestOtherPoint(const ModelViews& views, const std::vector<uint32_t>& members) {
+  const auto distance = BestDistanceFunctions().one;
+  const uint8_t* descriptors = views.descriptors.data();
+  std::vector<uint32_t> best(members.size(), kNone);
+  for (size_t a = 0; a < members.size(); ++a) {
+    const uint32_t va = members[a];
+    const uint8_t* da = descriptors + size_t{va} * kDescriptorBytes;
+    const uint32_t pa = views.view_points[va];
+    uint32_t best_a = best[a];
+    for (size_t b = a + 1; b < members.size(); ++b) {
+      const uint32_t vb = members[b];
+      if (views.view_points[vb] == pa) continue;
+      const uint32_t d = distance(da, descriptors + size_t{vb} * kDescriptorBytes);
+      best_a = std::min(best_a, d);
+      best[b] = std::min(best[b], d);
+    }
+    best[a] = best_a;
+  }
+  return best;
+}
+
+// The same from a kd-forest over the members: the first of the nearest neighbours that is a
+// view of another point.
+std::vector<uint32_t> ApproximateNearestOtherPoint(const ModelViews& views, const std::vector<uint32_t>& members,
+                                                   int num_threads) {
+  std::vector<uint8_t> descriptors(members.size() * kDescriptorBytes);
+  for (size_t m = 0; m < members.size(); ++m) {
+    std::memcpy(descriptors.data() + m * kDescriptorBytes,
+                views.descriptors.data() + size_t{members[m]} * kDescriptorBytes, kDescriptorBytes);
+  }
+  KdForestBuildOptions options;
+  options.num_threads = static_cast<uint32_t>(num_threads);
+  const KdForest forest = BuildKdForest(descriptors, options);
+  const KdForestView view = forest.View(descriptors);
+
+  std::vector<uint32_t> best(members.size(), kNone);
+  std::vector<KdForestSearcher> searchers(num_threads, KdForestSearcher(view));
+  std::vector<std::vector<KdNeighbor>> neighbors(num_threads, std::vector<KdNeighbor>(kApproxNeighborCount));
+  ParallelFor(members.size(), num_threads, [&](size_t m, int worker) {
+    const KdSearchResult found = searchers[worker].Search(descriptors.data() + m * kDescriptorBytes,
+                                                          KdSearchOptions{kApproxNeighborChecks}, neighbors[worker]);
+    const uint32_t point = views.view_points[members[m]];
+    for (uint32_t i = 0; i < found.num_neighbors; ++i) {
+      const KdNeighbor& neighbor = neighbors[worker][i];
+      if (views.view_points[members[neighbor.index]] != point) {
+        best[m] = neighbor.distance;
+        break;
+      }
+    }
+  });
+  return best;
+}
+
+}  // namespace
 
 std::vector<float> ComputeViewNeighborDistances(const ModelViews& views, const Clustering& clustering,
                                                 int num_threads) {
   std::vector<std::vector<uint32_t>> cluster_images(clustering.num_clusters);
-  for (uint32_t i = 0; i < views.images.size(); ++i) cluster_images[clustering.cluster_of_image[i]].push_back(i);
-
-  std::vector<float> distances(views.num_views(), std::numeric_limits<float>::infinity());
-  const auto distance = BestDistanceFunctions().one;
-  const uint8_t* descriptors = views.descriptors.data();
-  Progress progress("v_NN distances", clustering.num_clusters);
-  ParallelFor(clustering.num_clusters, ResolveThreads(num_threads), [&](size_t c, int) {
+  std::vector<size_t> cluster_views(clustering.num_clusters, 0);
+  for (uint32_t i = 0; i < views.images.size(); ++i) {
+    cluster_images[clustering.cluster_of_image[i]].push_back(i);
+    cluster_views[clustering.cluster_of_image[i]] += views.images[i].num_views;
+  }
+  auto members_of = [&](size_t c) {
     std::vector<uint32_t> members;
     for (uint32_t i : cluster_images[c]) {
       for (uint32_t v = 0; v < views.images[i].num_views; ++v) members.push_back(views.images[i].first_view + v);
     }
-    std::vector<uint32_t> best(members.size(), std::numeric_limits<uint32_t>::max());
-    // Each pair once, updating both ends.
-    for (size_t a = 0; a < members.size(); ++a) {
-      const uint32_t va = members[a];
-      const uint8_t* da = descriptors + size_t{va} * kDescriptorBytes;
-      const uint32_t pa = views.view_points[va];
-      uint32_t best_a = best[a];
-      for (size_t b = a + 1; b < members.size(); ++b) {
-        const uint32_t vb = members[b];
-        if (views.view_points[vb] == pa) continue;
-        const uint32_t d = distance(da, descriptors + size_t{vb} * kDescriptorBytes);
-        best_a = std::min(best_a, d);
-        best[b] = std::min(best[b], d);
-      }
-      best[a] = best_a;
+    return members;
+  };
+
+  std::vector<float> distances(views.num_views(), std::numeric_limits<float>::infinity());
+  auto store = [&](const std::vector<uint32_t>& members, const std::vector<uint32_t>& best) {
+    for (size_t m = 0; m < members.size(); ++m) {
+      if (best[m] != kNone) distances[members[m]] = std::sqrt(static_cast<float>(best[m]));
     }
-    for (size_t a = 0; a < members.size(); ++a) {
-      if (best[a] != std::numeric_limits<uint32_t>::max()) distances[members[a]] = std::sqrt(static_cast<float>(best[a]));
-    }
+  };
+  const int threads = ResolveThreads(num_threads);
+  Progress progress("v_NN distances", clustering.num_clusters);
+  ParallelFor(clustering.num_clusters, threads, [&](size_t c, int) {
+    if (cluster_views[c] > kExactNeighborMaxViews) return;  // below, one at a time with all threads
+    const std::vector<uint32_t> members = members_of(c);
+    store(members, ExactNearestOtherPoint(views, members));
     progress.Advance();
   });
+  for (size_t c = 0; c < clustering.num_clusters; ++c) {
+    if (cluster_views[c] <= kExactNeighborMaxViews) continue;
+    const std::vector<uint32_t> members = members_of(c);
+    store(members, ApproximateNearestOtherPoint(views, members, threads));
+    progress.Advance();
+  }
   progress.Finish();
   return distances;
 }
