@@ -45,7 +45,9 @@ ordered_json QuartilesJson(const std::optional<Quartiles>& q) {
 }
 
 ordered_json TimeQuantilesJson(const TimeQuantiles& q) {
-  return {{"q1", q.q1}, {"median", q.median}, {"q3", q.q3}, {"p90", q.p90}};
+  ordered_json json = QuartilesJson(q);
+  json["p90"] = q.p90;
+  return json;
 }
 
 std::string ThresholdName(const Threshold& t, const char* unit) {
@@ -84,21 +86,24 @@ double Quantile(const std::vector<double>& sorted, double p) {
   return sorted[lo] + (h - double(lo)) * (sorted[hi] - sorted[lo]);
 }
 
+namespace {
+
+Quartiles QuartilesOfSorted(const std::vector<double>& sorted) {
+  return {Quantile(sorted, 0.25), Quantile(sorted, 0.5), Quantile(sorted, 0.75)};
+}
+
+}  // namespace
+
 std::optional<Quartiles> ComputeQuartiles(std::vector<double> values) {
   if (values.empty()) return std::nullopt;
   std::sort(values.begin(), values.end());
-  return Quartiles{Quantile(values, 0.25), Quantile(values, 0.5), Quantile(values, 0.75)};
+  return QuartilesOfSorted(values);
 }
 
 std::optional<TimeQuantiles> ComputeTimeQuantiles(std::vector<double> values) {
   if (values.empty()) return std::nullopt;
   std::sort(values.begin(), values.end());
-  TimeQuantiles q;
-  q.q1 = Quantile(values, 0.25);
-  q.median = Quantile(values, 0.5);
-  q.q3 = Quantile(values, 0.75);
-  q.p90 = Quantile(values, 0.9);
-  return q;
+  return TimeQuantiles{QuartilesOfSorted(values), Quantile(values, 0.9)};
 }
 
 const char* QueryStatusName(QueryStatus status) {
