@@ -294,9 +294,9 @@ std::string FormatTable(const EvalReport& report) {
     out << "\nlocation recognition: a ranked image is right when it sees >= " << report.recognition_min_shared
         << " of the query's ground-truth 3D points; shares of all ground-truth queries\n";
     std::vector<std::vector<std::string>> recognition_rows;
-    std::vector<std::string> header = {"run", "queries with a right image"};
-    for (int k : kRecognitionRanks) header.push_back("top-" + std::to_string(k));
-    recognition_rows.push_back(header);
+    std::vector<std::string> recognition_header = {"run", "queries with a right image"};
+    for (int k : kRecognitionRanks) recognition_header.push_back("top-" + std::to_string(k));
+    recognition_rows.push_back(recognition_header);
     for (const RunReport& run : report.runs) {
       if (!run.recognition) continue;
       std::vector<std::string> row = {run.label, std::to_string(run.recognition->with_right_image)};
