@@ -7,7 +7,7 @@
 #include <random>
 #include <vector>
 
-#include "format/descriptor_distance.h"
+#include "format/kdtree/descriptor_distance.h"
 
 namespace cwloc {
 namespace {

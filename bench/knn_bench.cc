@@ -34,9 +34,9 @@
 
 #include <CLI/CLI.hpp>
 
-#include "format/descriptor_distance.h"
-#include "format/kd_forest.h"
-#include "format/kd_forest_builder.h"
+#include "format/kdtree/descriptor_distance.h"
+#include "format/kdtree/kd_forest.h"
+#include "format/kdtree/kd_forest_builder.h"
 
 namespace cwloc {
 namespace {

@@ -6,8 +6,8 @@
 #include <cstdlib>
 #include <vector>
 
-#include "format/error.h"
-#include "format/index.h"
+#include "format/base/error.h"
+#include "format/index/index.h"
 
 int main(int argc, char** argv) {
   if (argc < 2) {

@@ -10,7 +10,7 @@
 #include "localizer/pose/absolute_pose.h"
 #include "localizer/pose/p3p.h"
 #include "localizer/pose/p4pf.h"
-#include "tests/pose/synthetic_pose.h"
+#include "tests/localizer/pose/synthetic_pose.h"
 
 namespace cwloc {
 namespace {

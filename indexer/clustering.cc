@@ -9,7 +9,7 @@
 #include <sstream>
 #include <unordered_map>
 
-#include "format/error.h"
+#include "format/base/error.h"
 
 namespace cwloc {
 namespace {

@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-#include "format/parallel_for.h"
+#include "format/base/parallel_for.h"
 
 namespace cwloc {
 

@@ -7,10 +7,10 @@
 #include <iostream>
 
 #include "cwloc/version.h"
-#include "format/error.h"
-#include "format/index.h"
-#include "format/tool_main.h"
-#include "format/xxhash64.h"
+#include "format/base/error.h"
+#include "format/index/index.h"
+#include "format/base/tool_main.h"
+#include "format/index/xxhash64.h"
 #include "indexer/index_builder.h"
 
 namespace cwloc {

@@ -6,16 +6,16 @@
 #include <fstream>
 
 #include "cwloc/version.h"
-#include "format/error.h"
-#include "format/index_file.h"
-#include "format/progress.h"
-#include "format/xxhash64.h"
-#include "indexer/colmap/reconstruction_io.h"
+#include "format/base/error.h"
+#include "format/index/index_file.h"
+#include "format/base/progress.h"
+#include "format/index/xxhash64.h"
+#include "format/colmap/reconstruction_io.h"
 #include "indexer/covisibility.h"
-#include "format/kd_forest_builder.h"
+#include "format/kdtree/kd_forest_builder.h"
 #include "indexer/model_views.h"
 #include "indexer/neighbor_distances.h"
-#include "format/parallel_for.h"
+#include "format/base/parallel_for.h"
 
 namespace cwloc {
 namespace {

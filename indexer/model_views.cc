@@ -4,9 +4,9 @@
 #include <cstring>
 #include <unordered_map>
 
-#include "format/camera_models.h"
-#include "format/error.h"
-#include "format/progress.h"
+#include "format/camera/camera_models.h"
+#include "format/base/error.h"
+#include "format/base/progress.h"
 
 namespace cwloc {
 namespace {

@@ -4,9 +4,9 @@
 #include <string>
 #include <vector>
 
-#include "format/index_sections.h"
-#include "indexer/colmap/database.h"
-#include "indexer/colmap/reconstruction.h"
+#include "format/index/index_sections.h"
+#include "format/colmap/database.h"
+#include "format/colmap/reconstruction.h"
 
 namespace cwloc {
 

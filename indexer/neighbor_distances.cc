@@ -4,10 +4,10 @@
 #include <cstring>
 #include <limits>
 
-#include "format/descriptor_distance.h"
-#include "format/kd_forest_builder.h"
-#include "format/parallel_for.h"
-#include "format/progress.h"
+#include "format/kdtree/descriptor_distance.h"
+#include "format/kdtree/kd_forest_builder.h"
+#include "format/base/parallel_for.h"
+#include "format/base/progress.h"
 
 namespace cwloc {
 namespace {

@@ -4,9 +4,9 @@
 #include <chrono>
 #include <cmath>
 
-#include "format/error.h"
-#include "format/kd_forest_builder.h"
-#include "localizer/cluster_ratio_test.h"
+#include "format/base/error.h"
+#include "format/kdtree/kd_forest_builder.h"
+#include "localizer/cluster_wise_ratio.h"
 
 namespace cwloc {
 namespace {

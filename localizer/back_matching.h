@@ -4,8 +4,8 @@
 #include <span>
 #include <vector>
 
-#include "format/index.h"
-#include "format/kd_forest.h"
+#include "format/index/index.h"
+#include "format/kdtree/kd_forest.h"
 #include "localizer/forward_matching.h"
 #include "localizer/localizer_options.h"
 #include "localizer/query.h"

@@ -14,16 +14,16 @@
 #include <thread>
 
 #include "cwloc/version.h"
-#include "format/error.h"
-#include "format/index.h"
-#include "format/progress.h"
-#include "format/tool_main.h"
-#include "localizer/input/camera_spec.h"
-#include "localizer/input/feature_file.h"
+#include "format/base/error.h"
+#include "format/index/index.h"
+#include "format/base/progress.h"
+#include "format/base/tool_main.h"
+#include "localizer/io/camera_spec.h"
+#include "localizer/io/feature_file.h"
 #include "localizer/localizer.h"
-#include "localizer/result_json.h"
+#include "localizer/io/result_json.h"
 #ifdef CWLOC_WITH_COLMAP_DB
-#include "localizer/input/database_queries.h"
+#include "localizer/io/database_queries.h"
 #endif
 
 namespace cwloc {

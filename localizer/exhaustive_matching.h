@@ -3,7 +3,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "format/index.h"
+#include "format/index/index.h"
 #include "localizer/back_matching.h"
 #include "localizer/forward_matching.h"
 #include "localizer/query.h"

@@ -5,8 +5,8 @@
 #include <cmath>
 #include <numeric>
 
-#include "format/error.h"
-#include "localizer/cluster_ratio_test.h"
+#include "format/base/error.h"
+#include "localizer/cluster_wise_ratio.h"
 
 namespace cwloc {
 namespace {

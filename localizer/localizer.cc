@@ -6,9 +6,9 @@
 #include <random>
 #include <unordered_map>
 
-#include "format/camera_models.h"
-#include "format/error.h"
-#include "localizer/cluster_ratio_test.h"
+#include "format/camera/camera_models.h"
+#include "format/base/error.h"
+#include "localizer/cluster_wise_ratio.h"
 #include "localizer/exhaustive_matching.h"
 #include "localizer/forward_matching.h"
 #include "localizer/pose/absolute_pose.h"

@@ -1,6 +1,6 @@
 #pragma once
 
-#include "format/index.h"
+#include "format/index/index.h"
 #include "localizer/back_matching.h"
 #include "localizer/localization_result.h"
 #include "localizer/localizer_options.h"

@@ -4,7 +4,7 @@
 #include <string>
 #include <vector>
 
-#include "format/camera_models.h"
+#include "format/camera/camera_models.h"
 
 namespace cwloc {
 

@@ -7,7 +7,7 @@
 #include <iterator>
 #include <set>
 
-#include "format/index.h"
+#include "format/index/index.h"
 #include "tests/indexer/indexer_fixture.h"
 
 namespace cwloc {

@@ -6,7 +6,7 @@
 #include <fstream>
 #include <iterator>
 
-#include "format/index_file.h"
+#include "format/index/index_file.h"
 #include "tests/indexer/indexer_fixture.h"
 
 namespace cwloc {

@@ -2,11 +2,11 @@
 
 #include <gtest/gtest.h>
 
-#include "format/descriptor_distance.h"
-#include "indexer/colmap/database.h"
-#include "indexer/colmap/reconstruction_io.h"
+#include "format/kdtree/descriptor_distance.h"
+#include "format/colmap/database.h"
+#include "format/colmap/reconstruction_io.h"
 #include "indexer/index_builder.h"
-#include "tests/colmap/synthetic_model.h"
+#include "tests/format/colmap/synthetic_model.h"
 #include "tests/test_util.h"
 
 namespace cwloc::test {

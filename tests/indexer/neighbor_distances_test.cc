@@ -5,7 +5,7 @@
 #include <cmath>
 #include <random>
 
-#include "format/descriptor_distance.h"
+#include "format/kdtree/descriptor_distance.h"
 
 namespace cwloc {
 namespace {

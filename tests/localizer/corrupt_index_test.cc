@@ -6,8 +6,8 @@
 #include <fstream>
 #include <iterator>
 
-#include "format/index.h"
-#include "localizer/input/database_queries.h"
+#include "format/index/index.h"
+#include "localizer/io/database_queries.h"
 #include "localizer/localizer.h"
 #include "tests/test_util.h"
 

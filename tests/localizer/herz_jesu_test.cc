@@ -6,10 +6,10 @@
 #include <fstream>
 #include <sstream>
 
-#include "format/index.h"
+#include "format/index/index.h"
 #include "indexer/index_builder.h"
-#include "localizer/input/camera_spec.h"
-#include "localizer/input/database_queries.h"
+#include "localizer/io/camera_spec.h"
+#include "localizer/io/database_queries.h"
 #include "localizer/localizer.h"
 #include "tests/test_util.h"
 

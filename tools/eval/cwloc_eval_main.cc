@@ -6,8 +6,8 @@
 #include <iostream>
 
 #include "cwloc/version.h"
-#include "format/error.h"
-#include "format/tool_main.h"
+#include "format/base/error.h"
+#include "format/base/tool_main.h"
 #include "tools/eval/ground_truth.h"
 #include "tools/eval/report.h"
 #include "tools/eval/result_reader.h"

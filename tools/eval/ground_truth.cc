@@ -8,7 +8,7 @@
 #include <sstream>
 #include <unordered_map>
 
-#include "format/error.h"
+#include "format/base/error.h"
 
 namespace cwloc::eval {
 namespace {

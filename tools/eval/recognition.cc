@@ -4,8 +4,8 @@
 #include <sstream>
 #include <unordered_map>
 
-#include "format/error.h"
-#include "indexer/colmap/reconstruction_io.h"
+#include "format/base/error.h"
+#include "format/colmap/reconstruction_io.h"
 
 namespace cwloc::eval {
 

@@ -10,8 +10,8 @@
 
 #include <Eigen/Geometry>
 
-#include "format/camera_models.h"
-#include "format/parallel_for.h"
+#include "format/camera/camera_models.h"
+#include "format/base/parallel_for.h"
 
 namespace cwloc::synth {
 namespace {

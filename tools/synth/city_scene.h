@@ -15,8 +15,8 @@
 
 #include <Eigen/Core>
 
-#include "format/types.h"
-#include "indexer/colmap/reconstruction.h"
+#include "format/colmap/types.h"
+#include "format/colmap/reconstruction.h"
 #include "tools/synth/city_layout.h"
 #include "tools/synth/sift_descriptors.h"
 

@@ -11,9 +11,9 @@
 #include <mutex>
 
 #include "cwloc/version.h"
-#include "format/camera_models.h"
-#include "format/error.h"
-#include "format/tool_main.h"
+#include "format/camera/camera_models.h"
+#include "format/base/error.h"
+#include "format/base/tool_main.h"
 #include "tools/synth/city_scene.h"
 #include "tools/synth/scene_writer.h"
 #include "tools/synth/synth_options.h"

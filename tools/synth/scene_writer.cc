@@ -12,11 +12,11 @@
 #include <mutex>
 #include <thread>
 
-#include "format/camera_models.h"
-#include "format/error.h"
-#include "indexer/colmap/database.h"
-#include "indexer/colmap/reconstruction_io.h"
-#include "format/parallel_for.h"
+#include "format/camera/camera_models.h"
+#include "format/base/error.h"
+#include "format/colmap/database.h"
+#include "format/colmap/reconstruction_io.h"
+#include "format/base/parallel_for.h"
 
 namespace cwloc::synth {
 namespace fs = std::filesystem;

@@ -3,8 +3,8 @@
 #include <cmath>
 #include <sstream>
 
-#include "format/camera_models.h"
-#include "format/error.h"
+#include "format/camera/camera_models.h"
+#include "format/base/error.h"
 
 namespace cwloc::synth {
 namespace {

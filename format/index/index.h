@@ -1,0 +1,75 @@
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <span>
+#include <string>
+#include <string_view>
+
+#include "format/index/index_file.h"
+#include "format/index/index_sections.h"
+#include "format/kdtree/kd_forest.h"
+
+namespace cwloc {
+
+// The typed, read-only view of an index file that the localizer and the tools use.
+// Open() is O(number of sections): it checks that every section is present with the right
+// element size and that the counts agree, and never walks the big arrays. Indices stored in
+// those arrays are checked where they are used (the accessors below return nullopt / empty on
+// a bad one) and all of them by Validate().
+class Index {
+ public:
+  static Index Open(const std::filesystem::path& path);
+
+  const IndexFile& file() const { return file_; }
+  std::string_view manifest_json() const;
+
+  std::span<const IndexCamera> cameras() const { return cameras_; }
+  std::span<const IndexImage> images() const { return images_; }
+  std::span<const IndexPoint> points() const { return points_; }
+  std::span<const uint32_t> tracks() const { return tracks_; }  // view indices
+  std::span<const uint8_t> descriptors() const { return descriptors_; }
+  std::span<const uint32_t> view_points() const { return view_points_; }
+  // Empty unless the index was built with --keypoints.
+  std::span<const ViewKeypoint> view_keypoints() const { return view_keypoints_; }
+  std::span<const float> view_neighbor_distances() const { return view_neighbor_distances_; }
+  std::span<const uint32_t> covisibility_offsets() const { return covisibility_offsets_; }
+  std::span<const CovisibilityEdge> covisibility_edges() const { return covisibility_edges_; }
+
+  // The global kd-forest over all view descriptors, searched in place.
+  const KdForestView& kd_forest() const { return kd_forest_; }
+
+  size_t num_views() const { return view_points_.size(); }
+  const uint8_t* descriptor(uint32_t view) const { return descriptors_.data() + size_t{view} * kDescriptorBytes; }
+
+  // Image name from the string pool; empty if the stored range is out of bounds.
+  std::string_view ImageName(const IndexImage& image) const;
+  // The image (row in IMGS) whose view range holds `view`; UINT32_MAX if none.
+  uint32_t ImageOfView(uint32_t view) const;
+  // Views of a point / edges of an image, empty when the stored range is out of bounds.
+  std::span<const uint32_t> TrackOf(uint32_t point_index) const;
+  std::span<const CovisibilityEdge> CovisibleImages(uint32_t image_index) const;
+
+  // O(size) check of every stored index and range; throws InputError naming the section,
+  // the element and the problem.
+  void Validate() const;
+
+ private:
+  explicit Index(IndexFile file) : file_(std::move(file)) {}
+
+  IndexFile file_;
+  std::span<const IndexCamera> cameras_;
+  std::span<const IndexImage> images_;
+  std::span<const char> strings_;
+  std::span<const IndexPoint> points_;
+  std::span<const uint32_t> tracks_;
+  std::span<const uint8_t> descriptors_;
+  std::span<const uint32_t> view_points_;
+  std::span<const ViewKeypoint> view_keypoints_;
+  std::span<const float> view_neighbor_distances_;
+  std::span<const uint32_t> covisibility_offsets_;
+  std::span<const CovisibilityEdge> covisibility_edges_;
+  KdForestView kd_forest_;
+};
+
+}  // namespace cwloc

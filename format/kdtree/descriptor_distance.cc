@@ -1,0 +1,207 @@
+#include "format/kdtree/descriptor_distance.h"
+
+#if defined(__x86_64__) || defined(_M_X64)
+#define CWLOC_X86_64 1
+// GCC 12's AVX-512 headers initialize "undefined" vectors from themselves, which -Wuninitialized
+// reports at the header's lines when those intrinsics are inlined (GCC PR 105593).
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wuninitialized"
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
+#include <immintrin.h>
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic pop
+#endif
+#endif
+
+namespace cwloc {
+namespace {
+
+uint32_t ScalarOne(const uint8_t* a, const uint8_t* b) {
+  uint32_t sum = 0;
+  for (size_t i = 0; i < kDescriptorDim; ++i) {
+    const int32_t d = int32_t(a[i]) - int32_t(b[i]);
+    sum += uint32_t(d * d);
+  }
+  return sum;
+}
+
+void ScalarBatch(const uint8_t* query, const uint8_t* base, const uint32_t* rows, size_t n,
+                 uint32_t* out) {
+  for (size_t i = 0; i < n; ++i) out[i] = ScalarOne(query, base + size_t(rows[i]) * kDescriptorDim);
+}
+
+#ifdef CWLOC_X86_64
+
+// Both x86 kernels widen to 16 bits, subtract (|d| <= 255) and let vpmaddwd square and add
+// pairs into 32-bit lanes (<= 2 * 255^2 each), so nothing can overflow.
+
+__attribute__((target("avx2"))) inline uint32_t Avx2Reduce(__m256i acc) {
+  __m128i s = _mm_add_epi32(_mm256_castsi256_si128(acc), _mm256_extracti128_si256(acc, 1));
+  s = _mm_add_epi32(s, _mm_shuffle_epi32(s, _MM_SHUFFLE(1, 0, 3, 2)));
+  s = _mm_add_epi32(s, _mm_shuffle_epi32(s, _MM_SHUFFLE(2, 3, 0, 1)));
+  return uint32_t(_mm_cvtsi128_si32(s));
+}
+
+__attribute__((target("avx2"))) inline __m256i Avx2Load16(const uint8_t* p) {
+  return _mm256_cvtepu8_epi16(_mm_loadu_si128(reinterpret_cast<const __m128i*>(p)));
+}
+
+__attribute__((target("avx2"))) uint32_t Avx2One(const uint8_t* a, const uint8_t* b) {
+  __m256i acc0 = _mm256_setzero_si256();
+  __m256i acc1 = _mm256_setzero_si256();
+  for (size_t i = 0; i < kDescriptorDim; i += 32) {
+    const __m256i d0 = _mm256_sub_epi16(Avx2Load16(a + i), Avx2Load16(b + i));
+    const __m256i d1 = _mm256_sub_epi16(Avx2Load16(a + i + 16), Avx2Load16(b + i + 16));
+    acc0 = _mm256_add_epi32(acc0, _mm256_madd_epi16(d0, d0));
+    acc1 = _mm256_add_epi32(acc1, _mm256_madd_epi16(d1, d1));
+  }
+  return Avx2Reduce(_mm256_add_epi32(acc0, acc1));
+}
+
+__attribute__((target("avx2"))) void Avx2Batch(const uint8_t* query, const uint8_t* base,
+                                               const uint32_t* rows, size_t n, uint32_t* out) {
+  __m256i q[8];
+  for (int j = 0; j < 8; ++j) q[j] = Avx2Load16(query + 16 * j);
+  for (size_t i = 0; i < n; ++i) {
+    const uint8_t* v = base + size_t(rows[i]) * kDescriptorDim;
+    __m256i acc0 = _mm256_setzero_si256();
+    __m256i acc1 = _mm256_setzero_si256();
+    for (int j = 0; j < 8; j += 2) {
+      const __m256i d0 = _mm256_sub_epi16(q[j], Avx2Load16(v + 16 * j));
+      const __m256i d1 = _mm256_sub_epi16(q[j + 1], Avx2Load16(v + 16 * j + 16));
+      acc0 = _mm256_add_epi32(acc0, _mm256_madd_epi16(d0, d0));
+      acc1 = _mm256_add_epi32(acc1, _mm256_madd_epi16(d1, d1));
+    }
+    out[i] = Avx2Reduce(_mm256_add_epi32(acc0, acc1));
+  }
+}
+
+#define CWLOC_AVX512 "avx2,avx512f,avx512bw"
+#define CWLOC_AVX512_VNNI "avx2,avx512f,avx512bw,avx512vnni"
+
+// Folds 512 -> 256 bits with a lane shuffle (GCC 12's _mm512_reduce_add_epi32 trips
+// -Wuninitialized in its own header).
+__attribute__((target(CWLOC_AVX512))) inline uint32_t Avx512Reduce(__m512i acc) {
+  acc = _mm512_add_epi32(acc, _mm512_shuffle_i64x2(acc, acc, _MM_SHUFFLE(1, 0, 3, 2)));
+  return Avx2Reduce(_mm512_castsi512_si256(acc));
+}
+
+__attribute__((target(CWLOC_AVX512))) inline __m512i Avx512Load32(const uint8_t* p) {
+  return _mm512_cvtepu8_epi16(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(p)));
+}
+
+__attribute__((target(CWLOC_AVX512))) uint32_t Avx512One(const uint8_t* a, const uint8_t* b) {
+  __m512i acc0 = _mm512_setzero_si512();
+  __m512i acc1 = _mm512_setzero_si512();
+  for (size_t i = 0; i < kDescriptorDim; i += 64) {
+    const __m512i d0 = _mm512_sub_epi16(Avx512Load32(a + i), Avx512Load32(b + i));
+    const __m512i d1 = _mm512_sub_epi16(Avx512Load32(a + i + 32), Avx512Load32(b + i + 32));
+    acc0 = _mm512_add_epi32(acc0, _mm512_madd_epi16(d0, d0));
+    acc1 = _mm512_add_epi32(acc1, _mm512_madd_epi16(d1, d1));
+  }
+  return Avx512Reduce(_mm512_add_epi32(acc0, acc1));
+}
+
+__attribute__((target(CWLOC_AVX512))) void Avx512Batch(const uint8_t* query, const uint8_t* base,
+                                                       const uint32_t* rows, size_t n,
+                                                       uint32_t* out) {
+  __m512i q[4];
+  for (int j = 0; j < 4; ++j) q[j] = Avx512Load32(query + 32 * j);
+  for (size_t i = 0; i < n; ++i) {
+    const uint8_t* v = base + size_t(rows[i]) * kDescriptorDim;
+    const __m512i d0 = _mm512_sub_epi16(q[0], Avx512Load32(v));
+    const __m512i d1 = _mm512_sub_epi16(q[1], Avx512Load32(v + 32));
+    const __m512i d2 = _mm512_sub_epi16(q[2], Avx512Load32(v + 64));
+    const __m512i d3 = _mm512_sub_epi16(q[3], Avx512Load32(v + 96));
+    const __m512i s01 = _mm512_add_epi32(_mm512_madd_epi16(d0, d0), _mm512_madd_epi16(d1, d1));
+    const __m512i s23 = _mm512_add_epi32(_mm512_madd_epi16(d2, d2), _mm512_madd_epi16(d3, d3));
+    out[i] = Avx512Reduce(_mm512_add_epi32(s01, s23));
+  }
+}
+
+__attribute__((target(CWLOC_AVX512_VNNI))) uint32_t Avx512VnniOne(const uint8_t* a,
+                                                                  const uint8_t* b) {
+  __m512i acc0 = _mm512_setzero_si512();
+  __m512i acc1 = _mm512_setzero_si512();
+  for (size_t i = 0; i < kDescriptorDim; i += 64) {
+    const __m512i d0 = _mm512_sub_epi16(Avx512Load32(a + i), Avx512Load32(b + i));
+    const __m512i d1 = _mm512_sub_epi16(Avx512Load32(a + i + 32), Avx512Load32(b + i + 32));
+    acc0 = _mm512_dpwssd_epi32(acc0, d0, d0);
+    acc1 = _mm512_dpwssd_epi32(acc1, d1, d1);
+  }
+  return Avx512Reduce(_mm512_add_epi32(acc0, acc1));
+}
+
+__attribute__((target(CWLOC_AVX512_VNNI))) void Avx512VnniBatch(const uint8_t* query,
+                                                                const uint8_t* base,
+                                                                const uint32_t* rows, size_t n,
+                                                                uint32_t* out) {
+  __m512i q[4];
+  for (int j = 0; j < 4; ++j) q[j] = Avx512Load32(query + 32 * j);
+  for (size_t i = 0; i < n; ++i) {
+    const uint8_t* v = base + size_t(rows[i]) * kDescriptorDim;
+    const __m512i d0 = _mm512_sub_epi16(q[0], Avx512Load32(v));
+    const __m512i d1 = _mm512_sub_epi16(q[1], Avx512Load32(v + 32));
+    const __m512i d2 = _mm512_sub_epi16(q[2], Avx512Load32(v + 64));
+    const __m512i d3 = _mm512_sub_epi16(q[3], Avx512Load32(v + 96));
+    __m512i acc0 = _mm512_dpwssd_epi32(_mm512_setzero_si512(), d0, d0);
+    __m512i acc1 = _mm512_dpwssd_epi32(_mm512_setzero_si512(), d1, d1);
+    acc0 = _mm512_dpwssd_epi32(acc0, d2, d2);
+    acc1 = _mm512_dpwssd_epi32(acc1, d3, d3);
+    out[i] = Avx512Reduce(_mm512_add_epi32(acc0, acc1));
+  }
+}
+
+#endif  // CWLOC_X86_64
+
+constexpr DistanceFunctions kScalarFunctions{DistanceKernel::kScalar, "scalar", ScalarOne,
+                                             ScalarBatch};
+#ifdef CWLOC_X86_64
+constexpr DistanceFunctions kAvx2Functions{DistanceKernel::kAvx2, "avx2", Avx2One, Avx2Batch};
+constexpr DistanceFunctions kAvx512Functions{DistanceKernel::kAvx512, "avx512bw", Avx512One,
+                                             Avx512Batch};
+constexpr DistanceFunctions kAvx512VnniFunctions{DistanceKernel::kAvx512Vnni, "avx512vnni",
+                                                 Avx512VnniOne, Avx512VnniBatch};
+#endif
+
+}  // namespace
+
+const DistanceFunctions* DistanceFunctionsFor(DistanceKernel kernel) {
+  switch (kernel) {
+    case DistanceKernel::kScalar:
+      return &kScalarFunctions;
+#ifdef CWLOC_X86_64
+    // __builtin_cpu_supports also checks that the OS saves the wide registers (XGETBV).
+    case DistanceKernel::kAvx2:
+      return __builtin_cpu_supports("avx2") ? &kAvx2Functions : nullptr;
+    case DistanceKernel::kAvx512:
+      return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512bw")
+                 ? &kAvx512Functions
+                 : nullptr;
+    case DistanceKernel::kAvx512Vnni:
+      return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512bw") &&
+                     __builtin_cpu_supports("avx512vnni")
+                 ? &kAvx512VnniFunctions
+                 : nullptr;
+#else
+    default:
+      return nullptr;
+#endif
+  }
+  return nullptr;
+}
+
+const DistanceFunctions& BestDistanceFunctions() {
+  static const DistanceFunctions* best = [] {
+    for (DistanceKernel k : {DistanceKernel::kAvx512Vnni, DistanceKernel::kAvx512,
+                             DistanceKernel::kAvx2}) {
+      if (const DistanceFunctions* f = DistanceFunctionsFor(k)) return f;
+    }
+    return &kScalarFunctions;
+  }();
+  return *best;
+}
+
+}  // namespace cwloc

@@ -1,0 +1,71 @@
+#include "localizer/io/result_json.h"
+
+#include <cstdio>
+
+#include "format/camera/camera_models.h"
+
+namespace cwloc {
+
+nlohmann::ordered_json OptionsToJson(const LocalizerOptions& options) {
+  return {{"matcher", std::string(MatcherName(options.matcher))},
+          {"k", options.k},
+          {"checks", options.checks},
+          {"ratio", options.ratio},
+          {"forward_matches", options.forward_matches},
+          {"back_matches", options.back_matches},
+          {"max_back_images", options.max_back_images},
+          {"min_matches_to_vote", options.min_matches_to_vote},
+          {"query_tree_checks", options.query_tree_checks},
+          {"min_inliers", options.min_inliers},
+          {"max_error_px", options.max_error_px},
+          {"max_ransac_iterations", options.max_ransac_iterations},
+          {"ransac_confidence", options.ransac_confidence},
+          {"refine", options.refine},
+          {"seed", options.seed}};
+}
+
+nlohmann::ordered_json ResultToJson(const LocalizationResult& result, const LocalizerOptions& options) {
+  nlohmann::ordered_json out;
+  out["name"] = result.name;
+  out["success"] = result.success;
+  if (!result.success) out["failure_reason"] = result.failure_reason;
+  if (result.success) {
+    out["pose"] = {{"qvec", result.rotation}, {"tvec", result.translation}, {"center", result.center}};
+  }
+  out["camera"] = {{"model", std::string(CameraModelName(result.camera.model_id))},
+                   {"width", result.camera.width},
+                   {"height", result.camera.height},
+                   {"params", result.camera.params},
+                   {"focal_estimated", result.focal_estimated}};
+  out["num_inliers"] = result.num_inliers;
+  out["inlier_ratio"] = result.inlier_ratio;
+  out["matches"] = {{"features", result.num_features},         {"features_searched", result.features_searched},
+                    {"forward", result.forward_matches},        {"back", result.back_matches},
+                    {"correspondences", result.correspondences}, {"back_matched_images", result.back_matched_images},
+                    {"ransac_iterations", result.ransac_iterations}};
+  nlohmann::ordered_json ranked = nlohmann::ordered_json::array();
+  for (const RankedImage& image : result.ranked_images) {
+    ranked.push_back({{"image_id", image.image_id}, {"name", image.name}, {"votes", image.votes}});
+  }
+  out["ranked_images"] = ranked;
+  const StageTimes& t = result.times;
+  out["times_ms"] = {{"forward_knn", t.forward_knn * 1e3}, {"ratio_test", t.ratio_test * 1e3},
+                     {"query_tree", t.query_tree * 1e3},   {"back_matching", t.back_matching * 1e3},
+                     {"pose", t.pose * 1e3},               {"total", t.total * 1e3}};
+  out["parameters"] = OptionsToJson(options);
+  return out;
+}
+
+nlohmann::ordered_json ErrorToJson(const std::string& name, const std::string& error) {
+  return {{"name", name}, {"success", false}, {"error", error}};
+}
+
+std::string PoseLine(const LocalizationResult& result) {
+  char buffer[512];
+  std::snprintf(buffer, sizeof(buffer), "%s %.17g %.17g %.17g %.17g %.17g %.17g %.17g", result.name.c_str(),
+                result.rotation[0], result.rotation[1], result.rotation[2], result.rotation[3], result.translation[0],
+                result.translation[1], result.translation[2]);
+  return buffer;
+}
+
+}  // namespace cwloc

@@ -1,0 +1,95 @@
+#include <gmock/gmock.h>
+
+#include <fstream>
+
+#include "format/base/error.h"
+#include "localizer/io/camera_spec.h"
+#include "localizer/io/feature_file.h"
+#include "tests/test_util.h"
+
+namespace cwloc {
+namespace {
+
+using testing::HasSubstr;
+
+std::string ErrorOf(const std::function<void()>& body) {
+  try {
+    body();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(CameraSpec, ParsesEveryFieldOfAColmapCameraLine) {
+  const QueryCamera camera = ParseCameraSpec("SIMPLE_RADIAL 1536 1024 1375.77 768 512 -0.0008", "--camera");
+  EXPECT_EQ(camera.model_id, CameraModelId::kSimpleRadial);
+  EXPECT_EQ(camera.width, 1536u);
+  EXPECT_EQ(camera.height, 1024u);
+  EXPECT_EQ(camera.params, (std::vector<double>{1375.77, 768, 512, -0.0008}));
+  EXPECT_TRUE(camera.focal_known);
+}
+
+TEST(CameraSpec, BadSpecsNameTheProblem) {
+  EXPECT_EQ(ErrorOf([] { ParseCameraSpec("PINHOLE 640 480 500 500 320", "--camera"); }),
+            "--camera: PINHOLE takes 4 parameters, got 3");
+  EXPECT_EQ(ErrorOf([] { ParseCameraSpec("PINHOLE -640 480 500 500 320 240", "--camera"); }),
+            "--camera: expected a positive image width (at most 1000000)");
+  EXPECT_EQ(ErrorOf([] { ParseCameraSpec("PINHOLE 640 480 500 abc 320 240", "--camera"); }),
+            "--camera: camera parameters must be numbers");
+  EXPECT_EQ(ErrorOf([] { ParseCameraSpec("SIMPLE_PINHOLE 640 480 -5 320 240", "--camera"); }),
+            "--camera: the focal length must be positive");
+  EXPECT_THAT(ErrorOf([] { ParseCameraSpec("", "--camera"); }), HasSubstr("empty camera"));
+}
+
+TEST(CameraSpec, ImageSizeMeansUnknownFocalWithCentredPrincipalPoint) {
+  const QueryCamera camera = ParseImageSize("1536x1024", "--image-size");
+  EXPECT_FALSE(camera.focal_known);
+  EXPECT_EQ(camera.width, 1536u);
+  EXPECT_EQ(camera.params[1], 768.0);
+  EXPECT_EQ(ErrorOf([] { ParseImageSize("1536 1024 7", "--image-size"); }),
+            "--image-size: expected 'WIDTH HEIGHT', got extra '7'");
+}
+
+class FeatureFileTest : public testing::Test {
+ protected:
+  std::string Write(const std::string& text) {
+    const auto path = dir_ / "features.txt";
+    std::ofstream(path) << text;
+    return path.string();
+  }
+  static std::string Descriptor(int value) {
+    std::string values;
+    for (int i = 0; i < 128; ++i) values += " " + std::to_string((value + i) % 256);
+    return values;
+  }
+  test::TempDir dir_;
+};
+
+TEST_F(FeatureFileTest, ReadsKeypointsAndDescriptors) {
+  const std::string path = Write("2 128\n10.5 20.25 3.1 0.5" + Descriptor(0) + "\n1 2 1 0" + Descriptor(200) + "\n");
+  Query query;
+  ReadFeatureFile(path, &query);
+  ASSERT_EQ(query.NumFeatures(), 2u);
+  EXPECT_EQ(query.keypoints, (std::vector<float>{10.5f, 20.25f, 1, 2}));
+  EXPECT_EQ(query.Descriptor(0)[5], 5);
+  EXPECT_EQ(query.Descriptor(1)[100], (200 + 100) % 256);
+}
+
+TEST_F(FeatureFileTest, MalformedFilesNameTheLine) {
+  Query query;
+  std::string path = Write("2 64\n");
+  EXPECT_EQ(ErrorOf([&] { ReadFeatureFile(path, &query); }), path + ":1: descriptors have 64 dimensions, expected 128");
+  path = Write("2 128\n1 2 3 4" + Descriptor(0) + "\n");
+  EXPECT_EQ(ErrorOf([&] { ReadFeatureFile(path, &query); }), path + ":3: file ends after 1 of 2 features");
+  path = Write("1 128\n1 2 3 4 256" + Descriptor(0).substr(3) + "\n");
+  EXPECT_EQ(ErrorOf([&] { ReadFeatureFile(path, &query); }),
+            path + ":2: descriptor value 1 is not an integer in 0..255");
+  path = Write("1 128\n1 2 x 4" + Descriptor(0) + "\n");
+  EXPECT_EQ(ErrorOf([&] { ReadFeatureFile(path, &query); }),
+            path + ":2: expected X Y SCALE ORIENTATION then 128 descriptor values");
+  EXPECT_THAT(ErrorOf([&] { ReadFeatureFile(dir_ / "none.txt", &query); }), HasSubstr("cannot open feature file"));
+}
+
+}  // namespace
+}  // namespace cwloc

@@ -1,0 +1,169 @@
+#include "localizer/pose/absolute_pose.h"
+
+#include <gtest/gtest.h>
+
+#include "tests/localizer/pose/synthetic_pose.h"
+#include "tests/test_util.h"
+
+namespace cwloc {
+namespace {
+
+// Recall and precision of the reported inlier set against the true one.
+void ExpectInlierSet(const AbsolutePoseResult& result, const test::SyntheticPoseProblem& problem) {
+  ASSERT_EQ(result.inliers.size(), problem.is_inlier.size());
+  int true_positive = 0, reported = 0;
+  for (size_t i = 0; i < problem.is_inlier.size(); ++i) {
+    reported += result.inliers[i];
+    true_positive += result.inliers[i] && problem.is_inlier[i];
+  }
+  EXPECT_EQ(reported, result.num_inliers);
+  EXPECT_GE(true_positive, 0.97 * problem.num_inliers);  // 1 px noise: nearly all within 6 px
+  EXPECT_GE(true_positive, reported - 2);                // random outliers rarely land within 6 px
+}
+
+class KnownFocal : public testing::TestWithParam<double> {};
+
+TEST_P(KnownFocal, FindsPoseAndInliersAmongOutliers) {
+  auto& rng = test::Rng();
+  test::SyntheticPoseOptions options;
+  options.outlier_ratio = GetParam();
+  for (int trial = 0; trial < 5; ++trial) {
+    const auto problem = test::MakeSyntheticProblem(options, rng);
+    const AbsolutePoseResult result =
+        EstimateAbsolutePose(problem.normalized, problem.points3D, problem.focal_px);
+    ASSERT_TRUE(result.success) << result.failure_reason;
+    EXPECT_TRUE(result.failure_reason.empty());
+    EXPECT_LT(test::RotationErrorDeg(result.pose, problem.pose), 0.1);
+    EXPECT_LT((result.pose.Center() - problem.pose.Center()).norm(), 0.01 * problem.mean_depth);
+    EXPECT_EQ(result.focal_length_px, problem.focal_px);
+    EXPECT_TRUE(result.refined);
+    EXPECT_GT(result.mean_reprojection_error_px, 0.5);  // ~1.25 px for 1 px Gaussian noise
+    EXPECT_LT(result.mean_reprojection_error_px, 2.0);
+    EXPECT_GT(result.stats.iterations, 0u);
+    EXPECT_GT(result.stats.refinements, 0u);
+    ExpectInlierSet(result, problem);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(OutlierRatios, KnownFocal, testing::Values(0.6, 0.7, 0.8));
+
+class UnknownFocal : public testing::TestWithParam<double> {};
+
+TEST_P(UnknownFocal, RecoversFocalWithinOnePercent) {
+  auto& rng = test::Rng();
+  test::SyntheticPoseOptions options;
+  options.outlier_ratio = GetParam();
+  for (int trial = 0; trial < 4; ++trial) {
+    options.focal_px = test::Uniform(rng, 600.0, 2400.0);
+    const auto problem = test::MakeSyntheticProblem(options, rng);
+    const AbsolutePoseResult result =
+        EstimateAbsolutePoseUnknownFocal(problem.pixels, problem.points3D);
+    ASSERT_TRUE(result.success) << result.failure_reason;
+    EXPECT_NEAR(result.focal_length_px, problem.focal_px, 0.01 * problem.focal_px);
+    EXPECT_LT(test::RotationErrorDeg(result.pose, problem.pose), 0.2);
+    EXPECT_LT((result.pose.Center() - problem.pose.Center()).norm(), 0.02 * problem.mean_depth);
+    ExpectInlierSet(result, problem);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(OutlierRatios, UnknownFocal, testing::Values(0.5, 0.7));
+
+TEST(AbsolutePose, ReportsTooFewInliers) {
+  auto& rng = test::Rng();
+  test::SyntheticPoseOptions options;
+  options.num_points = 100;
+  options.outlier_ratio = 0.91;  // 9 true correspondences
+  const auto problem = test::MakeSyntheticProblem(options, rng);
+  ASSERT_EQ(problem.num_inliers, 9);
+  const AbsolutePoseResult result =
+      EstimateAbsolutePose(problem.normalized, problem.points3D, problem.focal_px);
+  EXPECT_FALSE(result.success);
+  EXPECT_LT(result.num_inliers, 12);
+  EXPECT_EQ(result.failure_reason,
+            "best pose has " + std::to_string(result.num_inliers) + " inliers < 12");
+  EXPECT_EQ(result.inliers.size(), problem.pixels.size());
+
+  const AbsolutePoseResult unknown = EstimateAbsolutePoseUnknownFocal(problem.pixels, problem.points3D);
+  EXPECT_FALSE(unknown.success);
+  EXPECT_NE(unknown.failure_reason.find("inliers < 12"), std::string::npos) << unknown.failure_reason;
+}
+
+TEST(AbsolutePose, ReportsBadInput) {
+  auto& rng = test::Rng();
+  test::SyntheticPoseOptions options;
+  options.num_points = 7;
+  options.outlier_ratio = 0.0;
+  const auto problem = test::MakeSyntheticProblem(options, rng);
+  AbsolutePoseResult result = EstimateAbsolutePose(problem.normalized, problem.points3D, 1000.0);
+  EXPECT_FALSE(result.success);
+  EXPECT_EQ(result.failure_reason, "too few correspondences: 7 < 12");
+  result = EstimateAbsolutePoseUnknownFocal(problem.pixels, problem.points3D);
+  EXPECT_EQ(result.failure_reason, "too few correspondences: 7 < 12");
+
+  // A lower min_inliers accepts the 7 exact correspondences.
+  AbsolutePoseOptions few;
+  few.min_inliers = 5;
+  result = EstimateAbsolutePose(problem.normalized, problem.points3D, problem.focal_px, few);
+  EXPECT_TRUE(result.success) << result.failure_reason;
+  EXPECT_EQ(result.num_inliers, 7);
+
+  const std::span<const Eigen::Vector3d> fewer(problem.points3D.data(), 6);
+  result = EstimateAbsolutePose(problem.normalized, fewer, 1000.0, few);
+  EXPECT_EQ(result.failure_reason, "size mismatch: 7 image points vs 6 3D points");
+
+  result = EstimateAbsolutePose(problem.normalized, problem.points3D, -1.0, few);
+  EXPECT_EQ(result.failure_reason, "invalid focal length: -1 px");
+}
+
+TEST(AbsolutePose, DeterministicForASeed) {
+  auto& rng = test::Rng();
+  const auto problem = test::MakeSyntheticProblem({}, rng);
+  AbsolutePoseOptions options;
+  options.seed = 7;
+  const auto a = EstimateAbsolutePose(problem.normalized, problem.points3D, problem.focal_px, options);
+  const auto b = EstimateAbsolutePose(problem.normalized, problem.points3D, problem.focal_px, options);
+  EXPECT_EQ(a.pose.rotation.coeffs(), b.pose.rotation.coeffs());
+  EXPECT_EQ(a.pose.translation, b.pose.translation);
+  EXPECT_EQ(a.inliers, b.inliers);
+  EXPECT_EQ(a.stats.iterations, b.stats.iterations);
+  const auto c = EstimateAbsolutePoseUnknownFocal(problem.pixels, problem.points3D, options);
+  const auto d = EstimateAbsolutePoseUnknownFocal(problem.pixels, problem.points3D, options);
+  EXPECT_EQ(c.focal_length_px, d.focal_length_px);
+  EXPECT_EQ(c.pose.translation, d.pose.translation);
+  // Another seed takes other samples but finds the same pose.
+  options.seed = 8;
+  const auto e = EstimateAbsolutePose(problem.normalized, problem.points3D, problem.focal_px, options);
+  ASSERT_TRUE(e.success);
+  EXPECT_LT(test::RotationErrorDeg(e.pose, a.pose), 0.01);
+}
+
+TEST(AbsolutePose, FocalRangeRejectsAbsurdFocalLengths) {
+  auto& rng = test::Rng();
+  test::SyntheticPoseOptions synth;
+  synth.outlier_ratio = 0.5;
+  const auto problem = test::MakeSyntheticProblem(synth, rng);
+  AbsolutePoseOptions options;
+  options.min_focal_px = 3000.0;  // the true focal length (1000 px) is outside
+  options.max_focal_px = 5000.0;
+  const auto result = EstimateAbsolutePoseUnknownFocal(problem.pixels, problem.points3D, options);
+  if (result.num_inliers > 0) {
+    EXPECT_GE(result.focal_length_px, 3000.0);
+    EXPECT_LE(result.focal_length_px, 5000.0);
+  }
+  EXPECT_FALSE(result.success && result.num_inliers > problem.num_inliers / 2);
+}
+
+TEST(AbsolutePose, WorksWithoutFinalRefinement) {
+  auto& rng = test::Rng();
+  const auto problem = test::MakeSyntheticProblem({}, rng);
+  AbsolutePoseOptions options;
+  options.refine = false;
+  const auto result =
+      EstimateAbsolutePose(problem.normalized, problem.points3D, problem.focal_px, options);
+  ASSERT_TRUE(result.success);
+  EXPECT_FALSE(result.refined);
+  EXPECT_LT(test::RotationErrorDeg(result.pose, problem.pose), 0.1);
+}
+
+}  // namespace
+}  // namespace cwloc

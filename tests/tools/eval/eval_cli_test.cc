@@ -1,0 +1,165 @@
+// cwloc-eval as a program: exit codes, messages, the JSON report against its schema, real data.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "cwloc/version.h"
+#include "tests/tools/eval/eval_fixtures.h"
+#include "tests/test_util.h"
+
+namespace cwloc::eval {
+namespace {
+
+namespace fs = std::filesystem;
+using test::Scenario;
+
+// Appending rather than "'" + string sidesteps a GCC 12 -Wrestrict false positive.
+std::string Quote(const fs::path& path) {
+  std::string quoted = "'";
+  quoted += path.string();
+  quoted += "'";
+  return quoted;
+}
+
+int Eval(const std::string& args, std::string* output) {
+  return cwloc::test::RunCommand(Quote(cwloc::test::ToolPath("cwloc-eval")) + " " + args, output);
+}
+
+// stdout only, so JSON can be parsed without stderr mixed in.
+int EvalStdout(const std::string& args, const fs::path& out_file) {
+  std::string ignored;
+  return cwloc::test::RunCommand(
+      Quote(cwloc::test::ToolPath("cwloc-eval")) + " " + args + " > " + Quote(out_file), &ignored);
+}
+
+int ValidateReport(const fs::path& report, std::string* output) {
+  const fs::path source = cwloc::test::SourceDir();
+  return cwloc::test::RunCommand("/usr/bin/python3 " + Quote(source / "tools" / "validate_json.py") + " " +
+                                     Quote(source / "schemas" / "eval-report.schema.json") + " " + Quote(report),
+                                 output);
+}
+
+nlohmann::json ReadJson(const fs::path& path) { return nlohmann::json::parse(std::ifstream(path)); }
+
+TEST(EvalCli, HelpAndVersion) {
+  std::string output;
+  EXPECT_EQ(Eval("--help", &output), 0);
+  EXPECT_NE(output.find("--results"), std::string::npos);
+  EXPECT_EQ(Eval("--version", &output), 0);
+  EXPECT_EQ(output, std::string("cwloc-eval ") + kToolVersion + "\n");
+}
+
+TEST(EvalCli, ExitCodes) {
+  cwloc::test::TempDir dir;
+  const Scenario s;
+  s.WriteGroundTruth(dir / "gt.txt");
+  s.WriteJsonLines(dir / "run.jsonl");
+  std::string output;
+  EXPECT_EQ(Eval("--gt " + Quote(dir / "gt.txt") + " --results " + Quote(dir / "run.jsonl"), &output), 0) << output;
+  EXPECT_NE(output.find("4/5"), std::string::npos) << output;
+  EXPECT_NE(output.find("model units"), std::string::npos) << output;
+
+  // Usage errors.
+  EXPECT_EQ(Eval("--results " + Quote(dir / "run.jsonl"), &output), 2) << output;
+  EXPECT_EQ(Eval("--gt " + Quote(dir / "gt.txt") + " --bogus", &output), 2) << output;
+  EXPECT_EQ(Eval("--gt " + Quote(dir / "gt.txt") + " --results " + Quote(dir / "run.jsonl") + " --label a --label b",
+                 &output),
+            2);
+  EXPECT_EQ(output, "cwloc-eval: error: got 2 --label for 1 --results; give one per run or none\n");
+
+  // A missing file and a malformed line name the file (and line).
+  EXPECT_EQ(Eval("--gt " + Quote(dir / "gt.txt") + " --results " + Quote(dir / "none.jsonl"), &output), 2);
+  EXPECT_EQ(output, "cwloc-eval: error: " + (dir / "none.jsonl").string() + ": cannot open (No such file or directory)\n");
+  std::ofstream(dir / "bad.jsonl") << "{\"name\": \"q0.jpg\", \"success\": false}\n\n{oops\n";
+  EXPECT_EQ(Eval("--gt " + Quote(dir / "gt.txt") + " --results " + Quote(dir / "bad.jsonl"), &output), 2);
+  EXPECT_EQ(output, "cwloc-eval: error: " + (dir / "bad.jsonl").string() + ":3: not valid JSON\n");
+  std::ofstream(dir / "bad_gt.txt") << "# header\nq0.jpg 1 0 0 0 1 2\n";
+  EXPECT_EQ(Eval("--gt " + Quote(dir / "bad_gt.txt") + " --results " + Quote(dir / "run.jsonl"), &output), 2);
+  EXPECT_EQ(output, "cwloc-eval: error: " + (dir / "bad_gt.txt").string() + ":2: expected NAME QW QX QY QZ TX TY TZ\n");
+}
+
+TEST(EvalCli, JsonReportMatchesSchemaAndComparesRuns) {
+  cwloc::test::TempDir dir;
+  const Scenario s;
+  s.WriteGroundTruth(dir / "gt.txt");
+  s.WriteJsonLines(dir / "run.jsonl");
+  s.WritePoses(dir / "run.txt");
+  std::ofstream(dir / "scale.txt") << "scale 2\n";
+  const std::string common = "--gt " + Quote(dir / "gt.txt") + " --results " + Quote(dir / "run.jsonl") +
+                             " --results " + Quote(dir / "run.txt") + " --label cwr --label poses";
+  ASSERT_EQ(EvalStdout(common + " --json", dir / "units.json"), 0);
+  ASSERT_EQ(EvalStdout(common + " --scale " + Quote(dir / "scale.txt") + " --json", dir / "metres.json"), 0);
+  for (const char* name : {"units.json", "metres.json"}) {
+    std::string output;
+    EXPECT_EQ(ValidateReport(dir / name, &output), 0) << name << "\n" << output;
+  }
+  const nlohmann::json units = ReadJson(dir / "units.json");
+  EXPECT_EQ(units["unit"], "model units");
+  EXPECT_TRUE(units["scale_path"].is_null());
+  ASSERT_EQ(units["runs"].size(), 2u);
+  EXPECT_EQ(units["runs"][0]["label"], "cwr");
+  EXPECT_EQ(units["runs"][0]["format"], "json-lines");
+  EXPECT_EQ(units["runs"][1]["format"], "poses");
+  EXPECT_TRUE(units["runs"][1]["times_ms"].is_null());
+  EXPECT_NEAR(units["runs"][0]["position_error"]["median"].get<double>(), 0.65, 1e-9);
+  EXPECT_NEAR(units["runs"][1]["position_error"]["median"].get<double>(), 0.65, 1e-9);
+  EXPECT_DOUBLE_EQ(units["runs"][0]["within"][1]["share"].get<double>(), 0.4);
+  const nlohmann::json& total = units["runs"][0]["times_ms"]["total"];
+  EXPECT_DOUBLE_EQ(total["q1"].get<double>(), 17.5);
+  EXPECT_DOUBLE_EQ(total["median"].get<double>(), 25.0);
+  EXPECT_DOUBLE_EQ(total["q3"].get<double>(), 32.5);
+  EXPECT_DOUBLE_EQ(total["p90"].get<double>(), 37.0);
+  for (const auto& [stage, quantiles] : units["runs"][0]["times_ms"].items()) {
+    EXPECT_EQ(quantiles.size(), 4u) << stage;
+    EXPECT_TRUE(quantiles.contains("p90")) << stage;
+  }
+  EXPECT_DOUBLE_EQ(units["runs"][0]["times_ms"]["pose"]["p90"].get<double>(), 4.0);
+  const nlohmann::json metres = ReadJson(dir / "metres.json");
+  EXPECT_EQ(metres["unit"], "m");
+  EXPECT_NEAR(metres["runs"][0]["position_error"]["median"].get<double>(), 1.3, 1e-9);
+
+  // The table shows both runs.
+  std::string table;
+  EXPECT_EQ(Eval(common + " --scale " + Quote(dir / "scale.txt"), &table), 0);
+  EXPECT_NE(table.find("cwr "), std::string::npos) << table;
+  EXPECT_NE(table.find("poses "), std::string::npos) << table;
+  EXPECT_NE(table.find("distances in metres (scale 2 from"), std::string::npos) << table;
+  EXPECT_NE(table.find("forward_knn"), std::string::npos) << table;
+  EXPECT_NE(table.find("times (ms), Q1 / median / Q3 / p90"), std::string::npos) << table;
+  EXPECT_NE(table.find("17.5 / 25.0 / 32.5 / 37.0"), std::string::npos) << table;
+
+  // The schema requires p90 in every stage's times.
+  nlohmann::json without_p90 = units;
+  without_p90["runs"][0]["times_ms"]["ratio_test"].erase("p90");
+  std::ofstream(dir / "without_p90.json") << without_p90.dump(2);
+  std::string output;
+  EXPECT_EQ(ValidateReport(dir / "without_p90.json", &output), 1) << output;
+  // times_ms is oneOf null or the stages, so the error is reported on times_ms as a whole.
+  EXPECT_NE(output.find("document 1: /runs/0/times_ms: "), std::string::npos) << output;
+}
+
+TEST(EvalCli, HerzJesuGroundTruthAgainstItself) {
+  CWLOC_REQUIRE_SHARED_DATA(data, "herz_jesu_p25");
+  cwloc::test::TempDir dir;
+  const fs::path gt = data / "queries_gt.txt";
+  ASSERT_EQ(EvalStdout("--gt " + Quote(gt) + " --results " + Quote(gt) + " --scale " +
+                           Quote(data / "scale_to_metres.txt") + " --json",
+                       dir / "report.json"),
+            0);
+  std::string output;
+  EXPECT_EQ(ValidateReport(dir / "report.json", &output), 0) << output;
+  const nlohmann::json report = ReadJson(dir / "report.json");
+  const nlohmann::json& run = report["runs"][0];
+  EXPECT_EQ(report["unit"], "m");
+  EXPECT_EQ(run["format"], "poses");
+  EXPECT_EQ(run["queries"], 5);
+  EXPECT_EQ(run["localized"], 5);
+  for (const char* key : {"position_error", "rotation_error_deg"}) {
+    for (const char* q : {"q1", "median", "q3"}) EXPECT_NEAR(run[key][q].get<double>(), 0.0, 1e-9) << key << " " << q;
+  }
+  for (const auto& within : run["within"]) EXPECT_EQ(within["share"], 1.0);
+}
+
+}  // namespace
+}  // namespace cwloc::eval

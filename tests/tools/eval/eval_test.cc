@@ -1,0 +1,266 @@
+// cwloc-eval's library: quartiles, pose errors, readers and the run report.
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "format/base/error.h"
+#include "tests/tools/eval/eval_fixtures.h"
+#include "tests/test_util.h"
+#include "tools/eval/ground_truth.h"
+#include "tools/eval/report.h"
+#include "tools/eval/result_reader.h"
+
+namespace cwloc::eval {
+namespace {
+
+using test::PoseFromCenter;
+using test::Radians;
+using test::Scenario;
+
+void WriteFile(const std::filesystem::path& path, const std::string& text) { std::ofstream(path) << text; }
+
+// The InputError message of body(), or "" if it did not throw one.
+template <typename F>
+std::string InputErrorOf(F body) {
+  try {
+    body();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Quartiles, LinearInterpolationBetweenClosestRanks) {
+  // numpy.quantile([1, 2, 3, 4], [.25, .5, .75]) = 1.75, 2.5, 3.25
+  auto q = ComputeQuartiles({4, 1, 3, 2});
+  ASSERT_TRUE(q);
+  EXPECT_DOUBLE_EQ(q->q1, 1.75);
+  EXPECT_DOUBLE_EQ(q->median, 2.5);
+  EXPECT_DOUBLE_EQ(q->q3, 3.25);
+  // Odd count: ranks fall on elements (h = 1, 2, 3 of 1 2 3 5 10).
+  q = ComputeQuartiles({10, 3, 1, 5, 2});
+  EXPECT_DOUBLE_EQ(q->q1, 2);
+  EXPECT_DOUBLE_EQ(q->median, 3);
+  EXPECT_DOUBLE_EQ(q->q3, 5);
+  q = ComputeQuartiles({0, 10});
+  EXPECT_DOUBLE_EQ(q->q1, 2.5);
+  EXPECT_DOUBLE_EQ(q->median, 5);
+  EXPECT_DOUBLE_EQ(q->q3, 7.5);
+  q = ComputeQuartiles({7});
+  EXPECT_DOUBLE_EQ(q->q1, 7);
+  EXPECT_DOUBLE_EQ(q->q3, 7);
+  EXPECT_FALSE(ComputeQuartiles({}));
+}
+
+TEST(Quartiles, TimeQuantilesAddThe90thPercentile) {
+  // numpy.quantile([1, 2, 3, 4], [.25, .5, .75, .9]) = 1.75, 2.5, 3.25, 3.7 (h = 2.7)
+  auto q = ComputeTimeQuantiles({4, 1, 3, 2});
+  ASSERT_TRUE(q);
+  EXPECT_DOUBLE_EQ(q->q1, 1.75);
+  EXPECT_DOUBLE_EQ(q->median, 2.5);
+  EXPECT_DOUBLE_EQ(q->q3, 3.25);
+  EXPECT_DOUBLE_EQ(q->p90, 3.7);
+  // 1 2 3 5 10: h = 3.6, 5 + 0.6 (10 - 5) = 8.
+  q = ComputeTimeQuantiles({10, 3, 1, 5, 2});
+  EXPECT_DOUBLE_EQ(q->median, 3);
+  EXPECT_DOUBLE_EQ(q->p90, 8);
+  // Eleven values 0..100 step 10: h = 9 falls on an element.
+  q = ComputeTimeQuantiles({100, 90, 80, 70, 60, 50, 40, 30, 20, 10, 0});
+  EXPECT_DOUBLE_EQ(q->median, 50);
+  EXPECT_DOUBLE_EQ(q->p90, 90);
+  q = ComputeTimeQuantiles({0, 10});
+  EXPECT_DOUBLE_EQ(q->p90, 9);
+  q = ComputeTimeQuantiles({7});
+  EXPECT_DOUBLE_EQ(q->p90, 7);
+  EXPECT_FALSE(ComputeTimeQuantiles({}));
+}
+
+TEST(PoseError, RotationAngleOfRelativeRotation) {
+  const Eigen::Quaterniond gt(Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, -2, 0.5).normalized()));
+  const Pose truth = PoseFromCenter(gt, Eigen::Vector3d(1, 2, 3));
+  for (const double degrees : {0.0, 0.01, 2.0, 45.0, 179.0, 180.0}) {
+    const Eigen::Quaterniond delta(Eigen::AngleAxisd(Radians(degrees), Eigen::Vector3d(0.3, 0.4, -1).normalized()));
+    const Pose estimate = PoseFromCenter(delta * gt, Eigen::Vector3d(1, 2, 3));
+    EXPECT_NEAR(RotationErrorDeg(estimate, truth), degrees, 1e-9) << degrees;
+    EXPECT_NEAR(PositionError(estimate, truth), 0, 1e-12);
+  }
+  // q and -q are one rotation.
+  Pose flipped = truth;
+  flipped.qvec.coeffs() = -flipped.qvec.coeffs();
+  EXPECT_NEAR(RotationErrorDeg(flipped, truth), 0, 1e-12);
+}
+
+TEST(PoseError, PositionIsDistanceOfCameraCentres) {
+  const Eigen::Quaterniond q(Eigen::AngleAxisd(1.2, Eigen::Vector3d(0, 0, 1)));
+  const Pose a = PoseFromCenter(q, Eigen::Vector3d(1, 1, 1));
+  const Pose b = PoseFromCenter(Eigen::Quaterniond::Identity(), Eigen::Vector3d(4, 5, 1));
+  EXPECT_NEAR((a.Center() - Eigen::Vector3d(1, 1, 1)).norm(), 0, 1e-12);
+  EXPECT_NEAR(PositionError(a, b), 5.0, 1e-12);
+  // The translation alone is not the centre: identity rotation, t = (0, 0, -3) puts C at (0, 0, 3).
+  Pose c;
+  c.tvec = Eigen::Vector3d(0, 0, -3);
+  EXPECT_NEAR(PositionError(c, Pose{}), 3.0, 1e-12);
+}
+
+TEST(Report, KnownErrorsGiveKnownQuartilesAndShares) {
+  cwloc::test::TempDir dir;
+  const Scenario s;
+  s.WriteGroundTruth(dir / "gt.txt");
+  s.WriteJsonLines(dir / "run.jsonl");
+  const RunReport r = EvaluateRun(ReadGroundTruth(dir / "gt.txt"), ReadResults(dir / "run.jsonl"), 1.0, "run");
+  EXPECT_EQ(r.queries, 5);
+  EXPECT_EQ(r.localized, 4);
+  EXPECT_EQ(r.missing, 1);
+  EXPECT_EQ(r.unknown_names, 0);
+  // {0.1, 0.3, 1, 6}: h = 0.75, 1.5, 2.25.
+  ASSERT_TRUE(r.position_error);
+  EXPECT_NEAR(r.position_error->q1, 0.25, 1e-9);
+  EXPECT_NEAR(r.position_error->median, 0.65, 1e-9);
+  EXPECT_NEAR(r.position_error->q3, 2.25, 1e-9);
+  // {1, 3, 8, 20} degrees.
+  ASSERT_TRUE(r.rotation_error_deg);
+  EXPECT_NEAR(r.rotation_error_deg->q1, 2.5, 1e-9);
+  EXPECT_NEAR(r.rotation_error_deg->median, 5.5, 1e-9);
+  EXPECT_NEAR(r.rotation_error_deg->q3, 11.0, 1e-9);
+  // (0.25, 2): q0; (0.5, 5): q0, q1; (5, 10): q0, q1, q2.
+  EXPECT_EQ(r.within, (std::array<int, 3>{1, 2, 3}));
+  ASSERT_TRUE(r.times_ms);
+  EXPECT_EQ(r.timed_records, 4);
+  EXPECT_DOUBLE_EQ((*r.times_ms)[5].q1, 17.5);
+  EXPECT_DOUBLE_EQ((*r.times_ms)[5].median, 25);
+  EXPECT_DOUBLE_EQ((*r.times_ms)[5].q3, 32.5);
+  // {10, 20, 30, 40}: h = 0.9 * 3 = 2.7, 30 + 0.7 * 10.
+  EXPECT_DOUBLE_EQ((*r.times_ms)[5].p90, 37);
+  EXPECT_DOUBLE_EQ((*r.times_ms)[0].median, 1.0);
+  EXPECT_DOUBLE_EQ((*r.times_ms)[0].p90, 1.0);
+  EXPECT_EQ(r.per_query[4].status, QueryStatus::kMissing);
+}
+
+TEST(Report, ScaleMultipliesDistancesOnly) {
+  cwloc::test::TempDir dir;
+  const Scenario s;
+  s.WriteGroundTruth(dir / "gt.txt");
+  s.WritePoses(dir / "run.txt");
+  WriteFile(dir / "scale.txt", "# comment\nscale 2\nR 1 0 0 0 1 0 0 0 1\nt 5 6 7\n");
+  const double scale = ReadScale(dir / "scale.txt");
+  EXPECT_EQ(scale, 2.0);
+  const RunReport r = EvaluateRun(ReadGroundTruth(dir / "gt.txt"), ReadResults(dir / "run.txt"), scale, "run");
+  EXPECT_NEAR(r.position_error->median, 1.3, 1e-9);
+  EXPECT_NEAR(r.rotation_error_deg->median, 5.5, 1e-9);
+  // Doubled distances 0.2, 0.6, 2, 12: only q0 within 0.5 now.
+  EXPECT_EQ(r.within, (std::array<int, 3>{1, 1, 3}));
+}
+
+TEST(Report, PosesFileAndJsonLinesGiveTheSameReport) {
+  cwloc::test::TempDir dir;
+  const Scenario s;
+  s.WriteGroundTruth(dir / "gt.txt");
+  s.WritePoses(dir / "run.txt");
+  s.WriteJsonLines(dir / "run.jsonl");
+  const auto gt = ReadGroundTruth(dir / "gt.txt");
+  const RunResults poses = ReadResults(dir / "run.txt");
+  const RunResults lines = ReadResults(dir / "run.jsonl");
+  EXPECT_EQ(poses.format, ResultFormat::kPoses);
+  EXPECT_EQ(lines.format, ResultFormat::kJsonLines);
+  EvalReport a, b;
+  a.runs = {EvaluateRun(gt, poses, 1.0, "run")};
+  b.runs = {EvaluateRun(gt, lines, 1.0, "run")};
+  auto ja = ReportToJson(a)["runs"][0];
+  auto jb = ReportToJson(b)["runs"][0];
+  // Only where the run came from and the timings (poses files have none) may differ.
+  for (const char* key : {"path", "format", "timed_records", "times_ms"}) {
+    ja.erase(key);
+    jb.erase(key);
+  }
+  // Both texts round-trip doubles exactly, so the errors agree to the last bit or nearly.
+  for (size_t i = 0; i < 4; ++i) {
+    EXPECT_NEAR(ja["per_query"][i]["position_error"].get<double>(), jb["per_query"][i]["position_error"].get<double>(), 1e-12);
+    EXPECT_NEAR(ja["per_query"][i]["rotation_error_deg"].get<double>(),
+                jb["per_query"][i]["rotation_error_deg"].get<double>(), 1e-9);
+  }
+  ja.erase("per_query");
+  jb.erase("per_query");
+  for (auto* j : {&ja, &jb}) {
+    for (const char* key : {"position_error", "rotation_error_deg"}) {
+      for (const char* q : {"q1", "median", "q3"}) (*j)[key][q] = std::round((*j)[key][q].get<double>() * 1e9) / 1e9;
+    }
+  }
+  EXPECT_EQ(ja.dump(), jb.dump());
+}
+
+TEST(Report, CountsFailuresErrorsMissingAndUnknownNames) {
+  cwloc::test::TempDir dir;
+  const Scenario s;
+  s.WriteGroundTruth(dir / "gt.txt");
+  std::ofstream(dir / "run.jsonl")
+      << Scenario::JsonRecord("q0.jpg", s.estimates[0], 5).dump() << "\n"
+      << R"({"name":"q1.jpg","success":false,"failure_reason":"too few inliers","times_ms":{"forward_knn":1,"ratio_test":1,"query_tree":1,"back_matching":1,"pose":1,"total":5}})"
+      << "\n"
+      << R"({"name":"q2.jpg","success":false,"error":"cannot read image"})" << "\n\n"
+      << Scenario::JsonRecord("other.jpg", s.estimates[1], 5).dump() << "\n";
+  const RunReport r = EvaluateRun(ReadGroundTruth(dir / "gt.txt"), ReadResults(dir / "run.jsonl"), 1.0, "run");
+  EXPECT_EQ(r.localized, 1);
+  EXPECT_EQ(r.not_localized, 1);
+  EXPECT_EQ(r.errors, 1);
+  EXPECT_EQ(r.missing, 2);
+  EXPECT_EQ(r.unknown_names, 1);
+  EXPECT_EQ(r.timed_records, 3);
+  EXPECT_EQ(r.within, (std::array<int, 3>{1, 1, 1}));
+  EXPECT_EQ(r.per_query[1].status, QueryStatus::kNotLocalized);
+  EXPECT_EQ(r.per_query[2].status, QueryStatus::kError);
+  EXPECT_NE(FormatTable(EvalReport{"gt.txt", 5, std::nullopt, 1.0, {r}}).find("1 result(s) for names not in the ground truth"),
+            std::string::npos);
+}
+
+TEST(Readers, MissingFileNamesTheFile) {
+  cwloc::test::TempDir dir;
+  const auto path = dir / "results.jsonl";
+  EXPECT_EQ(InputErrorOf([&] { ReadResults(path); }), path.string() + ": cannot open (No such file or directory)");
+  EXPECT_EQ(InputErrorOf([&] { ReadGroundTruth(path); }), path.string() + ": cannot open (No such file or directory)");
+  EXPECT_EQ(InputErrorOf([&] { ReadResults(dir.path()); }), dir.path().string() + ": is a directory, expected a file");
+}
+
+TEST(Readers, MalformedLinesNameFileAndLine) {
+  cwloc::test::TempDir dir;
+  const Scenario s;
+  const std::string good = Scenario::JsonRecord("q0.jpg", s.estimates[0], 5).dump();
+  const auto results = dir / "results.jsonl";
+  const auto expect = [&](const std::string& text, const std::string& message) {
+    WriteFile(results, text);
+    EXPECT_EQ(InputErrorOf([&] { ReadResults(results); }), results.string() + message) << text;
+  };
+  expect(good + "\n\n{\"name\": \"q1.jpg\", \"success\": tru\n", ":3: not valid JSON");
+  expect("{\"name\": \"q1.jpg\"}\n", ":1: expected a boolean \"success\"");
+  expect("{\"success\": true}\n", ":1: expected a non-empty string \"name\"");
+  expect("{\"name\": \"a\", \"success\": true}\n", ":1: \"success\" is true but there is no \"pose\" object");
+  expect("{\"name\": \"a\", \"success\": true, \"pose\": {\"qvec\": [1, 0, 0], \"tvec\": [0, 0, 0]}}\n",
+         ":1: \"pose.qvec\" must be an array of 4 finite numbers");
+  expect("{\"name\": \"a\", \"success\": true, \"pose\": {\"qvec\": [0, 0, 0, 0], \"tvec\": [0, 0, 0]}}\n",
+         ":1: \"pose.qvec\" is zero");
+  expect("{\"name\": \"a\", \"success\": false, \"times_ms\": {\"total\": 3}}\n",
+         ":1: \"times_ms.forward_knn\" must be a number");
+  expect(good + "\n[1, 2]\n", ":2: expected a JSON object (one cwloc-localize result per line)");
+  expect(good + "\n" + good + "\n", ":2: duplicate result for q0.jpg (first on line 1)");
+  // A poses file is detected by its first line; later lines must follow it.
+  expect("q0.jpg 1 0 0 0 1 2 3\nq1.jpg 1 0 0 0 1 2\n", ":2: expected NAME QW QX QY QZ TX TY TZ");
+
+  const auto gt = dir / "queries_gt.txt";
+  WriteFile(gt, "# comment\nq0.jpg 1 0 0 x 1 2 3\n");
+  EXPECT_EQ(InputErrorOf([&] { ReadGroundTruth(gt); }), gt.string() + ":2: expected NAME QW QX QY QZ TX TY TZ");
+  WriteFile(gt, "q0.jpg 0 0 0 0 1 2 3\n");
+  EXPECT_EQ(InputErrorOf([&] { ReadGroundTruth(gt); }), gt.string() + ":1: quaternion QW QX QY QZ is zero");
+  WriteFile(gt, "q0.jpg 1 0 0 0 1 2 3\nq0.jpg 1 0 0 0 1 2 3\n");
+  EXPECT_EQ(InputErrorOf([&] { ReadGroundTruth(gt); }), gt.string() + ":2: duplicate query q0.jpg (first on line 1)");
+  WriteFile(gt, "# nothing\n");
+  EXPECT_EQ(InputErrorOf([&] { ReadGroundTruth(gt); }),
+            gt.string() + ": no ground-truth queries (expected NAME QW QX QY QZ TX TY TZ lines)");
+
+  const auto scale = dir / "scale_to_metres.txt";
+  WriteFile(scale, "R 1 0 0 0 1 0 0 0 1\n");
+  EXPECT_EQ(InputErrorOf([&] { ReadScale(scale); }), scale.string() + ": no 'scale S' line");
+  WriteFile(scale, "# x\nscale -1\n");
+  EXPECT_EQ(InputErrorOf([&] { ReadScale(scale); }), scale.string() + ":2: expected 'scale S' with a number S > 0");
+}
+
+}  // namespace
+}  // namespace cwloc::eval

@@ -1,0 +1,133 @@
+#!/usr/bin/env python3
+"""Checks that every project header a target includes belongs to a library it links.
+
+Reads the cwloc_add_library / cwloc_add_executable / cwloc_add_test calls of every
+CMakeLists.txt, assigns each header to the library that compiles the source files of its
+folder, and follows PUBLIC links transitively (PRIVATE links count for the target itself
+only). Prints one line per violation and exits 1; exits 0 when the layering holds.
+
+Usage: tools/check_layering.py [SOURCE_DIR]
+"""
+import re
+import sys
+from pathlib import Path
+
+CALL = re.compile(r"\b(cwloc_add_library|cwloc_add_executable|cwloc_add_test)\(\s*([A-Za-z0-9_]+)(.*?)\)\s*$",
+                  re.S | re.M)
+SET = re.compile(r"\bset\(\s*([A-Z0-9_]+)\s+([^)]*)\)")
+APPEND = re.compile(r"\blist\(\s*APPEND\s+([A-Z0-9_]+)\s+([^)]*)\)")
+INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"', re.M)
+KEYWORDS = {"SRCS", "PUBLIC_LINK", "PRIVATE_LINK", "LINK", "OUTPUT"}
+
+
+def parse_calls(root):
+    """Yields (kind, name, folder, {keyword: [words]}) for each target declaration."""
+    for cmake in sorted(root.rglob("CMakeLists.txt")):
+        if any(part.startswith("build") or part == ".git" for part in cmake.relative_to(root).parts):
+            continue
+        text = re.sub(r"#.*", "", cmake.read_text())
+        variables = {}
+        for name, words in SET.findall(text):
+            variables.setdefault(name, []).extend(words.split())
+        for name, words in APPEND.findall(text):
+            variables.setdefault(name, []).extend(words.split())
+        for kind, name, body in CALL.findall(text):
+            args, key = {}, None
+            for word in body.split():
+                for value in expand(word, variables):
+                    if value in KEYWORDS:
+                        key = value
+                        args.setdefault(key, [])
+                    elif key:
+                        args[key].append(value)
+            yield kind, name, cmake.parent, args
+
+
+def expand(word, variables):
+    match = re.fullmatch(r"\$\{([A-Z0-9_]+)\}", word)
+    if match and match.group(1) in variables:
+        return [v for w in variables[match.group(1)] for v in expand(w, variables)]
+    return [word]
+
+
+def main():
+    root = Path(sys.argv[1] if len(sys.argv) > 1 else Path(__file__).resolve().parent.parent).resolve()
+    targets = {}
+    for kind, name, folder, args in parse_calls(root):
+        sources = []
+        for src in args.get("SRCS", []):
+            path = Path(src.replace("${PROJECT_SOURCE_DIR}", str(root)))
+            sources.append((path if path.is_absolute() else folder / path).resolve())
+        targets[name] = {
+            "kind": kind,
+            "sources": sources,
+            "public": args.get("PUBLIC_LINK", []) + args.get("LINK", []),
+            "private": args.get("PRIVATE_LINK", []),
+        }
+
+    # A header belongs to the library whose source of the same stem, else of the same folder,
+    # it sits beside.
+    owner_by_stem, owner_by_folder = {}, {}
+    for name, target in targets.items():
+        if target["kind"] != "cwloc_add_library":
+            continue
+        for src in target["sources"]:
+            owner_by_stem[src.with_suffix("")] = name
+            owner_by_folder.setdefault(src.parent, name)
+
+    def owner(header):
+        return owner_by_stem.get(header.with_suffix("")) or owner_by_folder.get(header.parent)
+
+    def closure(name, seen=None):
+        seen = set() if seen is None else seen
+        for dep in targets.get(name, {}).get("public", []):
+            if dep in targets and dep not in seen:
+                seen.add(dep)
+                closure(dep, seen)
+        return seen
+
+    def allowed(name, include_private):
+        result = {name} | closure(name)
+        if include_private:
+            for dep in targets[name]["private"]:
+                if dep in targets:
+                    result |= {dep} | closure(dep)
+        return result
+
+    violations = []
+
+    def check(path, target_name, include_private):
+        for include in INCLUDE.findall(path.read_text(errors="replace")):
+            header = (root / include).resolve()
+            if not header.exists() or include.startswith("tests/"):
+                continue  # generated, system-like or test-support headers
+            lib = owner(header)
+            if lib and lib not in allowed(target_name, include_private):
+                violations.append(f"{path.relative_to(root)} ({target_name}) includes {include} "
+                                  f"of {lib}, which {target_name} does not link")
+
+    for name, target in targets.items():
+        for src in target["sources"]:
+            if src.exists() and "tests" not in src.relative_to(root).parts[:1]:
+                check(src, name, include_private=True)
+    for header in sorted(root.rglob("*.h")):
+        rel = header.relative_to(root)
+        if rel.parts[0] in ("tests", ".git") or rel.parts[0].startswith("build"):
+            continue
+        lib = owner(header.resolve())
+        if lib:
+            check(header.resolve(), lib, include_private=False)
+        else:
+            violations.append(f"{rel}: in no library's folder")
+
+    for line in sorted(set(violations)):
+        print(line)
+    if violations:
+        print(f"check_layering: {len(set(violations))} violation(s)", file=sys.stderr)
+        return 1
+    print(f"check_layering: OK ({sum(t['kind'] == 'cwloc_add_library' for t in targets.values())} libraries)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
