@@ -1,39 +1,12 @@
 #include "localizer/back_matching.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 
-#include "format/base/error.h"
 #include "format/kdtree/kd_forest_builder.h"
-#include "localizer/cluster_wise_ratio.h"
+#include "format/base/stopwatch.h"
 
 namespace cwloc {
-namespace {
-
-using Clock = std::chrono::steady_clock;
-
-}  // namespace
-
-ClusterMembers::ClusterMembers(const Index& index) {
-  uint32_t num_clusters = 0;
-  for (const IndexImage& image : index.images()) {
-    // Cluster ids are dense and fewer than the images; anything else is a corrupt file.
-    if (image.cluster >= index.images().size()) {
-      throw InputError(index.file().path().string() + ": image " + std::to_string(image.image_id) + " has cluster " +
-                       std::to_string(image.cluster) + ", beyond the " + std::to_string(index.images().size()) +
-                       " images; the file is corrupt (run cwloc-index verify)");
-    }
-    num_clusters = std::max(num_clusters, image.cluster + 1);
-  }
-  offsets.assign(num_clusters + 1, 0);
-  for (const IndexImage& image : index.images()) ++offsets[image.cluster + 1];
-  for (uint32_t c = 0; c < num_clusters; ++c) offsets[c + 1] += offsets[c];
-  images.resize(index.images().size());
-  std::vector<uint32_t> cursor(offsets.begin(), offsets.end() - 1);
-  for (uint32_t i = 0; i < index.images().size(); ++i) images[cursor[index.images()[i].cluster]++] = i;
-}
-
 BackMatchingResult MatchBack(const Index& index, const ClusterMembers& clusters, const Query& query,
                              std::span<const FeatureMatch> forward_matches, const LocalizerOptions& options) {
   BackMatchingResult result;
@@ -47,7 +20,7 @@ BackMatchingResult MatchBack(const Index& index, const ClusterMembers& clusters,
   for (const FeatureMatch& match : forward_matches) vote(ClusterOfView(index, match.view));
   if (voted.empty() || query.NumFeatures() < 2) return result;
 
-  auto start = Clock::now();
+  Stopwatch stopwatch;
   KdForestBuildOptions tree_options;
   tree_options.num_trees = 4;
   tree_options.num_threads = 1;
@@ -55,9 +28,9 @@ BackMatchingResult MatchBack(const Index& index, const ClusterMembers& clusters,
   const std::span<const uint8_t> query_descriptors(query.descriptors.data(), size_t{query.NumFeatures()} * 128);
   const KdForest query_forest = BuildKdForest(query_descriptors, tree_options);
   KdForestSearcher searcher(query_forest.View(query_descriptors));
-  result.seconds_query_tree = std::chrono::duration<double>(Clock::now() - start).count();
+  result.seconds_query_tree = stopwatch.Seconds();
 
-  start = Clock::now();
+  stopwatch.Restart();
   const KdSearchOptions search_options{options.query_tree_checks};
   std::vector<bool> visited(clusters.num_clusters(), false);
   std::vector<KdNeighbor> neighbors(2);
@@ -99,7 +72,7 @@ BackMatchingResult MatchBack(const Index& index, const ClusterMembers& clusters,
       }
     }
   }
-  result.seconds_matching = std::chrono::duration<double>(Clock::now() - start).count();
+  result.seconds_matching = stopwatch.Seconds();
   return result;
 }
 

@@ -5,20 +5,11 @@
 #include <vector>
 
 #include "format/index/index.h"
-#include "format/kdtree/kd_forest.h"
-#include "localizer/forward_matching.h"
 #include "localizer/localizer_options.h"
+#include "localizer/matching.h"
 #include "localizer/query.h"
 
 namespace cwloc {
-
-// The clusters of an index as lists of image rows, computed once per index.
-struct ClusterMembers {
-  explicit ClusterMembers(const Index& index);
-  std::vector<uint32_t> offsets;  // cluster c's images: images[offsets[c] .. offsets[c+1])
-  std::vector<uint32_t> images;
-  uint32_t num_clusters() const { return static_cast<uint32_t>(offsets.size() - 1); }
-};
 
 struct VisitedCluster {
   uint32_t cluster = 0;

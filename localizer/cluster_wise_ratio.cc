@@ -1,18 +1,21 @@
 #include "localizer/cluster_wise_ratio.h"
 
 #include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "localizer/localizer_options.h"
 
 namespace cwloc {
 
-uint32_t ClusterOfView(const Index& index, uint32_t view) {
-  const uint32_t image = index.ImageOfView(view);
-  return image == UINT32_MAX ? UINT32_MAX : index.images()[image].cluster;
-}
-
 void ClusterWiseRatioTest(const Index& index, uint32_t feature, std::span<const KdNeighbor> neighbors,
                           double ratio, std::vector<FeatureMatch>* accepted, ForwardMatchingStats* stats) {
-  constexpr size_t kMaxNeighbors = 64;
-  const size_t n = std::min(neighbors.size(), kMaxNeighbors);
+  constexpr size_t kMaxNeighbors = kMaxK + 1;
+  if (neighbors.size() > kMaxNeighbors) {
+    throw std::invalid_argument("cluster-wise ratio test: " + std::to_string(neighbors.size()) +
+                                " neighbours, at most " + std::to_string(kMaxNeighbors));
+  }
+  const size_t n = neighbors.size();
   if (n < 2) return;
   uint32_t clusters[kMaxNeighbors];
   uint32_t points[kMaxNeighbors];

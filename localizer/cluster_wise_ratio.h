@@ -6,21 +6,18 @@
 
 #include "format/index/index.h"
 #include "format/kdtree/kd_forest.h"
-#include "localizer/forward_matching.h"
+#include "localizer/matching.h"
 
 namespace cwloc {
 
 // Algorithm 2 (cluster-wise ratio test) for one query feature whose k+1 global nearest
-// neighbours passed the k-ratio test. For each cluster among the first k neighbours, its
-// closest view v_c1 is tested:
+// neighbours (at most kMaxK + 1) passed the k-ratio test. For each cluster among the first k
+// neighbours, its closest view v_c1 is tested:
 //  - against the next neighbour in the same cluster that is a view of another 3D point (the
 //    local 1-ratio; the (k+1)-th neighbour counts too, since everything closer was retrieved);
 //  - otherwise with the t-ratio ||q - v_c1|| / (||q - v_c1|| + ||v_c1 - v_NN||), v_NN from VNND.
 // Accepted (feature, v_c1) pairs are appended to `accepted`.
 void ClusterWiseRatioTest(const Index& index, uint32_t feature, std::span<const KdNeighbor> neighbors,
                           double ratio, std::vector<FeatureMatch>* accepted, ForwardMatchingStats* stats);
-
-// The cluster of a view (UINT32_MAX for a view outside every image's range: a corrupt index).
-uint32_t ClusterOfView(const Index& index, uint32_t view);
 
 }  // namespace cwloc

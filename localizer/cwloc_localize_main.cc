@@ -89,39 +89,41 @@ class QueryLoader {
 #endif
   }
 
+  // Reads the query's features, then picks its camera once: the query list's, else --camera or
+  // --image-size, else the database's. The Localizer checks the query.
   Query Load(const QuerySource& source) const {
-    Query query;
-    if (!source.feature_file.empty()) {
-      ReadFeatureFile(source.feature_file, &query);
-      query.name = source.name;
-      if (!source.camera_spec.empty()) {
-        query.camera = ParseCameraSpec(source.camera_spec, cli_.query_list + " (" + source.name + ")");
-      } else if (default_camera_) {
-        query.camera = *default_camera_;
-      } else {
-        throw InputError(source.feature_file.string() +
-                         ": no camera: give --camera \"MODEL W H PARAMS\", --image-size \"W H\", or a camera in the "
-                         "query list");
-      }
-      if (query.NumFeatures() == 0) throw InputError(source.feature_file.string() + ": the query has no features");
-    } else {
-#ifdef CWLOC_WITH_COLMAP_DB
-      if (!database_) throw InputError("query '" + source.name + "': give --database to read it from");
-      query = database_->Load(source.name, /*focal_known=*/true);
-      if (!source.camera_spec.empty()) {
-        query.camera = ParseCameraSpec(source.camera_spec, cli_.query_list + " (" + source.name + ")");
-      } else if (default_camera_) {
-        query.camera = *default_camera_;
-      }
-#else
-      throw InputError("query '" + source.name + "': this cwloc-localize was built without COLMAP database input");
-#endif
+    Query query = source.feature_file.empty() ? LoadFromDatabase(source.name) : LoadFeatureFile(source);
+    if (!source.camera_spec.empty()) {
+      query.camera = ParseCameraSpec(source.camera_spec, cli_.query_list + " (" + source.name + ")");
+    } else if (default_camera_) {
+      query.camera = *default_camera_;
+    } else if (!source.feature_file.empty()) {
+      throw InputError(source.feature_file.string() +
+                       ": no camera: give --camera \"MODEL W H PARAMS\", --image-size \"W H\", or a camera in the "
+                       "query list");
     }
     if (cli_.unknown_focal) query.camera = WithUnknownFocal(query.camera);
     return query;
   }
 
  private:
+  static Query LoadFeatureFile(const QuerySource& source) {
+    Query query;
+    ReadFeatureFile(source.feature_file, &query);
+    query.name = source.name;
+    query.source = source.feature_file.string();
+    return query;
+  }
+
+  Query LoadFromDatabase(const std::string& name) const {
+#ifdef CWLOC_WITH_COLMAP_DB
+    if (!database_) throw InputError("query '" + name + "': give --database to read it from");
+    return database_->Load(name);
+#else
+    throw InputError("query '" + name + "': this cwloc-localize was built without COLMAP database input");
+#endif
+  }
+
   const CliOptions& cli_;
   std::optional<QueryCamera> default_camera_;
 #ifdef CWLOC_WITH_COLMAP_DB
@@ -280,13 +282,16 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--query-checks", options.query_tree_checks, "Leaf checks in the query features' kd-forest")
       ->capture_default_str();
-  app.add_option("--min-inliers", options.min_inliers, "Inliers needed for success")->capture_default_str();
-  app.add_option("--max-error", options.max_error_px, "Inlier reprojection error threshold, pixels")
+  app.add_option("--min-inliers", options.pose.min_inliers, "Inliers needed for success")->capture_default_str();
+  app.add_option("--max-error", options.pose.max_error_px, "Inlier reprojection error threshold, pixels")
       ->capture_default_str();
-  app.add_option("--max-ransac-iterations", options.max_ransac_iterations, "RANSAC iteration cap")
+  app.add_option("--max-ransac-iterations", options.pose.ransac.max_iterations, "RANSAC iteration cap")
+      ->capture_default_str();
+  app.add_option("--ransac-confidence", options.pose.ransac.confidence,
+                 "RANSAC stops once an all-inlier sample was drawn with this probability")
       ->capture_default_str();
   app.add_option("--seed", options.seed, "Seed of the feature order and RANSAC")->capture_default_str();
-  app.add_flag("!--no-refine", options.refine, "Skip the final Ceres refinement");
+  app.add_flag("!--no-refine", options.pose.refine, "Skip the final Ceres refinement");
 
   try {
     app.parse(argc, argv);

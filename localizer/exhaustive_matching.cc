@@ -1,10 +1,10 @@
 #include "localizer/exhaustive_matching.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <limits>
 
+#include "format/base/stopwatch.h"
 #include "format/kdtree/descriptor_distance.h"
 
 namespace cwloc {
@@ -37,7 +37,7 @@ constexpr size_t kBlockViews = 1024;
 std::vector<ClusterMatches> MatchEachClusterExhaustively(const Index& index, const ClusterMembers& clusters,
                                                          const Query& query, double ratio,
                                                          ForwardMatchingStats* stats) {
-  const auto start = std::chrono::steady_clock::now();
+  const Stopwatch stopwatch;
   const DistanceFunctions& distance = BestDistanceFunctions();
   const uint32_t num_features = query.NumFeatures();
   const std::span<const uint32_t> view_points = index.view_points();
@@ -81,7 +81,7 @@ std::vector<ClusterMatches> MatchEachClusterExhaustively(const Index& index, con
     if (!found.matches.empty()) out.push_back(std::move(found));
   }
   stats->features_searched = num_features;
-  stats->seconds_knn = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  stats->seconds_knn = stopwatch.Seconds();
   return out;
 }
 

@@ -4,8 +4,7 @@
 #include <vector>
 
 #include "format/index/index.h"
-#include "localizer/back_matching.h"
-#include "localizer/forward_matching.h"
+#include "localizer/matching.h"
 #include "localizer/query.h"
 
 namespace cwloc {

@@ -1,17 +1,16 @@
 #include "localizer/forward_matching.h"
 
-#include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <numeric>
+#include <span>
 
 #include "format/base/error.h"
+#include "format/base/split_mix64.h"
+#include "format/base/stopwatch.h"
 #include "localizer/cluster_wise_ratio.h"
 
 namespace cwloc {
 namespace {
-
-using Clock = std::chrono::steady_clock;
 
 void ThrowCorrupt(const Index& index) {
   throw InputError(index.file().path().string() +
@@ -21,29 +20,28 @@ void ThrowCorrupt(const Index& index) {
 }  // namespace
 
 std::vector<FeatureMatch> MatchForward(const Index& index, const Query& query, const LocalizerOptions& options,
-                                       std::mt19937_64& rng, KdForestSearcher& searcher,
-                                       ForwardMatchingStats* stats) {
+                                       KdForestSearcher& searcher, ForwardMatchingStats* stats) {
   std::vector<uint32_t> order(query.NumFeatures());
   std::iota(order.begin(), order.end(), 0u);
-  std::shuffle(order.begin(), order.end(), rng);
+  SplitMix64(options.seed).Shuffle(std::span<uint32_t>(order));
 
   std::vector<KdNeighbor> neighbors(options.k + 1);
   const KdSearchOptions search_options{options.checks};
   std::vector<FeatureMatch> matches;
   for (const uint32_t feature : order) {
     if (matches.size() >= options.forward_matches) break;
-    const auto knn_start = Clock::now();
+    const Stopwatch knn;
     const KdSearchResult result = searcher.Search(query.Descriptor(feature), search_options, neighbors);
-    stats->seconds_knn += std::chrono::duration<double>(Clock::now() - knn_start).count();
+    stats->seconds_knn += knn.Seconds();
     ++stats->features_searched;
     if (result.corrupt) ThrowCorrupt(index);
     if (result.num_neighbors < options.k + 1) continue;  // a model smaller than k+1 views
     // k-ratio ||q - v1|| / ||q - v_{k+1}|| <= tau.
     if (!PassesRatioTest(neighbors[0].distance, neighbors[options.k].distance, options.ratio)) continue;
     ++stats->passed_k_ratio;
-    const auto ratio_start = Clock::now();
+    const Stopwatch ratio_test;
     ClusterWiseRatioTest(index, feature, neighbors, options.ratio, &matches, stats);
-    stats->seconds_ratio_test += std::chrono::duration<double>(Clock::now() - ratio_start).count();
+    stats->seconds_ratio_test += ratio_test.Seconds();
   }
   return matches;
 }
@@ -53,7 +51,7 @@ std::vector<FeatureMatch> MatchGlobalRatio(const Index& index, const Query& quer
   std::vector<KdNeighbor> neighbors(2);
   const KdSearchOptions search_options{options.checks};
   std::vector<FeatureMatch> matches;
-  const auto start = Clock::now();
+  const Stopwatch knn;
   for (uint32_t feature = 0; feature < query.NumFeatures(); ++feature) {
     const KdSearchResult result = searcher.Search(query.Descriptor(feature), search_options, neighbors);
     ++stats->features_searched;
@@ -63,7 +61,7 @@ std::vector<FeatureMatch> MatchGlobalRatio(const Index& index, const Query& quer
     ++stats->passed_k_ratio;
     matches.push_back({feature, neighbors[0].index, std::sqrt(static_cast<float>(neighbors[0].distance))});
   }
-  stats->seconds_knn = std::chrono::duration<double>(Clock::now() - start).count();
+  stats->seconds_knn = knn.Seconds();
   return matches;
 }
 

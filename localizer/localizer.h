@@ -1,9 +1,9 @@
 #pragma once
 
 #include "format/index/index.h"
-#include "localizer/back_matching.h"
 #include "localizer/localization_result.h"
 #include "localizer/localizer_options.h"
+#include "localizer/matching.h"
 #include "localizer/query.h"
 
 namespace cwloc {
@@ -14,9 +14,10 @@ class Localizer {
  public:
   explicit Localizer(const Index& index);
 
-  // Throws InputError for a query that cannot be processed at all (an unknown camera model, a
-  // camera without parameters); a query that simply fails to localize returns success = false
-  // with the reason.
+  // The pipeline: the query is checked, the matcher yields 2D-3D correspondences, the pose
+  // stage fits them. Throws InputError naming the query for one that cannot be processed at
+  // all (no features, an unusable camera); a query that simply fails to localize returns
+  // success = false with the reason.
   LocalizationResult Localize(const Query& query, const LocalizerOptions& options) const;
 
   const Index& index() const { return index_; }
@@ -26,7 +27,7 @@ class Localizer {
   ClusterMembers clusters_;
 };
 
-// Checks options against absurd values; throws InputError naming the option.
+// Checks options against absurd values; throws InputError naming the CLI flag.
 void ValidateLocalizerOptions(const LocalizerOptions& options);
 
 }  // namespace cwloc

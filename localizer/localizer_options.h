@@ -5,6 +5,8 @@
 #include <optional>
 #include <string_view>
 
+#include "localizer/pose/absolute_pose.h"
+
 namespace cwloc {
 
 enum class Matcher {
@@ -27,8 +29,11 @@ inline std::optional<Matcher> ParseMatcher(std::string_view name) {
   return std::nullopt;
 }
 
+// The largest k: the k + 1 neighbours of a feature fit the ratio test's fixed-size arrays.
+inline constexpr uint32_t kMaxK = 63;
+
 // Every threshold and count of the pipeline; defaults are the paper's (section 4,
-// "Experimental details").
+// "Experimental details"). ValidateLocalizerOptions checks each one, naming its CLI flag.
 struct LocalizerOptions {
   Matcher matcher = Matcher::kClusterWise;
   // Forward matching (Algorithm 1): k nearest neighbours plus one for the k-ratio test.
@@ -46,15 +51,12 @@ struct LocalizerOptions {
   uint32_t max_back_images = 20;    // ... or this many clusters were back-matched
   uint32_t min_matches_to_vote = 12;  // a back-matched cluster votes for co-visible ones
   uint32_t query_tree_checks = 64;  // leaf checks in the per-query kd-forest
-  // Robust pose.
-  uint32_t min_inliers = 12;
-  double max_error_px = 6.0;
-  uint32_t max_ransac_iterations = 10000;
-  double ransac_confidence = 0.9999;
-  bool refine = true;
+  // Robust pose: inlier threshold, minimum inliers, RANSAC's limits, refinement. Its RANSAC
+  // seed is not used: the localizer seeds RANSAC with `seed` below.
+  AbsolutePoseOptions pose;
   // Output.
   uint32_t ranked_images = 10;      // model images listed for location recognition
-  uint64_t seed = 0;                // query feature order and RANSAC sampling
+  uint64_t seed = 0;                // query feature order, the query's kd-forest, RANSAC
 };
 
 }  // namespace cwloc

@@ -1,7 +1,6 @@
 #include "localizer/io/database_queries.h"
 
 #include "format/base/error.h"
-#include "localizer/io/camera_spec.h"
 
 namespace cwloc {
 
@@ -9,10 +8,11 @@ DatabaseQueries::DatabaseQueries(const std::filesystem::path& path) : reader_(pa
   for (colmap::Camera& camera : reader_.ReadAllCameras()) cameras_.emplace(camera.camera_id, std::move(camera));
 }
 
-Query DatabaseQueries::Load(const std::string& name, bool focal_known) const {
+Query DatabaseQueries::Load(const std::string& name) const {
   const std::string db = reader_.path().string();
   Query query;
   query.name = name;
+  query.source = db + ": image '" + name + "'";
   colmap::ImageFeatures features;
   camera_t camera_id;
   {
@@ -22,22 +22,14 @@ Query DatabaseQueries::Load(const std::string& name, bool focal_known) const {
     camera_id = image->camera_id;
     features = reader_.ReadFeatures(image->image_id);
   }
-  if (features.descriptors.rows == 0) throw InputError(db + ": image '" + name + "' has no features");
   const auto camera = cameras_.find(camera_id);
   if (camera == cameras_.end()) {
     throw InputError(db + ": image '" + name + "' refers to missing camera " + std::to_string(camera_id));
   }
-  const auto model = FindCameraModel(static_cast<int32_t>(camera->second.model_id));
-  QueryCamera query_camera;
-  query_camera.model_id = camera->second.model_id;
-  query_camera.width = static_cast<uint32_t>(camera->second.width);
-  query_camera.height = static_cast<uint32_t>(camera->second.height);
-  query_camera.params = camera->second.params;
-  if (focal_known && (!model || !model->can_project)) {
-    throw InputError(db + ": camera " + std::to_string(camera_id) + " of image '" + name + "' uses model " +
-                     (model ? std::string(model->name) : "unknown") + ", which cwloc cannot localize with");
-  }
-  query.camera = focal_known ? query_camera : WithUnknownFocal(query_camera);
+  query.camera.model_id = camera->second.model_id;
+  query.camera.width = static_cast<uint32_t>(camera->second.width);
+  query.camera.height = static_cast<uint32_t>(camera->second.height);
+  query.camera.params = camera->second.params;
   query.keypoints.reserve(features.keypoints.size() * 2);
   for (const colmap::Keypoint& keypoint : features.keypoints) {
     query.keypoints.push_back(keypoint.x);

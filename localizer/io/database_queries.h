@@ -16,9 +16,9 @@ class DatabaseQueries {
  public:
   explicit DatabaseQueries(const std::filesystem::path& path);
 
-  // Throws InputError naming the database and the image when the name is unknown, the image
-  // has no features, or its camera cannot be used.
-  Query Load(const std::string& name, bool focal_known) const;
+  // The image's features and its database camera; throws InputError naming the database and
+  // the image when the name or its camera is unknown. The Localizer checks what was read.
+  Query Load(const std::string& name) const;
 
  private:
   colmap::DatabaseReader reader_;

@@ -16,11 +16,11 @@ nlohmann::ordered_json OptionsToJson(const LocalizerOptions& options) {
           {"max_back_images", options.max_back_images},
           {"min_matches_to_vote", options.min_matches_to_vote},
           {"query_tree_checks", options.query_tree_checks},
-          {"min_inliers", options.min_inliers},
-          {"max_error_px", options.max_error_px},
-          {"max_ransac_iterations", options.max_ransac_iterations},
-          {"ransac_confidence", options.ransac_confidence},
-          {"refine", options.refine},
+          {"min_inliers", options.pose.min_inliers},
+          {"max_error_px", options.pose.max_error_px},
+          {"max_ransac_iterations", options.pose.ransac.max_iterations},
+          {"ransac_confidence", options.pose.ransac.confidence},
+          {"refine", options.pose.refine},
           {"seed", options.seed}};
 }
 

@@ -10,15 +10,6 @@
 namespace cwloc {
 namespace {
 
-RansacOptions MakeRansacOptions(const AbsolutePoseOptions& options) {
-  RansacOptions ransac;
-  ransac.min_iterations = options.min_iterations;
-  ransac.max_iterations = options.max_iterations;
-  ransac.confidence = options.confidence;
-  ransac.seed = options.seed;
-  return ransac;
-}
-
 template <typename... Args>
 std::string Concat(const Args&... args) {
   std::ostringstream out;
@@ -113,7 +104,7 @@ AbsolutePoseResult EstimateAbsolutePose(std::span<const Eigen::Vector2d> normali
   lo.max_iterations = options.lo_iterations;
   const AbsolutePoseEstimator estimator(normalized_points, points3D,
                                         options.max_error_px / focal_length_px, lo);
-  result.stats = Ransac(estimator, MakeRansacOptions(options), &result.pose);
+  result.stats = Ransac(estimator, options.ransac, &result.pose);
   if (!std::isfinite(result.stats.score)) {
     result.failure_reason = "no pose hypothesis: every minimal sample was degenerate";
     return result;
@@ -167,7 +158,7 @@ AbsolutePoseResult EstimateAbsolutePoseUnknownFocal(
   const AbsolutePoseFocalEstimator estimator(centered_pixels, points3D, options.max_error_px,
                                              min_focal, max_focal, lo);
   PoseAndFocal model;
-  result.stats = Ransac(estimator, MakeRansacOptions(options), &model);
+  result.stats = Ransac(estimator, options.ransac, &model);
   if (!std::isfinite(result.stats.score)) {
     result.failure_reason = Concat("no pose hypothesis: every minimal sample was degenerate or "
                                    "had a focal length outside [", min_focal, ", ", max_focal,

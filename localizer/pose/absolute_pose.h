@@ -26,14 +26,8 @@ struct AbsolutePoseOptions {
   double max_error_px = 6.0;
   // Success needs at least this many inliers (paper: 12).
   int min_inliers = 12;
-  // RANSAC minimal samples drawn: at least min_iterations, at most max_iterations, in between
-  // until an all-inlier sample has been drawn with probability `confidence` given the best
-  // inlier ratio so far.
-  uint32_t min_iterations = 100;
-  uint32_t max_iterations = 10000;
-  double confidence = 0.9999;
-  // Seed of the sampler: the same input and seed give the same result on every platform.
-  uint64_t seed = 0;
+  // The sampler: iteration limits, confidence, seed (ransac.h).
+  RansacOptions ransac;
   // Levenberg-Marquardt iterations per local optimisation inside RANSAC.
   int lo_iterations = 10;
   // Final Ceres refinement of the best pose (and the focal length when unknown).

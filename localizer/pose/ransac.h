@@ -10,6 +10,8 @@
 #include <span>
 #include <vector>
 
+#include "format/base/split_mix64.h"
+
 namespace cwloc {
 
 // A templated LO-RANSAC in the style of PoseLib's robust/ransac_impl.h (Lebeda, Matas and
@@ -55,25 +57,6 @@ concept RansacEstimator =
       e.Refine(model_out);
     };
 
-// SplitMix64 (Steele, Lea and Flood, OOPSLA 2014): a tiny generator with a fixed output
-// sequence; std::uniform_int_distribution is implementation-defined, so it is not used.
-class RansacRng {
- public:
-  explicit RansacRng(uint64_t seed) : state_(seed) {}
-  uint64_t Next() {
-    uint64_t z = (state_ += 0x9E3779B97F4A7C15ULL);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
-    return z ^ (z >> 31);
-  }
-  // Uniform in [0, n) by multiply-shift of the top 32 bits (Lemire); the bias, below n / 2^32,
-  // is irrelevant for sampling.
-  uint32_t Uniform(uint32_t n) { return static_cast<uint32_t>(((Next() >> 32) * n) >> 32); }
-
- private:
-  uint64_t state_;
-};
-
 // Iterations needed to draw an all-inlier sample with the given confidence.
 inline uint32_t RansacRequiredIterations(double inlier_ratio, size_t sample_size,
                                          double confidence, uint32_t max_iterations) {
@@ -98,7 +81,7 @@ RansacStats Ransac(const Estimator& estimator, const RansacOptions& options,
   if (num_data < kSampleSize || num_data > std::numeric_limits<uint32_t>::max()) return stats;
   const uint32_t n = static_cast<uint32_t>(num_data);
 
-  RansacRng rng(options.seed);
+  SplitMix64 rng(options.seed);
   std::array<uint32_t, kSampleSize> sample;
   std::vector<Model> models;
   uint32_t required = options.max_iterations;

@@ -92,7 +92,7 @@ TEST_F(HerzJesuTest, AllQueriesLocalizeWithKnownFocal) {
   const DatabaseQueries queries(data_ / "database.db");
   const Localizer localizer(*index_);
   for (const auto& [name, truth] : truth_) {
-    Query query = queries.Load(name, /*focal_known=*/true);
+    Query query = queries.Load(name);
     query.camera = ParseCameraSpec(truth.camera, "queries_gt.txt");  // the database holds the initial guess
     const LocalizationResult result = localizer.Localize(query, LocalizerOptions{});
     // Issue bound: 5 cm, 0.5 degrees; measured: under 4 mm and 0.02 degrees.
@@ -105,7 +105,8 @@ TEST_F(HerzJesuTest, AllQueriesLocalizeWithUnknownFocalAndRecoverIt) {
   const DatabaseQueries queries(data_ / "database.db");
   const Localizer localizer(*index_);
   for (const auto& [name, truth] : truth_) {
-    const Query query = queries.Load(name, /*focal_known=*/false);
+    Query query = queries.Load(name);
+    query.camera = WithUnknownFocal(query.camera);
     const LocalizationResult result = localizer.Localize(query, LocalizerOptions{});
     ExpectPoseClose(result, truth, 0.05, 0.5);
     ASSERT_TRUE(result.focal_estimated);
@@ -119,7 +120,7 @@ TEST_F(HerzJesuTest, GlobalRatioBaselineAlsoLocalizesThisSmallModel) {
   LocalizerOptions options;
   options.matcher = Matcher::kGlobalRatio;
   for (const auto& [name, truth] : truth_) {
-    Query query = queries.Load(name, true);
+    Query query = queries.Load(name);
     query.camera = ParseCameraSpec(truth.camera, "queries_gt.txt");
     const LocalizationResult result = localizer.Localize(query, options);
     ExpectPoseClose(result, truth, 0.05, 0.5);
@@ -134,7 +135,7 @@ TEST_F(HerzJesuTest, ExhaustivePerClusterMatchingLocalizesFromOneCluster) {
   options.matcher = Matcher::kClusterExhaustive;
   // Two queries: brute force compares every feature with all 63,727 views.
   for (const std::string name : {"0002.jpg", "0017.jpg"}) {
-    Query query = queries.Load(name, true);
+    Query query = queries.Load(name);
     query.camera = ParseCameraSpec(truth_[name].camera, "queries_gt.txt");
     const LocalizationResult result = localizer.Localize(query, options);
     ExpectPoseClose(result, truth_[name], 0.05, 0.5);
@@ -148,7 +149,7 @@ TEST_F(HerzJesuTest, ExhaustivePerClusterMatchingLocalizesFromOneCluster) {
 TEST_F(HerzJesuTest, SameSeedGivesTheSamePose) {
   const DatabaseQueries queries(data_ / "database.db");
   const Localizer localizer(*index_);
-  Query query = queries.Load("0012.jpg", true);
+  Query query = queries.Load("0012.jpg");
   query.camera = ParseCameraSpec(truth_["0012.jpg"].camera, "queries_gt.txt");
   const LocalizationResult a = localizer.Localize(query, LocalizerOptions{});
   const LocalizationResult b = localizer.Localize(query, LocalizerOptions{});

@@ -119,7 +119,7 @@ TEST(AbsolutePose, DeterministicForASeed) {
   auto& rng = test::Rng();
   const auto problem = test::MakeSyntheticProblem({}, rng);
   AbsolutePoseOptions options;
-  options.seed = 7;
+  options.ransac.seed = 7;
   const auto a = EstimateAbsolutePose(problem.normalized, problem.points3D, problem.focal_px, options);
   const auto b = EstimateAbsolutePose(problem.normalized, problem.points3D, problem.focal_px, options);
   EXPECT_EQ(a.pose.rotation.coeffs(), b.pose.rotation.coeffs());
@@ -131,7 +131,7 @@ TEST(AbsolutePose, DeterministicForASeed) {
   EXPECT_EQ(c.focal_length_px, d.focal_length_px);
   EXPECT_EQ(c.pose.translation, d.pose.translation);
   // Another seed takes other samples but finds the same pose.
-  options.seed = 8;
+  options.ransac.seed = 8;
   const auto e = EstimateAbsolutePose(problem.normalized, problem.points3D, problem.focal_px, options);
   ASSERT_TRUE(e.success);
   EXPECT_LT(test::RotationErrorDeg(e.pose, a.pose), 0.01);

@@ -1,0 +1,63 @@
+#include "localizer/query_pose.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include "format/camera/camera_models.h"
+
+namespace cwloc {
+
+std::vector<FeatureMatch> UniqueCorrespondences(const Index& index, std::vector<FeatureMatch> matches) {
+  std::sort(matches.begin(), matches.end(), [](const FeatureMatch& a, const FeatureMatch& b) {
+    return a.feature != b.feature ? a.feature < b.feature : a.distance < b.distance;
+  });
+  std::vector<FeatureMatch> unique;
+  for (const FeatureMatch& match : matches) {
+    // Views come from range-checked searches; their point is checked here, where it is read.
+    if (match.view >= index.num_views() || index.view_points()[match.view] >= index.points().size()) continue;
+    if (!unique.empty() && unique.back().feature == match.feature) continue;
+    unique.push_back(match);
+  }
+  return unique;
+}
+
+QueryPose EstimateQueryPose(const Index& index, const Query& query, std::span<const FeatureMatch> correspondences,
+                            const LocalizerOptions& options, bool refine) {
+  std::vector<Eigen::Vector2d> points2D;
+  std::vector<Eigen::Vector3d> points3D;
+  points2D.reserve(correspondences.size());
+  points3D.reserve(correspondences.size());
+  const QueryCamera& camera = query.camera;
+  const std::array<double, 2> center = camera.ImageCenter();
+  for (const FeatureMatch& match : correspondences) {
+    const std::array<double, 2> pixel = {query.keypoints[2 * match.feature], query.keypoints[2 * match.feature + 1]};
+    Eigen::Vector2d point2D;
+    if (camera.focal_known) {
+      std::array<double, 2> normalized;
+      if (!PixelToNormalized(camera.model_id, camera.params, pixel, &normalized)) continue;
+      point2D = {normalized[0], normalized[1]};
+    } else {
+      point2D = {pixel[0] - center[0], pixel[1] - center[1]};
+    }
+    const IndexPoint& point = index.points()[index.view_points()[match.view]];
+    points2D.push_back(point2D);
+    points3D.emplace_back(point.xyz[0], point.xyz[1], point.xyz[2]);
+  }
+
+  AbsolutePoseOptions pose_options = options.pose;
+  pose_options.ransac.seed = options.seed;
+  pose_options.refine = refine;
+  QueryPose result;
+  result.num_used = static_cast<uint32_t>(points2D.size());
+  if (camera.focal_known) {
+    result.pose =
+        EstimateAbsolutePose(points2D, points3D, MeanFocalLength(camera.model_id, camera.params), pose_options);
+  } else {
+    pose_options.image_diagonal_px = std::hypot(double(camera.width), double(camera.height));
+    result.pose = EstimateAbsolutePoseUnknownFocal(points2D, points3D, pose_options);
+  }
+  return result;
+}
+
+}  // namespace cwloc

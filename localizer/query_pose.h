@@ -1,0 +1,31 @@
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "format/index/index.h"
+#include "localizer/localizer_options.h"
+#include "localizer/matching.h"
+#include "localizer/pose/absolute_pose.h"
+#include "localizer/query.h"
+
+namespace cwloc {
+
+// One 2D-3D pair per query feature: the match with the smallest descriptor distance (a feature
+// matched to several 3D points would count twice in RANSAC's inlier tally otherwise). Matches
+// whose view or point is out of range (a corrupt index) are dropped.
+std::vector<FeatureMatch> UniqueCorrespondences(const Index& index, std::vector<FeatureMatch> matches);
+
+struct QueryPose {
+  AbsolutePoseResult pose;
+  uint32_t num_used = 0;  // correspondences that could be normalized and went into RANSAC
+};
+
+// The pose stage: LO-RANSAC with the minimal solver the camera calls for (P3P with a known
+// focal length, P4Pf without, the principal point at QueryCamera::ImageCenter), then, with
+// `refine`, the Ceres refinement. RANSAC is seeded with options.seed.
+QueryPose EstimateQueryPose(const Index& index, const Query& query, std::span<const FeatureMatch> correspondences,
+                            const LocalizerOptions& options, bool refine);
+
+}  // namespace cwloc
