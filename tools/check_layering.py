@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Checks that every project header a target includes belongs to a library it links.
+"""Checks that every project header a target includes belongs to a library it links, and that
+docs/architecture.md's library table lists exactly the CMake libraries, folders and links.
 
 Reads the cwloc_add_library / cwloc_add_executable / cwloc_add_test calls of every
 CMakeLists.txt, assigns each header to the library that compiles the source files of its
@@ -120,6 +121,8 @@ def main():
         else:
             violations.append(f"{rel}: in no library's folder")
 
+    violations += check_architecture_table(root, targets)
+
     for line in sorted(set(violations)):
         print(line)
     if violations:
@@ -127,6 +130,31 @@ def main():
         return 1
     print(f"check_layering: OK ({sum(t['kind'] == 'cwloc_add_library' for t in targets.values())} libraries)")
     return 0
+
+
+def check_architecture_table(root, targets):
+    """Rows `| `lib` | `folder/` | `link`, `link` (private) | used by |` against CMake."""
+    doc = root / "docs" / "architecture.md"
+    rows = {}
+    for line in doc.read_text().splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if len(cells) >= 3 and re.fullmatch(r"`cwloc_\w+`", cells[0]):
+            rows[cells[0].strip("`")] = (cells[1].strip("`"), set(re.findall(r"`([^`]+)`", cells[2])))
+    problems = []
+    libraries = {n: t for n, t in targets.items() if t["kind"] == "cwloc_add_library"}
+    for name in sorted(set(libraries) - set(rows)):
+        problems.append(f"docs/architecture.md: library {name} is missing from the table")
+    for name in sorted(set(rows) - set(libraries)):
+        problems.append(f"docs/architecture.md: {name} is in the table but no CMake library")
+    for name in sorted(set(rows) & set(libraries)):
+        folder, links = rows[name]
+        folders = {str(src.parent.relative_to(root)) + "/" for src in libraries[name]["sources"]}
+        if folders != {folder}:
+            problems.append(f"docs/architecture.md: {name} is in {sorted(folders)}, the table says {folder}")
+        cmake_links = set(libraries[name]["public"] + libraries[name]["private"])
+        if links != cmake_links:
+            problems.append(f"docs/architecture.md: {name} links {sorted(cmake_links)}, the table says {sorted(links)}")
+    return problems
 
 
 if __name__ == "__main__":
