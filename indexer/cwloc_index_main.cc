@@ -127,8 +127,8 @@ int main(int argc, char** argv) {
   build->add_option("--clusters", clusters,
                     "Clustering: spectral clustering of the co-visibility graph into this many clusters")
       ->excludes(cluster_file_option);
-  build->add_option("--trees", options.kd_trees, "Randomized kd-trees in the global forest")->capture_default_str();
-  build->add_option("--leaf-size", options.kd_leaf_size, "Descriptors per kd leaf bucket")->capture_default_str();
+  build->add_option("--trees", options.forest.num_trees, "Randomized kd-trees in the global forest")->capture_default_str();
+  build->add_option("--leaf-size", options.forest.max_leaf_size, "Descriptors per kd leaf bucket")->capture_default_str();
   build->add_option("--seed", options.seed, "Seed of the kd-forest and clustering randomization")->capture_default_str();
   build->add_option("--threads", options.threads, "Worker threads (0 = all cores)")->capture_default_str();
   build->add_flag("--keypoints", options.keypoints,
@@ -156,7 +156,6 @@ int main(int argc, char** argv) {
         options.clustering.method = cwloc::ClusteringMethod::kCovisibility;
         options.clustering.target_clusters = clusters;
       }
-      options.clustering.seed = options.seed;
       return cwloc::RunBuild(options, json);
     }
     if (info->parsed()) return cwloc::RunInfo(index_path, json);

@@ -51,11 +51,11 @@ std::span<const T> Span(const std::vector<T>& v) { return {v.data(), v.size()}; 
 IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
   const auto start = Clock::now();
   IndexBuildReport report;
-  if (options.kd_trees < 1 || options.kd_trees > 64) {
-    throw InputError("--trees " + std::to_string(options.kd_trees) + ": expected 1 to 64");
+  if (options.forest.num_trees < 1 || options.forest.num_trees > 64) {
+    throw InputError("--trees " + std::to_string(options.forest.num_trees) + ": expected 1 to 64");
   }
-  if (options.kd_leaf_size < 1 || options.kd_leaf_size > 255) {
-    throw InputError("--leaf-size " + std::to_string(options.kd_leaf_size) + ": expected 1 to 255");
+  if (options.forest.max_leaf_size < 1 || options.forest.max_leaf_size > 255) {
+    throw InputError("--leaf-size " + std::to_string(options.forest.max_leaf_size) + ": expected 1 to 255");
   }
   const int threads = ResolveThreads(options.threads);
 
@@ -75,7 +75,9 @@ IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
   report.seconds_covisibility = SecondsSince(stage);
 
   stage = Clock::now();
-  const Clustering clustering = ClusterImages(options.clustering, views, graph);
+  ClusteringOptions clustering_options = options.clustering;
+  clustering_options.seed = options.seed;
+  const Clustering clustering = ClusterImages(clustering_options, views, graph);
   for (size_t i = 0; i < views.images.size(); ++i) views.images[i].cluster = clustering.cluster_of_image[i];
   report.seconds_clustering = SecondsSince(stage);
 
@@ -84,9 +86,7 @@ IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
   report.seconds_neighbor_distances = SecondsSince(stage);
 
   stage = Clock::now();
-  KdForestBuildOptions forest_options;
-  forest_options.num_trees = options.kd_trees;
-  forest_options.max_leaf_size = options.kd_leaf_size;
+  KdForestBuildOptions forest_options = options.forest;
   forest_options.seed = options.seed;
   forest_options.num_threads = static_cast<uint32_t>(threads);
   Progress forest_progress("kd-forest", 1000);
@@ -122,8 +122,8 @@ IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
   if (options.clustering.method == ClusteringMethod::kCovisibility) {
     clustering_json["target_clusters"] = options.clustering.target_clusters;
   }
-  manifest["build_parameters"] = {{"kd_trees", options.kd_trees},
-                                  {"kd_leaf_size", options.kd_leaf_size},
+  manifest["build_parameters"] = {{"kd_trees", options.forest.num_trees},
+                                  {"kd_leaf_size", options.forest.max_leaf_size},
                                   {"seed", options.seed},
                                   {"keypoints", options.keypoints},
                                   {"clustering", clustering_json},

@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <string>
 
+#include "format/kdtree/kd_forest_builder.h"
 #include "indexer/clustering.h"
 
 namespace cwloc {
@@ -13,9 +14,10 @@ struct IndexBuildOptions {
   std::filesystem::path model_dir;
   std::filesystem::path database_path;
   std::filesystem::path output_path;
-  ClusteringOptions clustering;
-  uint32_t kd_trees = 4;      // the paper's FLANN setting
-  uint32_t kd_leaf_size = 8;  // descriptors per leaf bucket
+  ClusteringOptions clustering;  // its seed is set from `seed` below
+  // The global forest: num_trees (4, the paper's FLANN setting) and max_leaf_size; its seed,
+  // threads and progress are set from this build's.
+  KdForestBuildOptions forest;
   uint64_t seed = 0;          // kd-forest randomization and k-means initialisation
   bool keypoints = false;     // also store each view's keypoint (optional section VKXY, 8 B/view)
   int threads = 0;            // 0 = all cores
