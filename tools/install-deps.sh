@@ -8,7 +8,7 @@ packages=(
   libeigen3-dev libflann-dev libceres-dev libgeographiclib-dev
   libsqlite3-dev sqlite3 nlohmann-json3-dev libcli11-dev
   libgtest-dev libgmock-dev libbenchmark-dev libvlfeat-dev libstb-dev
-  colmap hyperfine valgrind time python3 python3-jsonschema python3-matplotlib
+  colmap hyperfine valgrind time python3 python3-jsonschema python3-matplotlib clang-format
 )
 
 missing=()
