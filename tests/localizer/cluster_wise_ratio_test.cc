@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <tuple>
+
 #include "indexer/index_builder.h"
 #include "tests/indexer/indexer_fixture.h"
 
@@ -83,6 +85,38 @@ TEST_F(ClusterRatioTest, ASingletonUsesTheTRatioWithTheStoredNeighbourDistance) 
     const bool passed = std::any_of(accepted.begin(), accepted.end(), [&](const auto& m) { return m.view == view; });
     EXPECT_EQ(passed, expect_pass) << "d = " << d << ", v_NN distance = " << neighbor;
   }
+}
+
+TEST_F(ClusterRatioTest, AViewOfTheSamePointIsNoLocalSecondNeighbour) {
+  // Two views of one point in one image (COLMAP allows it; the fixture model has some).
+  uint32_t image = 0, u = 0, w = 0;
+  for (; image < index_->images().size() && u == w; ++image) {
+    for (uint32_t i = 0; i < index_->images()[image].num_views && u == w; ++i) {
+      for (uint32_t j = i + 1; j < index_->images()[image].num_views; ++j) {
+        if (index_->view_points()[View(image, i)] == index_->view_points()[View(image, j)]) {
+          std::tie(u, w) = std::pair(View(image, i), View(image, j));
+          break;
+        }
+      }
+    }
+  }
+  ASSERT_NE(u, w) << "no point is seen twice in one image";
+  ASSERT_TRUE(std::isfinite(index_->view_neighbor_distances()[u]));
+  std::vector<KdNeighbor> neighbors = {{u, 100}, {w, 121}};
+  for (uint32_t other = 0; neighbors.size() < 6; ++other) {
+    if (index_->ImageOfView(View(other, 0)) != index_->ImageOfView(u)) {
+      neighbors.push_back({View(other, 0), 10000});
+    }
+  }
+  // 10 / 11 would fail the local 1-ratio; u's cluster has no other point among the
+  // neighbours, so the t-ratio decides (v_NN is ~260 away) and accepts.
+  ForwardMatchingStats stats;
+  const auto accepted = Run(neighbors, &stats);
+  EXPECT_EQ(stats.local_ratio_tests, 0u);
+  EXPECT_EQ(stats.t_ratio_tests, 4u);
+  ASSERT_FALSE(accepted.empty());
+  EXPECT_EQ(accepted[0].view, u);
+  EXPECT_FLOAT_EQ(accepted[0].distance, 10.0f);
 }
 
 }  // namespace
