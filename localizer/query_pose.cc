@@ -10,7 +10,9 @@ namespace cwloc {
 
 std::vector<FeatureMatch> UniqueCorrespondences(const Index& index, std::vector<FeatureMatch> matches) {
   std::sort(matches.begin(), matches.end(), [](const FeatureMatch& a, const FeatureMatch& b) {
-    return a.feature != b.feature ? a.feature < b.feature : a.distance < b.distance;
+    // A total order: with ties left to std::sort, the kept view could differ between platforms.
+    if (a.feature != b.feature) return a.feature < b.feature;
+    return a.distance != b.distance ? a.distance < b.distance : a.view < b.view;
   });
   std::vector<FeatureMatch> unique;
   for (const FeatureMatch& match : matches) {

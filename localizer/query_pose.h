@@ -12,9 +12,9 @@
 
 namespace cwloc {
 
-// One 2D-3D pair per query feature: the match with the smallest descriptor distance (a feature
-// matched to several 3D points would count twice in RANSAC's inlier tally otherwise). Matches
-// whose view or point is out of range (a corrupt index) are dropped.
+// One 2D-3D pair per query feature: the match with the smallest descriptor distance, the lower
+// view on a tie (a feature matched to several 3D points would count twice in RANSAC's inlier
+// tally otherwise). Matches whose view or point is out of range (a corrupt index) are dropped.
 std::vector<FeatureMatch> UniqueCorrespondences(const Index& index, std::vector<FeatureMatch> matches);
 
 struct QueryPose {
