@@ -34,6 +34,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "format/base/split_mix64.h"
 #include "format/kdtree/descriptor_distance.h"
 #include "format/kdtree/kd_forest.h"
 #include "format/kdtree/kd_forest_builder.h"
@@ -136,15 +137,11 @@ Dataset LoadColmapDatabase(const std::string& path, const std::string& query_lis
 // ---------------------------------------------------------------------------------------------
 // Generated SIFT-like descriptors
 
+// SplitMix64 with float draws.
 class Rng {
  public:
-  explicit Rng(uint64_t seed) : state_(seed) {}
-  uint64_t Next() {
-    uint64_t z = (state_ += 0x9e3779b97f4a7c15ULL);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-    return z ^ (z >> 31);
-  }
+  explicit Rng(uint64_t seed) : bits_(seed) {}
+  uint64_t Next() { return bits_.Next(); }
   float Uniform() { return float(Next() >> 40) * 0x1.0p-24f; }  // [0, 1)
   // Sum of four uniforms, rescaled: an approximately standard normal, cheap enough for 10^9.
   float Normal() {
@@ -155,7 +152,7 @@ class Rng {
   }
 
  private:
-  uint64_t state_;
+  SplitMix64 bits_;
 };
 
 using Vec = std::array<float, kDescriptorDim>;
