@@ -5,6 +5,7 @@
 #include <unordered_map>
 
 #include "format/base/error.h"
+#include "format/base/prefetch.h"
 
 namespace cwloc::colmap {
 namespace fs = std::filesystem;
@@ -215,7 +216,7 @@ void CheckTracks(const detail::ModelFiles& files, Reconstruction* rec) {
                          std::to_string(image->points2D.size()) + " points2D");
       }
       const Point2D* point2D = &image->points2D[el.point2D_idx];
-      __builtin_prefetch(point2D);
+      Prefetch(point2D);
       pending.push_back({point2D, point_id, i});
       if (pending.size() == kBatch) check_pending();
     }

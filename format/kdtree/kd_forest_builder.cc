@@ -9,6 +9,7 @@
 #include <string>
 #include <thread>
 
+#include "format/base/prefetch.h"
 #include "format/base/split_mix64.h"
 
 namespace cwloc {
@@ -28,14 +29,6 @@ constexpr uint32_t kNoParent = std::numeric_limits<uint32_t>::max();
 // A well-mixed seed from `z`: the first output of SplitMix64 seeded with it.
 uint64_t Mix(uint64_t z) { return SplitMix64(z).Next(); }
 uint64_t ChildSeed(uint64_t seed, int side) { return Mix(seed ^ (0x51ed2701u + side)); }
-
-inline void Prefetch(const void* p) {
-#if defined(__GNUC__) || defined(__clang__)
-  __builtin_prefetch(p);
-#else
-  (void)p;
-#endif
-}
 
 // Kept separate with restrict-qualified pointers so that the compiler vectorizes it: this
 // loop is most of the build's arithmetic.
