@@ -11,8 +11,13 @@
 #include "format/colmap/reconstruction.h"
 
 struct sqlite3;
+struct sqlite3_stmt;
 
 namespace cwloc::colmap {
+namespace internal {
+struct MatrixRow;
+struct MatrixTable;
+}  // namespace internal
 
 // COLMAP's FeatureKeypoint: position plus the affine shape. Rows with 2 columns (x, y) get an
 // identity shape, rows with 4 (x, y, scale, orientation) get the similarity COLMAP derives.
@@ -79,6 +84,10 @@ class DatabaseReader {
  private:
   struct Statements;
   std::string ImageLabel(image_t image_id) const;  // "image 3 'a.jpg'" for messages
+  // Steps `stmt`, a query of `table` for one image, and reads and checks the matrix row it
+  // returns (only its size with `sizes_only`); false when the image has no row.
+  bool ReadMatrixRow(sqlite3_stmt* stmt, image_t image_id, const internal::MatrixTable& table,
+                     bool sizes_only, internal::MatrixRow* row) const;
 
   std::filesystem::path path_;
   sqlite3* db_ = nullptr;
