@@ -28,9 +28,7 @@ int RunBuild(const IndexBuildOptions& options, bool json) {
     nlohmann::ordered_json out = {
         {"output", options.output_path.string()}, {"file_bytes", report.file_bytes},
         {"bytes_per_view", double(report.file_bytes) / double(report.num_views)},
-        {"counts", {{"cameras", report.num_cameras}, {"images", report.num_images}, {"points", report.num_points},
-                    {"views", report.num_views}, {"clusters", report.num_clusters},
-                    {"covisibility_edges", report.num_covisibility_edges}}},
+        {"counts", CountsJson(report)},
         {"seconds", {{"read", report.seconds_read}, {"covisibility", report.seconds_covisibility},
                      {"clustering", report.seconds_clustering}, {"view_neighbors", report.seconds_neighbor_distances},
                      {"kd_forest", report.seconds_kd_forest}, {"write", report.seconds_write},

@@ -113,10 +113,8 @@ IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
   manifest["format_version"] = std::to_string(kFormatMajor) + "." + std::to_string(kFormatMinor);
   manifest["tool"] = "cwloc-index";
   manifest["tool_version"] = kToolVersion;
-  manifest["counts"] = {{"cameras", report.num_cameras},       {"images", report.num_images},
-                        {"points", report.num_points},         {"views", report.num_views},
-                        {"clusters", report.num_clusters},     {"covisibility_edges", report.num_covisibility_edges},
-                        {"kd_nodes", forest.nodes.size()}};
+  manifest["counts"] = CountsJson(report);
+  manifest["counts"]["kd_nodes"] = forest.nodes.size();
   nlohmann::ordered_json clustering_json = {{"method", clustering.method}, {"num_clusters", clustering.num_clusters}};
   if (options.clustering.method == ClusteringMethod::kFile) clustering_json["file"] = options.clustering.file.string();
   if (options.clustering.method == ClusteringMethod::kCovisibility) {
@@ -161,6 +159,15 @@ IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
   report.file_bytes = std::filesystem::file_size(options.output_path);
   report.seconds_total = SecondsSince(start);
   return report;
+}
+
+nlohmann::ordered_json CountsJson(const IndexBuildReport& report) {
+  return {{"cameras", report.num_cameras},
+          {"images", report.num_images},
+          {"points", report.num_points},
+          {"views", report.num_views},
+          {"clusters", report.num_clusters},
+          {"covisibility_edges", report.num_covisibility_edges}};
 }
 
 }  // namespace cwloc
