@@ -97,5 +97,5 @@ awk -v nq="$nq" -v cm="${secs[colmap_matching]}" -v cr="${secs[colmap_registrati
   printf "%-7s %-10s %-10.3f %-10.3f the whole cwloc-localize command (index open included)\n", "cwloc", ncw "/" nq, cl, cl / nq
   printf "one-off: cwloc-index build %.3f s. Feature extraction is excluded for both tools.\n", cb
 }'
-"$bin/cwloc-plot" errors --report "$work/peer_eval.json" --title "herz_jesu_p25: COLMAP and cwloc against ground truth" \
-  -o "$work/peer_errors.png"
+"$bin/cwloc-plot" errors --report "$work/peer_eval.json" \
+  --title "$(basename "$data"): COLMAP and cwloc against ground truth" -o "$work/peer_errors.png"

@@ -7,6 +7,7 @@
 #include <random>
 #include <vector>
 
+#include "format/base/prefetch.h"
 #include "format/kdtree/descriptor_distance.h"
 
 namespace cwloc {
@@ -50,8 +51,8 @@ void BM_BatchFromRam(benchmark::State& state, DistanceKernel kernel) {
     for (uint32_t& r : rows) {
       r = uint32_t(rng() % kRows);
       if (prefetch) {
-        __builtin_prefetch(data.data() + size_t(r) * kDescriptorDim);
-        __builtin_prefetch(data.data() + size_t(r) * kDescriptorDim + 64);
+        Prefetch(data.data() + size_t(r) * kDescriptorDim);
+        Prefetch(data.data() + size_t(r) * kDescriptorDim + 64);
       }
     }
     f->batch(query.data(), data.data(), rows, 8, out);

@@ -14,7 +14,6 @@
 
 #include <algorithm>
 #include <atomic>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -34,18 +33,14 @@
 
 #include <CLI/CLI.hpp>
 
+#include "format/base/split_mix64.h"
+#include "format/base/stopwatch.h"
 #include "format/kdtree/descriptor_distance.h"
 #include "format/kdtree/kd_forest.h"
 #include "format/kdtree/kd_forest_builder.h"
 
 namespace cwloc {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double Seconds(Clock::time_point since) {
-  return std::chrono::duration<double>(Clock::now() - since).count();
-}
 
 struct Dataset {
   std::string description;
@@ -136,15 +131,11 @@ Dataset LoadColmapDatabase(const std::string& path, const std::string& query_lis
 // ---------------------------------------------------------------------------------------------
 // Generated SIFT-like descriptors
 
+// SplitMix64 with float draws.
 class Rng {
  public:
-  explicit Rng(uint64_t seed) : state_(seed) {}
-  uint64_t Next() {
-    uint64_t z = (state_ += 0x9e3779b97f4a7c15ULL);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-    return z ^ (z >> 31);
-  }
+  explicit Rng(uint64_t seed) : bits_(seed) {}
+  uint64_t Next() { return bits_.Next(); }
   float Uniform() { return float(Next() >> 40) * 0x1.0p-24f; }  // [0, 1)
   // Sum of four uniforms, rescaled: an approximately standard normal, cheap enough for 10^9.
   float Normal() {
@@ -155,7 +146,7 @@ class Rng {
   }
 
  private:
-  uint64_t state_;
+  SplitMix64 bits_;
 };
 
 using Vec = std::array<float, kDescriptorDim>;
@@ -423,11 +414,11 @@ int Main(int argc, char** argv) {
     if (!distance) Fail("this CPU does not support --kernel " + kernel_name);
   }
 
-  auto start = Clock::now();
+  Stopwatch stopwatch;
   Dataset data = database.empty()
                      ? GenerateSynthetic(synthetic, std::max(num_queries, gt_queries), seed, threads)
                      : LoadColmapDatabase(database, query_list);
-  std::printf("data: %s (%.1f s)\n", data.description.c_str(), Seconds(start));
+  std::printf("data: %s (%.1f s)\n", data.description.c_str(), stopwatch.Seconds());
   // A random subset of the queries, in random order (the localizer shuffles its features too).
   {
     std::vector<size_t> order(data.NumQueries());
@@ -470,10 +461,10 @@ int Main(int argc, char** argv) {
   build_options.max_leaf_size = leaf_size;
   build_options.seed = seed;
   build_options.num_threads = threads;
-  start = Clock::now();
+  stopwatch.Restart();
   const double build_cpu_start = ProcessCpuSeconds();
   const KdForest forest = BuildKdForest(base, build_options);
-  const double build_s = Seconds(start);
+  const double build_s = stopwatch.Seconds();
   const KdForestView view = forest.View(base);
   const double build_cpu_s = ProcessCpuSeconds() - build_cpu_start;
   uint64_t checksum = 0xcbf29ce484222325ULL;  // FNV-1a of the arrays: same data+seed, same forest
@@ -490,15 +481,15 @@ int Main(int argc, char** argv) {
               build_s, build_cpu_s, forest.nodes.size(), double(forest.MemoryBytes()) / 1e6,
               double(forest.MemoryBytes()) / double(std::max<size_t>(n, 1)),
               static_cast<unsigned long long>(checksum));
-  start = Clock::now();
+  stopwatch.Restart();
   std::string error;
   if (!ValidateKdForest(view, &error)) Fail("our forest does not validate: " + error);
-  std::printf("ValidateKdForest: %.3f s\n", Seconds(start));
+  std::printf("ValidateKdForest: %.3f s\n", stopwatch.Seconds());
   if (build_only) return 0;
 
-  start = Clock::now();
+  stopwatch.Restart();
   const std::vector<TrueNeighbors> truth = BruteForce(data, gt_queries, threads);
-  std::printf("brute force ground truth: %.1f s\n", Seconds(start));
+  std::printf("brute force ground truth: %.1f s\n", stopwatch.Seconds());
 
   // Every method is a row plus a search function; the timed passes of all methods are
   // interleaved (rep 1 of each, rep 2 of each, ...) so that load drift on a shared machine hits
@@ -518,9 +509,9 @@ int Main(int argc, char** argv) {
     flann::Matrix<unsigned char> dataset(const_cast<uint8_t*>(base.data()), n, kDescriptorDim);
     flann_index = std::make_unique<flann::Index<flann::L2<unsigned char>>>(
         dataset, flann::KDTreeIndexParams(int(trees)));
-    start = Clock::now();
+    stopwatch.Restart();
     flann_index->buildIndex();
-    row.build_s = Seconds(start);
+    row.build_s = stopwatch.Seconds();
     // FLANN's pools plus its array of row pointers (the descriptors themselves are shared).
     row.memory_mb = (double(flann_index->usedMemory()) + double(n) * sizeof(void*)) / 1e6;
     std::printf("FLANN build: %.2f s\n", row.build_s);

@@ -2,12 +2,12 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
-#include <chrono>
 #include <cstdio>
 #include <iostream>
 
 #include "cwloc/version.h"
 #include "format/base/error.h"
+#include "format/base/stopwatch.h"
 #include "format/index/index.h"
 #include "format/base/tool_main.h"
 #include "format/index/xxhash64.h"
@@ -28,9 +28,7 @@ int RunBuild(const IndexBuildOptions& options, bool json) {
     nlohmann::ordered_json out = {
         {"output", options.output_path.string()}, {"file_bytes", report.file_bytes},
         {"bytes_per_view", double(report.file_bytes) / double(report.num_views)},
-        {"counts", {{"cameras", report.num_cameras}, {"images", report.num_images}, {"points", report.num_points},
-                    {"views", report.num_views}, {"clusters", report.num_clusters},
-                    {"covisibility_edges", report.num_covisibility_edges}}},
+        {"counts", CountsJson(report)},
         {"seconds", {{"read", report.seconds_read}, {"covisibility", report.seconds_covisibility},
                      {"clustering", report.seconds_clustering}, {"view_neighbors", report.seconds_neighbor_distances},
                      {"kd_forest", report.seconds_kd_forest}, {"write", report.seconds_write},
@@ -50,9 +48,9 @@ int RunBuild(const IndexBuildOptions& options, bool json) {
 }
 
 int RunInfo(const std::string& path, bool json) {
-  const auto start = std::chrono::steady_clock::now();
+  const Stopwatch open_time;
   const Index index = Index::Open(path);
-  const double open_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  const double open_ms = open_time.Seconds() * 1e3;
   const nlohmann::ordered_json manifest = ParseManifest(index);
   const FileHeader& header = index.file().header();
   if (json) {
@@ -94,12 +92,12 @@ int RunInfo(const std::string& path, bool json) {
 }
 
 int RunVerify(const std::string& path) {
-  const auto start = std::chrono::steady_clock::now();
+  const Stopwatch stopwatch;
   const Index index = Index::Open(path);
   index.file().VerifyChecksums();
   index.Validate();
   ParseManifest(index);
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double seconds = stopwatch.Seconds();
   std::printf("%s: OK: %zu section checksums and every stored index verified in %.2f s\n", path.c_str(),
               index.file().sections().size(), seconds);
   return kExitOk;

@@ -2,13 +2,13 @@
 
 #include <nlohmann/json.hpp>
 
-#include <chrono>
 #include <fstream>
 
 #include "cwloc/version.h"
 #include "format/base/error.h"
 #include "format/index/index_file.h"
 #include "format/base/progress.h"
+#include "format/base/stopwatch.h"
 #include "format/index/xxhash64.h"
 #include "format/colmap/reconstruction_io.h"
 #include "indexer/covisibility.h"
@@ -19,10 +19,6 @@
 
 namespace cwloc {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double SecondsSince(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
 // XXH64 over the model files in name order: ties the index to the exact model it came from.
 std::string FingerprintModel(const std::filesystem::path& dir) {
@@ -49,7 +45,7 @@ std::span<const T> Span(const std::vector<T>& v) { return {v.data(), v.size()}; 
 }  // namespace
 
 IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
-  const auto start = Clock::now();
+  const Stopwatch total;
   IndexBuildReport report;
   if (options.forest.num_trees < 1 || options.forest.num_trees > 64) {
     throw InputError("--trees " + std::to_string(options.forest.num_trees) + ": expected 1 to 64");
@@ -59,7 +55,7 @@ IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
   }
   const int threads = ResolveThreads(options.threads);
 
-  auto stage = Clock::now();
+  Stopwatch stage;
   const colmap::Reconstruction model = colmap::ReadReconstruction(options.model_dir);
   const colmap::DatabaseReader database(options.database_path);
   ModelViews views = GatherModelViews(model, database);
@@ -67,26 +63,28 @@ IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
     throw InputError(options.model_dir.string() + ": the model has no 3D points with views; nothing to index");
   }
   if (views.num_views() >= UINT32_MAX) throw InputError("more than 2^32 - 1 views; split the model");
-  report.seconds_read = SecondsSince(stage);
+  report.seconds_read = stage.Seconds();
 
-  stage = Clock::now();
+  stage.Restart();
   const CovisibilityGraph graph =
       BuildCovisibilityGraph(views.images, views.points, views.tracks, views.view_points, threads);
-  report.seconds_covisibility = SecondsSince(stage);
+  report.seconds_covisibility = stage.Seconds();
 
-  stage = Clock::now();
+  stage.Restart();
   ClusteringOptions clustering_options = options.clustering;
   clustering_options.seed = options.seed;
   const Clustering clustering = ClusterImages(clustering_options, views, graph);
   for (size_t i = 0; i < views.images.size(); ++i) views.images[i].cluster = clustering.cluster_of_image[i];
-  report.seconds_clustering = SecondsSince(stage);
+  report.seconds_clustering = stage.Seconds();
 
-  stage = Clock::now();
+  stage.Restart();
   const std::vector<float> neighbor_distances = ComputeViewNeighborDistances(views, clustering, threads);
-  report.seconds_neighbor_distances = SecondsSince(stage);
+  report.seconds_neighbor_distances = stage.Seconds();
 
-  stage = Clock::now();
-  KdForestBuildOptions forest_options = options.forest;
+  stage.Restart();
+  ClusteringOptions clustering_options = options.clustering;
+  clustering_options.seed = options.seed;
+  const Clustering clustering = ClusterImages(clustering_options, views, graph);
   forest_options.seed = options.seed;
   forest_options.num_threads = static_cast<uint32_t>(threads);
   Progress forest_progress("kd-forest", 1000);
@@ -100,7 +98,7 @@ IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
   };
   const KdForest forest = BuildKdForest(views.descriptors, forest_options);
   forest_progress.Finish();
-  report.seconds_kd_forest = SecondsSince(stage);
+  report.seconds_kd_forest = stage.Seconds();
 
   report.num_cameras = views.cameras.size();
   report.num_images = views.images.size();
@@ -113,10 +111,8 @@ IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
   manifest["format_version"] = std::to_string(kFormatMajor) + "." + std::to_string(kFormatMinor);
   manifest["tool"] = "cwloc-index";
   manifest["tool_version"] = kToolVersion;
-  manifest["counts"] = {{"cameras", report.num_cameras},       {"images", report.num_images},
-                        {"points", report.num_points},         {"views", report.num_views},
-                        {"clusters", report.num_clusters},     {"covisibility_edges", report.num_covisibility_edges},
-                        {"kd_nodes", forest.nodes.size()}};
+  manifest["counts"] = CountsJson(report);
+  manifest["counts"]["kd_nodes"] = forest.nodes.size();
   nlohmann::ordered_json clustering_json = {{"method", clustering.method}, {"num_clusters", clustering.num_clusters}};
   if (options.clustering.method == ClusteringMethod::kFile) clustering_json["file"] = options.clustering.file.string();
   if (options.clustering.method == ClusteringMethod::kCovisibility) {
@@ -135,7 +131,7 @@ IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
   manifest["georeference"] = nullptr;
   const std::string manifest_text = manifest.dump(2) + "\n";
 
-  stage = Clock::now();
+  stage.Restart();
   std::vector<SectionData> sections = {
       MakeSection<char>(section::kManifest, {manifest_text.data(), manifest_text.size()}),
       MakeSection(section::kCameras, Span(views.cameras)),
@@ -157,10 +153,19 @@ IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
     sections.push_back(MakeSection(section::kViewKeypoints, Span(views.view_keypoints), /*flags=*/0));
   }
   WriteIndexFile(options.output_path, sections);
-  report.seconds_write = SecondsSince(stage);
+  report.seconds_write = stage.Seconds();
   report.file_bytes = std::filesystem::file_size(options.output_path);
-  report.seconds_total = SecondsSince(start);
+  report.seconds_total = total.Seconds();
   return report;
+}
+
+nlohmann::ordered_json CountsJson(const IndexBuildReport& report) {
+  return {{"cameras", report.num_cameras},
+          {"images", report.num_images},
+          {"points", report.num_points},
+          {"views", report.num_views},
+          {"clusters", report.num_clusters},
+          {"covisibility_edges", report.num_covisibility_edges}};
 }
 
 }  // namespace cwloc

@@ -4,6 +4,8 @@
 #include <filesystem>
 #include <string>
 
+#include <nlohmann/json_fwd.hpp>
+
 #include "format/kdtree/kd_forest_builder.h"
 #include "indexer/clustering.h"
 
@@ -34,5 +36,9 @@ struct IndexBuildReport {
 // Reads the model and database, computes every section, writes the index atomically.
 // Throws InputError on bad input.
 IndexBuildReport BuildIndex(const IndexBuildOptions& options);
+
+// The counts of a build, as the manifest (which adds kd_nodes) and `cwloc-index build --json`
+// report them: cameras, images, points, views, clusters, covisibility_edges.
+nlohmann::ordered_json CountsJson(const IndexBuildReport& report);
 
 }  // namespace cwloc

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
 #include <optional>
 #include <random>
@@ -36,6 +37,20 @@ std::filesystem::path ToolPath(const std::string& name);
 
 // Runs a shell command, captures stdout+stderr, returns the exit code.
 int RunCommand(const std::string& command, std::string* output);
+
+// While alive, writes that grow a file past `bytes` fail with EFBIG ("File too large"), the
+// way a full disk fails them; unlike /dev/full this reaches files of any name, even as root.
+class FileSizeLimit {
+ public:
+  explicit FileSizeLimit(uint64_t bytes);
+  ~FileSizeLimit();
+  FileSizeLimit(const FileSizeLimit&) = delete;
+  FileSizeLimit& operator=(const FileSizeLimit&) = delete;
+
+ private:
+  uint64_t old_soft_limit_;
+  void (*old_handler_)(int);
+};
 
 }  // namespace cwloc::test
 

@@ -10,8 +10,7 @@ namespace cwloc {
 bool Progress::Enabled() { return ::isatty(STDERR_FILENO) == 1 && std::getenv("CWLOC_NO_PROGRESS") == nullptr; }
 
 Progress::Progress(std::string label, uint64_t total)
-    : label_(std::move(label)), total_(total), enabled_(Enabled()),
-      start_(std::chrono::steady_clock::now()), last_draw_(start_) {}
+    : label_(std::move(label)), total_(total), enabled_(Enabled()) {}
 
 Progress::~Progress() { Finish(); }
 
@@ -19,9 +18,8 @@ void Progress::Advance(uint64_t amount) {
   if (!enabled_) return;
   std::lock_guard lock(mutex_);
   done_ += amount;
-  const auto now = std::chrono::steady_clock::now();
-  if (now - last_draw_ >= std::chrono::milliseconds(100)) {
-    last_draw_ = now;
+  if (since_draw_.Seconds() >= 0.1) {
+    since_draw_.Restart();
     Draw(false);
   }
 }
@@ -39,9 +37,9 @@ void Progress::Draw(bool final_draw) {
   constexpr int kWidth = 30;
   const double fraction = total_ == 0 ? 1.0 : std::min(1.0, double(done_) / double(total_));
   const int filled = static_cast<int>(fraction * kWidth);
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
   std::fprintf(stderr, "\r%-24s [%.*s%*s] %5.1f%% %7.1fs", label_.c_str(), filled,
-               "##############################", kWidth - filled, "", 100.0 * fraction, seconds);
+               "##############################", kWidth - filled, "", 100.0 * fraction,
+               elapsed_.Seconds());
   if (final_draw) std::fputc('\n', stderr);
   std::fflush(stderr);
 }

@@ -1,9 +1,10 @@
 #pragma once
 
-#include <chrono>
 #include <cstdint>
 #include <mutex>
 #include <string>
+
+#include "format/base/stopwatch.h"
 
 namespace cwloc {
 
@@ -29,8 +30,8 @@ class Progress {
   uint64_t done_ = 0;
   bool enabled_;
   bool finished_ = false;
-  std::chrono::steady_clock::time_point start_;
-  std::chrono::steady_clock::time_point last_draw_;
+  Stopwatch elapsed_;
+  Stopwatch since_draw_;
   std::mutex mutex_;
 };
 

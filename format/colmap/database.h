@@ -7,11 +7,17 @@
 #include <string>
 #include <vector>
 
+#include "format/base/atomic_file.h"
 #include "format/colmap/reconstruction.h"
 
 struct sqlite3;
+struct sqlite3_stmt;
 
 namespace cwloc::colmap {
+namespace internal {
+struct MatrixRow;
+struct MatrixTable;
+}  // namespace internal
 
 // COLMAP's FeatureKeypoint: position plus the affine shape. Rows with 2 columns (x, y) get an
 // identity shape, rows with 4 (x, y, scale, orientation) get the similarity COLMAP derives.
@@ -78,6 +84,10 @@ class DatabaseReader {
  private:
   struct Statements;
   std::string ImageLabel(image_t image_id) const;  // "image 3 'a.jpg'" for messages
+  // Steps `stmt`, a query of `table` for one image, and reads and checks the matrix row it
+  // returns (only its size with `sizes_only`); false when the image has no row.
+  bool ReadMatrixRow(sqlite3_stmt* stmt, image_t image_id, const internal::MatrixTable& table,
+                     bool sizes_only, internal::MatrixRow* row) const;
 
   std::filesystem::path path_;
   sqlite3* db_ = nullptr;
@@ -88,10 +98,10 @@ class DatabaseReader {
 
 // Creates a new database in COLMAP 3.8's schema (the one Debian's colmap reads and
 // upgrades), with user_version 3800. Writes go into one transaction committed by Commit();
-// the file is built under a temporary name in the same directory and renamed into place,
-// so a failure never leaves a partial database. Cameras are written with
-// prior_focal_length = 0. Bad arguments throw std::invalid_argument, I/O and SQLite
-// failures std::runtime_error, both naming the file.
+// SQLite builds the file at an AtomicFile's temporary path, which Commit() renames into
+// place, so a failure never leaves a partial database. Cameras are written with
+// prior_focal_length = 0. Bad arguments throw std::invalid_argument, SQLite failures
+// std::runtime_error, file-system failures InputError (one too), all naming the file.
 class DatabaseWriter {
  public:
   // Replaces an existing file (and its stale -journal/-wal/-shm) on Commit().
@@ -108,15 +118,15 @@ class DatabaseWriter {
   // Commits, closes, fsyncs and renames into place. The writer cannot be used afterwards.
   void Commit();
 
+  const std::filesystem::path& path() const { return file_.path(); }
+
  private:
   struct Statements;
   void Close() noexcept;
 
-  std::filesystem::path path_;
-  std::filesystem::path temp_path_;
+  AtomicFile file_;  // created before SQLite opens its temp_path()
   sqlite3* db_ = nullptr;
   std::unique_ptr<Statements> stmts_;
-  bool committed_ = false;
 };
 
 }  // namespace cwloc::colmap

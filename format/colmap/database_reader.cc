@@ -6,6 +6,7 @@
 #include <fstream>
 #include <functional>
 #include <limits>
+#include <span>
 #include <string_view>
 
 #include "format/base/error.h"
@@ -92,14 +93,6 @@ bool Exists(const std::filesystem::path& path) {
   return std::filesystem::exists(path, ec);
 }
 
-// Shape of one rows/cols/data row, checked against the table's layout.
-struct MatrixRow {
-  int64_t rows = 0;
-  int64_t cols = 0;
-  int data_type = SQLITE_NULL;  // SQLITE_BLOB, SQLITE_NULL, ...
-  int64_t bytes = 0;
-};
-
 const char* SqliteTypeName(int type) {
   switch (type) {
     case SQLITE_INTEGER:
@@ -122,6 +115,41 @@ int SqliteTypeFromName(std::string_view name) {
   if (name == "blob") return SQLITE_BLOB;
   return SQLITE_NULL;
 }
+
+}  // namespace
+
+namespace internal {
+
+// The layout of a rows/cols/data table: keypoints or descriptors.
+struct MatrixTable {
+  const char* name;
+  std::span<const int64_t> accepted_cols;  // what a non-empty matrix may have
+  size_t element_size;
+  const char* element_name;
+  bool has_type;  // descriptors carry their extractor type in COLMAP >= 4.0
+};
+
+// Shape of one rows/cols/data row, checked against the table's layout.
+struct MatrixRow {
+  int64_t rows = 0;
+  int64_t cols = 0;
+  int data_type = SQLITE_NULL;  // SQLITE_BLOB, SQLITE_NULL, ...
+  int64_t bytes = 0;
+  const void* blob = nullptr;  // the data, unless only sizes were read
+};
+
+}  // namespace internal
+
+namespace {
+
+using internal::MatrixRow;
+using internal::MatrixTable;
+
+constexpr int64_t kKeypointCols[] = {2, 4, 6};
+constexpr int64_t kDescriptorCols[] = {kDescriptorDim};
+constexpr MatrixTable kKeypointsTable{"keypoints", kKeypointCols, sizeof(float), "float", false};
+constexpr MatrixTable kDescriptorsTable{"descriptors", kDescriptorCols, sizeof(uint8_t), "uint8",
+                                        true};
 
 }  // namespace
 
@@ -306,9 +334,10 @@ int64_t IntegerColumn(sqlite3_stmt* stmt, int col, const Where& where, const cha
 }
 
 // Checks one keypoints/descriptors row: the column count is accepted and the blob holds
-// exactly rows * cols elements. `accepted_cols` lists what a non-empty matrix may have.
-void CheckMatrixRow(const MatrixRow& row, std::initializer_list<int64_t> accepted_cols,
-                    size_t element_size, const char* element_name, const Where& where) {
+// exactly rows * cols elements.
+void CheckMatrixRow(const MatrixRow& row, const MatrixTable& table, const Where& where) {
+  const std::span<const int64_t> accepted_cols = table.accepted_cols;
+  const size_t element_size = table.element_size;
   if (row.rows < 0 || row.cols < 0) {
     throw InputError(where() + ": negative shape " + std::to_string(row.rows) + " x " +
                      std::to_string(row.cols));
@@ -343,7 +372,7 @@ void CheckMatrixRow(const MatrixRow& row, std::initializer_list<int64_t> accepte
     throw InputError(where() + ": data blob has " + std::to_string(row.bytes) +
                      " bytes, expected " + std::to_string(expected) + " (" +
                      std::to_string(row.rows) + " rows x " + std::to_string(row.cols) + " cols x " +
-                     std::to_string(element_size) + "-byte " + element_name + ")");
+                     std::to_string(element_size) + "-byte " + table.element_name + ")");
   }
 }
 
@@ -457,27 +486,43 @@ std::optional<DatabaseImage> DatabaseReader::FindImage(const std::string& name) 
   return ReadImageRow(stmt, file);
 }
 
-std::vector<Keypoint> DatabaseReader::ReadKeypoints(image_t image_id) const {
+bool DatabaseReader::ReadMatrixRow(sqlite3_stmt* stmt, image_t image_id,
+                                   const MatrixTable& table, bool sizes_only,
+                                   MatrixRow* row) const {
   const std::string file = path_.string();
+  sqlite3_bind_int64(stmt, 1, image_id);
+  if (CheckSqlite<InputError>(db_, sqlite3_step(stmt), file) != SQLITE_ROW) return false;
+  const Where where = [&] {
+    return file + ": table '" + table.name + "', " + ImageLabel(image_id);
+  };
+  // Columns: rows, cols, then data or length(data) and typeof(data), then the type if any.
+  row->rows = IntegerColumn(stmt, 0, where, "rows");
+  row->cols = IntegerColumn(stmt, 1, where, "cols");
+  if (table.has_type && has_descriptor_type_) CheckDescriptorType(stmt, sizes_only ? 4 : 3, where);
+  if (sizes_only) {
+    row->data_type =
+        SqliteTypeFromName(reinterpret_cast<const char*>(sqlite3_column_text(stmt, 3)));
+    row->bytes = sqlite3_column_int64(stmt, 2);
+  } else {
+    row->data_type = sqlite3_column_type(stmt, 2);
+    row->blob = sqlite3_column_blob(stmt, 2);  // before _bytes, as SQLite advises
+    row->bytes = sqlite3_column_bytes(stmt, 2);
+    if (row->data_type != SQLITE_BLOB) row->blob = nullptr;
+  }
+  CheckMatrixRow(*row, table, where);
+  return true;
+}
+
+std::vector<Keypoint> DatabaseReader::ReadKeypoints(image_t image_id) const {
   sqlite3_stmt* stmt = stmts_->read_keypoints.get();
   StmtScope scope(stmt);
-  sqlite3_bind_int64(stmt, 1, image_id);
-  if (CheckSqlite<InputError>(db_, sqlite3_step(stmt), file) != SQLITE_ROW) return {};
-
-  const Where where = [&] { return file + ": table 'keypoints', " + ImageLabel(image_id); };
   MatrixRow row;
-  row.rows = IntegerColumn(stmt, 0, where, "rows");
-  row.cols = IntegerColumn(stmt, 1, where, "cols");
-  row.data_type = sqlite3_column_type(stmt, 2);
-  const void* blob = sqlite3_column_blob(stmt, 2);  // before _bytes, as SQLite advises
-  row.bytes = sqlite3_column_bytes(stmt, 2);
-  if (row.data_type != SQLITE_BLOB) blob = nullptr;
-  CheckMatrixRow(row, {2, 4, 6}, sizeof(float), "float", where);
+  if (!ReadMatrixRow(stmt, image_id, kKeypointsTable, /*sizes_only=*/false, &row)) return {};
 
   const size_t rows = static_cast<size_t>(row.rows);
   const size_t cols = static_cast<size_t>(row.cols);
   std::vector<float> values(rows * cols);
-  if (!values.empty()) std::memcpy(values.data(), blob, values.size() * sizeof(float));
+  if (!values.empty()) std::memcpy(values.data(), row.blob, values.size() * sizeof(float));
   std::vector<Keypoint> keypoints(rows);
   for (size_t i = 0; i < rows; ++i) {
     const float* v = values.data() + i * cols;
@@ -502,7 +547,8 @@ std::vector<Keypoint> DatabaseReader::ReadKeypoints(image_t image_id) const {
       kp.a22 = v[5];
     }
     if (!finite) {
-      throw InputError(where() + ": keypoint " + std::to_string(i) +
+      throw InputError(path_.string() + ": table 'keypoints', " + ImageLabel(image_id) +
+                       ": keypoint " + std::to_string(i) +
                        " has a non-finite value or a negative scale");
     }
   }
@@ -510,27 +556,16 @@ std::vector<Keypoint> DatabaseReader::ReadKeypoints(image_t image_id) const {
 }
 
 Descriptors DatabaseReader::ReadDescriptors(image_t image_id) const {
-  const std::string file = path_.string();
   sqlite3_stmt* stmt = stmts_->read_descriptors.get();
   StmtScope scope(stmt);
-  sqlite3_bind_int64(stmt, 1, image_id);
-  if (CheckSqlite<InputError>(db_, sqlite3_step(stmt), file) != SQLITE_ROW) return {};
-
-  const Where where = [&] { return file + ": table 'descriptors', " + ImageLabel(image_id); };
   MatrixRow row;
-  row.rows = IntegerColumn(stmt, 0, where, "rows");
-  row.cols = IntegerColumn(stmt, 1, where, "cols");
-  if (has_descriptor_type_) CheckDescriptorType(stmt, 3, where);
-  row.data_type = sqlite3_column_type(stmt, 2);
-  const void* blob = sqlite3_column_blob(stmt, 2);
-  row.bytes = sqlite3_column_bytes(stmt, 2);
-  CheckMatrixRow(row, {kDescriptorDim}, sizeof(uint8_t), "uint8", where);
-
+  if (!ReadMatrixRow(stmt, image_id, kDescriptorsTable, /*sizes_only=*/false, &row)) return {};
   Descriptors descriptors;
   descriptors.rows = static_cast<uint32_t>(row.rows);
   descriptors.data.resize(size_t{descriptors.rows} * kDescriptorDim);
-  if (!descriptors.data.empty())
-    std::memcpy(descriptors.data.data(), blob, descriptors.data.size());
+  if (!descriptors.data.empty()) {
+    std::memcpy(descriptors.data.data(), row.blob, descriptors.data.size());
+  }
   return descriptors;
 }
 
@@ -548,36 +583,19 @@ ImageFeatures DatabaseReader::ReadFeatures(image_t image_id) const {
 }
 
 uint32_t DatabaseReader::NumKeypoints(image_t image_id) const {
-  const std::string file = path_.string();
   sqlite3_stmt* stmt = stmts_->size_keypoints.get();
   StmtScope scope(stmt);
-  sqlite3_bind_int64(stmt, 1, image_id);
-  if (CheckSqlite<InputError>(db_, sqlite3_step(stmt), file) != SQLITE_ROW) return 0;
-  const Where where = [&] { return file + ": table 'keypoints', " + ImageLabel(image_id); };
   MatrixRow row;
-  row.rows = IntegerColumn(stmt, 0, where, "rows");
-  row.cols = IntegerColumn(stmt, 1, where, "cols");
-  row.data_type = SqliteTypeFromName(reinterpret_cast<const char*>(sqlite3_column_text(stmt, 3)));
-  row.bytes = sqlite3_column_int64(stmt, 2);
-  CheckMatrixRow(row, {2, 4, 6}, sizeof(float), "float", where);
-  return static_cast<uint32_t>(row.rows);
+  const bool found = ReadMatrixRow(stmt, image_id, kKeypointsTable, /*sizes_only=*/true, &row);
+  return found ? static_cast<uint32_t>(row.rows) : 0;
 }
 
 uint32_t DatabaseReader::NumDescriptors(image_t image_id) const {
-  const std::string file = path_.string();
   sqlite3_stmt* stmt = stmts_->size_descriptors.get();
   StmtScope scope(stmt);
-  sqlite3_bind_int64(stmt, 1, image_id);
-  if (CheckSqlite<InputError>(db_, sqlite3_step(stmt), file) != SQLITE_ROW) return 0;
-  const Where where = [&] { return file + ": table 'descriptors', " + ImageLabel(image_id); };
   MatrixRow row;
-  row.rows = IntegerColumn(stmt, 0, where, "rows");
-  row.cols = IntegerColumn(stmt, 1, where, "cols");
-  if (has_descriptor_type_) CheckDescriptorType(stmt, 4, where);
-  row.data_type = SqliteTypeFromName(reinterpret_cast<const char*>(sqlite3_column_text(stmt, 3)));
-  row.bytes = sqlite3_column_int64(stmt, 2);
-  CheckMatrixRow(row, {kDescriptorDim}, sizeof(uint8_t), "uint8", where);
-  return static_cast<uint32_t>(row.rows);
+  const bool found = ReadMatrixRow(stmt, image_id, kDescriptorsTable, /*sizes_only=*/true, &row);
+  return found ? static_cast<uint32_t>(row.rows) : 0;
 }
 
 }  // namespace cwloc::colmap

@@ -1,8 +1,3 @@
-#include <fcntl.h>
-#include <unistd.h>
-
-#include <atomic>
-#include <cerrno>
 #include <cstring>
 #include <limits>
 #include <stdexcept>
@@ -71,24 +66,6 @@ constexpr const char* kCreateTables =
 constexpr int64_t kMaxImageId = std::numeric_limits<int32_t>::max();
 constexpr int kKeypointCols = 6;
 
-std::filesystem::path TempPathFor(const std::filesystem::path& path) {
-  static std::atomic<unsigned> counter{0};
-  // Appending piecewise (not "." + name) also avoids a GCC 12 -Wrestrict false positive.
-  std::string name = ".";
-  name += path.filename().string();
-  name += ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(counter++);
-  return path.parent_path() / name;
-}
-
-void Fsync(const std::filesystem::path& path, int open_flags, const std::string& what) {
-  const int fd = ::open(path.c_str(), open_flags | O_CLOEXEC);
-  if (fd < 0) throw std::system_error(errno, std::generic_category(), what + ": open for fsync");
-  const int rc = ::fsync(fd);
-  const int err = errno;
-  ::close(fd);
-  if (rc != 0) throw std::system_error(err, std::generic_category(), what + ": fsync");
-}
-
 }  // namespace
 
 struct DatabaseWriter::Statements {
@@ -99,16 +76,14 @@ struct DatabaseWriter::Statements {
   std::vector<float> keypoint_buffer;  // reused so that writing does not allocate per image
 };
 
-DatabaseWriter::DatabaseWriter(const std::filesystem::path& path)
-    : path_(path), temp_path_(TempPathFor(path)) {
-  const std::string file = path_.string();
-  std::error_code ec;
-  std::filesystem::remove(temp_path_, ec);
+DatabaseWriter::DatabaseWriter(const std::filesystem::path& path) : file_(path) {
+  const std::string file = path.string();
+  const std::filesystem::path& temp_path = file_.temp_path();
   const int flags = SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_NOMUTEX;
-  const int rc = sqlite3_open_v2(temp_path_.c_str(), &db_, flags, nullptr);
+  const int rc = sqlite3_open_v2(temp_path.c_str(), &db_, flags, nullptr);
   if (rc != SQLITE_OK) {
     const std::string message =
-        internal::SqliteErrorMessage(db_, rc, file + ": cannot create " + temp_path_.string());
+        internal::SqliteErrorMessage(db_, rc, file + ": cannot open " + temp_path.string());
     sqlite3_close(db_);
     db_ = nullptr;
     throw std::runtime_error(message);
@@ -121,7 +96,7 @@ DatabaseWriter::DatabaseWriter(const std::filesystem::path& path)
                              "PRAGMA journal_mode = OFF; PRAGMA synchronous = OFF; "
                              "PRAGMA locking_mode = EXCLUSIVE; PRAGMA temp_store = MEMORY;",
                              nullptr, nullptr, nullptr),
-                file + ": setting up " + temp_path_.string());
+                file + ": setting up " + temp_path.string());
     CheckSqlite(db_, sqlite3_exec(db_, kCreateTables, nullptr, nullptr, nullptr),
                 file + ": creating tables");
     CheckSqlite(db_, sqlite3_exec(db_, "BEGIN", nullptr, nullptr, nullptr), file);
@@ -138,7 +113,6 @@ DatabaseWriter::DatabaseWriter(const std::filesystem::path& path)
         db_, "INSERT INTO descriptors(image_id, rows, cols, data) VALUES(?1, ?2, ?3, ?4)", file);
   } catch (...) {
     Close();
-    std::filesystem::remove(temp_path_, ec);
     throw;
   }
 }
@@ -149,12 +123,8 @@ void DatabaseWriter::Close() noexcept {
   db_ = nullptr;
 }
 
-DatabaseWriter::~DatabaseWriter() {
-  if (committed_) return;
-  Close();
-  std::error_code ec;
-  std::filesystem::remove(temp_path_, ec);
-}
+// Closes SQLite first; file_ then removes the temporary file unless Commit() published it.
+DatabaseWriter::~DatabaseWriter() { Close(); }
 
 namespace {
 
@@ -179,8 +149,8 @@ void BindMatrix(sqlite3* db, sqlite3_stmt* stmt, int64_t rows, int64_t cols, con
 }  // namespace
 
 void DatabaseWriter::WriteCamera(const Camera& camera) {
-  CheckOpen(db_, path_);
-  const std::string what = path_.string() + ": camera " + std::to_string(camera.camera_id);
+  CheckOpen(db_, path());
+  const std::string what = path().string() + ": camera " + std::to_string(camera.camera_id);
   const auto model = FindCameraModel(static_cast<int32_t>(camera.model_id));
   if (!model) {
     throw std::invalid_argument(what + ": unknown camera model id " +
@@ -209,9 +179,9 @@ void DatabaseWriter::WriteCamera(const Camera& camera) {
 }
 
 void DatabaseWriter::WriteImage(const DatabaseImage& image) {
-  CheckOpen(db_, path_);
+  CheckOpen(db_, path());
   const std::string what =
-      path_.string() + ": image " + std::to_string(image.image_id) + " '" + image.name + "'";
+      path().string() + ": image " + std::to_string(image.image_id) + " '" + image.name + "'";
   if (image.image_id >= kMaxImageId) {
     throw std::invalid_argument(what + ": COLMAP image ids must be below 2147483647");
   }
@@ -227,8 +197,8 @@ void DatabaseWriter::WriteImage(const DatabaseImage& image) {
 }
 
 void DatabaseWriter::WriteKeypoints(image_t image_id, const std::vector<Keypoint>& keypoints) {
-  CheckOpen(db_, path_);
-  const std::string what = path_.string() + ": keypoints of image " + std::to_string(image_id);
+  CheckOpen(db_, path());
+  const std::string what = path().string() + ": keypoints of image " + std::to_string(image_id);
   std::vector<float>& buffer = stmts_->keypoint_buffer;
   buffer.resize(keypoints.size() * kKeypointCols);
   float* out = buffer.data();
@@ -249,8 +219,8 @@ void DatabaseWriter::WriteKeypoints(image_t image_id, const std::vector<Keypoint
 }
 
 void DatabaseWriter::WriteDescriptors(image_t image_id, const Descriptors& descriptors) {
-  CheckOpen(db_, path_);
-  const std::string what = path_.string() + ": descriptors of image " + std::to_string(image_id);
+  CheckOpen(db_, path());
+  const std::string what = path().string() + ": descriptors of image " + std::to_string(image_id);
   if (descriptors.data.size() != size_t{descriptors.rows} * kDescriptorDim) {
     throw std::invalid_argument(what + ": " + std::to_string(descriptors.rows) + " rows need " +
                                 std::to_string(size_t{descriptors.rows} * kDescriptorDim) +
@@ -265,8 +235,8 @@ void DatabaseWriter::WriteDescriptors(image_t image_id, const Descriptors& descr
 }
 
 void DatabaseWriter::Commit() {
-  CheckOpen(db_, path_);
-  const std::string file = path_.string();
+  CheckOpen(db_, path());
+  const std::string file = path().string();
   CheckSqlite(db_, sqlite3_exec(db_, "COMMIT", nullptr, nullptr, nullptr), file + ": commit");
   stmts_.reset();
   const int rc = sqlite3_close(db_);
@@ -274,24 +244,16 @@ void DatabaseWriter::Commit() {
     throw std::runtime_error(internal::SqliteErrorMessage(db_, rc, file + ": close"));
   }
   db_ = nullptr;
-  Fsync(temp_path_, O_RDONLY, file);
 
   // Side files of a database we replace belong to the old content: SQLite would replay a
   // stale -journal or -wal onto the new file.
   std::error_code ec;
   for (const char* suffix : {"-journal", "-wal", "-shm"}) {
-    std::filesystem::path side = path_;
+    std::filesystem::path side = path();
     side += suffix;
     std::filesystem::remove(side, ec);
   }
-  std::filesystem::rename(temp_path_, path_, ec);
-  if (ec) {
-    throw std::runtime_error(file + ": cannot rename " + temp_path_.string() +
-                             " into place: " + ec.message());
-  }
-  committed_ = true;
-  const std::filesystem::path dir = path_.has_parent_path() ? path_.parent_path() : ".";
-  Fsync(dir, O_RDONLY | O_DIRECTORY, file + ": directory");
+  file_.Commit();
 }
 
 }  // namespace cwloc::colmap

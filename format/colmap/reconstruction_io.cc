@@ -1,14 +1,11 @@
 #include "format/colmap/reconstruction_io.h"
 
-#include <fcntl.h>
-#include <unistd.h>
-
 #include <algorithm>
-#include <cerrno>
 #include <system_error>
 #include <unordered_map>
 
 #include "format/base/error.h"
+#include "format/base/prefetch.h"
 
 namespace cwloc::colmap {
 namespace fs = std::filesystem;
@@ -219,7 +216,7 @@ void CheckTracks(const detail::ModelFiles& files, Reconstruction* rec) {
                          std::to_string(image->points2D.size()) + " points2D");
       }
       const Point2D* point2D = &image->points2D[el.point2D_idx];
-      __builtin_prefetch(point2D);
+      Prefetch(point2D);
       pending.push_back({point2D, point_id, i});
       if (pending.size() == kBatch) check_pending();
     }
@@ -310,71 +307,6 @@ void RigsAndFramesToWrite(const Reconstruction& rec, std::map<rig_t, Rig>* rigs,
     frame.data_ids.push_back({{SensorType::kCamera, image.camera_id}, image_id});
     frames->emplace(image_id, std::move(frame));
   }
-}
-
-AtomicFileWriter::AtomicFileWriter(fs::path path)
-    : path_(std::move(path)), temp_path_(path_.string() + ".tmp") {
-  fd_ = ::open(temp_path_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd_ < 0) Fail("cannot create " + temp_path_.filename().string(), errno);
-  buffer_ = std::make_unique_for_overwrite<char[]>(kBufferSize);
-}
-
-AtomicFileWriter::~AtomicFileWriter() {
-  if (fd_ >= 0) {
-    ::close(fd_);
-    std::error_code ignored;
-    fs::remove(temp_path_, ignored);
-  }
-}
-
-void AtomicFileWriter::Append(const void* data, size_t size) {
-  if (kBufferSize - used_ < size) Flush();
-  if (size > kBufferSize) {
-    WriteAll(static_cast<const char*>(data), size);  // rare: larger than the whole buffer
-    return;
-  }
-  std::memcpy(buffer_.get() + used_, data, size);
-  used_ += size;
-}
-
-void AtomicFileWriter::Flush() {
-  WriteAll(buffer_.get(), used_);
-  used_ = 0;
-}
-
-void AtomicFileWriter::WriteAll(const char* data, size_t size) {
-  size_t done = 0;
-  while (done < size) {
-    const ssize_t n = ::write(fd_, data + done, size - done);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      Fail("cannot write", errno);
-    }
-    done += static_cast<size_t>(n);
-  }
-}
-
-void AtomicFileWriter::Commit() {
-  Flush();
-  const int fd = fd_;
-  fd_ = -1;
-  if (::close(fd) != 0) {
-    const int error_number = errno;
-    std::error_code ignored;
-    fs::remove(temp_path_, ignored);
-    Fail("cannot write", error_number);
-  }
-  if (::rename(temp_path_.c_str(), path_.c_str()) != 0) {
-    const int error_number = errno;
-    std::error_code ignored;
-    fs::remove(temp_path_, ignored);
-    Fail("cannot rename " + temp_path_.filename().string() + " into place", error_number);
-  }
-}
-
-void AtomicFileWriter::Fail(const std::string& what, int error_number) {
-  throw InputError(path_.string() + ": " + what + ": " +
-                   std::generic_category().message(error_number));
 }
 
 }  // namespace detail

@@ -32,10 +32,10 @@ Reconstruction ReadReconstructionText(const std::filesystem::path& dir);
 // Writes a model COLMAP reads back. With kRigs, a model without rigs and frames gets one
 // trivial rig per camera and one frame per image, as COLMAP does when it upgrades a model.
 // With kClassic, stale rigs.* / frames.* of the same format are removed from `dir` so that
-// a later read does not pick them up. Each file is written to "<name>.tmp" and renamed into
-// place. Numbers in text files use 17 significant digits (COLMAP's precision), so text
-// round-trips every double exactly. Throws InputError naming the file when `dir` is missing
-// or not writable, or a write fails.
+// a later read does not pick them up. Each file is replaced atomically (AtomicFileWriter).
+// Numbers in text files use 17 significant digits (COLMAP's precision), so text round-trips
+// every double exactly. Throws InputError naming the file when `dir` is missing or not
+// writable, or a write fails.
 void WriteReconstruction(const Reconstruction& reconstruction, const std::filesystem::path& dir,
                          ModelFormat format, ModelLayout layout = ModelLayout::kClassic);
 
@@ -76,41 +76,6 @@ void WriteModel(const Reconstruction& reconstruction, const std::filesystem::pat
 // camera and one frame per image when it has none.
 void RigsAndFramesToWrite(const Reconstruction& reconstruction, std::map<rig_t, Rig>* rigs,
                           std::map<frame_t, Frame>* frames);
-
-// Writes through a large buffer to "<path>.tmp"; Commit() flushes, closes and renames it to
-// `path`. Destroyed without Commit() (an exception), it removes the temporary file.
-class AtomicFileWriter {
- public:
-  explicit AtomicFileWriter(std::filesystem::path path);
-  ~AtomicFileWriter();
-  AtomicFileWriter(const AtomicFileWriter&) = delete;
-  AtomicFileWriter& operator=(const AtomicFileWriter&) = delete;
-
-  // A cursor with at least `n` writable bytes (n <= kBufferSize); hand the end back to Advance.
-  char* Ensure(size_t n) {
-    if (kBufferSize - used_ < n) Flush();
-    return buffer_.get() + used_;
-  }
-  void Advance(char* end) { used_ = static_cast<size_t>(end - buffer_.get()); }
-  void Append(const void* data, size_t size);
-  void Append(std::string_view text) { Append(text.data(), text.size()); }
-
-  void Commit();
-  const std::filesystem::path& path() const { return path_; }
-
-  static constexpr size_t kBufferSize = size_t{4} << 20;
-
- private:
-  void Flush();
-  void WriteAll(const char* data, size_t size);
-  [[noreturn]] void Fail(const std::string& what, int error_number);
-
-  std::filesystem::path path_;
-  std::filesystem::path temp_path_;
-  int fd_ = -1;
-  std::unique_ptr<char[]> buffer_;
-  size_t used_ = 0;
-};
 
 }  // namespace detail
 }  // namespace cwloc::colmap

@@ -11,6 +11,7 @@
 #include <memory>
 #include <system_error>
 
+#include "format/base/atomic_file.h"
 #include "format/base/error.h"
 #include "format/colmap/reconstruction_io.h"
 
@@ -380,11 +381,11 @@ class BinaryWriter {
     U32(sensor.id);
   }
   void String(const std::string& s) { out_.Append(s.c_str(), s.size() + 1); }  // with '\0'
-  detail::AtomicFileWriter& out() { return out_; }
+  AtomicFileWriter& out() { return out_; }
   void Commit() { out_.Commit(); }
 
  private:
-  detail::AtomicFileWriter out_;
+  AtomicFileWriter out_;
 };
 
 void WriteCameras(const Reconstruction& rec, const fs::path& path) {

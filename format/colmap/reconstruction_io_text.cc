@@ -11,6 +11,7 @@
 #include <memory>
 #include <system_error>
 
+#include "format/base/atomic_file.h"
 #include "format/base/error.h"
 #include "format/colmap/reconstruction_io.h"
 
@@ -394,7 +395,7 @@ class TextWriter {
   void Commit() { out_.Commit(); }
 
  private:
-  detail::AtomicFileWriter out_;
+  AtomicFileWriter out_;
 };
 
 void WriteCameras(const Reconstruction& rec, const fs::path& path) {

@@ -4,6 +4,8 @@
 #include <functional>
 #include <limits>
 
+#include "format/base/prefetch.h"
+
 namespace cwloc {
 namespace {
 
@@ -13,14 +15,6 @@ constexpr uint64_t kMaxDescriptors = std::numeric_limits<uint32_t>::max() - 1;
 
 std::string NodeName(size_t tree, size_t node) {
   return "kd-forest tree " + std::to_string(tree) + " node " + std::to_string(node);
-}
-
-inline void Prefetch(const void* p) {
-#if defined(__GNUC__) || defined(__clang__)
-  __builtin_prefetch(p);
-#else
-  (void)p;
-#endif
 }
 
 }  // namespace

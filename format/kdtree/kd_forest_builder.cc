@@ -9,6 +9,9 @@
 #include <string>
 #include <thread>
 
+#include "format/base/prefetch.h"
+#include "format/base/split_mix64.h"
+
 namespace cwloc {
 namespace {
 
@@ -23,21 +26,9 @@ constexpr uint32_t kRandomDims = 5;
 constexpr uint32_t kJobDepth = 4;
 constexpr uint32_t kNoParent = std::numeric_limits<uint32_t>::max();
 
-uint64_t Mix(uint64_t z) {  // SplitMix64 finalizer
-  z += 0x9e3779b97f4a7c15ULL;
-  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-  return z ^ (z >> 31);
-}
+// A well-mixed seed from `z`: the first output of SplitMix64 seeded with it.
+uint64_t Mix(uint64_t z) { return SplitMix64(z).Next(); }
 uint64_t ChildSeed(uint64_t seed, int side) { return Mix(seed ^ (0x51ed2701u + side)); }
-
-inline void Prefetch(const void* p) {
-#if defined(__GNUC__) || defined(__clang__)
-  __builtin_prefetch(p);
-#else
-  (void)p;
-#endif
-}
 
 // Kept separate with restrict-qualified pointers so that the compiler vectorizes it: this
 // loop is most of the build's arithmetic.

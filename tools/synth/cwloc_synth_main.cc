@@ -5,7 +5,6 @@
 #include <sys/resource.h>
 #include <unistd.h>
 
-#include <chrono>
 #include <cstdio>
 #include <iostream>
 #include <mutex>
@@ -13,6 +12,7 @@
 #include "cwloc/version.h"
 #include "format/camera/camera_models.h"
 #include "format/base/error.h"
+#include "format/base/stopwatch.h"
 #include "format/base/tool_main.h"
 #include "tools/synth/city_scene.h"
 #include "tools/synth/scene_writer.h"
@@ -20,10 +20,6 @@
 
 namespace cwloc::synth {
 namespace {
-
-double Seconds(std::chrono::steady_clock::time_point since) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
-}
 
 uint64_t PeakMemoryBytes() {
   rusage usage{};
@@ -59,9 +55,8 @@ class ProgressBar {
  private:
   void Show(std::string_view stage, double fraction) {
     std::lock_guard lock(mutex_);
-    const auto now = std::chrono::steady_clock::now();
-    if (shown_ && stage == stage_ && fraction < 1 && now - last_ < std::chrono::milliseconds(100)) return;
-    last_ = now;
+    if (shown_ && stage == stage_ && fraction < 1 && since_shown_.Seconds() < 0.1) return;
+    since_shown_.Restart();
     stage_ = stage;
     const int filled = int(30 * std::clamp(fraction, 0.0, 1.0));
     std::fprintf(stderr, "\r%-16.*s [%s%s] %3d%%", int(stage.size()), stage.data(),
@@ -73,7 +68,7 @@ class ProgressBar {
   bool enabled_;
   bool shown_ = false;
   std::string stage_;
-  std::chrono::steady_clock::time_point last_;
+  Stopwatch since_shown_;
   std::mutex mutex_;
 };
 
@@ -217,12 +212,12 @@ int main(int argc, char** argv) {
     return app.exit(e) == 0 ? cwloc::kExitOk : cwloc::kExitBadInput;
   }
   return cwloc::RunTool("cwloc-synth", [&]() -> int {
-    const auto start = std::chrono::steady_clock::now();
+    const cwloc::Stopwatch total;
     const SceneOptions options = MakeSceneOptions(knobs);
     SceneWriter writer(output, overwrite);  // checks the output path before the long work
     ProgressBar bar;
     const CityScene scene = CityScene::Generate(options, bar.Callback());
-    const double scene_seconds = Seconds(start);
+    const double scene_seconds = total.Seconds();
     WriteOptions write_options;
     write_options.text = text;
     write_options.threads = options.threads;
@@ -230,7 +225,7 @@ int main(int argc, char** argv) {
     const WriteTimings timings = writer.Write(scene, write_options, bar.Callback());
     bar.Clear();
     const nlohmann::ordered_json summary =
-        Summary(writer.output_dir(), knobs, scene, text, scene_seconds, timings, Seconds(start));
+        Summary(writer.output_dir(), knobs, scene, text, scene_seconds, timings, total.Seconds());
     writer.Commit(summary.dump(1) + "\n");
     if (json) {
       std::cout << summary.dump(2) << "\n";

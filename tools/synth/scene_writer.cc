@@ -4,7 +4,6 @@
 #include <sys/stat.h>
 
 #include <algorithm>
-#include <chrono>
 #include <condition_variable>
 #include <cstdio>
 #include <cstring>
@@ -17,16 +16,13 @@
 #include "format/colmap/database.h"
 #include "format/colmap/reconstruction_io.h"
 #include "format/base/parallel_for.h"
+#include "format/base/stopwatch.h"
 
 namespace cwloc::synth {
 namespace fs = std::filesystem;
 namespace {
 
 constexpr uint64_t kColorStream = 200;
-
-double Seconds(std::chrono::steady_clock::time_point since) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
-}
 
 std::string Format(const char* format, double value) {
   char buffer[64];
@@ -380,7 +376,7 @@ SceneWriter::~SceneWriter() {
 WriteTimings SceneWriter::Write(const CityScene& scene, const WriteOptions& options,
                                 const CityScene::Progress& progress) {
   WriteTimings timings;
-  auto start = std::chrono::steady_clock::now();
+  Stopwatch stage;
   {
     if (progress) progress("model", 0);
     const colmap::Reconstruction rec = BuildReconstruction(scene, options.threads);
@@ -394,14 +390,14 @@ WriteTimings SceneWriter::Write(const CityScene& scene, const WriteOptions& opti
                                   format[0] == 'b' ? colmap::ModelFormat::kBinary : colmap::ModelFormat::kText);
     }
   }
-  timings.model_seconds = Seconds(start);
-  start = std::chrono::steady_clock::now();
+  timings.model_seconds = stage.Seconds();
+  stage.Restart();
   WriteDatabase(scene, temp_dir_ / "database.db", options.threads, progress);
-  timings.database_seconds = Seconds(start);
-  start = std::chrono::steady_clock::now();
+  timings.database_seconds = stage.Seconds();
+  stage.Restart();
   WriteQueryFiles(scene, temp_dir_);
   WriteTextFile(temp_dir_ / "README.txt", ReadmeText(scene, options));
-  timings.files_seconds = Seconds(start);
+  timings.files_seconds = stage.Seconds();
   return timings;
 }
 

@@ -10,6 +10,8 @@
 #include <array>
 #include <cstdint>
 
+#include "format/base/split_mix64.h"
+
 namespace cwloc::synth {
 
 inline constexpr int kSiftDim = 128;
@@ -17,20 +19,15 @@ inline constexpr int kSiftDim = 128;
 // A descriptor in COLMAP's L1-root domain before quantization: non-negative, unit L2 norm.
 using SiftVector = std::array<float, kSiftDim>;
 
-// Small, fast, seedable generator (SplitMix64). Every stream is seeded from (seed, ids) so the
-// output never depends on thread scheduling.
+// SplitMix64 with the draws the generator needs. Every stream is seeded from (seed, ids) so
+// the output never depends on thread scheduling.
 class Rng {
  public:
-  explicit Rng(uint64_t seed) : state_(seed) {}
+  explicit Rng(uint64_t seed) : bits_(seed) {}
   // Hashes a few integers into one well-mixed seed.
   static uint64_t Seed(uint64_t a, uint64_t b, uint64_t c = 0, uint64_t d = 0);
 
-  uint64_t Next() {
-    uint64_t z = (state_ += 0x9e3779b97f4a7c15ULL);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-    return z ^ (z >> 31);
-  }
+  uint64_t Next() { return bits_.Next(); }
   double Uniform() { return double(Next() >> 11) * 0x1.0p-53; }  // [0, 1)
   double Uniform(double lo, double hi) { return lo + (hi - lo) * Uniform(); }
   uint64_t Below(uint64_t n) { return n == 0 ? 0 : Next() % n; }  // [0, n)
@@ -43,7 +40,7 @@ class Rng {
   void FillNormal(float* out, int n);
 
  private:
-  uint64_t state_;
+  SplitMix64 bits_;
 };
 
 // The shape of random patches. Tuned so that generated descriptors match real COLMAP SIFT in

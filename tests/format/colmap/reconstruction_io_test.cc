@@ -663,20 +663,16 @@ TEST(ReconstructionIoWriteTest, UnwritableTargets) {
       ErrorOf([&] { WriteReconstruction(TinyModel(), dir / "missing", ModelFormat::kBinary); }),
       (dir / "missing").string() + ": not a directory (create it before writing a model)");
 
-  // The temporary name is taken by a directory: creating the file fails.
-  fs::create_directory(dir / "cameras.bin.tmp");
-  EXPECT_EQ(ErrorOf([&] { WriteReconstruction(TinyModel(), dir.path(), ModelFormat::kBinary); }),
-            (dir / "cameras.bin").string() + ": cannot create cameras.bin.tmp: Is a directory");
-  fs::remove(dir / "cameras.bin.tmp");
-
-  // A full disk: the temporary file is /dev/full.
-  if (fs::exists("/dev/full")) {
-    fs::create_symlink("/dev/full", dir / "images.txt.tmp");
+  // A full disk: the file being replaced is kept and no temporary file is left behind.
+  WriteReconstruction(TinyModel(), dir.path(), ModelFormat::kText);
+  const std::string cameras = ReadFile(dir / "cameras.txt");
+  {
+    const test::FileSizeLimit limit(16);
     EXPECT_EQ(ErrorOf([&] { WriteReconstruction(TinyModel(), dir.path(), ModelFormat::kText); }),
-              (dir / "images.txt").string() + ": cannot write: No space left on device");
-    EXPECT_FALSE(fs::exists(dir / "images.txt"));
-    EXPECT_FALSE(fs::exists(fs::symlink_status(dir / "images.txt.tmp")));  // cleaned up
+              (dir / "cameras.txt").string() + ": cannot write: File too large");
   }
+  EXPECT_EQ(ReadFile(dir / "cameras.txt"), cameras);
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir.path()), fs::directory_iterator()), 3);
 }
 
 }  // namespace

@@ -60,7 +60,10 @@ class FeatureFileTest : public testing::Test {
   }
   static std::string Descriptor(int value) {
     std::string values;
-    for (int i = 0; i < 128; ++i) values += " " + std::to_string((value + i) % 256);
+    for (int i = 0; i < 128; ++i) {
+      values += ' ';  // not " " + std::to_string(...): a GCC 12 -Wrestrict false positive
+      values += std::to_string((value + i) % 256);
+    }
     return values;
   }
   test::TempDir dir_;

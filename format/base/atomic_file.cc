@@ -1,0 +1,111 @@
+#include "format/base/atomic_file.h"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cerrno>
+#include <cstdint>
+#include <cstring>
+#include <string>
+#include <system_error>
+#include <utility>
+
+#include "format/base/error.h"
+
+namespace cwloc {
+namespace {
+
+// O_EXCL on a name no other writer picks: the process id tells processes apart, the counter
+// the files of this one; a name left behind by a crash is skipped. Returns -1 with errno set.
+int CreateTempFile(const std::filesystem::path& path, std::filesystem::path* temp_path) {
+  static std::atomic<uint64_t> counter{0};
+  std::string prefix = path.filename().string();
+  prefix += ".tmp-" + std::to_string(::getpid()) + "-";
+  for (int attempt = 0; attempt < 100; ++attempt) {
+    *temp_path = path.parent_path() / (prefix + std::to_string(counter++));
+    const int fd = ::open(temp_path->c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+    if (fd >= 0 || errno != EEXIST) return fd;
+  }
+  return -1;
+}
+
+}  // namespace
+
+AtomicFile::AtomicFile(std::filesystem::path path) : path_(std::move(path)) {
+  fd_ = CreateTempFile(path_, &temp_path_);
+  if (fd_ < 0) {
+    const int error_number = errno;
+    temp_path_.clear();
+    Fail("cannot create a temporary file next to it", error_number);
+  }
+}
+
+AtomicFile::~AtomicFile() {
+  if (fd_ >= 0) ::close(fd_);
+  if (!temp_path_.empty()) ::unlink(temp_path_.c_str());
+}
+
+void AtomicFile::Write(const void* data, size_t size) {
+  const char* bytes = static_cast<const char*>(data);
+  while (size > 0) {
+    const ssize_t n = ::write(fd_, bytes, size);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) Fail("cannot write", n < 0 ? errno : ENOSPC);
+    bytes += n;
+    size -= static_cast<size_t>(n);
+  }
+}
+
+void AtomicFile::Commit() {
+  // fsync also reports write errors the kernel deferred (a full disk on NFS, EIO).
+  if (::fsync(fd_) != 0) Fail("cannot sync to disk", errno);
+  if (::close(std::exchange(fd_, -1)) != 0) Fail("cannot write", errno);
+  if (::rename(temp_path_.c_str(), path_.c_str()) != 0) {
+    const int error_number = errno;
+    Fail("cannot rename " + temp_path_.filename().string() + " into place", error_number);
+  }
+  temp_path_.clear();
+  // The rename is durable once the directory is: sync it too.
+  const std::filesystem::path dir = path_.has_parent_path() ? path_.parent_path() : ".";
+  const int dir_fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (dir_fd < 0) Fail("cannot open its directory to sync it", errno);
+  const int rc = ::fsync(dir_fd);
+  const int error_number = errno;
+  ::close(dir_fd);
+  // EINVAL: a file system that cannot sync directories; nothing more can be done there.
+  if (rc != 0 && error_number != EINVAL) Fail("cannot sync its directory", error_number);
+}
+
+void AtomicFile::Fail(std::string_view what, int error_number) const {
+  std::string message = path_.string();
+  message += ": ";
+  message += what;
+  message += ": " + std::generic_category().message(error_number);
+  throw InputError(message);
+}
+
+AtomicFileWriter::AtomicFileWriter(std::filesystem::path path)
+    : file_(std::move(path)), buffer_(std::make_unique_for_overwrite<char[]>(kBufferSize)) {}
+
+void AtomicFileWriter::Append(const void* data, size_t size) {
+  if (kBufferSize - used_ < size) Flush();
+  if (size > kBufferSize) {
+    file_.Write(data, size);  // rare: larger than the whole buffer
+    return;
+  }
+  std::memcpy(buffer_.get() + used_, data, size);
+  used_ += size;
+}
+
+void AtomicFileWriter::Flush() {
+  file_.Write(buffer_.get(), used_);
+  used_ = 0;
+}
+
+void AtomicFileWriter::Commit() {
+  Flush();
+  file_.Commit();
+}
+
+}  // namespace cwloc

@@ -1,0 +1,115 @@
+#include "format/base/atomic_file.h"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <iterator>
+#include <string>
+#include <vector>
+
+#include "format/base/error.h"
+#include "tests/test_util.h"
+
+namespace cwloc {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string ReadFile(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+std::vector<fs::path> ListDir(const fs::path& dir) {
+  return {fs::directory_iterator(dir), fs::directory_iterator()};
+}
+
+TEST(AtomicFileTest, CommitReplacesTheFileAndLeavesNoTemporaryFile) {
+  test::TempDir dir;
+  const fs::path path = dir / "a.bin";
+  std::ofstream(path) << "old content";
+  AtomicFile file(path);
+  EXPECT_EQ(file.temp_path().parent_path(), dir.path());
+  EXPECT_TRUE(fs::exists(file.temp_path()));
+  file.Write("new", 3);
+  EXPECT_EQ(ReadFile(path), "old content");  // untouched until Commit()
+  file.Commit();
+  EXPECT_EQ(ReadFile(path), "new");
+  EXPECT_EQ(ListDir(dir.path()), std::vector<fs::path>{path});
+  EXPECT_EQ(fs::status(path).permissions() & fs::perms::owner_read, fs::perms::owner_read);
+}
+
+TEST(AtomicFileTest, TemporaryNamesAreUnique) {
+  test::TempDir dir;
+  AtomicFile a(dir / "a.bin"), b(dir / "a.bin");
+  EXPECT_NE(a.temp_path(), b.temp_path());
+  b.Write("b", 1);
+  b.Commit();
+  a.Write("a", 1);
+  a.Commit();  // the last commit wins
+  EXPECT_EQ(ReadFile(dir / "a.bin"), "a");
+  EXPECT_EQ(ListDir(dir.path()).size(), 1u);
+}
+
+TEST(AtomicFileTest, WithoutCommitNothingIsLeft) {
+  test::TempDir dir;
+  {
+    AtomicFileWriter writer(dir / "a.bin");
+    writer.Append("abandoned");
+  }
+  EXPECT_TRUE(ListDir(dir.path()).empty());
+}
+
+TEST(AtomicFileTest, MissingDirectoryIsAnErrorNamingTheFile) {
+  test::TempDir dir;
+  try {
+    AtomicFile file(dir / "missing" / "a.bin");
+    FAIL() << "expected an error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()), (dir / "missing" / "a.bin").string() +
+                                         ": cannot create a temporary file next to it: No such "
+                                         "file or directory");
+  }
+}
+
+TEST(AtomicFileTest, FailedWriteKeepsTheOldFileAndRemovesTheTemporaryOne) {
+  test::TempDir dir;
+  const fs::path path = dir / "a.bin";
+  std::ofstream(path) << "old content";
+  try {
+    const test::FileSizeLimit limit(4);
+    AtomicFile file(path);
+    file.Write("too long for the limit", 22);
+    file.Commit();
+    FAIL() << "expected an error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()), path.string() + ": cannot write: File too large");
+  }
+  EXPECT_EQ(ReadFile(path), "old content");
+  EXPECT_EQ(ListDir(dir.path()), std::vector<fs::path>{path});
+}
+
+TEST(AtomicFileTest, WriterBuffersSmallPiecesAndPassesLargeOnes) {
+  test::TempDir dir;
+  std::string expected;
+  AtomicFileWriter writer(dir / "a.bin");
+  for (int i = 0; i < 1000; ++i) {
+    const std::string piece = std::to_string(i) + ",";
+    writer.Append(piece);
+    expected += piece;
+  }
+  char* cursor = writer.Ensure(2);
+  *cursor++ = '|';
+  writer.Advance(cursor);
+  expected += '|';
+  const std::string large(AtomicFileWriter::kBufferSize + 17, 'x');
+  writer.Append(large);
+  expected += large;
+  writer.Append("end");
+  expected += "end";
+  writer.Commit();
+  EXPECT_TRUE(ReadFile(dir / "a.bin") == expected);
+}
+
+}  // namespace
+}  // namespace cwloc
