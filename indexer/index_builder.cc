@@ -82,9 +82,7 @@ IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
   report.seconds_neighbor_distances = stage.Seconds();
 
   stage.Restart();
-  ClusteringOptions clustering_options = options.clustering;
-  clustering_options.seed = options.seed;
-  const Clustering clustering = ClusterImages(clustering_options, views, graph);
+  KdForestBuildOptions forest_options = options.forest;
   forest_options.seed = options.seed;
   forest_options.num_threads = static_cast<uint32_t>(threads);
   Progress forest_progress("kd-forest", 1000);
