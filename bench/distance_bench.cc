@@ -61,8 +61,8 @@ void BM_BatchFromRam(benchmark::State& state, DistanceKernel kernel) {
   state.SetItemsProcessed(state.iterations() * 8);
 }
 
-#define CWLOC_KERNEL_BENCH(kernel)                                                    \
-  BENCHMARK_CAPTURE(BM_One, kernel, DistanceKernel::kernel);                          \
+#define CWLOC_KERNEL_BENCH(kernel)                           \
+  BENCHMARK_CAPTURE(BM_One, kernel, DistanceKernel::kernel); \
   BENCHMARK_CAPTURE(BM_BatchFromRam, kernel, DistanceKernel::kernel)->Arg(0)->Arg(1);
 
 CWLOC_KERNEL_BENCH(kScalar)

@@ -8,19 +8,20 @@
 // Data: a COLMAP database.db (--database; query images from --query-list, else every 5th
 // image), or generated SIFT-like descriptors (--synthetic N; see GenerateSynthetic).
 
-#include <flann/flann.hpp>
 #include <sqlite3.h>
 #include <sys/mman.h>
 
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <ctime>
+#include <flann/flann.hpp>
 #include <fstream>
-#include <iostream>
 #include <functional>
+#include <iostream>
 #include <map>
 #include <memory>
 #include <numeric>
@@ -30,8 +31,6 @@
 #include <string>
 #include <thread>
 #include <vector>
-
-#include <CLI/CLI.hpp>
 
 #include "format/base/split_mix64.h"
 #include "format/base/stopwatch.h"
@@ -105,8 +104,8 @@ Dataset LoadColmapDatabase(const std::string& path, const std::string& query_lis
     const int64_t bytes = sqlite3_column_bytes(stmt, 3);
     if (rows == 0) continue;
     if (cols != 128 || rows < 0 || bytes != rows * cols || !blob) {
-      Fail(path + ": descriptors of image_id " + std::to_string(image_id) + ": rows=" +
-           std::to_string(rows) + " cols=" + std::to_string(cols) + " blob=" +
+      Fail(path + ": descriptors of image_id " + std::to_string(image_id) +
+           ": rows=" + std::to_string(rows) + " cols=" + std::to_string(cols) + " blob=" +
            std::to_string(bytes) + " bytes, expected cols=128 and rows*128 bytes of uint8");
     }
     const auto it = names.find(image_id);
@@ -140,8 +139,8 @@ class Rng {
   // Sum of four uniforms, rescaled: an approximately standard normal, cheap enough for 10^9.
   float Normal() {
     const uint64_t r = Next();
-    const float s = float(r & 0xFFFF) + float((r >> 16) & 0xFFFF) + float((r >> 32) & 0xFFFF) +
-                    float(r >> 48);
+    const float s =
+        float(r & 0xFFFF) + float((r >> 16) & 0xFFFF) + float((r >> 32) & 0xFFFF) + float(r >> 48);
     return (s * (1.0f / 65536.0f) - 2.0f) * 1.7320508f;
   }
 
@@ -269,8 +268,8 @@ std::vector<TrueNeighbors> BruteForce(const Dataset& data, size_t num_queries, u
       const uint8_t* query = data.queries.data() + q * kDescriptorDim;
       std::pair<uint32_t, uint32_t> best{UINT32_MAX, 0}, second{UINT32_MAX, 0};
       for (size_t i = 0; i < n; ++i) {
-        const std::pair<uint32_t, uint32_t> c{dist.one(query, data.base.data() + i * kDescriptorDim),
-                                              uint32_t(i)};
+        const std::pair<uint32_t, uint32_t> c{
+            dist.one(query, data.base.data() + i * kDescriptorDim), uint32_t(i)};
         if (c < second) {
           second = c;
           if (second < best) std::swap(best, second);
@@ -338,8 +337,7 @@ void Recall(const std::vector<TrueNeighbors>& truth, const std::vector<uint32_t>
 
 void PrintTable(const std::vector<Row>& rows, double flann_us) {
   std::printf("\n| %-34s | %8s | %9s | %9s | %8s | %8s | %8s | %9s | %9s |\n", "method", "build s",
-              "index MB", "us/query", "recall@1", "recall@2", "dist/q", "vs FLANN",
-              "unchecked");
+              "index MB", "us/query", "recall@1", "recall@2", "dist/q", "vs FLANN", "unchecked");
   std::printf("|%s|%s|%s|%s|%s|%s|%s|%s|%s|\n", std::string(36, '-').c_str(),
               std::string(10, '-').c_str(), std::string(11, '-').c_str(),
               std::string(11, '-').c_str(), std::string(10, '-').c_str(),
@@ -389,11 +387,13 @@ int Main(int argc, char** argv) {
   app.add_option("--flann-checks", flann_checks, "FLANN's checks (the paper: 128)");
   app.add_option("-k", k, "neighbours per query (the paper: k+1 = 6)");
   app.add_option("--reps", reps, "timed repetitions (median is reported)");
-  app.add_option("--threads", threads, "threads for our build, data generation and brute force "
-                                       "(0 = all cores; searches are single-threaded)");
+  app.add_option("--threads", threads,
+                 "threads for our build, data generation and brute force "
+                 "(0 = all cores; searches are single-threaded)");
   app.add_option("--seed", seed, "seed for data generation, query sampling and our build");
   app.add_option("--kernel", kernel_name, "distance kernel: scalar, avx2, avx512, avx512vnni");
-  app.add_option("--interleave", interleave, "descents our search keeps in flight (1 = FLANN order)");
+  app.add_option("--interleave", interleave,
+                 "descents our search keeps in flight (1 = FLANN order)");
   app.add_flag("--no-flann", no_flann, "skip FLANN");
   app.add_flag("--hugepages", hugepages,
                "put the base descriptors on transparent huge pages (both methods)");
@@ -406,8 +406,10 @@ int Main(int argc, char** argv) {
   const DistanceFunctions* distance = &BestDistanceFunctions();
   if (!kernel_name.empty()) {
     const std::map<std::string, DistanceKernel> kernels{
-        {"scalar", DistanceKernel::kScalar}, {"avx2", DistanceKernel::kAvx2},
-        {"avx512", DistanceKernel::kAvx512}, {"avx512vnni", DistanceKernel::kAvx512Vnni}};
+        {"scalar", DistanceKernel::kScalar},
+        {"avx2", DistanceKernel::kAvx2},
+        {"avx512", DistanceKernel::kAvx512},
+        {"avx512vnni", DistanceKernel::kAvx512Vnni}};
     const auto it = kernels.find(kernel_name);
     if (it == kernels.end()) Fail("unknown --kernel " + kernel_name);
     distance = DistanceFunctionsFor(it->second);
@@ -415,9 +417,9 @@ int Main(int argc, char** argv) {
   }
 
   Stopwatch stopwatch;
-  Dataset data = database.empty()
-                     ? GenerateSynthetic(synthetic, std::max(num_queries, gt_queries), seed, threads)
-                     : LoadColmapDatabase(database, query_list);
+  Dataset data = database.empty() ? GenerateSynthetic(synthetic, std::max(num_queries, gt_queries),
+                                                      seed, threads)
+                                  : LoadColmapDatabase(database, query_list);
   std::printf("data: %s (%.1f s)\n", data.description.c_str(), stopwatch.Seconds());
   // A random subset of the queries, in random order (the localizer shuffles its features too).
   {
@@ -435,10 +437,11 @@ int Main(int argc, char** argv) {
   const size_t n = data.NumBase();
   const size_t nq = std::min(num_queries, data.NumQueries());
   gt_queries = std::min(gt_queries, data.NumQueries());
-  std::printf("base %zu descriptors (%.1f MB), %zu timed queries, %zu with ground truth; "
-              "k=%d, %u trees, leaf <= %u, distance kernel %s, build threads %u\n",
-              n, double(data.base.size()) / 1e6, nq, gt_queries, k, trees, leaf_size,
-              std::string(distance->name).c_str(), threads);
+  std::printf(
+      "base %zu descriptors (%.1f MB), %zu timed queries, %zu with ground truth; "
+      "k=%d, %u trees, leaf <= %u, distance kernel %s, build threads %u\n",
+      n, double(data.base.size()) / 1e6, nq, gt_queries, k, trees, leaf_size,
+      std::string(distance->name).c_str(), threads);
 
   // The matrix both indexes search. Optionally on transparent huge pages: a random row then
   // costs no page walk (the index file is mapped with 4 KB pages unless copied like this).
@@ -476,11 +479,12 @@ int Main(int argc, char** argv) {
   hash(forest.nodes.data(), forest.nodes.size() * sizeof(KdNode));
   hash(forest.leaves.data(), forest.leaves.size() * sizeof(uint32_t));
   hash(forest.roots.data(), forest.roots.size() * sizeof(uint32_t));
-  std::printf("our build: %.2f s wall, %.2f s CPU, %zu nodes, %.1f MB (%.2f bytes/descriptor), "
-              "checksum %016llx\n",
-              build_s, build_cpu_s, forest.nodes.size(), double(forest.MemoryBytes()) / 1e6,
-              double(forest.MemoryBytes()) / double(std::max<size_t>(n, 1)),
-              static_cast<unsigned long long>(checksum));
+  std::printf(
+      "our build: %.2f s wall, %.2f s CPU, %zu nodes, %.1f MB (%.2f bytes/descriptor), "
+      "checksum %016llx\n",
+      build_s, build_cpu_s, forest.nodes.size(), double(forest.MemoryBytes()) / 1e6,
+      double(forest.MemoryBytes()) / double(std::max<size_t>(n, 1)),
+      static_cast<unsigned long long>(checksum));
   stopwatch.Restart();
   std::string error;
   if (!ValidateKdForest(view, &error)) Fail("our forest does not validate: " + error);

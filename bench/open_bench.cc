@@ -29,8 +29,9 @@ int main(int argc, char** argv) {
     return 2;
   }
   std::sort(ms.begin(), ms.end());
-  std::printf("| index | views | opens | median ms | p90 ms | max ms |\n|---|---|---|---|---|---|\n");
-  std::printf("| %s | %zu | %d | %.4f | %.4f | %.4f |\n", argv[1], views, repetitions, ms[ms.size() / 2],
-              ms[ms.size() * 9 / 10], ms.back());
+  std::printf(
+      "| index | views | opens | median ms | p90 ms | max ms |\n|---|---|---|---|---|---|\n");
+  std::printf("| %s | %zu | %d | %.4f | %.4f | %.4f |\n", argv[1], views, repetitions,
+              ms[ms.size() / 2], ms[ms.size() * 9 / 10], ms.back());
   return 0;
 }

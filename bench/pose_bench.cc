@@ -87,14 +87,19 @@ void BM_RansacKnownFocal(benchmark::State& state) {
   size_t k = 0, iterations = 0, successes = 0;
   for (auto _ : state) {
     const auto& p = problems[k++ % problems.size()];
-    const AbsolutePoseResult r = EstimateAbsolutePose(p.normalized, p.points3D, p.focal_px, options);
+    const AbsolutePoseResult r =
+        EstimateAbsolutePose(p.normalized, p.points3D, p.focal_px, options);
     iterations += r.stats.iterations;
     successes += r.success;
   }
   state.counters["ransac_iters"] = static_cast<double>(iterations) / state.iterations();
   state.counters["success"] = static_cast<double>(successes) / state.iterations();
 }
-BENCHMARK(BM_RansacKnownFocal)->Args({70, 1})->Args({70, 0})->Args({50, 1})->Args({80, 1})
+BENCHMARK(BM_RansacKnownFocal)
+    ->Args({70, 1})
+    ->Args({70, 0})
+    ->Args({50, 1})
+    ->Args({80, 1})
     ->Unit(benchmark::kMillisecond);
 
 void BM_RansacUnknownFocal(benchmark::State& state) {
@@ -111,7 +116,11 @@ void BM_RansacUnknownFocal(benchmark::State& state) {
   state.counters["ransac_iters"] = static_cast<double>(iterations) / state.iterations();
   state.counters["success"] = static_cast<double>(successes) / state.iterations();
 }
-BENCHMARK(BM_RansacUnknownFocal)->Args({70, 1})->Args({70, 0})->Args({50, 1})->Args({80, 1})
+BENCHMARK(BM_RansacUnknownFocal)
+    ->Args({70, 1})
+    ->Args({70, 0})
+    ->Args({50, 1})
+    ->Args({80, 1})
     ->Unit(benchmark::kMillisecond);
 
 }  // namespace

@@ -2,7 +2,6 @@
 
 #include <Eigen/Dense>
 #include <Eigen/Sparse>
-
 #include <fstream>
 #include <map>
 #include <random>
@@ -29,7 +28,8 @@ Clustering ReadClusteringFile(const std::filesystem::path& path, const ModelView
                        ": expected 'IMAGE_NAME CLUSTER_ID' with a non-negative integer id");
     }
     if (!cluster_by_name.emplace(name, cluster).second) {
-      throw InputError(path.string() + ":" + std::to_string(line_number) + ": image '" + name + "' listed twice");
+      throw InputError(path.string() + ":" + std::to_string(line_number) + ": image '" + name +
+                       "' listed twice");
     }
   }
   // Dense ids in increasing order of the file's ids.
@@ -55,7 +55,8 @@ Clustering ReadClusteringFile(const std::filesystem::path& path, const ModelView
 // Normalized spectral clustering (Shi & Malik, as the paper used): the leading eigenvectors of
 // D^-1/2 S D^-1/2 for the shared-points matrix S, by subspace iteration, then k-means on the
 // row-normalized embedding.
-Clustering SpectralClustering(const ClusteringOptions& options, const CovisibilityGraph& graph, size_t num_images) {
+Clustering SpectralClustering(const ClusteringOptions& options, const CovisibilityGraph& graph,
+                              size_t num_images) {
   const uint32_t k = options.target_clusters;
   const int dims = static_cast<int>(std::min<size_t>({size_t{50}, size_t{k}, num_images}));
   const int n = static_cast<int>(num_images);
@@ -72,7 +73,8 @@ Clustering SpectralClustering(const ClusteringOptions& options, const Covisibili
   Eigen::SparseMatrix<double> affinity(n, n);
   affinity.setFromTriplets(triplets.begin(), triplets.end());
   const Eigen::VectorXd inv_sqrt = degree.cwiseSqrt().cwiseInverse();
-  const Eigen::SparseMatrix<double> normalized = inv_sqrt.asDiagonal() * affinity * inv_sqrt.asDiagonal();
+  const Eigen::SparseMatrix<double> normalized =
+      inv_sqrt.asDiagonal() * affinity * inv_sqrt.asDiagonal();
 
   std::mt19937_64 rng(options.seed);
   std::normal_distribution<double> normal;
@@ -99,7 +101,8 @@ Clustering SpectralClustering(const ClusteringOptions& options, const Covisibili
   std::vector<double> nearest(n, std::numeric_limits<double>::max());
   centres.row(0) = basis.row(std::uniform_int_distribution<int>(0, n - 1)(rng));
   for (uint32_t c = 1; c < k; ++c) {
-    for (int r = 0; r < n; ++r) nearest[r] = std::min(nearest[r], (basis.row(r) - centres.row(c - 1)).squaredNorm());
+    for (int r = 0; r < n; ++r)
+      nearest[r] = std::min(nearest[r], (basis.row(r) - centres.row(c - 1)).squaredNorm());
     std::discrete_distribution<int> pick(nearest.begin(), nearest.end());
     centres.row(c) = basis.row(pick(rng));
   }
@@ -135,7 +138,8 @@ Clustering SpectralClustering(const ClusteringOptions& options, const Covisibili
 
 }  // namespace
 
-Clustering ClusterImages(const ClusteringOptions& options, const ModelViews& views, const CovisibilityGraph& graph) {
+Clustering ClusterImages(const ClusteringOptions& options, const ModelViews& views,
+                         const CovisibilityGraph& graph) {
   const size_t num_images = views.images.size();
   switch (options.method) {
     case ClusteringMethod::kPerImage: {
@@ -147,8 +151,9 @@ Clustering ClusterImages(const ClusteringOptions& options, const ModelViews& vie
       return ReadClusteringFile(options.file, views);
     case ClusteringMethod::kCovisibility:
       if (options.target_clusters < 1 || options.target_clusters > num_images) {
-        throw InputError("--clusters " + std::to_string(options.target_clusters) + ": expected a count in [1, " +
-                         std::to_string(num_images) + "] (the number of model images)");
+        throw InputError("--clusters " + std::to_string(options.target_clusters) +
+                         ": expected a count in [1, " + std::to_string(num_images) +
+                         "] (the number of model images)");
       }
       return SpectralClustering(options, graph, num_images);
   }

@@ -18,15 +18,15 @@ enum class ClusteringMethod {
 
 struct ClusteringOptions {
   ClusteringMethod method = ClusteringMethod::kPerImage;
-  std::filesystem::path file;   // kFile
-  uint32_t target_clusters = 0; // kCovisibility
-  uint64_t seed = 0;            // k-means initialisation for kCovisibility
+  std::filesystem::path file;    // kFile
+  uint32_t target_clusters = 0;  // kCovisibility
+  uint64_t seed = 0;             // k-means initialisation for kCovisibility
 };
 
 struct Clustering {
   std::vector<uint32_t> cluster_of_image;  // per image row, dense ids [0, num_clusters)
   uint32_t num_clusters = 0;
-  std::string method;                      // "image", "file" or "covisibility"
+  std::string method;  // "image", "file" or "covisibility"
 };
 
 // Throws InputError for an unreadable or malformed clustering file (naming file and line), a

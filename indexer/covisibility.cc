@@ -9,7 +9,8 @@ namespace cwloc {
 CovisibilityGraph BuildCovisibilityGraph(const std::vector<IndexImage>& images,
                                          const std::vector<IndexPoint>& points,
                                          const std::vector<uint32_t>& tracks,
-                                         const std::vector<uint32_t>& view_points, int num_threads) {
+                                         const std::vector<uint32_t>& view_points,
+                                         int num_threads) {
   // Image row of every view, from the contiguous view ranges.
   std::vector<uint32_t> image_of_view(view_points.size());
   for (uint32_t i = 0; i < images.size(); ++i) {

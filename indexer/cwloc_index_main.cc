@@ -1,15 +1,14 @@
 // cwloc-index: builds, inspects and verifies cwloc index files.
 #include <CLI/CLI.hpp>
-#include <nlohmann/json.hpp>
-
 #include <cstdio>
 #include <iostream>
+#include <nlohmann/json.hpp>
 
 #include "cwloc/version.h"
 #include "format/base/error.h"
 #include "format/base/stopwatch.h"
-#include "format/index/index.h"
 #include "format/base/tool_main.h"
+#include "format/index/index.h"
 #include "format/index/xxhash64.h"
 #include "indexer/index_builder.h"
 
@@ -17,8 +16,10 @@ namespace cwloc {
 namespace {
 
 nlohmann::ordered_json ParseManifest(const Index& index) {
-  auto manifest = nlohmann::ordered_json::parse(index.manifest_json(), nullptr, /*allow_exceptions=*/false);
-  if (manifest.is_discarded()) throw InputError(index.file().path().string() + ": section 'MANI' is not valid JSON");
+  auto manifest =
+      nlohmann::ordered_json::parse(index.manifest_json(), nullptr, /*allow_exceptions=*/false);
+  if (manifest.is_discarded())
+    throw InputError(index.file().path().string() + ": section 'MANI' is not valid JSON");
   return manifest;
 }
 
@@ -26,24 +27,32 @@ int RunBuild(const IndexBuildOptions& options, bool json) {
   const IndexBuildReport report = BuildIndex(options);
   if (json) {
     nlohmann::ordered_json out = {
-        {"output", options.output_path.string()}, {"file_bytes", report.file_bytes},
+        {"output", options.output_path.string()},
+        {"file_bytes", report.file_bytes},
         {"bytes_per_view", double(report.file_bytes) / double(report.num_views)},
         {"counts", CountsJson(report)},
-        {"seconds", {{"read", report.seconds_read}, {"covisibility", report.seconds_covisibility},
-                     {"clustering", report.seconds_clustering}, {"view_neighbors", report.seconds_neighbor_distances},
-                     {"kd_forest", report.seconds_kd_forest}, {"write", report.seconds_write},
-                     {"total", report.seconds_total}}}};
+        {"seconds",
+         {{"read", report.seconds_read},
+          {"covisibility", report.seconds_covisibility},
+          {"clustering", report.seconds_clustering},
+          {"view_neighbors", report.seconds_neighbor_distances},
+          {"kd_forest", report.seconds_kd_forest},
+          {"write", report.seconds_write},
+          {"total", report.seconds_total}}}};
     std::cout << out.dump(2) << "\n";
     return kExitOk;
   }
-  std::printf("wrote %s: %zu images, %zu points, %zu views, %zu clusters, %zu co-visibility edges\n",
-              options.output_path.c_str(), report.num_images, report.num_points, report.num_views,
-              report.num_clusters, report.num_covisibility_edges);
-  std::printf("%.1f MB, %.1f bytes per view; %.2f s (read %.2f, co-visibility %.2f, clustering %.2f, "
-              "v_NN %.2f, kd-forest %.2f, write %.2f)\n",
-              report.file_bytes / 1e6, double(report.file_bytes) / double(report.num_views), report.seconds_total,
-              report.seconds_read, report.seconds_covisibility, report.seconds_clustering,
-              report.seconds_neighbor_distances, report.seconds_kd_forest, report.seconds_write);
+  std::printf(
+      "wrote %s: %zu images, %zu points, %zu views, %zu clusters, %zu co-visibility edges\n",
+      options.output_path.c_str(), report.num_images, report.num_points, report.num_views,
+      report.num_clusters, report.num_covisibility_edges);
+  std::printf(
+      "%.1f MB, %.1f bytes per view; %.2f s (read %.2f, co-visibility %.2f, clustering %.2f, "
+      "v_NN %.2f, kd-forest %.2f, write %.2f)\n",
+      report.file_bytes / 1e6, double(report.file_bytes) / double(report.num_views),
+      report.seconds_total, report.seconds_read, report.seconds_covisibility,
+      report.seconds_clustering, report.seconds_neighbor_distances, report.seconds_kd_forest,
+      report.seconds_write);
   return kExitOk;
 }
 
@@ -57,11 +66,15 @@ int RunInfo(const std::string& path, bool json) {
     nlohmann::ordered_json out;
     out["path"] = path;
     out["file_bytes"] = header.file_size;
-    out["format_version"] = std::to_string(header.format_major) + "." + std::to_string(header.format_minor);
+    out["format_version"] =
+        std::to_string(header.format_major) + "." + std::to_string(header.format_minor);
     out["sections"] = nlohmann::ordered_json::array();
     for (const SectionEntry& entry : index.file().sections()) {
-      out["sections"].push_back({{"tag", SectionTagName(entry.tag)}, {"offset", entry.offset}, {"bytes", entry.size},
-                                 {"count", entry.count}, {"element_bytes", entry.element_size},
+      out["sections"].push_back({{"tag", SectionTagName(entry.tag)},
+                                 {"offset", entry.offset},
+                                 {"bytes", entry.size},
+                                 {"count", entry.count},
+                                 {"element_bytes", entry.element_size},
                                  {"required", (entry.flags & kSectionRequired) != 0},
                                  {"checksum", "xxh64:" + HashHex(entry.checksum)}});
     }
@@ -69,12 +82,12 @@ int RunInfo(const std::string& path, bool json) {
     std::cout << out.dump(2) << "\n";
     return kExitOk;
   }
-  std::printf("%s: cwloc index format %u.%u, %.1f MB, opened in %.3f ms\n", path.c_str(), header.format_major,
-              header.format_minor, header.file_size / 1e6, open_ms);
+  std::printf("%s: cwloc index format %u.%u, %.1f MB, opened in %.3f ms\n", path.c_str(),
+              header.format_major, header.format_minor, header.file_size / 1e6, open_ms);
   const auto& counts = manifest["counts"];
   std::printf("  %s images, %s points, %s views, %s clusters (%s), %s co-visibility edges\n",
-              counts["images"].dump().c_str(), counts["points"].dump().c_str(), counts["views"].dump().c_str(),
-              counts["clusters"].dump().c_str(),
+              counts["images"].dump().c_str(), counts["points"].dump().c_str(),
+              counts["views"].dump().c_str(), counts["clusters"].dump().c_str(),
               manifest["build_parameters"]["clustering"]["method"].get<std::string>().c_str(),
               counts["covisibility_edges"].dump().c_str());
   std::printf("  built by %s %s from %s\n", manifest["tool"].get<std::string>().c_str(),
@@ -84,7 +97,8 @@ int RunInfo(const std::string& path, bool json) {
   const double views = static_cast<double>(index.num_views());
   for (const SectionEntry& entry : index.file().sections()) {
     std::printf("  %-6s %12llu %14llu %12llu  %8.2f\n", SectionTagName(entry.tag).c_str(),
-                static_cast<unsigned long long>(entry.offset), static_cast<unsigned long long>(entry.size),
+                static_cast<unsigned long long>(entry.offset),
+                static_cast<unsigned long long>(entry.size),
                 static_cast<unsigned long long>(entry.count), double(entry.size) / views);
   }
   std::printf("  total %.2f bytes per view\n", double(header.file_size) / views);
@@ -98,8 +112,8 @@ int RunVerify(const std::string& path) {
   index.Validate();
   ParseManifest(index);
   const double seconds = stopwatch.Seconds();
-  std::printf("%s: OK: %zu section checksums and every stored index verified in %.2f s\n", path.c_str(),
-              index.file().sections().size(), seconds);
+  std::printf("%s: OK: %zu section checksums and every stored index verified in %.2f s\n",
+              path.c_str(), index.file().sections().size(), seconds);
   return kExitOk;
 }
 
@@ -107,7 +121,8 @@ int RunVerify(const std::string& path) {
 }  // namespace cwloc
 
 int main(int argc, char** argv) {
-  CLI::App app{"cwloc-index: build a cwloc index from a COLMAP model and database, inspect or verify it"};
+  CLI::App app{
+      "cwloc-index: build a cwloc index from a COLMAP model and database, inspect or verify it"};
   app.set_version_flag("--version", std::string("cwloc-index ") + cwloc::kToolVersion);
   app.require_subcommand(1);
 
@@ -115,29 +130,43 @@ int main(int argc, char** argv) {
   std::string cluster_file;
   uint32_t clusters = 0;
   bool json = false;
-  auto* build = app.add_subcommand("build", "Build an index from a COLMAP sparse model and its database");
-  build->add_option("--model", options.model_dir, "COLMAP sparse model directory (binary or text)")->required();
-  build->add_option("--database", options.database_path, "COLMAP database.db with the model's descriptors (read only)")
+  auto* build =
+      app.add_subcommand("build", "Build an index from a COLMAP sparse model and its database");
+  build->add_option("--model", options.model_dir, "COLMAP sparse model directory (binary or text)")
       ->required();
-  build->add_option("-o,--output", options.output_path, "Index file to write (atomically)")->required();
+  build
+      ->add_option("--database", options.database_path,
+                   "COLMAP database.db with the model's descriptors (read only)")
+      ->required();
+  build->add_option("-o,--output", options.output_path, "Index file to write (atomically)")
+      ->required();
   auto* cluster_file_option = build->add_option(
-      "--cluster-file", cluster_file, "Clustering: lines 'IMAGE_NAME CLUSTER_ID' (default: one cluster per image)");
-  build->add_option("--clusters", clusters,
-                    "Clustering: spectral clustering of the co-visibility graph into this many clusters")
+      "--cluster-file", cluster_file,
+      "Clustering: lines 'IMAGE_NAME CLUSTER_ID' (default: one cluster per image)");
+  build
+      ->add_option(
+          "--clusters", clusters,
+          "Clustering: spectral clustering of the co-visibility graph into this many clusters")
       ->excludes(cluster_file_option);
-  build->add_option("--trees", options.forest.num_trees, "Randomized kd-trees in the global forest")->capture_default_str();
-  build->add_option("--leaf-size", options.forest.max_leaf_size, "Descriptors per kd leaf bucket")->capture_default_str();
-  build->add_option("--seed", options.seed, "Seed of the kd-forest and clustering randomization")->capture_default_str();
-  build->add_option("--threads", options.threads, "Worker threads (0 = all cores)")->capture_default_str();
-  build->add_flag("--keypoints", options.keypoints,
-                  "Also store each view's keypoint (8 bytes per view; the localizer does not need them)");
+  build->add_option("--trees", options.forest.num_trees, "Randomized kd-trees in the global forest")
+      ->capture_default_str();
+  build->add_option("--leaf-size", options.forest.max_leaf_size, "Descriptors per kd leaf bucket")
+      ->capture_default_str();
+  build->add_option("--seed", options.seed, "Seed of the kd-forest and clustering randomization")
+      ->capture_default_str();
+  build->add_option("--threads", options.threads, "Worker threads (0 = all cores)")
+      ->capture_default_str();
+  build->add_flag(
+      "--keypoints", options.keypoints,
+      "Also store each view's keypoint (8 bytes per view; the localizer does not need them)");
   build->add_flag("--json", json, "Print the build report as JSON");
 
   std::string index_path;
   auto* info = app.add_subcommand("info", "Print an index's counts, sections and build parameters");
   info->add_option("index", index_path, "Index file")->required();
   info->add_flag("--json", json, "Print as JSON (schemas/index-info.schema.json)");
-  auto* verify = app.add_subcommand("verify", "Check every checksum and stored index of an index file");
+  auto* verify =
+      app.add_subcommand("verify", "Check every checksum and stored index of an index file");
   verify->add_option("index", index_path, "Index file")->required();
 
   try {

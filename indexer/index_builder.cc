@@ -1,21 +1,20 @@
 #include "indexer/index_builder.h"
 
-#include <nlohmann/json.hpp>
-
 #include <fstream>
+#include <nlohmann/json.hpp>
 
 #include "cwloc/version.h"
 #include "format/base/error.h"
-#include "format/index/index_file.h"
+#include "format/base/parallel_for.h"
 #include "format/base/progress.h"
 #include "format/base/stopwatch.h"
-#include "format/index/xxhash64.h"
 #include "format/colmap/reconstruction_io.h"
-#include "indexer/covisibility.h"
+#include "format/index/index_file.h"
+#include "format/index/xxhash64.h"
 #include "format/kdtree/kd_forest_builder.h"
+#include "indexer/covisibility.h"
 #include "indexer/model_views.h"
 #include "indexer/neighbor_distances.h"
-#include "format/base/parallel_for.h"
 
 namespace cwloc {
 namespace {
@@ -40,7 +39,9 @@ std::string FingerprintModel(const std::filesystem::path& dir) {
 }
 
 template <typename T>
-std::span<const T> Span(const std::vector<T>& v) { return {v.data(), v.size()}; }
+std::span<const T> Span(const std::vector<T>& v) {
+  return {v.data(), v.size()};
+}
 
 }  // namespace
 
@@ -51,7 +52,8 @@ IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
     throw InputError("--trees " + std::to_string(options.forest.num_trees) + ": expected 1 to 64");
   }
   if (options.forest.max_leaf_size < 1 || options.forest.max_leaf_size > 255) {
-    throw InputError("--leaf-size " + std::to_string(options.forest.max_leaf_size) + ": expected 1 to 255");
+    throw InputError("--leaf-size " + std::to_string(options.forest.max_leaf_size) +
+                     ": expected 1 to 255");
   }
   const int threads = ResolveThreads(options.threads);
 
@@ -60,9 +62,11 @@ IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
   const colmap::DatabaseReader database(options.database_path);
   ModelViews views = GatherModelViews(model, database);
   if (views.num_views() == 0) {
-    throw InputError(options.model_dir.string() + ": the model has no 3D points with views; nothing to index");
+    throw InputError(options.model_dir.string() +
+                     ": the model has no 3D points with views; nothing to index");
   }
-  if (views.num_views() >= UINT32_MAX) throw InputError("more than 2^32 - 1 views; split the model");
+  if (views.num_views() >= UINT32_MAX)
+    throw InputError("more than 2^32 - 1 views; split the model");
   report.seconds_read = stage.Seconds();
 
   stage.Restart();
@@ -74,11 +78,13 @@ IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
   ClusteringOptions clustering_options = options.clustering;
   clustering_options.seed = options.seed;
   const Clustering clustering = ClusterImages(clustering_options, views, graph);
-  for (size_t i = 0; i < views.images.size(); ++i) views.images[i].cluster = clustering.cluster_of_image[i];
+  for (size_t i = 0; i < views.images.size(); ++i)
+    views.images[i].cluster = clustering.cluster_of_image[i];
   report.seconds_clustering = stage.Seconds();
 
   stage.Restart();
-  const std::vector<float> neighbor_distances = ComputeViewNeighborDistances(views, clustering, threads);
+  const std::vector<float> neighbor_distances =
+      ComputeViewNeighborDistances(views, clustering, threads);
   report.seconds_neighbor_distances = stage.Seconds();
 
   stage.Restart();
@@ -111,20 +117,24 @@ IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
   manifest["tool_version"] = kToolVersion;
   manifest["counts"] = CountsJson(report);
   manifest["counts"]["kd_nodes"] = forest.nodes.size();
-  nlohmann::ordered_json clustering_json = {{"method", clustering.method}, {"num_clusters", clustering.num_clusters}};
-  if (options.clustering.method == ClusteringMethod::kFile) clustering_json["file"] = options.clustering.file.string();
+  nlohmann::ordered_json clustering_json = {{"method", clustering.method},
+                                            {"num_clusters", clustering.num_clusters}};
+  if (options.clustering.method == ClusteringMethod::kFile)
+    clustering_json["file"] = options.clustering.file.string();
   if (options.clustering.method == ClusteringMethod::kCovisibility) {
     clustering_json["target_clusters"] = options.clustering.target_clusters;
   }
-  manifest["build_parameters"] = {{"kd_trees", options.forest.num_trees},
-                                  {"kd_leaf_size", options.forest.max_leaf_size},
-                                  {"seed", options.seed},
-                                  {"keypoints", options.keypoints},
-                                  {"clustering", clustering_json},
-                                  {"view_neighbor", "nearest view of another 3D point in the same cluster"}};
-  manifest["source"] = {{"model", {{"path", options.model_dir.string()},
-                                   {"layout", model.rigs.empty() ? "classic" : "rigs"},
-                                   {"fingerprint", FingerprintModel(options.model_dir)}}},
+  manifest["build_parameters"] = {
+      {"kd_trees", options.forest.num_trees},
+      {"kd_leaf_size", options.forest.max_leaf_size},
+      {"seed", options.seed},
+      {"keypoints", options.keypoints},
+      {"clustering", clustering_json},
+      {"view_neighbor", "nearest view of another 3D point in the same cluster"}};
+  manifest["source"] = {{"model",
+                         {{"path", options.model_dir.string()},
+                          {"layout", model.rigs.empty() ? "classic" : "rigs"},
+                          {"fingerprint", FingerprintModel(options.model_dir)}}},
                         {"database", {{"path", options.database_path.string()}}}};
   manifest["georeference"] = nullptr;
   const std::string manifest_text = manifest.dump(2) + "\n";
@@ -137,7 +147,8 @@ IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
       MakeSection<char>(section::kStrings, {views.strings.data(), views.strings.size()}),
       MakeSection(section::kPoints, Span(views.points)),
       MakeSection(section::kTracks, Span(views.tracks)),
-      SectionData{section::kDescriptors, kSectionRequired, kDescriptorBytes, views.num_views(), views.descriptors},
+      SectionData{section::kDescriptors, kSectionRequired, kDescriptorBytes, views.num_views(),
+                  views.descriptors},
       MakeSection(section::kViewPoint, Span(views.view_points)),
       MakeSection(section::kViewNeighbor, Span(neighbor_distances)),
       MakeSection(section::kKdNodes, Span(forest.nodes)),
@@ -148,7 +159,8 @@ IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
   };
   if (options.keypoints) {
     // Optional: the localizer does not read model keypoints; tools that draw matches do.
-    sections.push_back(MakeSection(section::kViewKeypoints, Span(views.view_keypoints), /*flags=*/0));
+    sections.push_back(
+        MakeSection(section::kViewKeypoints, Span(views.view_keypoints), /*flags=*/0));
   }
   WriteIndexFile(options.output_path, sections);
   report.seconds_write = stage.Seconds();
@@ -158,12 +170,9 @@ IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
 }
 
 nlohmann::ordered_json CountsJson(const IndexBuildReport& report) {
-  return {{"cameras", report.num_cameras},
-          {"images", report.num_images},
-          {"points", report.num_points},
-          {"views", report.num_views},
-          {"clusters", report.num_clusters},
-          {"covisibility_edges", report.num_covisibility_edges}};
+  return {{"cameras", report.num_cameras},   {"images", report.num_images},
+          {"points", report.num_points},     {"views", report.num_views},
+          {"clusters", report.num_clusters}, {"covisibility_edges", report.num_covisibility_edges}};
 }
 
 }  // namespace cwloc

@@ -2,9 +2,8 @@
 
 #include <cstdint>
 #include <filesystem>
-#include <string>
-
 #include <nlohmann/json_fwd.hpp>
+#include <string>
 
 #include "format/kdtree/kd_forest_builder.h"
 #include "indexer/clustering.h"
@@ -20,9 +19,9 @@ struct IndexBuildOptions {
   // The global forest: num_trees (4, the paper's FLANN setting) and max_leaf_size; its seed,
   // threads and progress are set from this build's.
   KdForestBuildOptions forest;
-  uint64_t seed = 0;          // kd-forest randomization and k-means initialisation
-  bool keypoints = false;     // also store each view's keypoint (optional section VKXY, 8 B/view)
-  int threads = 0;            // 0 = all cores
+  uint64_t seed = 0;       // kd-forest randomization and k-means initialisation
+  bool keypoints = false;  // also store each view's keypoint (optional section VKXY, 8 B/view)
+  int threads = 0;         // 0 = all cores
 };
 
 struct IndexBuildReport {
@@ -30,7 +29,8 @@ struct IndexBuildReport {
   size_t num_clusters = 0, num_covisibility_edges = 0;
   uint64_t file_bytes = 0;
   double seconds_read = 0, seconds_covisibility = 0, seconds_clustering = 0;
-  double seconds_neighbor_distances = 0, seconds_kd_forest = 0, seconds_write = 0, seconds_total = 0;
+  double seconds_neighbor_distances = 0, seconds_kd_forest = 0, seconds_write = 0,
+         seconds_total = 0;
 };
 
 // Reads the model and database, computes every section, writes the index atomically.

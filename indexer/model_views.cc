@@ -4,9 +4,9 @@
 #include <cstring>
 #include <unordered_map>
 
-#include "format/camera/camera_models.h"
 #include "format/base/error.h"
 #include "format/base/progress.h"
+#include "format/camera/camera_models.h"
 
 namespace cwloc {
 namespace {
@@ -18,7 +18,8 @@ IndexCamera ToIndexCamera(const colmap::Camera& camera) {
   out.width = static_cast<uint32_t>(camera.width);
   out.height = static_cast<uint32_t>(camera.height);
   if (camera.params.size() > kMaxCameraParams) {
-    throw InputError("camera " + std::to_string(camera.camera_id) + " has " + std::to_string(camera.params.size()) +
+    throw InputError("camera " + std::to_string(camera.camera_id) + " has " +
+                     std::to_string(camera.params.size()) +
                      " parameters; the index stores at most " + std::to_string(kMaxCameraParams));
   }
   out.num_params = static_cast<uint32_t>(camera.params.size());
@@ -28,7 +29,8 @@ IndexCamera ToIndexCamera(const colmap::Camera& camera) {
 
 }  // namespace
 
-ModelViews GatherModelViews(const colmap::Reconstruction& model, const colmap::DatabaseReader& database) {
+ModelViews GatherModelViews(const colmap::Reconstruction& model,
+                            const colmap::DatabaseReader& database) {
   const std::string db_name = database.path().string();
   ModelViews views;
 
@@ -67,9 +69,11 @@ ModelViews GatherModelViews(const colmap::Reconstruction& model, const colmap::D
     }
     const colmap::Descriptors descriptors = database.ReadDescriptors(image_id);
     if (descriptors.rows != image.points2D.size()) {
-      throw InputError(db_name + ": image " + std::to_string(image_id) + " '" + image.name + "' has " +
-                       std::to_string(descriptors.rows) + " descriptors but " + std::to_string(image.points2D.size()) +
-                       " 2D points in the model (the model and the database do not belong together)");
+      throw InputError(
+          db_name + ": image " + std::to_string(image_id) + " '" + image.name + "' has " +
+          std::to_string(descriptors.rows) + " descriptors but " +
+          std::to_string(image.points2D.size()) +
+          " 2D points in the model (the model and the database do not belong together)");
     }
     const auto camera = camera_index.find(image.camera_id);
     if (camera == camera_index.end()) {
@@ -83,7 +87,8 @@ ModelViews GatherModelViews(const colmap::Reconstruction& model, const colmap::D
     row.name_offset = static_cast<uint32_t>(views.strings.size());
     row.name_size = static_cast<uint32_t>(image.name.size());
     views.strings += image.name;
-    std::copy(image.cam_from_world.rotation.begin(), image.cam_from_world.rotation.end(), row.cam_from_world_rotation);
+    std::copy(image.cam_from_world.rotation.begin(), image.cam_from_world.rotation.end(),
+              row.cam_from_world_rotation);
     std::copy(image.cam_from_world.translation.begin(), image.cam_from_world.translation.end(),
               row.cam_from_world_translation);
     row.first_view = static_cast<uint32_t>(views.view_points.size());
@@ -92,11 +97,13 @@ ModelViews GatherModelViews(const colmap::Reconstruction& model, const colmap::D
       if (point2D.point3D_id == kInvalidPoint3DId) continue;
       const auto point = point_index.find(point2D.point3D_id);
       if (point == point_index.end()) {
-        throw InputError("model image " + std::to_string(image_id) + " point2D " + std::to_string(i) +
-                         " refers to missing 3D point " + std::to_string(point2D.point3D_id));
+        throw InputError("model image " + std::to_string(image_id) + " point2D " +
+                         std::to_string(i) + " refers to missing 3D point " +
+                         std::to_string(point2D.point3D_id));
       }
       views.view_points.push_back(point->second);
-      views.view_keypoints.push_back({static_cast<float>(point2D.x), static_cast<float>(point2D.y)});
+      views.view_keypoints.push_back(
+          {static_cast<float>(point2D.x), static_cast<float>(point2D.y)});
       const uint8_t* row_bytes = descriptors.Row(static_cast<uint32_t>(i));
       views.descriptors.insert(views.descriptors.end(), row_bytes, row_bytes + kDescriptorBytes);
     }
@@ -112,7 +119,8 @@ ModelViews GatherModelViews(const colmap::Reconstruction& model, const colmap::D
   for (size_t p = 0; p < views.points.size(); ++p) counts[p + 1] += counts[p];
   views.tracks.resize(views.view_points.size());
   std::vector<uint32_t> cursor(counts.begin(), counts.end() - 1);
-  for (uint32_t v = 0; v < views.view_points.size(); ++v) views.tracks[cursor[views.view_points[v]]++] = v;
+  for (uint32_t v = 0; v < views.view_points.size(); ++v)
+    views.tracks[cursor[views.view_points[v]]++] = v;
 
   // Drop points without views (none in a consistent model) and renumber.
   std::vector<uint32_t> new_index(views.points.size(), UINT32_MAX);

@@ -4,9 +4,9 @@
 #include <string>
 #include <vector>
 
-#include "format/index/index_sections.h"
 #include "format/colmap/database.h"
 #include "format/colmap/reconstruction.h"
+#include "format/index/index_sections.h"
 
 namespace cwloc {
 
@@ -15,13 +15,13 @@ namespace cwloc {
 // image's views are contiguous.
 struct ModelViews {
   std::vector<IndexCamera> cameras;
-  std::vector<IndexImage> images;       // cluster left 0; filled by the clustering step
-  std::string strings;                  // image names
-  std::vector<IndexPoint> points;       // 3D points with at least one view, in id order
-  std::vector<point3D_t> point_ids;     // COLMAP id of each point
-  std::vector<uint32_t> tracks;         // view indices, grouped by point
-  std::vector<uint8_t> descriptors;     // views x 128
-  std::vector<uint32_t> view_points;    // point index of each view
+  std::vector<IndexImage> images;     // cluster left 0; filled by the clustering step
+  std::string strings;                // image names
+  std::vector<IndexPoint> points;     // 3D points with at least one view, in id order
+  std::vector<point3D_t> point_ids;   // COLMAP id of each point
+  std::vector<uint32_t> tracks;       // view indices, grouped by point
+  std::vector<uint8_t> descriptors;   // views x 128
+  std::vector<uint32_t> view_points;  // point index of each view
   std::vector<ViewKeypoint> view_keypoints;
 
   size_t num_views() const { return view_points.size(); }
@@ -31,6 +31,7 @@ struct ModelViews {
 // in the model are ignored (they may be queries). Throws InputError when a model image is
 // missing from the database, has another name there, or its descriptor count differs from its
 // number of 2D points.
-ModelViews GatherModelViews(const colmap::Reconstruction& model, const colmap::DatabaseReader& database);
+ModelViews GatherModelViews(const colmap::Reconstruction& model,
+                            const colmap::DatabaseReader& database);
 
 }  // namespace cwloc

@@ -4,10 +4,10 @@
 #include <cstring>
 #include <limits>
 
-#include "format/kdtree/descriptor_distance.h"
-#include "format/kdtree/kd_forest_builder.h"
 #include "format/base/parallel_for.h"
 #include "format/base/progress.h"
+#include "format/kdtree/descriptor_distance.h"
+#include "format/kdtree/kd_forest_builder.h"
 
 namespace cwloc {
 namespace {
@@ -15,7 +15,8 @@ namespace {
 constexpr uint32_t kNone = std::numeric_limits<uint32_t>::max();
 
 // Smallest squared distance from each member to a member of another 3D point, each pair once.
-std::vector<uint32_t> ExactNearestOtherPoint(const ModelViews& views, const std::vector<uint32_t>& members) {
+std::vector<uint32_t> ExactNearestOtherPoint(const ModelViews& views,
+                                             const std::vector<uint32_t>& members) {
   const auto distance = BestDistanceFunctions().one;
   const uint8_t* descriptors = views.descriptors.data();
   std::vector<uint32_t> best(members.size(), kNone);
@@ -38,7 +39,8 @@ std::vector<uint32_t> ExactNearestOtherPoint(const ModelViews& views, const std:
 
 // The same from a kd-forest over the members: the first of the nearest neighbours that is a
 // view of another point.
-std::vector<uint32_t> ApproximateNearestOtherPoint(const ModelViews& views, const std::vector<uint32_t>& members,
+std::vector<uint32_t> ApproximateNearestOtherPoint(const ModelViews& views,
+                                                   const std::vector<uint32_t>& members,
                                                    int num_threads) {
   std::vector<uint8_t> descriptors(members.size() * kDescriptorBytes);
   for (size_t m = 0; m < members.size(); ++m) {
@@ -52,10 +54,12 @@ std::vector<uint32_t> ApproximateNearestOtherPoint(const ModelViews& views, cons
 
   std::vector<uint32_t> best(members.size(), kNone);
   std::vector<KdForestSearcher> searchers(num_threads, KdForestSearcher(view));
-  std::vector<std::vector<KdNeighbor>> neighbors(num_threads, std::vector<KdNeighbor>(kApproxNeighborCount));
+  std::vector<std::vector<KdNeighbor>> neighbors(num_threads,
+                                                 std::vector<KdNeighbor>(kApproxNeighborCount));
   ParallelFor(members.size(), num_threads, [&](size_t m, int worker) {
-    const KdSearchResult found = searchers[worker].Search(descriptors.data() + m * kDescriptorBytes,
-                                                          KdSearchOptions{kApproxNeighborChecks}, neighbors[worker]);
+    const KdSearchResult found =
+        searchers[worker].Search(descriptors.data() + m * kDescriptorBytes,
+                                 KdSearchOptions{kApproxNeighborChecks}, neighbors[worker]);
     const uint32_t point = views.view_points[members[m]];
     for (uint32_t i = 0; i < found.num_neighbors; ++i) {
       const KdNeighbor& neighbor = neighbors[worker][i];
@@ -70,8 +74,8 @@ std::vector<uint32_t> ApproximateNearestOtherPoint(const ModelViews& views, cons
 
 }  // namespace
 
-std::vector<float> ComputeViewNeighborDistances(const ModelViews& views, const Clustering& clustering,
-                                                int num_threads) {
+std::vector<float> ComputeViewNeighborDistances(const ModelViews& views,
+                                                const Clustering& clustering, int num_threads) {
   std::vector<std::vector<uint32_t>> cluster_images(clustering.num_clusters);
   std::vector<size_t> cluster_views(clustering.num_clusters, 0);
   for (uint32_t i = 0; i < views.images.size(); ++i) {
@@ -81,7 +85,8 @@ std::vector<float> ComputeViewNeighborDistances(const ModelViews& views, const C
   auto members_of = [&](size_t c) {
     std::vector<uint32_t> members;
     for (uint32_t i : cluster_images[c]) {
-      for (uint32_t v = 0; v < views.images[i].num_views; ++v) members.push_back(views.images[i].first_view + v);
+      for (uint32_t v = 0; v < views.images[i].num_views; ++v)
+        members.push_back(views.images[i].first_view + v);
     }
     return members;
   };

@@ -22,7 +22,7 @@ inline constexpr uint32_t kApproxNeighborChecks = 2048;
 // cluster's search found none among its kApproxNeighborCount neighbours. Exact for clusters of
 // at most kExactNeighborMaxViews views (sum of n^2 / 2 distances); approximate beyond, where a
 // missed nearest neighbour can only make the distance larger.
-std::vector<float> ComputeViewNeighborDistances(const ModelViews& views, const Clustering& clustering,
-                                                int num_threads);
+std::vector<float> ComputeViewNeighborDistances(const ModelViews& views,
+                                                const Clustering& clustering, int num_threads);
 
 }  // namespace cwloc

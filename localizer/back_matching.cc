@@ -3,12 +3,13 @@
 #include <algorithm>
 #include <cmath>
 
-#include "format/kdtree/kd_forest_builder.h"
 #include "format/base/stopwatch.h"
+#include "format/kdtree/kd_forest_builder.h"
 
 namespace cwloc {
 BackMatchingResult MatchBack(const Index& index, const ClusterMembers& clusters, const Query& query,
-                             std::span<const FeatureMatch> forward_matches, const LocalizerOptions& options) {
+                             std::span<const FeatureMatch> forward_matches,
+                             const LocalizerOptions& options) {
   BackMatchingResult result;
   result.cluster_votes.assign(clusters.num_clusters(), 0);
   std::vector<uint32_t>& votes = result.cluster_votes;
@@ -25,7 +26,8 @@ BackMatchingResult MatchBack(const Index& index, const ClusterMembers& clusters,
   tree_options.num_trees = 4;
   tree_options.num_threads = 1;
   tree_options.seed = options.seed;
-  const std::span<const uint8_t> query_descriptors(query.descriptors.data(), size_t{query.NumFeatures()} * 128);
+  const std::span<const uint8_t> query_descriptors(query.descriptors.data(),
+                                                   size_t{query.NumFeatures()} * 128);
   const KdForest query_forest = BuildKdForest(query_descriptors, tree_options);
   KdForestSearcher searcher(query_forest.View(query_descriptors));
   result.seconds_query_tree = stopwatch.Seconds();
@@ -35,7 +37,8 @@ BackMatchingResult MatchBack(const Index& index, const ClusterMembers& clusters,
   std::vector<bool> visited(clusters.num_clusters(), false);
   std::vector<KdNeighbor> neighbors(2);
   std::vector<uint32_t> track_clusters;
-  while (result.matches.size() < options.back_matches && result.visited.size() < options.max_back_images) {
+  while (result.matches.size() < options.back_matches &&
+         result.visited.size() < options.max_back_images) {
     uint32_t best = UINT32_MAX;
     for (uint32_t cluster : voted) {
       if (!visited[cluster] && (best == UINT32_MAX || votes[cluster] > votes[best] ||
@@ -50,10 +53,12 @@ BackMatchingResult MatchBack(const Index& index, const ClusterMembers& clusters,
       const IndexImage& image = index.images()[clusters.images[i]];
       for (uint32_t view = image.first_view; view < image.first_view + image.num_views; ++view) {
         if (view >= index.num_views()) break;  // a corrupt range; verify names it
-        const KdSearchResult found = searcher.Search(index.descriptor(view), search_options, neighbors);
+        const KdSearchResult found =
+            searcher.Search(index.descriptor(view), search_options, neighbors);
         if (found.num_neighbors < 2) continue;
         if (!PassesRatioTest(neighbors[0].distance, neighbors[1].distance, options.ratio)) continue;
-        result.matches.push_back({neighbors[0].index, view, std::sqrt(static_cast<float>(neighbors[0].distance))});
+        result.matches.push_back(
+            {neighbors[0].index, view, std::sqrt(static_cast<float>(neighbors[0].distance))});
       }
     }
     const uint32_t found_here = static_cast<uint32_t>(result.matches.size() - first_match);
@@ -65,7 +70,8 @@ BackMatchingResult MatchBack(const Index& index, const ClusterMembers& clusters,
       for (const uint32_t other_view : index.TrackOf(index.view_points()[result.matches[m].view])) {
         const uint32_t cluster = ClusterOfView(index, other_view);
         if (cluster == best || cluster == UINT32_MAX) continue;
-        if (std::find(track_clusters.begin(), track_clusters.end(), cluster) == track_clusters.end()) {
+        if (std::find(track_clusters.begin(), track_clusters.end(), cluster) ==
+            track_clusters.end()) {
           track_clusters.push_back(cluster);
           vote(cluster);
         }

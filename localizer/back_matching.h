@@ -13,8 +13,8 @@ namespace cwloc {
 
 struct VisitedCluster {
   uint32_t cluster = 0;
-  uint32_t votes = 0;     // when it was chosen
-  uint32_t matches = 0;   // back-matches it gave
+  uint32_t votes = 0;    // when it was chosen
+  uint32_t matches = 0;  // back-matches it gave
 };
 
 struct BackMatchingResult {
@@ -31,6 +31,7 @@ struct BackMatchingResult {
 // 3D point, for every cluster that sees that point. Stops at options.back_matches matches or
 // options.max_back_images clusters, or when no cluster has votes left.
 BackMatchingResult MatchBack(const Index& index, const ClusterMembers& clusters, const Query& query,
-                             std::span<const FeatureMatch> forward_matches, const LocalizerOptions& options);
+                             std::span<const FeatureMatch> forward_matches,
+                             const LocalizerOptions& options);
 
 }  // namespace cwloc

@@ -8,8 +8,9 @@
 
 namespace cwloc {
 
-void ClusterWiseRatioTest(const Index& index, uint32_t feature, std::span<const KdNeighbor> neighbors,
-                          double ratio, std::vector<FeatureMatch>* accepted, ForwardMatchingStats* stats) {
+void ClusterWiseRatioTest(const Index& index, uint32_t feature,
+                          std::span<const KdNeighbor> neighbors, double ratio,
+                          std::vector<FeatureMatch>* accepted, ForwardMatchingStats* stats) {
   constexpr size_t kMaxNeighbors = kMaxK + 1;
   if (neighbors.size() > kMaxNeighbors) {
     throw std::invalid_argument("cluster-wise ratio test: " + std::to_string(neighbors.size()) +
@@ -21,7 +22,8 @@ void ClusterWiseRatioTest(const Index& index, uint32_t feature, std::span<const 
   uint32_t points[kMaxNeighbors];
   for (size_t i = 0; i < n; ++i) {
     clusters[i] = ClusterOfView(index, neighbors[i].index);
-    points[i] = neighbors[i].index < index.num_views() ? index.view_points()[neighbors[i].index] : UINT32_MAX;
+    points[i] = neighbors[i].index < index.num_views() ? index.view_points()[neighbors[i].index]
+                                                       : UINT32_MAX;
   }
   const size_t k = n - 1;  // the last neighbour only serves as a local second neighbour
   for (size_t i = 0; i < k; ++i) {

@@ -17,7 +17,8 @@ namespace cwloc {
 //    local 1-ratio; the (k+1)-th neighbour counts too, since everything closer was retrieved);
 //  - otherwise with the t-ratio ||q - v_c1|| / (||q - v_c1|| + ||v_c1 - v_NN||), v_NN from VNND.
 // Accepted (feature, v_c1) pairs are appended to `accepted`.
-void ClusterWiseRatioTest(const Index& index, uint32_t feature, std::span<const KdNeighbor> neighbors,
-                          double ratio, std::vector<FeatureMatch>* accepted, ForwardMatchingStats* stats);
+void ClusterWiseRatioTest(const Index& index, uint32_t feature,
+                          std::span<const KdNeighbor> neighbors, double ratio,
+                          std::vector<FeatureMatch>* accepted, ForwardMatchingStats* stats);
 
 }  // namespace cwloc

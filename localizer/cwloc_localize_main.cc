@@ -1,7 +1,5 @@
 // cwloc-localize: opens a cwloc index read-only and estimates query camera poses.
 #include <CLI/CLI.hpp>
-#include <nlohmann/json.hpp>
-
 #include <algorithm>
 #include <atomic>
 #include <cstdio>
@@ -9,18 +7,19 @@
 #include <iostream>
 #include <memory>
 #include <mutex>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <thread>
 
 #include "cwloc/version.h"
 #include "format/base/error.h"
-#include "format/index/index.h"
 #include "format/base/progress.h"
 #include "format/base/tool_main.h"
+#include "format/index/index.h"
 #include "localizer/io/camera_spec.h"
 #include "localizer/io/feature_file.h"
-#include "localizer/localizer.h"
 #include "localizer/io/result_json.h"
+#include "localizer/localizer.h"
 #ifdef CWLOC_WITH_COLMAP_DB
 #include "localizer/io/database_queries.h"
 #endif
@@ -84,21 +83,25 @@ class QueryLoader {
     if (!cli.camera_spec.empty()) default_camera_ = ParseCameraSpec(cli.camera_spec, "--camera");
     if (!cli.image_size.empty()) default_camera_ = ParseImageSize(cli.image_size, "--image-size");
 #ifdef CWLOC_WITH_COLMAP_DB
-    if (!cli.database_path.empty()) database_ = std::make_unique<DatabaseQueries>(cli.database_path);
+    if (!cli.database_path.empty())
+      database_ = std::make_unique<DatabaseQueries>(cli.database_path);
 #endif
   }
 
   // Reads the query's features, then picks its camera once: the query list's, else --camera or
   // --image-size, else the database's. The Localizer checks the query.
   Query Load(const QuerySource& source) const {
-    Query query = source.feature_file.empty() ? LoadFromDatabase(source.name) : LoadFeatureFile(source);
+    Query query =
+        source.feature_file.empty() ? LoadFromDatabase(source.name) : LoadFeatureFile(source);
     if (!source.camera_spec.empty()) {
-      query.camera = ParseCameraSpec(source.camera_spec, cli_.query_list + " (" + source.name + ")");
+      query.camera =
+          ParseCameraSpec(source.camera_spec, cli_.query_list + " (" + source.name + ")");
     } else if (default_camera_) {
       query.camera = *default_camera_;
     } else if (!source.feature_file.empty()) {
       throw InputError(source.feature_file.string() +
-                       ": no camera: give --camera \"MODEL W H PARAMS\", --image-size \"W H\", or a camera in the "
+                       ": no camera: give --camera \"MODEL W H PARAMS\", --image-size \"W H\", or "
+                       "a camera in the "
                        "query list");
     }
     if (cli_.unknown_focal) query.camera = WithUnknownFocal(query.camera);
@@ -119,7 +122,8 @@ class QueryLoader {
     if (!database_) throw InputError("query '" + name + "': give --database to read it from");
     return database_->Load(name);
 #else
-    throw InputError("query '" + name + "': this cwloc-localize was built without COLMAP database input");
+    throw InputError("query '" + name +
+                     "': this cwloc-localize was built without COLMAP database input");
 #endif
   }
 
@@ -135,7 +139,8 @@ class QueryLoader {
 class ResultSink {
  public:
   explicit ResultSink(const CliOptions& cli) : cli_(cli) {
-    if (!cli.output_path.empty() && cli.output_path != "-") OpenOrThrow(&json_file_, cli.output_path);
+    if (!cli.output_path.empty() && cli.output_path != "-")
+      OpenOrThrow(&json_file_, cli.output_path);
     if (!cli.poses_path.empty()) OpenOrThrow(&poses_file_, cli.poses_path);
   }
 
@@ -145,14 +150,16 @@ class ResultSink {
     // With the JSON in a file, stdout gets a readable line per query.
     if (json_file_.is_open() && !cli_.quiet) {
       if (result.success) {
-        std::printf("%s: localized, %u inliers / %u correspondences, %.1f ms\n", result.name.c_str(),
-                    result.num_inliers, result.correspondences, result.times.total * 1e3);
+        std::printf("%s: localized, %u inliers / %u correspondences, %.1f ms\n",
+                    result.name.c_str(), result.num_inliers, result.correspondences,
+                    result.times.total * 1e3);
       } else {
         std::printf("%s: not localized: %s\n", result.name.c_str(), result.failure_reason.c_str());
       }
       std::fflush(stdout);
     }
-    if (poses_file_.is_open() && result.success) poses_file_ << PoseLine(result) << "\n" << std::flush;
+    if (poses_file_.is_open() && result.success)
+      poses_file_ << PoseLine(result) << "\n" << std::flush;
   }
 
   void WriteError(const std::string& name, const std::string& error) {
@@ -181,7 +188,8 @@ class ResultSink {
 
 int Run(const CliOptions& cli, const LocalizerOptions& options) {
   ValidateLocalizerOptions(options);
-  if (cli.threads < 1 || cli.threads > 1024) throw InputError("--threads must be between 1 and 1024");
+  if (cli.threads < 1 || cli.threads > 1024)
+    throw InputError("--threads must be between 1 and 1024");
   const Index index = Index::Open(cli.index_path);
   if (cli.verify) {
     index.file().VerifyChecksums();
@@ -224,9 +232,11 @@ int Run(const CliOptions& cli, const LocalizerOptions& options) {
   }
   std::sort(finished.begin(), finished.end());
   if (!cli.quiet) {
-    std::fprintf(stderr, "cwloc-localize: localized %d of %zu queries", localized.load(), sources.size());
+    std::fprintf(stderr, "cwloc-localize: localized %d of %zu queries", localized.load(),
+                 sources.size());
     if (errors > 0) std::fprintf(stderr, " (%d bad input)", errors.load());
-    if (!finished.empty()) std::fprintf(stderr, ", median %.1f ms per query", finished[finished.size() / 2] * 1e3);
+    if (!finished.empty())
+      std::fprintf(stderr, ", median %.1f ms per query", finished[finished.size() / 2] * 1e3);
     std::fprintf(stderr, "\n");
   }
   if (errors > 0) return kExitBadInput;
@@ -244,52 +254,70 @@ int main(int argc, char** argv) {
 
   app.add_option("--index", cli.index_path, "Index file built by cwloc-index")->required();
 #ifdef CWLOC_WITH_COLMAP_DB
-  app.add_option("--database", cli.database_path, "COLMAP database holding the queries' keypoints and descriptors");
+  app.add_option("--database", cli.database_path,
+                 "COLMAP database holding the queries' keypoints and descriptors");
 #endif
   app.add_option("--query", cli.query_names, "Query image name in --database (repeatable)");
   app.add_option("--query-list", cli.query_list,
-                 "File of queries, one per line: a name in --database (or a feature file), optionally followed by "
+                 "File of queries, one per line: a name in --database (or a feature file), "
+                 "optionally followed by "
                  "'MODEL W H PARAMS' (hloc's queries_with_intrinsics.txt)");
   app.add_option("--features", cli.feature_files,
-                 "COLMAP text feature file ('N 128', then 'x y scale orientation d1..d128' lines; repeatable)");
-  auto* camera = app.add_option("--camera", cli.camera_spec, "Query camera 'MODEL W H PARAMS...' (known focal)");
-  app.add_option("--image-size", cli.image_size, "Query image size 'W H' when the focal length is unknown (P4Pf)")
+                 "COLMAP text feature file ('N 128', then 'x y scale orientation d1..d128' lines; "
+                 "repeatable)");
+  auto* camera = app.add_option("--camera", cli.camera_spec,
+                                "Query camera 'MODEL W H PARAMS...' (known focal)");
+  app.add_option("--image-size", cli.image_size,
+                 "Query image size 'W H' when the focal length is unknown (P4Pf)")
       ->excludes(camera);
-  app.add_flag("--unknown-focal", cli.unknown_focal, "Ignore the known focal length and estimate it (P4Pf)");
+  app.add_flag("--unknown-focal", cli.unknown_focal,
+               "Ignore the known focal length and estimate it (P4Pf)");
   app.add_option("-o,--output", cli.output_path, "JSON lines output (default: stdout)");
-  app.add_option("--poses", cli.poses_path, "Also write 'NAME QW QX QY QZ TX TY TZ' lines of localized queries");
+  app.add_option("--poses", cli.poses_path,
+                 "Also write 'NAME QW QX QY QZ TX TY TZ' lines of localized queries");
   app.add_option("--threads", cli.threads, "Queries localized in parallel")->capture_default_str();
-  app.add_flag("--verify", cli.verify, "Verify the index's checksums and stored indices before localizing");
+  app.add_flag("--verify", cli.verify,
+               "Verify the index's checksums and stored indices before localizing");
   app.add_flag("-q,--quiet", cli.quiet, "No summary or readable lines");
 
   std::string matcher = "cluster-wise";
-  app.add_option("--matcher", matcher,
-                 "cluster-wise (the paper), global-ratio (diagnostic baseline) or cluster-exhaustive (the "
-                 "paper's brute-force gold standard; slow)")
-      ->check(CLI::IsMember(std::vector<std::string>(cwloc::kMatcherNames.begin(), cwloc::kMatcherNames.end())))
+  app.add_option(
+         "--matcher", matcher,
+         "cluster-wise (the paper), global-ratio (diagnostic baseline) or cluster-exhaustive (the "
+         "paper's brute-force gold standard; slow)")
+      ->check(CLI::IsMember(
+          std::vector<std::string>(cwloc::kMatcherNames.begin(), cwloc::kMatcherNames.end())))
       ->capture_default_str();
-  app.add_option("--k", options.k, "Nearest neighbours per query feature (k; k+1 are searched)")->capture_default_str();
-  app.add_option("--checks", options.checks, "kd-forest leaf checks per search")->capture_default_str();
+  app.add_option("--k", options.k, "Nearest neighbours per query feature (k; k+1 are searched)")
+      ->capture_default_str();
+  app.add_option("--checks", options.checks, "kd-forest leaf checks per search")
+      ->capture_default_str();
   app.add_option("--ratio", options.ratio, "Ratio test threshold tau")->capture_default_str();
   app.add_option("--nf", options.forward_matches, "N_F: forward matches passing both ratio tests")
       ->capture_default_str();
-  app.add_option("--nb", options.back_matches, "N_B: back-matches to collect")->capture_default_str();
+  app.add_option("--nb", options.back_matches, "N_B: back-matches to collect")
+      ->capture_default_str();
   app.add_option("--max-back-images", options.max_back_images, "Clusters to back-match at most")
       ->capture_default_str();
   app.add_option("--min-vote-matches", options.min_matches_to_vote,
                  "Back-matches a cluster needs to cast co-visibility votes")
       ->capture_default_str();
-  app.add_option("--query-checks", options.query_tree_checks, "Leaf checks in the query features' kd-forest")
+  app.add_option("--query-checks", options.query_tree_checks,
+                 "Leaf checks in the query features' kd-forest")
       ->capture_default_str();
-  app.add_option("--min-inliers", options.pose.min_inliers, "Inliers needed for success")->capture_default_str();
-  app.add_option("--max-error", options.pose.max_error_px, "Inlier reprojection error threshold, pixels")
+  app.add_option("--min-inliers", options.pose.min_inliers, "Inliers needed for success")
       ->capture_default_str();
-  app.add_option("--max-ransac-iterations", options.pose.ransac.max_iterations, "RANSAC iteration cap")
+  app.add_option("--max-error", options.pose.max_error_px,
+                 "Inlier reprojection error threshold, pixels")
+      ->capture_default_str();
+  app.add_option("--max-ransac-iterations", options.pose.ransac.max_iterations,
+                 "RANSAC iteration cap")
       ->capture_default_str();
   app.add_option("--ransac-confidence", options.pose.ransac.confidence,
                  "RANSAC stops once an all-inlier sample was drawn with this probability")
       ->capture_default_str();
-  app.add_option("--seed", options.seed, "Seed of the feature order and RANSAC")->capture_default_str();
+  app.add_option("--seed", options.seed, "Seed of the feature order and RANSAC")
+      ->capture_default_str();
   app.add_flag("!--no-refine", options.pose.refine, "Skip the final Ceres refinement");
 
   try {

@@ -34,7 +34,8 @@ constexpr size_t kBlockViews = 1024;
 
 }  // namespace
 
-std::vector<ClusterMatches> MatchEachClusterExhaustively(const Index& index, const ClusterMembers& clusters,
+std::vector<ClusterMatches> MatchEachClusterExhaustively(const Index& index,
+                                                         const ClusterMembers& clusters,
                                                          const Query& query, double ratio,
                                                          ForwardMatchingStats* stats) {
   const Stopwatch stopwatch;
@@ -49,10 +50,11 @@ std::vector<ClusterMatches> MatchEachClusterExhaustively(const Index& index, con
 
   auto compare_block = [&] {
     for (uint32_t feature = 0; feature < num_features; ++feature) {
-      distance.batch(query.Descriptor(feature), index.descriptors().data(), block.data(), block.size(),
-                     distances.data());
+      distance.batch(query.Descriptor(feature), index.descriptors().data(), block.data(),
+                     block.size(), distances.data());
       NearestTwo& two = nearest[feature];
-      for (size_t i = 0; i < block.size(); ++i) two.Offer(distances[i], block[i], view_points[block[i]]);
+      for (size_t i = 0; i < block.size(); ++i)
+        two.Offer(distances[i], block[i], view_points[block[i]]);
     }
     block.clear();
   };
@@ -61,9 +63,11 @@ std::vector<ClusterMatches> MatchEachClusterExhaustively(const Index& index, con
     std::fill(nearest.begin(), nearest.end(), NearestTwo{});
     for (uint32_t i = clusters.offsets[cluster]; i < clusters.offsets[cluster + 1]; ++i) {
       const IndexImage& image = index.images()[clusters.images[i]];
-      const uint64_t end = std::min<uint64_t>(uint64_t{image.first_view} + image.num_views, index.num_views());
+      const uint64_t end =
+          std::min<uint64_t>(uint64_t{image.first_view} + image.num_views, index.num_views());
       for (uint64_t view = image.first_view; view < end; ++view) {
-        if (view_points[view] >= index.points().size()) continue;  // a corrupt view; verify names it
+        if (view_points[view] >= index.points().size())
+          continue;  // a corrupt view; verify names it
         block.push_back(static_cast<uint32_t>(view));
         if (block.size() == kBlockViews) compare_block();
       }

@@ -20,7 +20,8 @@ struct ClusterMatches {
 // another 3D point *in the same cluster* is far enough (the 1-ratio test inside the cluster).
 // Costs features x views distances, so it is for evaluation, not for devices. Returns the
 // clusters with at least one match, in cluster order; stats->seconds_knn gets the time.
-std::vector<ClusterMatches> MatchEachClusterExhaustively(const Index& index, const ClusterMembers& clusters,
+std::vector<ClusterMatches> MatchEachClusterExhaustively(const Index& index,
+                                                         const ClusterMembers& clusters,
                                                          const Query& query, double ratio,
                                                          ForwardMatchingStats* stats);
 

@@ -13,14 +13,16 @@ namespace cwloc {
 namespace {
 
 void ThrowCorrupt(const Index& index) {
-  throw InputError(index.file().path().string() +
-                   ": the kd-forest holds an out-of-range index; the file is corrupt (run cwloc-index verify)");
+  throw InputError(
+      index.file().path().string() +
+      ": the kd-forest holds an out-of-range index; the file is corrupt (run cwloc-index verify)");
 }
 
 }  // namespace
 
-std::vector<FeatureMatch> MatchForward(const Index& index, const Query& query, const LocalizerOptions& options,
-                                       KdForestSearcher& searcher, ForwardMatchingStats* stats) {
+std::vector<FeatureMatch> MatchForward(const Index& index, const Query& query,
+                                       const LocalizerOptions& options, KdForestSearcher& searcher,
+                                       ForwardMatchingStats* stats) {
   std::vector<uint32_t> order(query.NumFeatures());
   std::iota(order.begin(), order.end(), 0u);
   SplitMix64(options.seed).Shuffle(std::span<uint32_t>(order));
@@ -31,13 +33,15 @@ std::vector<FeatureMatch> MatchForward(const Index& index, const Query& query, c
   for (const uint32_t feature : order) {
     if (matches.size() >= options.forward_matches) break;
     const Stopwatch knn;
-    const KdSearchResult result = searcher.Search(query.Descriptor(feature), search_options, neighbors);
+    const KdSearchResult result =
+        searcher.Search(query.Descriptor(feature), search_options, neighbors);
     stats->seconds_knn += knn.Seconds();
     ++stats->features_searched;
     if (result.corrupt) ThrowCorrupt(index);
     if (result.num_neighbors < options.k + 1) continue;  // a model smaller than k+1 views
     // k-ratio ||q - v1|| / ||q - v_{k+1}|| <= tau.
-    if (!PassesRatioTest(neighbors[0].distance, neighbors[options.k].distance, options.ratio)) continue;
+    if (!PassesRatioTest(neighbors[0].distance, neighbors[options.k].distance, options.ratio))
+      continue;
     ++stats->passed_k_ratio;
     const Stopwatch ratio_test;
     ClusterWiseRatioTest(index, feature, neighbors, options.ratio, &matches, stats);
@@ -46,20 +50,24 @@ std::vector<FeatureMatch> MatchForward(const Index& index, const Query& query, c
   return matches;
 }
 
-std::vector<FeatureMatch> MatchGlobalRatio(const Index& index, const Query& query, const LocalizerOptions& options,
-                                           KdForestSearcher& searcher, ForwardMatchingStats* stats) {
+std::vector<FeatureMatch> MatchGlobalRatio(const Index& index, const Query& query,
+                                           const LocalizerOptions& options,
+                                           KdForestSearcher& searcher,
+                                           ForwardMatchingStats* stats) {
   std::vector<KdNeighbor> neighbors(2);
   const KdSearchOptions search_options{options.checks};
   std::vector<FeatureMatch> matches;
   const Stopwatch knn;
   for (uint32_t feature = 0; feature < query.NumFeatures(); ++feature) {
-    const KdSearchResult result = searcher.Search(query.Descriptor(feature), search_options, neighbors);
+    const KdSearchResult result =
+        searcher.Search(query.Descriptor(feature), search_options, neighbors);
     ++stats->features_searched;
     if (result.corrupt) ThrowCorrupt(index);
     if (result.num_neighbors < 2) continue;
     if (!PassesRatioTest(neighbors[0].distance, neighbors[1].distance, options.ratio)) continue;
     ++stats->passed_k_ratio;
-    matches.push_back({feature, neighbors[0].index, std::sqrt(static_cast<float>(neighbors[0].distance))});
+    matches.push_back(
+        {feature, neighbors[0].index, std::sqrt(static_cast<float>(neighbors[0].distance))});
   }
   stats->seconds_knn = knn.Seconds();
   return matches;

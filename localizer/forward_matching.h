@@ -14,12 +14,14 @@ namespace cwloc {
 // Algorithms 1 and 2 of the paper, interleaved: query features in a random order drawn from
 // options.seed, (k+1)-NN in the global kd-forest, the k-ratio test, then the cluster-wise ratio
 // test on the k neighbours; stops once options.forward_matches matches have passed both.
-std::vector<FeatureMatch> MatchForward(const Index& index, const Query& query, const LocalizerOptions& options,
-                                       KdForestSearcher& searcher, ForwardMatchingStats* stats);
+std::vector<FeatureMatch> MatchForward(const Index& index, const Query& query,
+                                       const LocalizerOptions& options, KdForestSearcher& searcher,
+                                       ForwardMatchingStats* stats);
 
 // The diagnostic baseline: every query feature's 2-NN in the global forest, the plain 1-ratio
 // test.
-std::vector<FeatureMatch> MatchGlobalRatio(const Index& index, const Query& query, const LocalizerOptions& options,
+std::vector<FeatureMatch> MatchGlobalRatio(const Index& index, const Query& query,
+                                           const LocalizerOptions& options,
                                            KdForestSearcher& searcher, ForwardMatchingStats* stats);
 
 }  // namespace cwloc

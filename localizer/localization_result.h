@@ -18,11 +18,11 @@ struct RankedImage {
 
 // Wall-clock seconds per pipeline stage.
 struct StageTimes {
-  double forward_knn = 0;      // kd-forest searches of the query features
-  double ratio_test = 0;       // cluster-wise ratio tests
-  double query_tree = 0;       // building the kd-forest over the query features
-  double back_matching = 0;    // prioritized back-matching and co-visibility votes
-  double pose = 0;             // LO-RANSAC with the minimal solvers, then the Ceres refinement
+  double forward_knn = 0;    // kd-forest searches of the query features
+  double ratio_test = 0;     // cluster-wise ratio tests
+  double query_tree = 0;     // building the kd-forest over the query features
+  double back_matching = 0;  // prioritized back-matching and co-visibility votes
+  double pose = 0;           // LO-RANSAC with the minimal solvers, then the Ceres refinement
   double total = 0;
 };
 
@@ -34,7 +34,7 @@ struct LocalizationResult {
   std::array<double, 4> rotation{1, 0, 0, 0};
   std::array<double, 3> translation{0, 0, 0};
   std::array<double, 3> center{0, 0, 0};
-  QueryCamera camera;           // as used; the estimated focal when it was unknown
+  QueryCamera camera;  // as used; the estimated focal when it was unknown
   bool focal_estimated = false;
   uint32_t num_features = 0;
   uint32_t features_searched = 0;

@@ -30,8 +30,8 @@ struct MatcherOutput {
 };
 
 // The paper: forward matching, then back-matching; the pose is fit to the back-matches.
-MatcherOutput MatchClusterWise(const Index& index, const ClusterMembers& clusters, const Query& query,
-                               const LocalizerOptions& options) {
+MatcherOutput MatchClusterWise(const Index& index, const ClusterMembers& clusters,
+                               const Query& query, const LocalizerOptions& options) {
   MatcherOutput out;
   KdForestSearcher searcher(index.kd_forest());
   out.forward = MatchForward(index, query, options, searcher, &out.forward_stats);
@@ -45,7 +45,8 @@ MatcherOutput MatchClusterWise(const Index& index, const ClusterMembers& cluster
 }
 
 // The diagnostic baseline: the pose is fit to the global 1-ratio matches.
-MatcherOutput MatchGlobally(const Index& index, const Query& query, const LocalizerOptions& options) {
+MatcherOutput MatchGlobally(const Index& index, const Query& query,
+                            const LocalizerOptions& options) {
   MatcherOutput out;
   KdForestSearcher searcher(index.kd_forest());
   out.forward = MatchGlobalRatio(index, query, options, searcher, &out.forward_stats);
@@ -55,8 +56,8 @@ MatcherOutput MatchGlobally(const Index& index, const Query& query, const Locali
 
 // Table 1's gold standard: unrefined RANSAC in every cluster that could reach min_inliers;
 // the pose is fit to the matches of the cluster with the most inliers.
-MatcherOutput MatchClusterExhaustive(const Index& index, const ClusterMembers& clusters, const Query& query,
-                                     const LocalizerOptions& options) {
+MatcherOutput MatchClusterExhaustive(const Index& index, const ClusterMembers& clusters,
+                                     const Query& query, const LocalizerOptions& options) {
   MatcherOutput out;
   const std::vector<ClusterMatches> per_cluster =
       MatchEachClusterExhaustively(index, clusters, query, options.ratio, &out.forward_stats);
@@ -66,7 +67,8 @@ MatcherOutput MatchClusterExhaustive(const Index& index, const ClusterMembers& c
   for (const ClusterMatches& cluster : per_cluster) {
     out.forward.insert(out.forward.end(), cluster.matches.begin(), cluster.matches.end());
     if (cluster.matches.size() < static_cast<size_t>(options.pose.min_inliers)) continue;
-    const QueryPose candidate = EstimateQueryPose(index, query, cluster.matches, options, /*refine=*/false);
+    const QueryPose candidate =
+        EstimateQueryPose(index, query, cluster.matches, options, /*refine=*/false);
     if (candidate.pose.success && candidate.pose.num_inliers > best_inliers) {
       best_inliers = candidate.pose.num_inliers;
       best = &cluster.matches;
@@ -110,13 +112,15 @@ void ValidateQuery(const Query& query) {
     throw InputError(source + ": keypoint and descriptor counts differ");
   }
   if (query.NumFeatures() == 0) throw InputError(source + ": the query has no features");
-  if (query.camera.width == 0 || query.camera.height == 0) throw InputError(source + ": camera has no image size");
+  if (query.camera.width == 0 || query.camera.height == 0)
+    throw InputError(source + ": camera has no image size");
   if (!query.camera.focal_known) return;
   const auto model = FindCameraModel(static_cast<int32_t>(query.camera.model_id));
   if (!model || !model->can_project) throw InputError(source + ": unsupported camera model");
   if (query.camera.params.size() != static_cast<size_t>(model->num_params)) {
-    throw InputError(source + ": " + std::string(model->name) + " takes " + std::to_string(model->num_params) +
-                     " parameters, got " + std::to_string(query.camera.params.size()));
+    throw InputError(source + ": " + std::string(model->name) + " takes " +
+                     std::to_string(model->num_params) + " parameters, got " +
+                     std::to_string(query.camera.params.size()));
   }
 }
 
@@ -129,11 +133,13 @@ void ValidateLocalizerOptions(const LocalizerOptions& o) {
   require(o.k >= 1 && o.k <= kMaxK,
           "--k " + std::to_string(o.k) + ": expected 1 to " + std::to_string(kMaxK));
   require(o.checks >= 1, "--checks must be at least 1");
-  require(o.ratio > 0 && o.ratio <= 1, "--ratio " + std::to_string(o.ratio) + ": expected a value in (0, 1]");
+  require(o.ratio > 0 && o.ratio <= 1,
+          "--ratio " + std::to_string(o.ratio) + ": expected a value in (0, 1]");
   require(o.forward_matches >= 1, "--nf must be at least 1");
   require(o.max_back_images >= 1, "--max-back-images must be at least 1");
   require(o.query_tree_checks >= 1, "--query-checks must be at least 1");
-  require(o.pose.min_inliers >= 4, "--min-inliers " + std::to_string(o.pose.min_inliers) + ": expected at least 4");
+  require(o.pose.min_inliers >= 4,
+          "--min-inliers " + std::to_string(o.pose.min_inliers) + ": expected at least 4");
   require(o.pose.max_error_px > 0 && std::isfinite(o.pose.max_error_px),
           "--max-error must be a positive number of pixels");
   require(o.pose.ransac.max_iterations >= 1, "--max-ransac-iterations must be at least 1");
@@ -149,9 +155,15 @@ LocalizationResult Localizer::Localize(const Query& query, const LocalizerOption
 
   MatcherOutput matched;
   switch (options.matcher) {
-    case Matcher::kClusterWise: matched = MatchClusterWise(index_, clusters_, query, options); break;
-    case Matcher::kGlobalRatio: matched = MatchGlobally(index_, query, options); break;
-    case Matcher::kClusterExhaustive: matched = MatchClusterExhaustive(index_, clusters_, query, options); break;
+    case Matcher::kClusterWise:
+      matched = MatchClusterWise(index_, clusters_, query, options);
+      break;
+    case Matcher::kGlobalRatio:
+      matched = MatchGlobally(index_, query, options);
+      break;
+    case Matcher::kClusterExhaustive:
+      matched = MatchClusterExhaustive(index_, clusters_, query, options);
+      break;
   }
 
   const Stopwatch pose_time;

@@ -10,8 +10,8 @@
 namespace cwloc {
 
 enum class Matcher {
-  kClusterWise,  // the paper: k-ratio + cluster-wise ratio tests, voting, back-matching
-  kGlobalRatio,  // diagnostic baseline: plain 1-ratio against the global tree, then RANSAC
+  kClusterWise,        // the paper: k-ratio + cluster-wise ratio tests, voting, back-matching
+  kGlobalRatio,        // diagnostic baseline: plain 1-ratio against the global tree, then RANSAC
   kClusterExhaustive,  // diagnostic gold standard (Table 1): brute-force 1-ratio inside each
                        // cluster, RANSAC per cluster, the cluster with most inliers wins
 };
@@ -20,7 +20,9 @@ enum class Matcher {
 inline constexpr std::array<std::string_view, 3> kMatcherNames = {"cluster-wise", "global-ratio",
                                                                   "cluster-exhaustive"};
 
-inline std::string_view MatcherName(Matcher matcher) { return kMatcherNames[static_cast<size_t>(matcher)]; }
+inline std::string_view MatcherName(Matcher matcher) {
+  return kMatcherNames[static_cast<size_t>(matcher)];
+}
 
 inline std::optional<Matcher> ParseMatcher(std::string_view name) {
   for (size_t i = 0; i < kMatcherNames.size(); ++i) {
@@ -42,21 +44,21 @@ struct LocalizerOptions {
   // 384 reaches the recall of the paper's FLANN setting (128 checks of 1-view leaves);
   // docs/kd_forest.md has the measurements.
   uint32_t checks = 384;
-  double ratio = 0.7;               // tau, used by every ratio test
+  double ratio = 0.7;  // tau, used by every ratio test
   // N_F: forward matching stops once this many (query feature, view) matches have passed the
   // k-ratio *and* the cluster-wise ratio test (docs/algorithm.md explains this reading).
   uint32_t forward_matches = 200;
   // Back-matching (Algorithm 3).
-  uint32_t back_matches = 200;      // N_B: stop once this many back-matches are found
-  uint32_t max_back_images = 20;    // ... or this many clusters were back-matched
+  uint32_t back_matches = 200;        // N_B: stop once this many back-matches are found
+  uint32_t max_back_images = 20;      // ... or this many clusters were back-matched
   uint32_t min_matches_to_vote = 12;  // a back-matched cluster votes for co-visible ones
-  uint32_t query_tree_checks = 64;  // leaf checks in the per-query kd-forest
+  uint32_t query_tree_checks = 64;    // leaf checks in the per-query kd-forest
   // Robust pose: inlier threshold, minimum inliers, RANSAC's limits, refinement. Its RANSAC
   // seed is not used: the localizer seeds RANSAC with `seed` below.
   AbsolutePoseOptions pose;
   // Output.
-  uint32_t ranked_images = 10;      // model images listed for location recognition
-  uint64_t seed = 0;                // query feature order, the query's kd-forest, RANSAC
+  uint32_t ranked_images = 10;  // model images listed for location recognition
+  uint64_t seed = 0;            // query feature order, the query's kd-forest, RANSAC
 };
 
 }  // namespace cwloc

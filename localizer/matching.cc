@@ -17,8 +17,9 @@ ClusterMembers::ClusterMembers(const Index& index) {
   for (const IndexImage& image : index.images()) {
     // Cluster ids are dense and fewer than the images; anything else is a corrupt file.
     if (image.cluster >= index.images().size()) {
-      throw InputError(index.file().path().string() + ": image " + std::to_string(image.image_id) + " has cluster " +
-                       std::to_string(image.cluster) + ", beyond the " + std::to_string(index.images().size()) +
+      throw InputError(index.file().path().string() + ": image " + std::to_string(image.image_id) +
+                       " has cluster " + std::to_string(image.cluster) + ", beyond the " +
+                       std::to_string(index.images().size()) +
                        " images; the file is corrupt (run cwloc-index verify)");
     }
     num_clusters = std::max(num_clusters, image.cluster + 1);
@@ -28,7 +29,8 @@ ClusterMembers::ClusterMembers(const Index& index) {
   for (uint32_t c = 0; c < num_clusters; ++c) offsets[c + 1] += offsets[c];
   images.resize(index.images().size());
   std::vector<uint32_t> cursor(offsets.begin(), offsets.end() - 1);
-  for (uint32_t i = 0; i < index.images().size(); ++i) images[cursor[index.images()[i].cluster]++] = i;
+  for (uint32_t i = 0; i < index.images().size(); ++i)
+    images[cursor[index.images()[i].cluster]++] = i;
 }
 
 }  // namespace cwloc

@@ -30,8 +30,8 @@ struct Query {
   // Where the query was read from (a feature file, a database image), for error messages.
   std::string source;
   QueryCamera camera;
-  std::vector<float> keypoints;     // x0, y0, x1, y1, ...
-  std::vector<uint8_t> descriptors; // N x 128
+  std::vector<float> keypoints;      // x0, y0, x1, y1, ...
+  std::vector<uint8_t> descriptors;  // N x 128
 
   uint32_t NumFeatures() const { return static_cast<uint32_t>(keypoints.size() / 2); }
   const uint8_t* Descriptor(uint32_t i) const { return descriptors.data() + size_t{i} * 128; }

@@ -8,7 +8,8 @@
 
 namespace cwloc {
 
-std::vector<FeatureMatch> UniqueCorrespondences(const Index& index, std::vector<FeatureMatch> matches) {
+std::vector<FeatureMatch> UniqueCorrespondences(const Index& index,
+                                                std::vector<FeatureMatch> matches) {
   std::sort(matches.begin(), matches.end(), [](const FeatureMatch& a, const FeatureMatch& b) {
     // A total order: with ties left to std::sort, the kept view could differ between platforms.
     if (a.feature != b.feature) return a.feature < b.feature;
@@ -17,14 +18,16 @@ std::vector<FeatureMatch> UniqueCorrespondences(const Index& index, std::vector<
   std::vector<FeatureMatch> unique;
   for (const FeatureMatch& match : matches) {
     // Views come from range-checked searches; their point is checked here, where it is read.
-    if (match.view >= index.num_views() || index.view_points()[match.view] >= index.points().size()) continue;
+    if (match.view >= index.num_views() || index.view_points()[match.view] >= index.points().size())
+      continue;
     if (!unique.empty() && unique.back().feature == match.feature) continue;
     unique.push_back(match);
   }
   return unique;
 }
 
-QueryPose EstimateQueryPose(const Index& index, const Query& query, std::span<const FeatureMatch> correspondences,
+QueryPose EstimateQueryPose(const Index& index, const Query& query,
+                            std::span<const FeatureMatch> correspondences,
                             const LocalizerOptions& options, bool refine) {
   std::vector<Eigen::Vector2d> points2D;
   std::vector<Eigen::Vector3d> points3D;
@@ -33,7 +36,8 @@ QueryPose EstimateQueryPose(const Index& index, const Query& query, std::span<co
   const QueryCamera& camera = query.camera;
   const std::array<double, 2> center = camera.ImageCenter();
   for (const FeatureMatch& match : correspondences) {
-    const std::array<double, 2> pixel = {query.keypoints[2 * match.feature], query.keypoints[2 * match.feature + 1]};
+    const std::array<double, 2> pixel = {query.keypoints[2 * match.feature],
+                                         query.keypoints[2 * match.feature + 1]};
     Eigen::Vector2d point2D;
     if (camera.focal_known) {
       std::array<double, 2> normalized;
@@ -53,8 +57,8 @@ QueryPose EstimateQueryPose(const Index& index, const Query& query, std::span<co
   QueryPose result;
   result.num_used = static_cast<uint32_t>(points2D.size());
   if (camera.focal_known) {
-    result.pose =
-        EstimateAbsolutePose(points2D, points3D, MeanFocalLength(camera.model_id, camera.params), pose_options);
+    result.pose = EstimateAbsolutePose(
+        points2D, points3D, MeanFocalLength(camera.model_id, camera.params), pose_options);
   } else {
     pose_options.image_diagonal_px = std::hypot(double(camera.width), double(camera.height));
     result.pose = EstimateAbsolutePoseUnknownFocal(points2D, points3D, pose_options);

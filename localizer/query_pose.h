@@ -15,7 +15,8 @@ namespace cwloc {
 // One 2D-3D pair per query feature: the match with the smallest descriptor distance, the lower
 // view on a tie (a feature matched to several 3D points would count twice in RANSAC's inlier
 // tally otherwise). Matches whose view or point is out of range (a corrupt index) are dropped.
-std::vector<FeatureMatch> UniqueCorrespondences(const Index& index, std::vector<FeatureMatch> matches);
+std::vector<FeatureMatch> UniqueCorrespondences(const Index& index,
+                                                std::vector<FeatureMatch> matches);
 
 struct QueryPose {
   AbsolutePoseResult pose;
@@ -25,7 +26,8 @@ struct QueryPose {
 // The pose stage: LO-RANSAC with the minimal solver the camera calls for (P3P with a known
 // focal length, P4Pf without, the principal point at QueryCamera::ImageCenter), then, with
 // `refine`, the Ceres refinement. RANSAC is seeded with options.seed.
-QueryPose EstimateQueryPose(const Index& index, const Query& query, std::span<const FeatureMatch> correspondences,
+QueryPose EstimateQueryPose(const Index& index, const Query& query,
+                            std::span<const FeatureMatch> correspondences,
                             const LocalizerOptions& options, bool refine);
 
 }  // namespace cwloc

@@ -1,14 +1,15 @@
 #include "tests/test_util.h"
 
-#include <array>
-#include <atomic>
-#include <vector>
-#include <csignal>
-#include <cstdio>
-#include <cstdlib>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
+
+#include <array>
+#include <atomic>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <vector>
 
 namespace cwloc::test {
 
@@ -28,7 +29,8 @@ std::optional<std::filesystem::path> SharedDataDir(const std::string& name) {
   roots.push_back(SourceDir() / ".." / "shared" / "data");
   for (const auto& root : roots) {
     std::error_code ec;
-    if (std::filesystem::is_directory(root / name, ec)) return std::filesystem::canonical(root / name);
+    if (std::filesystem::is_directory(root / name, ec))
+      return std::filesystem::canonical(root / name);
   }
   return std::nullopt;
 }
@@ -57,7 +59,8 @@ int RunCommand(const std::string& command, std::string* output) {
   if (!pipe) return -1;
   std::array<char, 4096> buffer;
   size_t n;
-  while ((n = std::fread(buffer.data(), 1, buffer.size(), pipe)) > 0) output->append(buffer.data(), n);
+  while ((n = std::fread(buffer.data(), 1, buffer.size(), pipe)) > 0)
+    output->append(buffer.data(), n);
   const int status = ::pclose(pipe);
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }

@@ -55,8 +55,10 @@ class FileSizeLimit {
 }  // namespace cwloc::test
 
 // Skips the current test with a message CTest shows, when shared data is absent.
-#define CWLOC_REQUIRE_SHARED_DATA(var, name)                                                   \
-  const auto var##_opt = ::cwloc::test::SharedDataDir(name);                                   \
-  if (!var##_opt) GTEST_SKIP() << "shared data '" << name << "' not found next to the source " \
-                                  "tree (../shared/data); skipping";                           \
+#define CWLOC_REQUIRE_SHARED_DATA(var, name)                 \
+  const auto var##_opt = ::cwloc::test::SharedDataDir(name); \
+  if (!var##_opt)                                            \
+    GTEST_SKIP() << "shared data '" << name                  \
+                 << "' not found next to the source "        \
+                    "tree (../shared/data); skipping";       \
   const std::filesystem::path var = *var##_opt

@@ -23,7 +23,8 @@ inline int ResolveThreads(int requested) {
 // which thread ran it. The first exception is rethrown once all threads have stopped.
 template <typename Body>
 void ParallelFor(size_t n, int threads, Body&& body) {
-  const int workers = static_cast<int>(std::min<size_t>(size_t(ResolveThreads(threads)), std::max<size_t>(n, 1)));
+  const int workers =
+      static_cast<int>(std::min<size_t>(size_t(ResolveThreads(threads)), std::max<size_t>(n, 1)));
   std::atomic<size_t> next{0};
   std::exception_ptr error;
   std::mutex error_mutex;

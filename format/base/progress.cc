@@ -7,7 +7,9 @@
 
 namespace cwloc {
 
-bool Progress::Enabled() { return ::isatty(STDERR_FILENO) == 1 && std::getenv("CWLOC_NO_PROGRESS") == nullptr; }
+bool Progress::Enabled() {
+  return ::isatty(STDERR_FILENO) == 1 && std::getenv("CWLOC_NO_PROGRESS") == nullptr;
+}
 
 Progress::Progress(std::string label, uint64_t total)
     : label_(std::move(label)), total_(total), enabled_(Enabled()) {}

@@ -486,9 +486,8 @@ std::optional<DatabaseImage> DatabaseReader::FindImage(const std::string& name) 
   return ReadImageRow(stmt, file);
 }
 
-bool DatabaseReader::ReadMatrixRow(sqlite3_stmt* stmt, image_t image_id,
-                                   const MatrixTable& table, bool sizes_only,
-                                   MatrixRow* row) const {
+bool DatabaseReader::ReadMatrixRow(sqlite3_stmt* stmt, image_t image_id, const MatrixTable& table,
+                                   bool sizes_only, MatrixRow* row) const {
   const std::string file = path_.string();
   sqlite3_bind_int64(stmt, 1, image_id);
   if (CheckSqlite<InputError>(db_, sqlite3_step(stmt), file) != SQLITE_ROW) return false;

@@ -355,8 +355,10 @@ Reconstruction ReadModel(const fs::path& dir, ModelFormat format) {
   const bool has_rigs = fs::exists(files.rigs, ec);
   const bool has_frames = fs::exists(files.frames, ec);
   if (has_rigs != has_frames) {
-    const std::string rigs = files.rigs.filename().string(), frames = files.frames.filename().string();
-    throw InputError(dir.string() + ": has " + (has_rigs ? rigs + " but no " + frames : frames + " but no " + rigs) +
+    const std::string rigs = files.rigs.filename().string(),
+                      frames = files.frames.filename().string();
+    throw InputError(dir.string() + ": has " +
+                     (has_rigs ? rigs + " but no " + frames : frames + " but no " + rigs) +
                      " (a COLMAP >= 3.12 model needs both)");
   }
   files.has_rigs = has_rigs;
@@ -372,7 +374,8 @@ Reconstruction ReadModel(const fs::path& dir, ModelFormat format) {
   return rec;
 }
 
-void WriteModel(const Reconstruction& rec, const fs::path& dir, ModelFormat format, ModelLayout layout) {
+void WriteModel(const Reconstruction& rec, const fs::path& dir, ModelFormat format,
+                ModelLayout layout) {
   const ModelFileCodec& codec = CodecOf(format);
   const ModelFiles files = FilesOf(dir, format);
   if (layout == ModelLayout::kRigs) {

@@ -486,8 +486,9 @@ Reconstruction ReadReconstructionBinary(const fs::path& dir) {
 namespace detail {
 
 const ModelFileCodec& BinaryCodec() {
-  static const ModelFileCodec codec{ReadCameras,  ReadRigs,    ReadFrames,     ReadImages, ReadPoints3D,
-                                    WriteCameras, WriteImages, WritePoints3D, WriteRigs,  WriteFrames};
+  static const ModelFileCodec codec{ReadCameras,  ReadRigs,     ReadFrames,  ReadImages,
+                                    ReadPoints3D, WriteCameras, WriteImages, WritePoints3D,
+                                    WriteRigs,    WriteFrames};
   return codec;
 }
 

@@ -513,8 +513,9 @@ Reconstruction ReadReconstructionText(const fs::path& dir) {
 namespace detail {
 
 const ModelFileCodec& TextCodec() {
-  static const ModelFileCodec codec{ReadCameras,  ReadRigs,    ReadFrames,     ReadImages, ReadPoints3D,
-                                    WriteCameras, WriteImages, WritePoints3D, WriteRigs,  WriteFrames};
+  static const ModelFileCodec codec{ReadCameras,  ReadRigs,     ReadFrames,  ReadImages,
+                                    ReadPoints3D, WriteCameras, WriteImages, WritePoints3D,
+                                    WriteRigs,    WriteFrames};
   return codec;
 }
 

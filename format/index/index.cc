@@ -25,7 +25,8 @@ Index Index::Open(const std::filesystem::path& path) {
   index.points_ = file.Section<IndexPoint>(section::kPoints);
   index.tracks_ = file.Section<uint32_t>(section::kTracks);
   const auto rows = file.Section<DescriptorRow>(section::kDescriptors);
-  index.descriptors_ = {reinterpret_cast<const uint8_t*>(rows.data()), rows.size() * kDescriptorBytes};
+  index.descriptors_ = {reinterpret_cast<const uint8_t*>(rows.data()),
+                        rows.size() * kDescriptorBytes};
   index.view_points_ = file.Section<uint32_t>(section::kViewPoint);
   if (file.FindSection(section::kViewKeypoints) != nullptr) {
     index.view_keypoints_ = file.Section<ViewKeypoint>(section::kViewKeypoints);
@@ -34,7 +35,8 @@ Index Index::Open(const std::filesystem::path& path) {
   index.covisibility_offsets_ = file.Section<uint32_t>(section::kCovisOffsets);
   index.covisibility_edges_ = file.Section<CovisibilityEdge>(section::kCovisEdges);
   file.Section<char>(section::kManifest);
-  index.kd_forest_ = {file.Section<KdNode>(section::kKdNodes), file.Section<uint32_t>(section::kKdRoots),
+  index.kd_forest_ = {file.Section<KdNode>(section::kKdNodes),
+                      file.Section<uint32_t>(section::kKdRoots),
                       file.Section<uint32_t>(section::kKdLeaves), index.descriptors_};
 
   const size_t views = rows.size();
@@ -49,16 +51,20 @@ Index Index::Open(const std::filesystem::path& path) {
   require_views("VNND", index.view_neighbor_distances_.size());
   require_views("TRKS", index.tracks_.size());
   if (index.covisibility_offsets_.size() != index.images_.size() + 1) {
-    throw InputError(name + ": section 'CVOF' has " + std::to_string(index.covisibility_offsets_.size()) +
-                     " elements, expected one per image plus one (" + std::to_string(index.images_.size() + 1) +
-                     ")");
+    throw InputError(name + ": section 'CVOF' has " +
+                     std::to_string(index.covisibility_offsets_.size()) +
+                     " elements, expected one per image plus one (" +
+                     std::to_string(index.images_.size() + 1) + ")");
   }
-  if (index.kd_forest_.roots.empty() || index.kd_forest_.leaves.size() != index.kd_forest_.roots.size() * views) {
-    throw InputError(name + ": sections 'KDRT'/'KDLF' hold " + std::to_string(index.kd_forest_.roots.size()) +
-                     " trees and " + std::to_string(index.kd_forest_.leaves.size()) +
+  if (index.kd_forest_.roots.empty() ||
+      index.kd_forest_.leaves.size() != index.kd_forest_.roots.size() * views) {
+    throw InputError(name + ": sections 'KDRT'/'KDLF' hold " +
+                     std::to_string(index.kd_forest_.roots.size()) + " trees and " +
+                     std::to_string(index.kd_forest_.leaves.size()) +
                      " leaf slots, expected at least one tree and one slot per view per tree");
   }
-  if (views > UINT32_MAX || index.points_.size() > UINT32_MAX || index.images_.size() > UINT32_MAX) {
+  if (views > UINT32_MAX || index.points_.size() > UINT32_MAX ||
+      index.images_.size() > UINT32_MAX) {
     throw InputError(name + ": more than 2^32 views, points or images");
   }
   return index;
@@ -70,13 +76,15 @@ std::string_view Index::manifest_json() const {
 }
 
 std::string_view Index::ImageName(const IndexImage& image) const {
-  if (image.name_offset > strings_.size() || image.name_size > strings_.size() - image.name_offset) return {};
+  if (image.name_offset > strings_.size() || image.name_size > strings_.size() - image.name_offset)
+    return {};
   return {strings_.data() + image.name_offset, image.name_size};
 }
 
 uint32_t Index::ImageOfView(uint32_t view) const {
-  const auto it = std::upper_bound(images_.begin(), images_.end(), view,
-                                   [](uint32_t v, const IndexImage& image) { return v < image.first_view; });
+  const auto it =
+      std::upper_bound(images_.begin(), images_.end(), view,
+                       [](uint32_t v, const IndexImage& image) { return v < image.first_view; });
   if (it == images_.begin()) return UINT32_MAX;
   const IndexImage& image = *(it - 1);
   if (view - image.first_view >= image.num_views) return UINT32_MAX;
@@ -86,7 +94,8 @@ uint32_t Index::ImageOfView(uint32_t view) const {
 std::span<const uint32_t> Index::TrackOf(uint32_t point_index) const {
   if (point_index >= points_.size()) return {};
   const IndexPoint& point = points_[point_index];
-  if (point.first_track > tracks_.size() || point.track_length > tracks_.size() - point.first_track) return {};
+  if (point.first_track > tracks_.size() || point.track_length > tracks_.size() - point.first_track)
+    return {};
   return tracks_.subspan(point.first_track, point.track_length);
 }
 
@@ -106,61 +115,81 @@ void Index::Validate() const {
   for (size_t i = 0; i < cameras_.size(); ++i) {
     const IndexCamera& camera = cameras_[i];
     const auto model = FindCameraModel(camera.model_id);
-    if (!model) fail("CAMS[" + std::to_string(i) + "]: unknown camera model id " + std::to_string(camera.model_id));
+    if (!model)
+      fail("CAMS[" + std::to_string(i) + "]: unknown camera model id " +
+           std::to_string(camera.model_id));
     if (camera.num_params != static_cast<uint32_t>(model->num_params)) {
       fail("CAMS[" + std::to_string(i) + "]: " + std::string(model->name) + " has " +
-           std::to_string(model->num_params) + " parameters, the file says " + std::to_string(camera.num_params));
+           std::to_string(model->num_params) + " parameters, the file says " +
+           std::to_string(camera.num_params));
     }
   }
   uint64_t next_view = 0;
   for (size_t i = 0; i < images_.size(); ++i) {
     const IndexImage& image = images_[i];
-    const std::string what = "IMGS[" + std::to_string(i) + "] (image_id " + std::to_string(image.image_id) + ")";
-    if (image.camera_index >= cameras_.size()) fail(what + ": camera index " + std::to_string(image.camera_index) + " out of range");
-    if (image.name_offset > strings_.size() || image.name_size > strings_.size() - image.name_offset) {
+    const std::string what =
+        "IMGS[" + std::to_string(i) + "] (image_id " + std::to_string(image.image_id) + ")";
+    if (image.camera_index >= cameras_.size())
+      fail(what + ": camera index " + std::to_string(image.camera_index) + " out of range");
+    if (image.name_offset > strings_.size() ||
+        image.name_size > strings_.size() - image.name_offset) {
       fail(what + ": name range outside the string pool");
     }
     if (image.first_view != next_view) {
-      fail(what + ": views start at " + std::to_string(image.first_view) + ", expected " + std::to_string(next_view));
+      fail(what + ": views start at " + std::to_string(image.first_view) + ", expected " +
+           std::to_string(next_view));
     }
     next_view += image.num_views;
-    if (image.cluster >= images_.size()) fail(what + ": cluster " + std::to_string(image.cluster) + " out of range");
+    if (image.cluster >= images_.size())
+      fail(what + ": cluster " + std::to_string(image.cluster) + " out of range");
   }
   if (next_view != views) {
-    fail("IMGS: view ranges cover " + std::to_string(next_view) + " views, DESC has " + std::to_string(views));
+    fail("IMGS: view ranges cover " + std::to_string(next_view) + " views, DESC has " +
+         std::to_string(views));
   }
   uint64_t next_track = 0;
   for (size_t p = 0; p < points_.size(); ++p) {
     const IndexPoint& point = points_[p];
     if (point.first_track != next_track || point.track_length == 0) {
-      fail("PNTS[" + std::to_string(p) + "]: track starts at " + std::to_string(point.first_track) + " with length " +
-           std::to_string(point.track_length) + ", expected to start at " + std::to_string(next_track));
+      fail("PNTS[" + std::to_string(p) + "]: track starts at " + std::to_string(point.first_track) +
+           " with length " + std::to_string(point.track_length) + ", expected to start at " +
+           std::to_string(next_track));
     }
     next_track += point.track_length;
     if (next_track > tracks_.size()) fail("PNTS[" + std::to_string(p) + "]: track ends past TRKS");
     for (uint32_t t = point.first_track; t < next_track; ++t) {
       const uint32_t view = tracks_[t];
       if (view >= views || view_points_[view] != p) {
-        fail("TRKS[" + std::to_string(t) + "]: view " + std::to_string(view) + " is not a view of point " + std::to_string(p));
+        fail("TRKS[" + std::to_string(t) + "]: view " + std::to_string(view) +
+             " is not a view of point " + std::to_string(p));
       }
     }
   }
-  if (next_track != tracks_.size()) fail("TRKS: " + std::to_string(tracks_.size()) + " entries, tracks use " + std::to_string(next_track));
+  if (next_track != tracks_.size())
+    fail("TRKS: " + std::to_string(tracks_.size()) + " entries, tracks use " +
+         std::to_string(next_track));
   for (size_t v = 0; v < views; ++v) {
-    if (view_points_[v] >= points_.size()) fail("V2PT[" + std::to_string(v) + "]: point " + std::to_string(view_points_[v]) + " out of range");
+    if (view_points_[v] >= points_.size())
+      fail("V2PT[" + std::to_string(v) + "]: point " + std::to_string(view_points_[v]) +
+           " out of range");
     const float d = view_neighbor_distances_[v];
-    if (std::isnan(d) || d < 0) fail("VNND[" + std::to_string(v) + "]: distance " + std::to_string(d) + " is not >= 0");
+    if (std::isnan(d) || d < 0)
+      fail("VNND[" + std::to_string(v) + "]: distance " + std::to_string(d) + " is not >= 0");
   }
   std::string forest_error;
   if (!ValidateKdForest(kd_forest_, &forest_error)) fail("kd-forest: " + forest_error);
-  if (covisibility_offsets_.front() != 0 || covisibility_offsets_.back() != covisibility_edges_.size()) {
-    fail("CVOF: offsets must run from 0 to the " + std::to_string(covisibility_edges_.size()) + " edges of CVED");
+  if (covisibility_offsets_.front() != 0 ||
+      covisibility_offsets_.back() != covisibility_edges_.size()) {
+    fail("CVOF: offsets must run from 0 to the " + std::to_string(covisibility_edges_.size()) +
+         " edges of CVED");
   }
   for (size_t i = 0; i + 1 < covisibility_offsets_.size(); ++i) {
-    if (covisibility_offsets_[i] > covisibility_offsets_[i + 1]) fail("CVOF[" + std::to_string(i) + "]: offsets decrease");
+    if (covisibility_offsets_[i] > covisibility_offsets_[i + 1])
+      fail("CVOF[" + std::to_string(i) + "]: offsets decrease");
     for (const CovisibilityEdge& edge : CovisibleImages(static_cast<uint32_t>(i))) {
       if (edge.image_index >= images_.size() || edge.image_index == i) {
-        fail("CVED: image " + std::to_string(i) + " has an edge to image index " + std::to_string(edge.image_index));
+        fail("CVED: image " + std::to_string(i) + " has an edge to image index " +
+             std::to_string(edge.image_index));
       }
     }
   }

@@ -40,7 +40,9 @@ class Index {
   const KdForestView& kd_forest() const { return kd_forest_; }
 
   size_t num_views() const { return view_points_.size(); }
-  const uint8_t* descriptor(uint32_t view) const { return descriptors_.data() + size_t{view} * kDescriptorBytes; }
+  const uint8_t* descriptor(uint32_t view) const {
+    return descriptors_.data() + size_t{view} * kDescriptorBytes;
+  }
 
   // Image name from the string pool; empty if the stored range is out of bounds.
   std::string_view ImageName(const IndexImage& image) const;

@@ -21,7 +21,8 @@ std::string Describe(const SectionEntry& entry, size_t index) {
 
 // A required section with a tag this reader does not know means a newer writer.
 bool IsKnownTag(uint32_t tag) {
-  return std::find(std::begin(section::kAll), std::end(section::kAll), tag) != std::end(section::kAll);
+  return std::find(std::begin(section::kAll), std::end(section::kAll), tag) !=
+         std::end(section::kAll);
 }
 
 }  // namespace
@@ -45,7 +46,7 @@ IndexFile IndexFile::Open(const std::filesystem::path& path) {
   const std::string name = path.string();
   const int fd = ::open(name.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) throw InputError(name + ": cannot open: " + std::strerror(errno));
-  struct stat st{};
+  struct stat st {};
   if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
     ::close(fd);
     throw InputError(name + ": not a regular file");
@@ -76,44 +77,52 @@ IndexFile IndexFile::Open(const std::filesystem::path& path) {
   }
   if (header.format_major != kFormatMajor) {
     throw InputError(name + ": index format " + std::to_string(header.format_major) + "." +
-                     std::to_string(header.format_minor) + " is not readable by this cwloc, which reads format " +
-                     std::to_string(kFormatMajor) + ".x (up to " + std::to_string(kFormatMajor) + "." +
-                     std::to_string(kFormatMinor) + "); rebuild the index with this cwloc-index" +
+                     std::to_string(header.format_minor) +
+                     " is not readable by this cwloc, which reads format " +
+                     std::to_string(kFormatMajor) + ".x (up to " + std::to_string(kFormatMajor) +
+                     "." + std::to_string(kFormatMinor) +
+                     "); rebuild the index with this cwloc-index" +
                      (header.format_major > kFormatMajor ? " or upgrade cwloc" : ""));
   }
-  const uint64_t header_checksum =
-      XxHash64({file.data_, offsetof(FileHeader, header_checksum)});
+  const uint64_t header_checksum = XxHash64({file.data_, offsetof(FileHeader, header_checksum)});
   if (header_checksum != header.header_checksum) {
-    throw InputError(name + ": header checksum mismatch (stored " + HashHex(header.header_checksum) +
-                     ", computed " + HashHex(header_checksum) + "): the file is corrupt");
+    throw InputError(name + ": header checksum mismatch (stored " +
+                     HashHex(header.header_checksum) + ", computed " + HashHex(header_checksum) +
+                     "): the file is corrupt");
   }
   if (header.file_size != file_size) {
-    throw InputError(name + ": truncated or extended: the header says " + std::to_string(header.file_size) +
-                     " bytes, the file has " + std::to_string(file_size));
+    throw InputError(name + ": truncated or extended: the header says " +
+                     std::to_string(header.file_size) + " bytes, the file has " +
+                     std::to_string(file_size));
   }
-  if (header.header_size != sizeof(FileHeader) || header.section_entry_size != sizeof(SectionEntry)) {
-    throw InputError(name + ": header size " + std::to_string(header.header_size) + " / section entry size " +
-                     std::to_string(header.section_entry_size) + " (expected " +
-                     std::to_string(sizeof(FileHeader)) + " / " + std::to_string(sizeof(SectionEntry)) + ")");
+  if (header.header_size != sizeof(FileHeader) ||
+      header.section_entry_size != sizeof(SectionEntry)) {
+    throw InputError(name + ": header size " + std::to_string(header.header_size) +
+                     " / section entry size " + std::to_string(header.section_entry_size) +
+                     " (expected " + std::to_string(sizeof(FileHeader)) + " / " +
+                     std::to_string(sizeof(SectionEntry)) + ")");
   }
   const uint64_t unknown_features = header.required_features & ~kKnownRequiredFeatures;
   if (unknown_features != 0) {
-    throw InputError(name + ": requires features unknown to this cwloc (bits 0x" + HashHex(unknown_features) +
-                     "); upgrade cwloc");
+    throw InputError(name + ": requires features unknown to this cwloc (bits 0x" +
+                     HashHex(unknown_features) + "); upgrade cwloc");
   }
   const uint64_t table_offset = header.section_table_offset;
   const uint64_t table_bytes = uint64_t{header.section_count} * sizeof(SectionEntry);
   if (table_offset % kSectionAlignment != 0 || table_offset < sizeof(FileHeader) ||
       table_offset > file_size || table_bytes > file_size - table_offset) {
     throw InputError(name + ": section table (offset " + std::to_string(table_offset) + ", " +
-                     std::to_string(header.section_count) + " entries) lies outside the file or is misaligned");
+                     std::to_string(header.section_count) +
+                     " entries) lies outside the file or is misaligned");
   }
   const uint64_t table_checksum = XxHash64({file.data_ + table_offset, table_bytes});
   if (table_checksum != header.section_table_checksum) {
-    throw InputError(name + ": section table checksum mismatch (stored " + HashHex(header.section_table_checksum) +
-                     ", computed " + HashHex(table_checksum) + "): the file is corrupt");
+    throw InputError(name + ": section table checksum mismatch (stored " +
+                     HashHex(header.section_table_checksum) + ", computed " +
+                     HashHex(table_checksum) + "): the file is corrupt");
   }
-  file.sections_ = {reinterpret_cast<const SectionEntry*>(file.data_ + table_offset), header.section_count};
+  file.sections_ = {reinterpret_cast<const SectionEntry*>(file.data_ + table_offset),
+                    header.section_count};
 
   // Sections lie after the header, inside the file, aligned, in increasing order, without overlap.
   uint64_t previous_end = sizeof(FileHeader);
@@ -121,18 +130,21 @@ IndexFile IndexFile::Open(const std::filesystem::path& path) {
     const SectionEntry& entry = file.sections_[i];
     const std::string what = name + ": " + Describe(entry, i);
     if (entry.offset % kSectionAlignment != 0) {
-      throw InputError(what + ": offset " + std::to_string(entry.offset) + " is not 64-byte aligned");
+      throw InputError(what + ": offset " + std::to_string(entry.offset) +
+                       " is not 64-byte aligned");
     }
-    if (entry.offset < previous_end || entry.offset > file_size || entry.size > file_size - entry.offset) {
-      throw InputError(what + ": bytes [" + std::to_string(entry.offset) + ", +" + std::to_string(entry.size) +
+    if (entry.offset < previous_end || entry.offset > file_size ||
+        entry.size > file_size - entry.offset) {
+      throw InputError(what + ": bytes [" + std::to_string(entry.offset) + ", +" +
+                       std::to_string(entry.size) +
                        ") overlap another section or lie outside the " + std::to_string(file_size) +
                        "-byte file");
     }
     if (entry.element_size == 0 || entry.count > entry.size / entry.element_size ||
         entry.count * entry.element_size != entry.size) {
       throw InputError(what + ": " + std::to_string(entry.size) + " bytes do not hold " +
-                       std::to_string(entry.count) + " elements of " + std::to_string(entry.element_size) +
-                       " bytes");
+                       std::to_string(entry.count) + " elements of " +
+                       std::to_string(entry.element_size) + " bytes");
     }
     if ((entry.flags & kSectionRequired) && !IsKnownTag(entry.tag)) {
       throw InputError(what + ": a required section unknown to this cwloc; upgrade cwloc");
@@ -188,7 +200,8 @@ void IndexFile::VerifyChecksums() const {
     const uint64_t checksum = XxHash64({data_ + entry.offset, static_cast<size_t>(entry.size)});
     if (checksum != entry.checksum) {
       throw InputError(path_.string() + ": " + Describe(entry, i) + ": checksum mismatch (stored " +
-                       HashHex(entry.checksum) + ", computed " + HashHex(checksum) + "): the section is corrupt");
+                       HashHex(entry.checksum) + ", computed " + HashHex(checksum) +
+                       "): the section is corrupt");
     }
   }
 }

@@ -66,8 +66,12 @@ struct SectionData {
 void WriteIndexFile(const std::filesystem::path& path, std::span<const SectionData> sections);
 
 template <typename T>
-SectionData MakeSection(uint32_t tag, std::span<const T> elements, uint32_t flags = kSectionRequired) {
-  return {tag, flags, static_cast<uint32_t>(sizeof(T)), elements.size(),
+SectionData MakeSection(uint32_t tag, std::span<const T> elements,
+                        uint32_t flags = kSectionRequired) {
+  return {tag,
+          flags,
+          static_cast<uint32_t>(sizeof(T)),
+          elements.size(),
           {reinterpret_cast<const uint8_t*>(elements.data()), elements.size_bytes()}};
 }
 

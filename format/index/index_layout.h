@@ -11,8 +11,9 @@
 
 namespace cwloc {
 
-static_assert(std::endian::native == std::endian::little,
-              "cwloc index files are little-endian and read in place; big-endian hosts are not supported");
+static_assert(
+    std::endian::native == std::endian::little,
+    "cwloc index files are little-endian and read in place; big-endian hosts are not supported");
 
 inline constexpr char kIndexMagic[8] = {'C', 'W', 'L', 'O', 'C', 'I', 'D', 'X'};
 inline constexpr uint32_t kByteOrderMark = 0x01020304;
@@ -24,16 +25,16 @@ inline constexpr uint64_t kSectionAlignment = 64;
 inline constexpr uint64_t kKnownRequiredFeatures = 0;
 
 struct FileHeader {
-  char magic[8];                    // "CWLOCIDX"
-  uint32_t byte_order_mark;         // kByteOrderMark
-  uint16_t format_major;            // a reader refuses a major it does not know
-  uint16_t format_minor;            // newer minors only add optional sections/fields
-  uint32_t header_size;             // sizeof(FileHeader)
-  uint32_t section_entry_size;      // sizeof(SectionEntry)
-  uint64_t required_features;       // bits a reader must understand
-  uint64_t optional_features;       // bits a reader may ignore
-  uint64_t file_size;               // total bytes; a shorter file is truncated
-  uint64_t section_table_offset;    // 64-byte aligned
+  char magic[8];                  // "CWLOCIDX"
+  uint32_t byte_order_mark;       // kByteOrderMark
+  uint16_t format_major;          // a reader refuses a major it does not know
+  uint16_t format_minor;          // newer minors only add optional sections/fields
+  uint32_t header_size;           // sizeof(FileHeader)
+  uint32_t section_entry_size;    // sizeof(SectionEntry)
+  uint64_t required_features;     // bits a reader must understand
+  uint64_t optional_features;     // bits a reader may ignore
+  uint64_t file_size;             // total bytes; a shorter file is truncated
+  uint64_t section_table_offset;  // 64-byte aligned
   uint32_t section_count;
   uint32_t reserved0;               // zero
   uint64_t section_table_checksum;  // XXH64 of the section table bytes
@@ -44,7 +45,8 @@ static_assert(sizeof(FileHeader) == 128);
 static_assert(offsetof(FileHeader, section_table_offset) == 48);
 static_assert(offsetof(FileHeader, header_checksum) == 120);
 
-inline constexpr uint32_t kSectionRequired = 1u << 0;  // a reader that does not know the tag refuses
+inline constexpr uint32_t kSectionRequired = 1u
+                                             << 0;  // a reader that does not know the tag refuses
 
 struct SectionEntry {
   uint32_t tag;           // four ASCII characters, e.g. "DESC"
@@ -66,25 +68,25 @@ constexpr uint32_t SectionTag(const char (&name)[5]) {
 
 // The sections of format 1.x (docs/format.md describes each one's layout).
 namespace section {
-inline constexpr uint32_t kManifest = SectionTag("MANI");         // JSON, schemas/index-manifest
+inline constexpr uint32_t kManifest = SectionTag("MANI");  // JSON, schemas/index-manifest
 inline constexpr uint32_t kCameras = SectionTag("CAMS");
 inline constexpr uint32_t kImages = SectionTag("IMGS");
-inline constexpr uint32_t kStrings = SectionTag("STRS");          // image names
+inline constexpr uint32_t kStrings = SectionTag("STRS");  // image names
 inline constexpr uint32_t kPoints = SectionTag("PNTS");
-inline constexpr uint32_t kTracks = SectionTag("TRKS");           // point -> views
-inline constexpr uint32_t kDescriptors = SectionTag("DESC");      // view descriptors, N x 128
-inline constexpr uint32_t kViewPoint = SectionTag("V2PT");        // view -> point
-inline constexpr uint32_t kViewKeypoints = SectionTag("VKXY");    // view keypoint x, y
-inline constexpr uint32_t kViewNeighbor = SectionTag("VNND");     // v_NN distance in its cluster
+inline constexpr uint32_t kTracks = SectionTag("TRKS");         // point -> views
+inline constexpr uint32_t kDescriptors = SectionTag("DESC");    // view descriptors, N x 128
+inline constexpr uint32_t kViewPoint = SectionTag("V2PT");      // view -> point
+inline constexpr uint32_t kViewKeypoints = SectionTag("VKXY");  // view keypoint x, y
+inline constexpr uint32_t kViewNeighbor = SectionTag("VNND");   // v_NN distance in its cluster
 inline constexpr uint32_t kKdNodes = SectionTag("KDND");
 inline constexpr uint32_t kKdLeaves = SectionTag("KDLF");
 inline constexpr uint32_t kKdRoots = SectionTag("KDRT");
-inline constexpr uint32_t kCovisOffsets = SectionTag("CVOF");     // CSR row offsets per image
-inline constexpr uint32_t kCovisEdges = SectionTag("CVED");       // (image, shared points)
-inline constexpr uint32_t kAll[] = {kManifest, kCameras, kImages, kStrings, kPoints, kTracks,
-                                    kDescriptors, kViewPoint, kViewKeypoints, kViewNeighbor,
-                                    kKdNodes, kKdLeaves, kKdRoots, kCovisOffsets,
-                                    kCovisEdges};
+inline constexpr uint32_t kCovisOffsets = SectionTag("CVOF");  // CSR row offsets per image
+inline constexpr uint32_t kCovisEdges = SectionTag("CVED");    // (image, shared points)
+inline constexpr uint32_t kAll[] = {kManifest,      kCameras,      kImages,      kStrings,
+                                    kPoints,        kTracks,       kDescriptors, kViewPoint,
+                                    kViewKeypoints, kViewNeighbor, kKdNodes,     kKdLeaves,
+                                    kKdRoots,       kCovisOffsets, kCovisEdges};
 }  // namespace section
 
 // "DESC" for a tag, with non-printable bytes escaped, for messages.

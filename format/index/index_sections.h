@@ -15,12 +15,12 @@ inline constexpr uint32_t kNoNeighborView = 0xFFFFFFFFu;
 
 // CAMS: one per camera of the model.
 struct IndexCamera {
-  uint32_t camera_id;       // COLMAP's id
-  int32_t model_id;         // COLMAP's camera model id
+  uint32_t camera_id;  // COLMAP's id
+  int32_t model_id;    // COLMAP's camera model id
   uint32_t width;
   uint32_t height;
-  uint32_t num_params;      // the model's parameter count, <= kMaxCameraParams
-  uint32_t reserved;        // zero
+  uint32_t num_params;              // the model's parameter count, <= kMaxCameraParams
+  uint32_t reserved;                // zero
   double params[kMaxCameraParams];  // COLMAP's order; unused entries zero
 };
 static_assert(sizeof(IndexCamera) == 152 && std::is_trivially_copyable_v<IndexCamera>);
@@ -28,16 +28,16 @@ static_assert(sizeof(IndexCamera) == 152 && std::is_trivially_copyable_v<IndexCa
 // IMGS: one per model image, ordered by image_id; its views are DESC rows
 // [first_view, first_view + num_views), so one image's views are contiguous.
 struct IndexImage {
-  uint32_t image_id;        // COLMAP's id
-  uint32_t camera_index;    // row in CAMS
-  uint32_t name_offset;     // bytes into STRS
-  uint32_t name_size;       // bytes, no terminator
-  double cam_from_world_rotation[4];     // quaternion w, x, y, z
+  uint32_t image_id;                  // COLMAP's id
+  uint32_t camera_index;              // row in CAMS
+  uint32_t name_offset;               // bytes into STRS
+  uint32_t name_size;                 // bytes, no terminator
+  double cam_from_world_rotation[4];  // quaternion w, x, y, z
   double cam_from_world_translation[3];
   uint32_t first_view;
   uint32_t num_views;
-  uint32_t cluster;         // cluster id in [0, manifest.clustering.num_clusters)
-  uint32_t reserved;        // zero
+  uint32_t cluster;   // cluster id in [0, manifest.clustering.num_clusters)
+  uint32_t reserved;  // zero
 };
 static_assert(sizeof(IndexImage) == 88 && std::is_trivially_copyable_v<IndexImage>);
 static_assert(offsetof(IndexImage, first_view) == 72);
@@ -61,8 +61,8 @@ static_assert(sizeof(ViewKeypoint) == 8);
 // CVED: an edge of the co-visibility graph; CVOF[i]..CVOF[i+1] are image i's edges,
 // sorted by image index.
 struct CovisibilityEdge {
-  uint32_t image_index;     // row in IMGS
-  uint32_t shared_points;   // 3D points both images see
+  uint32_t image_index;    // row in IMGS
+  uint32_t shared_points;  // 3D points both images see
 };
 static_assert(sizeof(CovisibilityEdge) == 8);
 

@@ -8,7 +8,9 @@
 namespace cwloc {
 namespace {
 
-uint64_t AlignUp(uint64_t value) { return (value + kSectionAlignment - 1) / kSectionAlignment * kSectionAlignment; }
+uint64_t AlignUp(uint64_t value) {
+  return (value + kSectionAlignment - 1) / kSectionAlignment * kSectionAlignment;
+}
 
 }  // namespace
 
@@ -46,8 +48,10 @@ void WriteIndexFile(const std::filesystem::path& path, std::span<const SectionDa
   header.file_size = table_offset + table_bytes;
   header.section_table_offset = table_offset;
   header.section_count = static_cast<uint32_t>(table.size());
-  header.section_table_checksum = XxHash64({reinterpret_cast<const uint8_t*>(table.data()), table_bytes});
-  header.header_checksum = XxHash64({reinterpret_cast<const uint8_t*>(&header), offsetof(FileHeader, header_checksum)});
+  header.section_table_checksum =
+      XxHash64({reinterpret_cast<const uint8_t*>(table.data()), table_bytes});
+  header.header_checksum =
+      XxHash64({reinterpret_cast<const uint8_t*>(&header), offsetof(FileHeader, header_checksum)});
 
   AtomicFile file(path);
   static constexpr uint8_t kZeros[kSectionAlignment] = {};

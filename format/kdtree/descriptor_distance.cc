@@ -195,8 +195,8 @@ const DistanceFunctions* DistanceFunctionsFor(DistanceKernel kernel) {
 
 const DistanceFunctions& BestDistanceFunctions() {
   static const DistanceFunctions* best = [] {
-    for (DistanceKernel k : {DistanceKernel::kAvx512Vnni, DistanceKernel::kAvx512,
-                             DistanceKernel::kAvx2}) {
+    for (DistanceKernel k :
+         {DistanceKernel::kAvx512Vnni, DistanceKernel::kAvx512, DistanceKernel::kAvx2}) {
       if (const DistanceFunctions* f = DistanceFunctionsFor(k)) return f;
     }
     return &kScalarFunctions;

@@ -13,9 +13,9 @@ namespace cwloc {
 inline constexpr size_t kDescriptorDim = 128;
 
 enum class DistanceKernel : uint8_t {
-  kScalar,   // portable C++, any CPU
-  kAvx2,     // x86-64 with AVX2
-  kAvx512,   // x86-64 with AVX-512BW
+  kScalar,      // portable C++, any CPU
+  kAvx2,        // x86-64 with AVX2
+  kAvx512,      // x86-64 with AVX-512BW
   kAvx512Vnni,  // AVX-512BW plus VNNI (vpdpwssd fuses the multiply-add and the sum)
 };
 

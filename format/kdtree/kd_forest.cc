@@ -29,7 +29,8 @@ bool ValidateKdForest(const KdForestView& forest, std::string* error) {
                 " bytes is not a multiple of 128");
   }
   const uint64_t n = forest.NumDescriptors();
-  if (n > kMaxDescriptors) return fail("kd-forest: too many descriptors (" + std::to_string(n) + ")");
+  if (n > kMaxDescriptors)
+    return fail("kd-forest: too many descriptors (" + std::to_string(n) + ")");
   const size_t num_trees = forest.roots.size();
   const size_t num_nodes = forest.nodes.size();
   if (num_trees == 0) {
@@ -43,8 +44,9 @@ bool ValidateKdForest(const KdForestView& forest, std::string* error) {
     return fail("kd-forest: too many nodes (" + std::to_string(num_nodes) + ")");
   }
   if (forest.leaves.size() != num_trees * n) {
-    return fail("kd-forest leaves: " + std::to_string(forest.leaves.size()) + " entries, expected " +
-                std::to_string(num_trees) + " trees x " + std::to_string(n) + " descriptors");
+    return fail("kd-forest leaves: " + std::to_string(forest.leaves.size()) +
+                " entries, expected " + std::to_string(num_trees) + " trees x " +
+                std::to_string(n) + " descriptors");
   }
   if (forest.roots[0] != 0) {
     return fail("kd-forest roots[0] = " + std::to_string(forest.roots[0]) + ", expected 0");
@@ -52,9 +54,10 @@ bool ValidateKdForest(const KdForestView& forest, std::string* error) {
   for (size_t t = 0; t < num_trees; ++t) {
     const uint64_t end = t + 1 < num_trees ? forest.roots[t + 1] : num_nodes;
     if (forest.roots[t] >= end || end > num_nodes) {
-      return fail("kd-forest roots[" + std::to_string(t) + "] = " + std::to_string(forest.roots[t]) +
-                  ": trees must be non-empty, in order and within the " + std::to_string(num_nodes) +
-                  " nodes");
+      return fail("kd-forest roots[" + std::to_string(t) +
+                  "] = " + std::to_string(forest.roots[t]) +
+                  ": trees must be non-empty, in order and within the " +
+                  std::to_string(num_nodes) + " nodes");
     }
   }
 
@@ -84,8 +87,9 @@ bool ValidateKdForest(const KdForestView& forest, std::string* error) {
         }
         if (node.high != 0) return fail(NodeName(t, r.node) + ": leaf with a nonzero high byte");
         if (node.index != next_slot) {
-          return fail(NodeName(t, r.node) + ": leaf bucket starts at " + std::to_string(node.index) +
-                      ", expected " + std::to_string(next_slot) + " (buckets must tile the leaves)");
+          return fail(NodeName(t, r.node) + ": leaf bucket starts at " +
+                      std::to_string(node.index) + ", expected " + std::to_string(next_slot) +
+                      " (buckets must tile the leaves)");
         }
         const uint64_t bucket_end = next_slot + node.low;
         if (bucket_end > (t + 1) * n) {

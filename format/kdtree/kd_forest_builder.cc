@@ -118,8 +118,8 @@ class ForestBuilder {
 
  private:
   // Splits by `dim` at a value threshold with both sides non-empty, or returns false.
-  bool TrySplit(const NodeRows& rows, uint32_t count, uint32_t dim, uint32_t sum,
-                uint32_t samples, Scratch* scratch, Split* split) const;
+  bool TrySplit(const NodeRows& rows, uint32_t count, uint32_t dim, uint32_t sum, uint32_t samples,
+                Scratch* scratch, Split* split) const;
   Split FallbackSplit(const NodeRows& rows, uint32_t count, Scratch* scratch) const;
   static void Partition(const NodeRows& rows, uint32_t count, const uint8_t* column,
                         uint32_t threshold, Scratch* scratch);
@@ -283,9 +283,8 @@ Split ForestBuilder::SplitNode(const NodeRows& rows, uint32_t count, uint64_t se
   return FallbackSplit(rows, count, scratch);
 }
 
-void ForestBuilder::BuildSubtree(uint32_t* ind, uint64_t slot_base, uint32_t begin,
-                                 uint32_t count, uint64_t seed, std::vector<KdNode>* out,
-                                 Scratch* scratch) {
+void ForestBuilder::BuildSubtree(uint32_t* ind, uint64_t slot_base, uint32_t begin, uint32_t count,
+                                 uint64_t seed, std::vector<KdNode>* out, Scratch* scratch) {
   struct Task {
     uint32_t begin, count;
     uint64_t seed;

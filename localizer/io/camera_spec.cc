@@ -21,15 +21,18 @@ uint32_t ParseDimension(std::istringstream& in, const std::string& field, const 
 QueryCamera ParseCameraSpec(const std::string& spec, const std::string& what) {
   std::istringstream in(spec);
   std::string model_name;
-  if (!(in >> model_name)) throw InputError(what + ": empty camera; expected 'MODEL WIDTH HEIGHT PARAMS...'");
+  if (!(in >> model_name))
+    throw InputError(what + ": empty camera; expected 'MODEL WIDTH HEIGHT PARAMS...'");
   const auto model = FindCameraModel(model_name);
   if (!model) {
     std::string known;
-    for (const CameraModelInfo& info : AllCameraModels()) known += (known.empty() ? "" : ", ") + std::string(info.name);
+    for (const CameraModelInfo& info : AllCameraModels())
+      known += (known.empty() ? "" : ", ") + std::string(info.name);
     throw InputError(what + ": unknown camera model '" + model_name + "' (known: " + known + ")");
   }
   if (!model->can_project) {
-    throw InputError(what + ": camera model " + std::string(model->name) + " is not supported for localization");
+    throw InputError(what + ": camera model " + std::string(model->name) +
+                     " is not supported for localization");
   }
   QueryCamera camera;
   camera.model_id = model->id;
@@ -37,13 +40,15 @@ QueryCamera ParseCameraSpec(const std::string& spec, const std::string& what) {
   camera.height = ParseDimension(in, "height", what);
   double value;
   while (in >> value) {
-    if (!std::isfinite(value)) throw InputError(what + ": camera parameters must be finite numbers");
+    if (!std::isfinite(value))
+      throw InputError(what + ": camera parameters must be finite numbers");
     camera.params.push_back(value);
   }
   if (!in.eof()) throw InputError(what + ": camera parameters must be numbers");
   if (camera.params.size() != static_cast<size_t>(model->num_params)) {
-    throw InputError(what + ": " + std::string(model->name) + " takes " + std::to_string(model->num_params) +
-                     " parameters, got " + std::to_string(camera.params.size()));
+    throw InputError(what + ": " + std::string(model->name) + " takes " +
+                     std::to_string(model->num_params) + " parameters, got " +
+                     std::to_string(camera.params.size()));
   }
   if (!(MeanFocalLength(camera.model_id, camera.params) > 0)) {
     throw InputError(what + ": the focal length must be positive");
@@ -69,7 +74,8 @@ QueryCamera ParseImageSize(const std::string& spec, const std::string& what) {
 }
 
 QueryCamera WithUnknownFocal(const QueryCamera& camera) {
-  return ParseImageSize(std::to_string(camera.width) + " " + std::to_string(camera.height), "camera");
+  return ParseImageSize(std::to_string(camera.width) + " " + std::to_string(camera.height),
+                        "camera");
 }
 
 }  // namespace cwloc

@@ -5,7 +5,8 @@
 namespace cwloc {
 
 DatabaseQueries::DatabaseQueries(const std::filesystem::path& path) : reader_(path) {
-  for (colmap::Camera& camera : reader_.ReadAllCameras()) cameras_.emplace(camera.camera_id, std::move(camera));
+  for (colmap::Camera& camera : reader_.ReadAllCameras())
+    cameras_.emplace(camera.camera_id, std::move(camera));
 }
 
 Query DatabaseQueries::Load(const std::string& name) const {
@@ -24,7 +25,8 @@ Query DatabaseQueries::Load(const std::string& name) const {
   }
   const auto camera = cameras_.find(camera_id);
   if (camera == cameras_.end()) {
-    throw InputError(db + ": image '" + name + "' refers to missing camera " + std::to_string(camera_id));
+    throw InputError(db + ": image '" + name + "' refers to missing camera " +
+                     std::to_string(camera_id));
   }
   query.camera.model_id = camera->second.model_id;
   query.camera.width = static_cast<uint32_t>(camera->second.width);

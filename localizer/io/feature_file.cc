@@ -19,7 +19,8 @@ std::string_view NextToken(std::string_view& line) {
     return {};
   }
   const size_t end = line.find_first_of(" \t\r", begin);
-  const std::string_view token = line.substr(begin, end == std::string_view::npos ? line.size() - begin : end - begin);
+  const std::string_view token =
+      line.substr(begin, end == std::string_view::npos ? line.size() - begin : end - begin);
   line.remove_prefix(end == std::string_view::npos ? line.size() : end);
   return token;
 }
@@ -38,15 +39,20 @@ void ReadFeatureFile(const std::filesystem::path& path, Query* query) {
   if (!in) throw InputError(path.string() + ": cannot open feature file");
   const std::string name = path.string();
   std::string line;
-  if (!std::getline(in, line)) throw InputError(name + ": empty feature file; expected 'NUM_FEATURES 128'");
+  if (!std::getline(in, line))
+    throw InputError(name + ": empty feature file; expected 'NUM_FEATURES 128'");
   std::string_view header = line;
   uint64_t count = 0;
   uint32_t dim = 0;
-  if (!ParseNumber(NextToken(header), &count) || !ParseNumber(NextToken(header), &dim) || !NextToken(header).empty()) {
+  if (!ParseNumber(NextToken(header), &count) || !ParseNumber(NextToken(header), &dim) ||
+      !NextToken(header).empty()) {
     throw InputError(name + ":1: expected 'NUM_FEATURES 128'");
   }
-  if (dim != 128) throw InputError(name + ":1: descriptors have " + std::to_string(dim) + " dimensions, expected 128");
-  if (count > 10'000'000) throw InputError(name + ":1: " + std::to_string(count) + " features is more than 10 million");
+  if (dim != 128)
+    throw InputError(name + ":1: descriptors have " + std::to_string(dim) +
+                     " dimensions, expected 128");
+  if (count > 10'000'000)
+    throw InputError(name + ":1: " + std::to_string(count) + " features is more than 10 million");
   query->keypoints.clear();
   query->descriptors.clear();
   query->keypoints.reserve(count * 2);
@@ -54,7 +60,8 @@ void ReadFeatureFile(const std::filesystem::path& path, Query* query) {
   for (uint64_t i = 0; i < count; ++i) {
     const std::string where = name + ":" + std::to_string(i + 2);
     if (!std::getline(in, line)) {
-      throw InputError(where + ": file ends after " + std::to_string(i) + " of " + std::to_string(count) + " features");
+      throw InputError(where + ": file ends after " + std::to_string(i) + " of " +
+                       std::to_string(count) + " features");
     }
     std::string_view rest = line;
     float values[4];
@@ -68,7 +75,8 @@ void ReadFeatureFile(const std::filesystem::path& path, Query* query) {
     for (int d = 0; d < 128; ++d) {
       unsigned value;
       if (!ParseNumber(NextToken(rest), &value) || value > 255) {
-        throw InputError(where + ": descriptor value " + std::to_string(d + 1) + " is not an integer in 0..255");
+        throw InputError(where + ": descriptor value " + std::to_string(d + 1) +
+                         " is not an integer in 0..255");
       }
       query->descriptors.push_back(static_cast<uint8_t>(value));
     }

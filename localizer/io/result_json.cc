@@ -24,13 +24,15 @@ nlohmann::ordered_json OptionsToJson(const LocalizerOptions& options) {
           {"seed", options.seed}};
 }
 
-nlohmann::ordered_json ResultToJson(const LocalizationResult& result, const LocalizerOptions& options) {
+nlohmann::ordered_json ResultToJson(const LocalizationResult& result,
+                                    const LocalizerOptions& options) {
   nlohmann::ordered_json out;
   out["name"] = result.name;
   out["success"] = result.success;
   if (!result.success) out["failure_reason"] = result.failure_reason;
   if (result.success) {
-    out["pose"] = {{"qvec", result.rotation}, {"tvec", result.translation}, {"center", result.center}};
+    out["pose"] = {
+        {"qvec", result.rotation}, {"tvec", result.translation}, {"center", result.center}};
   }
   out["camera"] = {{"model", std::string(CameraModelName(result.camera.model_id))},
                    {"width", result.camera.width},
@@ -39,9 +41,12 @@ nlohmann::ordered_json ResultToJson(const LocalizationResult& result, const Loca
                    {"focal_estimated", result.focal_estimated}};
   out["num_inliers"] = result.num_inliers;
   out["inlier_ratio"] = result.inlier_ratio;
-  out["matches"] = {{"features", result.num_features},         {"features_searched", result.features_searched},
-                    {"forward", result.forward_matches},        {"back", result.back_matches},
-                    {"correspondences", result.correspondences}, {"back_matched_images", result.back_matched_images},
+  out["matches"] = {{"features", result.num_features},
+                    {"features_searched", result.features_searched},
+                    {"forward", result.forward_matches},
+                    {"back", result.back_matches},
+                    {"correspondences", result.correspondences},
+                    {"back_matched_images", result.back_matched_images},
                     {"ransac_iterations", result.ransac_iterations}};
   nlohmann::ordered_json ranked = nlohmann::ordered_json::array();
   for (const RankedImage& image : result.ranked_images) {
@@ -49,9 +54,12 @@ nlohmann::ordered_json ResultToJson(const LocalizationResult& result, const Loca
   }
   out["ranked_images"] = ranked;
   const StageTimes& t = result.times;
-  out["times_ms"] = {{"forward_knn", t.forward_knn * 1e3}, {"ratio_test", t.ratio_test * 1e3},
-                     {"query_tree", t.query_tree * 1e3},   {"back_matching", t.back_matching * 1e3},
-                     {"pose", t.pose * 1e3},               {"total", t.total * 1e3}};
+  out["times_ms"] = {{"forward_knn", t.forward_knn * 1e3},
+                     {"ratio_test", t.ratio_test * 1e3},
+                     {"query_tree", t.query_tree * 1e3},
+                     {"back_matching", t.back_matching * 1e3},
+                     {"pose", t.pose * 1e3},
+                     {"total", t.total * 1e3}};
   out["parameters"] = OptionsToJson(options);
   return out;
 }
@@ -62,9 +70,10 @@ nlohmann::ordered_json ErrorToJson(const std::string& name, const std::string& e
 
 std::string PoseLine(const LocalizationResult& result) {
   char buffer[512];
-  std::snprintf(buffer, sizeof(buffer), "%s %.17g %.17g %.17g %.17g %.17g %.17g %.17g", result.name.c_str(),
-                result.rotation[0], result.rotation[1], result.rotation[2], result.rotation[3], result.translation[0],
-                result.translation[1], result.translation[2]);
+  std::snprintf(buffer, sizeof(buffer), "%s %.17g %.17g %.17g %.17g %.17g %.17g %.17g",
+                result.name.c_str(), result.rotation[0], result.rotation[1], result.rotation[2],
+                result.rotation[3], result.translation[0], result.translation[1],
+                result.translation[2]);
   return buffer;
 }
 

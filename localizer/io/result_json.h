@@ -1,7 +1,6 @@
 #pragma once
 
 #include <nlohmann/json.hpp>
-
 #include <string>
 
 #include "localizer/localization_result.h"
@@ -9,7 +8,8 @@
 namespace cwloc {
 
 // One result as described by schemas/localization-result.schema.json.
-nlohmann::ordered_json ResultToJson(const LocalizationResult& result, const LocalizerOptions& options);
+nlohmann::ordered_json ResultToJson(const LocalizationResult& result,
+                                    const LocalizerOptions& options);
 
 // The record of a query that could not be processed (bad input): name and error only.
 nlohmann::ordered_json ErrorToJson(const std::string& name, const std::string& error);

@@ -66,8 +66,8 @@ void Finish(std::span<const Eigen::Vector2d> pixels, std::span<const Eigen::Vect
 }
 
 uint32_t CountInliers(std::span<const Eigen::Vector2d> pixels,
-                      std::span<const Eigen::Vector3d> points3D, const CameraPose& pose,
-                      double f, double max_sq) {
+                      std::span<const Eigen::Vector3d> points3D, const CameraPose& pose, double f,
+                      double max_sq) {
   const Eigen::Matrix3d rot = pose.rotation.toRotationMatrix();
   uint32_t count = 0;
   for (size_t i = 0; i < pixels.size(); ++i) {
@@ -135,8 +135,8 @@ AbsolutePoseResult EstimateAbsolutePoseUnknownFocal(
     std::span<const Eigen::Vector2d> centered_pixels, std::span<const Eigen::Vector3d> points3D,
     const AbsolutePoseOptions& options) {
   AbsolutePoseResult result;
-  if (!CheckInput(centered_pixels.size(), points3D.size(),
-                  AbsolutePoseFocalEstimator::kSampleSize, options, &result)) {
+  if (!CheckInput(centered_pixels.size(), points3D.size(), AbsolutePoseFocalEstimator::kSampleSize,
+                  options, &result)) {
     return result;
   }
   double diagonal = options.image_diagonal_px;
@@ -160,9 +160,10 @@ AbsolutePoseResult EstimateAbsolutePoseUnknownFocal(
   PoseAndFocal model;
   result.stats = Ransac(estimator, options.ransac, &model);
   if (!std::isfinite(result.stats.score)) {
-    result.failure_reason = Concat("no pose hypothesis: every minimal sample was degenerate or "
-                                   "had a focal length outside [", min_focal, ", ", max_focal,
-                                   "] px");
+    result.failure_reason = Concat(
+        "no pose hypothesis: every minimal sample was degenerate or "
+        "had a focal length outside [",
+        min_focal, ", ", max_focal, "] px");
     return result;
   }
   result.pose = model.pose;

@@ -1,11 +1,10 @@
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <span>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "localizer/pose/camera_pose.h"
 #include "localizer/pose/ransac.h"
@@ -54,8 +53,8 @@ struct AbsolutePoseResult {
   double focal_length_px = 0.0;  // the given focal length, or the estimated one
   std::vector<char> inliers;     // per correspondence: 1 if in front, error < max_error_px
   int num_inliers = 0;
-  RansacStats stats;             // of the RANSAC run (before the final refinement)
-  bool refined = false;          // the Ceres refinement was applied
+  RansacStats stats;                        // of the RANSAC run (before the final refinement)
+  bool refined = false;                     // the Ceres refinement was applied
   double mean_reprojection_error_px = 0.0;  // over the inliers
 };
 

@@ -1,8 +1,7 @@
 #include "localizer/pose/local_optimization.h"
 
-#include <cmath>
-
 #include <Eigen/Dense>
+#include <cmath>
 
 namespace cwloc {
 namespace {
@@ -10,7 +9,8 @@ namespace {
 // exp([w]x) as a unit quaternion.
 Eigen::Quaterniond ExpQuaternion(const Eigen::Vector3d& w) {
   const double theta = w.norm();
-  if (theta < 1e-12) return Eigen::Quaterniond(1.0, 0.5 * w(0), 0.5 * w(1), 0.5 * w(2)).normalized();
+  if (theta < 1e-12)
+    return Eigen::Quaterniond(1.0, 0.5 * w(0), 0.5 * w(1), 0.5 * w(2)).normalized();
   const Eigen::Vector3d v = std::sin(0.5 * theta) / theta * w;
   return Eigen::Quaterniond(std::cos(0.5 * theta), v(0), v(1), v(2));
 }
@@ -27,8 +27,8 @@ struct LmProblem {
   double loss_scale;
 
   // Robust cost and, if requested, the IRLS normal equations (J^T W J, J^T W r).
-  double Evaluate(const Eigen::Quaterniond& q, const Eigen::Vector3d& t, double f,
-                  Hessian* jtj, Gradient* jtr) const {
+  double Evaluate(const Eigen::Quaterniond& q, const Eigen::Vector3d& t, double f, Hessian* jtj,
+                  Gradient* jtr) const {
     const Eigen::Matrix3d rot = q.toRotationMatrix();
     const double s2 = loss_scale * loss_scale;
     double cost = 0.0;
@@ -125,9 +125,8 @@ int OptimizePose(std::span<const Eigen::Vector2d> points2D,
 
 int OptimizePoseAndFocal(std::span<const Eigen::Vector2d> centered_pixels,
                          std::span<const Eigen::Vector3d> points3D,
-                         std::span<const uint32_t> indices,
-                         const LocalOptimizationOptions& options, CameraPose* pose,
-                         double* focal_length) {
+                         std::span<const uint32_t> indices, const LocalOptimizationOptions& options,
+                         CameraPose* pose, double* focal_length) {
   const LmProblem<7> problem{centered_pixels, points3D, indices, options.loss_scale};
   return Optimize(problem, options.max_iterations, pose, focal_length);
 }

@@ -1,9 +1,8 @@
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <span>
-
-#include <Eigen/Core>
 
 #include "localizer/pose/camera_pose.h"
 
@@ -31,8 +30,7 @@ int OptimizePose(std::span<const Eigen::Vector2d> points2D,
 // the principal point (pixels), over the pose and f.
 int OptimizePoseAndFocal(std::span<const Eigen::Vector2d> centered_pixels,
                          std::span<const Eigen::Vector3d> points3D,
-                         std::span<const uint32_t> indices,
-                         const LocalOptimizationOptions& options, CameraPose* pose,
-                         double* focal_length);
+                         std::span<const uint32_t> indices, const LocalOptimizationOptions& options,
+                         CameraPose* pose, double* focal_length);
 
 }  // namespace cwloc

@@ -1,9 +1,8 @@
 #include "localizer/pose/p3p.h"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
-
-#include <Eigen/Dense>
 
 namespace cwloc {
 namespace {
@@ -95,9 +94,8 @@ struct DepthProblem {
     double cost = r.squaredNorm();
     for (int iter = 0; iter < 5 && cost > 0.0; ++iter) {
       Matrix3d jac;
-      jac << 2.0 * (l(0) - b12 * l(1)), 2.0 * (l(1) - b12 * l(0)), 0.0,
-          2.0 * (l(0) - b13 * l(2)), 0.0, 2.0 * (l(2) - b13 * l(0)),
-          0.0, 2.0 * (l(1) - b23 * l(2)), 2.0 * (l(2) - b23 * l(1));
+      jac << 2.0 * (l(0) - b12 * l(1)), 2.0 * (l(1) - b12 * l(0)), 0.0, 2.0 * (l(0) - b13 * l(2)),
+          0.0, 2.0 * (l(2) - b13 * l(0)), 0.0, 2.0 * (l(1) - b23 * l(2)), 2.0 * (l(2) - b23 * l(1));
       const double det = jac.determinant();
       if (!(std::abs(det) > 0.0)) return;
       const Vector3d l_new = l - jac.inverse() * r;
@@ -135,12 +133,8 @@ int P3P(const std::array<Eigen::Vector3d, 3>& bearings,
   const double a12 = dp.a12, a13 = dp.a13, a23 = dp.a23;
   const double b12 = dp.b12, b13 = dp.b13, b23 = dp.b23;
   Matrix3d d1, d2;
-  d1 << a23, -a23 * b12, 0.0,
-      -a23 * b12, a23 - a12, a12 * b23,
-      0.0, a12 * b23, -a12;
-  d2 << a23, 0.0, -a23 * b13,
-      0.0, -a13, a13 * b23,
-      -a23 * b13, a13 * b23, a23 - a13;
+  d1 << a23, -a23 * b12, 0.0, -a23 * b12, a23 - a12, a12 * b23, 0.0, a12 * b23, -a12;
+  d2 << a23, 0.0, -a23 * b13, 0.0, -a13, a13 * b23, -a23 * b13, a13 * b23, a23 - a13;
 
   // det(d1 + g d2) = c3 g^3 + c2 g^2 + c1 g + c0. Any real root g makes d0 = d1 + g d2 a pair of
   // real lines whenever real solutions exist (Persson & Nordberg, sec. 3); the largest is used.
@@ -208,8 +202,8 @@ int P3P(const std::array<Eigen::Vector3d, 3>& bearings,
     if (sq > 0.0) roots[num_roots++] = qq != 0.0 ? qc / qq : 0.0;
 
     for (int r = 0; r < num_roots; ++r) {
-      const Eigen::Vector2d m = swap ? Eigen::Vector2d(1.0, roots[r])
-                                     : Eigen::Vector2d(roots[r], 1.0);
+      const Eigen::Vector2d m =
+          swap ? Eigen::Vector2d(1.0, roots[r]) : Eigen::Vector2d(roots[r], 1.0);
       Vector3d lambda = w * m;
       // Fix the scale with the best conditioned distance constraint.
       const Vector3d n = dp.Residuals(lambda) + Vector3d(a12, a13, a23);

@@ -1,10 +1,9 @@
 #include "localizer/pose/p4pf.h"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <numeric>
-
-#include <Eigen/Dense>
 
 #include "localizer/pose/three_quadrics.h"
 
@@ -128,8 +127,8 @@ void SolvePlanar(const NormalizedProblem& np, const Matrix3d& axes,
   // w = 1/f^2, solved in the least squares sense.
   const double a1 = hom(0, 0) * hom(0, 1) + hom(1, 0) * hom(1, 1);
   const double b1 = hom(2, 0) * hom(2, 1);
-  const double a2 = hom(0, 0) * hom(0, 0) + hom(1, 0) * hom(1, 0) - hom(0, 1) * hom(0, 1) -
-                    hom(1, 1) * hom(1, 1);
+  const double a2 =
+      hom(0, 0) * hom(0, 0) + hom(1, 0) * hom(1, 0) - hom(0, 1) * hom(0, 1) - hom(1, 1) * hom(1, 1);
   const double b2 = hom(2, 0) * hom(2, 0) - hom(2, 1) * hom(2, 1);
   const double w = -(a1 * b1 + a2 * b2) / (a1 * a1 + a2 * a2);
   if (!(w > 0.0) || !std::isfinite(w)) return;  // e.g. a fronto-parallel plane: f unobservable
@@ -184,7 +183,7 @@ int P4Pf(const std::array<Eigen::Vector2d, 4>& points2D,
   }
   const Eigen::SelfAdjointEigenSolver<Matrix3d> principal(scatter);
   const Vector3d variances = principal.eigenvalues().cwiseMax(0.0);  // ascending, sum 4
-  if (!(variances(1) > 1e-12 * variances(2))) return 0;  // collinear points
+  if (!(variances(1) > 1e-12 * variances(2))) return 0;              // collinear points
   const double flatness = std::sqrt(variances(0) / variances(2));
 
   std::vector<Candidate> candidates;

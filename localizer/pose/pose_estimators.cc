@@ -127,8 +127,7 @@ void AbsolutePoseFocalEstimator::Refine(Model* model) const {
   if (refined.focal_length >= min_focal_ && refined.focal_length <= max_focal_) *model = refined;
 }
 
-void AbsolutePoseFocalEstimator::Inliers(const Model& model,
-                                         std::vector<uint32_t>* inliers) const {
+void AbsolutePoseFocalEstimator::Inliers(const Model& model, std::vector<uint32_t>* inliers) const {
   CollectInliers(points2D_, points3D_, model.pose, model.focal_length, max_error_sq_, inliers);
 }
 

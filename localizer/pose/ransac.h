@@ -30,10 +30,10 @@ struct RansacOptions {
 };
 
 struct RansacStats {
-  uint32_t iterations = 0;   // minimal samples drawn
-  uint32_t num_inliers = 0;  // of the best model
-  double inlier_ratio = 0.0; // num_inliers / number of data points
-  uint32_t refinements = 0;  // local optimisation rounds run
+  uint32_t iterations = 0;                                 // minimal samples drawn
+  uint32_t num_inliers = 0;                                // of the best model
+  double inlier_ratio = 0.0;                               // num_inliers / number of data points
+  uint32_t refinements = 0;                                // local optimisation rounds run
   double score = std::numeric_limits<double>::infinity();  // MSAC score of the best model
 };
 
@@ -46,20 +46,19 @@ struct RansacStats {
 //   Refine(&model)               local optimisation on the model's inliers (e.g. non-linear
 //                                least squares); Ransac keeps the result only if it scores better
 template <typename E>
-concept RansacEstimator =
-    requires(const E& e, const typename E::Model& model, typename E::Model* model_out,
-             std::span<const uint32_t> sample, std::vector<typename E::Model>* models,
-             uint32_t* num_inliers) {
-      { E::kSampleSize } -> std::convertible_to<size_t>;
-      { e.NumData() } -> std::convertible_to<size_t>;
-      e.GenerateModels(sample, models);
-      { e.Score(model, num_inliers) } -> std::convertible_to<double>;
-      e.Refine(model_out);
-    };
+concept RansacEstimator = requires(const E& e, const typename E::Model& model,
+                                   typename E::Model* model_out, std::span<const uint32_t> sample,
+                                   std::vector<typename E::Model>* models, uint32_t* num_inliers) {
+  { E::kSampleSize } -> std::convertible_to<size_t>;
+  { e.NumData() } -> std::convertible_to<size_t>;
+  e.GenerateModels(sample, models);
+  { e.Score(model, num_inliers) } -> std::convertible_to<double>;
+  e.Refine(model_out);
+};
 
 // Iterations needed to draw an all-inlier sample with the given confidence.
-inline uint32_t RansacRequiredIterations(double inlier_ratio, size_t sample_size,
-                                         double confidence, uint32_t max_iterations) {
+inline uint32_t RansacRequiredIterations(double inlier_ratio, size_t sample_size, double confidence,
+                                         uint32_t max_iterations) {
   if (inlier_ratio <= 0.0) return max_iterations;
   if (inlier_ratio >= 1.0) return 0;
   const double all_inliers = std::pow(inlier_ratio, static_cast<double>(sample_size));

@@ -1,10 +1,9 @@
 #include "localizer/pose/three_quadrics.h"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <array>
 #include <cmath>
-
-#include <Eigen/Dense>
 
 namespace cwloc {
 namespace {
@@ -184,9 +183,8 @@ Coeffs ChangeCoordinates(const Coeffs& c, const Eigen::Matrix3d& m, const Eigen:
   Coeffs out;
   for (int k = 0; k < 3; ++k) {
     Eigen::Matrix4d q;
-    q << c(k, 0), 0.5 * c(k, 1), 0.5 * c(k, 2), 0.5 * c(k, 6),
-        0.5 * c(k, 1), c(k, 3), 0.5 * c(k, 4), 0.5 * c(k, 7),
-        0.5 * c(k, 2), 0.5 * c(k, 4), c(k, 5), 0.5 * c(k, 8),
+    q << c(k, 0), 0.5 * c(k, 1), 0.5 * c(k, 2), 0.5 * c(k, 6), 0.5 * c(k, 1), c(k, 3),
+        0.5 * c(k, 4), 0.5 * c(k, 7), 0.5 * c(k, 2), 0.5 * c(k, 4), c(k, 5), 0.5 * c(k, 8),
         0.5 * c(k, 6), 0.5 * c(k, 7), 0.5 * c(k, 8), c(k, 9);
     const Eigen::Matrix4d qn = h.transpose() * q * h;
     out.row(k) << qn(0, 0), 2.0 * qn(0, 1), 2.0 * qn(0, 2), qn(1, 1), 2.0 * qn(1, 2), qn(2, 2),

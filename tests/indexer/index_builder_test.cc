@@ -59,8 +59,10 @@ TEST_F(IndexBuilderTest, StoresEveryObservedViewWithItsDescriptorPointAndImage) 
     const IndexImage& stored = index.images()[row++];
     EXPECT_EQ(stored.image_id, image_id);
     EXPECT_EQ(index.cameras()[stored.camera_index].camera_id, image.camera_id);
-    for (int i = 0; i < 4; ++i) EXPECT_EQ(stored.cam_from_world_rotation[i], image.cam_from_world.rotation[i]);
-    for (int i = 0; i < 3; ++i) EXPECT_EQ(stored.cam_from_world_translation[i], image.cam_from_world.translation[i]);
+    for (int i = 0; i < 4; ++i)
+      EXPECT_EQ(stored.cam_from_world_rotation[i], image.cam_from_world.rotation[i]);
+    for (int i = 0; i < 3; ++i)
+      EXPECT_EQ(stored.cam_from_world_translation[i], image.cam_from_world.translation[i]);
     EXPECT_EQ(index.ImageName(stored), image.name);
     EXPECT_EQ(stored.cluster, row - 1);  // one cluster per image by default
     uint32_t view = stored.first_view;
@@ -68,7 +70,8 @@ TEST_F(IndexBuilderTest, StoresEveryObservedViewWithItsDescriptorPointAndImage) 
       const colmap::Point2D& point2D = image.points2D[i];
       if (point2D.point3D_id == kInvalidPoint3DId) continue;
       ASSERT_LT(view, stored.first_view + stored.num_views);
-      EXPECT_EQ(0, std::memcmp(index.descriptor(view), descriptors_[image_id].Row(static_cast<uint32_t>(i)), 128));
+      EXPECT_EQ(0, std::memcmp(index.descriptor(view),
+                               descriptors_[image_id].Row(static_cast<uint32_t>(i)), 128));
       const IndexPoint& point = index.points()[index.view_points()[view]];
       const auto& xyz = model_.points3D.at(point2D.point3D_id).xyz;
       EXPECT_EQ(point.xyz[0], xyz[0]);
@@ -129,7 +132,8 @@ TEST_F(IndexBuilderTest, CovisibilityCountsSharedPointsSymmetrically) {
   }
   std::map<std::pair<uint32_t, uint32_t>, uint32_t> stored;
   for (uint32_t i = 0; i < index.images().size(); ++i) {
-    for (const CovisibilityEdge& edge : index.CovisibleImages(i)) stored[{i, edge.image_index}] = edge.shared_points;
+    for (const CovisibilityEdge& edge : index.CovisibleImages(i))
+      stored[{i, edge.image_index}] = edge.shared_points;
   }
   EXPECT_EQ(stored, expected);
 }
@@ -151,7 +155,8 @@ TEST_F(IndexBuilderTest, ClusteringFromAFileGroupsImages) {
     std::ofstream out(cluster_file);
     out << "# name cluster\n";
     int i = 0;
-    for (const auto& [id, image] : model_.images) out << image.name << " " << (i++ < 5 ? 70 : 3) << "\n";
+    for (const auto& [id, image] : model_.images)
+      out << image.name << " " << (i++ < 5 ? 70 : 3) << "\n";
     out << "not_in_model.jpg 5\n";
   }
   IndexBuildOptions options = Options();
@@ -185,8 +190,9 @@ TEST_F(IndexBuilderTest, BadClusteringInputIsAClearError) {
     BuildIndex(options);
     FAIL();
   } catch (const InputError& e) {
-    EXPECT_EQ(std::string(e.what()), options.clustering.file.string() +
-                                         ":1: expected 'IMAGE_NAME CLUSTER_ID' with a non-negative integer id");
+    EXPECT_EQ(std::string(e.what()),
+              options.clustering.file.string() +
+                  ":1: expected 'IMAGE_NAME CLUSTER_ID' with a non-negative integer id");
   }
   std::ofstream(options.clustering.file) << model_.images.begin()->second.name << " 1\n";
   EXPECT_THROW(BuildIndex(options), InputError);  // the other images have no cluster
@@ -196,7 +202,8 @@ TEST_F(IndexBuilderTest, BadClusteringInputIsAClearError) {
     BuildIndex(options);
     FAIL();
   } catch (const InputError& e) {
-    EXPECT_EQ(std::string(e.what()), "--clusters 11: expected a count in [1, 10] (the number of model images)");
+    EXPECT_EQ(std::string(e.what()),
+              "--clusters 11: expected a count in [1, 10] (the number of model images)");
   }
   EXPECT_FALSE(std::filesystem::exists(index_path_));
 }
@@ -222,9 +229,10 @@ TEST_F(IndexBuilderTest, ModelAndDatabaseThatDoNotBelongTogetherAreRejected) {
     BuildIndex(Options());
     FAIL();
   } catch (const InputError& e) {
-    EXPECT_THAT(e.what(), HasSubstr("image " + std::to_string(image_id) + " '" + image.name + "' has " +
-                                    std::to_string(image.points2D.size() - 1) + " descriptors but " +
-                                    std::to_string(image.points2D.size()) + " 2D points in the model"));
+    EXPECT_THAT(e.what(),
+                HasSubstr("image " + std::to_string(image_id) + " '" + image.name + "' has " +
+                          std::to_string(image.points2D.size() - 1) + " descriptors but " +
+                          std::to_string(image.points2D.size()) + " 2D points in the model"));
   }
   EXPECT_FALSE(std::filesystem::exists(index_path_));
 }

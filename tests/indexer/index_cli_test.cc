@@ -1,10 +1,10 @@
 // cwloc-index as a user runs it: build, info (--json against its schema), verify, and the
 // exit code and message for each kind of damaged file.
 #include <gmock/gmock.h>
-#include <nlohmann/json.hpp>
 
 #include <fstream>
 #include <iterator>
+#include <nlohmann/json.hpp>
 
 #include "format/index/index_file.h"
 #include "tests/indexer/indexer_fixture.h"
@@ -22,8 +22,8 @@ class IndexCliTest : public test::IndexerFixture {
 
   void Build() {
     std::string output;
-    ASSERT_EQ(Run("build --model " + model_dir_.string() + " --database " + database_path_.string() + " -o " +
-                      index_path_.string(),
+    ASSERT_EQ(Run("build --model " + model_dir_.string() + " --database " +
+                      database_path_.string() + " -o " + index_path_.string(),
                   &output),
               0)
         << output;
@@ -36,7 +36,8 @@ class IndexCliTest : public test::IndexerFixture {
 
   void WriteCorrupt(const std::vector<uint8_t>& bytes) const {
     std::ofstream(dir_ / "corrupt.cwl", std::ios::binary)
-        .write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+        .write(reinterpret_cast<const char*>(bytes.data()),
+               static_cast<std::streamsize>(bytes.size()));
   }
 };
 
@@ -61,8 +62,8 @@ TEST_F(IndexCliTest, InfoJsonValidatesAgainstItsSchema) {
   const auto schema = test::SourceDir() / "schemas" / "index-info.schema.json";
   const auto validator = test::SourceDir() / "tools" / "validate_json.py";
   std::string validation;
-  EXPECT_EQ(test::RunCommand("/usr/bin/python3 " + validator.string() + " " + schema.string() + " " +
-                                 (dir_ / "info.json").string(),
+  EXPECT_EQ(test::RunCommand("/usr/bin/python3 " + validator.string() + " " + schema.string() +
+                                 " " + (dir_ / "info.json").string(),
                              &validation),
             0)
       << validation;
@@ -99,7 +100,8 @@ TEST_F(IndexCliTest, DamagedFilesGiveTheirOwnErrors) {
   std::vector<uint8_t> truncated(original.begin(), original.begin() + original.size() / 2);
   WriteCorrupt(truncated);
   EXPECT_EQ(Run("info " + corrupt, &output), 2);
-  EXPECT_THAT(output, HasSubstr("cwloc-index: error: " + corrupt + ": truncated or extended: the header says " +
+  EXPECT_THAT(output, HasSubstr("cwloc-index: error: " + corrupt +
+                                ": truncated or extended: the header says " +
                                 std::to_string(original.size()) + " bytes, the file has " +
                                 std::to_string(truncated.size())));
 
@@ -113,7 +115,8 @@ TEST_F(IndexCliTest, DamagedFilesGiveTheirOwnErrors) {
   newer[12] = 3;
   WriteCorrupt(newer);
   EXPECT_EQ(Run("info " + corrupt, &output), 2);
-  EXPECT_THAT(output, HasSubstr("index format 3.0 is not readable by this cwloc, which reads format 1.x"));
+  EXPECT_THAT(output,
+              HasSubstr("index format 3.0 is not readable by this cwloc, which reads format 1.x"));
 
   EXPECT_EQ(Run("info " + (dir_ / "missing.cwl").string(), &output), 2);
   EXPECT_THAT(output, HasSubstr("missing.cwl: cannot open: No such file or directory"));
@@ -121,8 +124,8 @@ TEST_F(IndexCliTest, DamagedFilesGiveTheirOwnErrors) {
 
 TEST_F(IndexCliTest, BuildFromAMissingModelIsABadInputError) {
   std::string output;
-  EXPECT_EQ(Run("build --model " + (dir_ / "nope").string() + " --database " + database_path_.string() + " -o " +
-                    index_path_.string(),
+  EXPECT_EQ(Run("build --model " + (dir_ / "nope").string() + " --database " +
+                    database_path_.string() + " -o " + index_path_.string(),
                 &output),
             2);
   EXPECT_THAT(output, HasSubstr("cwloc-index: error: "));

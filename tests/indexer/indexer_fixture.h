@@ -2,9 +2,9 @@
 
 #include <gtest/gtest.h>
 
-#include "format/kdtree/descriptor_distance.h"
 #include "format/colmap/database.h"
 #include "format/colmap/reconstruction_io.h"
+#include "format/kdtree/descriptor_distance.h"
 #include "indexer/index_builder.h"
 #include "tests/format/colmap/synthetic_model.h"
 #include "tests/test_util.h"

@@ -16,7 +16,8 @@ ModelViews TwoViewsPerPoint(uint32_t points, uint32_t images) {
   std::mt19937 rng(7);
   std::uniform_int_distribution<int> byte(0, 120), noise(-12, 12), small(-4, 4);
   std::vector<std::array<int, 128>> words(64);
-  for (auto& word : words) for (int& value : word) value = byte(rng);
+  for (auto& word : words)
+    for (int& value : word) value = byte(rng);
   ModelViews views;
   const uint32_t num_views = 2 * points;
   views.descriptors.resize(size_t{num_views} * 128);
@@ -26,7 +27,8 @@ ModelViews TwoViewsPerPoint(uint32_t points, uint32_t images) {
     for (size_t d = 0; d < 128; ++d) base[d] = word[d] + noise(rng);
     for (uint32_t copy = 0; copy < 2; ++copy) {
       uint8_t* out = views.descriptors.data() + size_t{2 * p + copy} * 128;
-      for (size_t d = 0; d < 128; ++d) out[d] = static_cast<uint8_t>(std::clamp(base[d] + small(rng), 0, 255));
+      for (size_t d = 0; d < 128; ++d)
+        out[d] = static_cast<uint8_t>(std::clamp(base[d] + small(rng), 0, 255));
       views.view_points.push_back(p);
     }
   }
@@ -45,7 +47,8 @@ std::vector<uint32_t> BruteForce(const ModelViews& views) {
   for (uint32_t a = 0; a < views.num_views(); ++a) {
     for (uint32_t b = 0; b < views.num_views(); ++b) {
       if (views.view_points[a] == views.view_points[b]) continue;
-      best[a] = std::min(best[a], SquaredL2(&views.descriptors[size_t{a} * 128], &views.descriptors[size_t{b} * 128]));
+      best[a] = std::min(best[a], SquaredL2(&views.descriptors[size_t{a} * 128],
+                                            &views.descriptors[size_t{b} * 128]));
     }
   }
   return best;

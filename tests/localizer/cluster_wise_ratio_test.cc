@@ -23,7 +23,8 @@ class ClusterRatioTest : public test::IndexerFixture {
   // The i-th view of image row `image` (distinct points for distinct i in practice).
   uint32_t View(uint32_t image, uint32_t i) const { return index_->images()[image].first_view + i; }
 
-  std::vector<FeatureMatch> Run(const std::vector<KdNeighbor>& neighbors, ForwardMatchingStats* stats) const {
+  std::vector<FeatureMatch> Run(const std::vector<KdNeighbor>& neighbors,
+                                ForwardMatchingStats* stats) const {
     std::vector<FeatureMatch> accepted;
     ClusterWiseRatioTest(*index_, 7, neighbors, 0.7, &accepted, stats);
     return accepted;
@@ -36,8 +37,12 @@ TEST_F(ClusterRatioTest, TwoViewsOfDistinctPointsInOneClusterUseTheLocalRatio) {
   ASSERT_NE(index_->view_points()[View(0, 0)], index_->view_points()[View(0, 1)]);
   ForwardMatchingStats stats;
   // d1 = 10, d2 = 20 in cluster 0: 0.5 <= 0.7 passes; others in other clusters.
-  auto accepted = Run({{View(0, 0), 100}, {View(1, 0), 150}, {View(0, 1), 400}, {View(2, 0), 500},
-                       {View(3, 0), 600}, {View(4, 0), 700}},
+  auto accepted = Run({{View(0, 0), 100},
+                       {View(1, 0), 150},
+                       {View(0, 1), 400},
+                       {View(2, 0), 500},
+                       {View(3, 0), 600},
+                       {View(4, 0), 700}},
                       &stats);
   EXPECT_GE(stats.local_ratio_tests, 1u);
   ASSERT_FALSE(accepted.empty());
@@ -46,8 +51,12 @@ TEST_F(ClusterRatioTest, TwoViewsOfDistinctPointsInOneClusterUseTheLocalRatio) {
   EXPECT_FLOAT_EQ(accepted[0].distance, 10.0f);
   // d1 = 10, d2 = 12: 0.83 fails, and the second view is never a candidate itself.
   stats = {};
-  accepted = Run({{View(0, 0), 100}, {View(0, 1), 144}, {View(1, 0), 10000}, {View(2, 0), 10000},
-                  {View(3, 0), 10000}, {View(4, 0), 10000}},
+  accepted = Run({{View(0, 0), 100},
+                  {View(0, 1), 144},
+                  {View(1, 0), 10000},
+                  {View(2, 0), 10000},
+                  {View(3, 0), 10000},
+                  {View(4, 0), 10000}},
                  &stats);
   for (const FeatureMatch& match : accepted) {
     EXPECT_NE(match.view, View(0, 0));
@@ -58,8 +67,12 @@ TEST_F(ClusterRatioTest, TwoViewsOfDistinctPointsInOneClusterUseTheLocalRatio) {
 TEST_F(ClusterRatioTest, TheLastNeighbourServesOnlyAsASecondNeighbour) {
   ForwardMatchingStats stats;
   // Cluster 0's second view is the (k+1)-th neighbour: 10 / 20 passes by the local test.
-  const auto accepted = Run({{View(0, 0), 100}, {View(1, 0), 9000}, {View(2, 0), 9000}, {View(3, 0), 9000},
-                             {View(4, 0), 9000}, {View(0, 1), 400}},
+  const auto accepted = Run({{View(0, 0), 100},
+                             {View(1, 0), 9000},
+                             {View(2, 0), 9000},
+                             {View(3, 0), 9000},
+                             {View(4, 0), 9000},
+                             {View(0, 1), 400}},
                             &stats);
   EXPECT_EQ(stats.local_ratio_tests, 1u);
   EXPECT_EQ(stats.t_ratio_tests, 4u);
@@ -78,11 +91,16 @@ TEST_F(ClusterRatioTest, ASingletonUsesTheTRatioWithTheStoredNeighbourDistance) 
   for (const auto& [d, expect_pass] : {std::pair{pass, true}, std::pair{fail, false}}) {
     ForwardMatchingStats stats;
     const uint32_t squared = static_cast<uint32_t>(d * d);
-    const auto accepted = Run({{view, squared}, {View(1, 0), squared + 1}, {View(2, 0), squared + 2},
-                               {View(3, 0), squared + 3}, {View(4, 0), squared + 4}, {View(5, 0), squared * 9}},
+    const auto accepted = Run({{view, squared},
+                               {View(1, 0), squared + 1},
+                               {View(2, 0), squared + 2},
+                               {View(3, 0), squared + 3},
+                               {View(4, 0), squared + 4},
+                               {View(5, 0), squared * 9}},
                               &stats);
     EXPECT_EQ(stats.t_ratio_tests, 5u);
-    const bool passed = std::any_of(accepted.begin(), accepted.end(), [&](const auto& m) { return m.view == view; });
+    const bool passed = std::any_of(accepted.begin(), accepted.end(),
+                                    [&](const auto& m) { return m.view == view; });
     EXPECT_EQ(passed, expect_pass) << "d = " << d << ", v_NN distance = " << neighbor;
   }
 }

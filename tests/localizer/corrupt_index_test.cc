@@ -22,14 +22,15 @@ std::vector<char> ReadAll(const std::filesystem::path& path) {
 TEST(CorruptIndex, RandomWordsInAnySectionNeverCrashTheLocalizer) {
   test::TempDir dir;
   std::string output;
-  ASSERT_EQ(test::RunCommand(test::ToolPath("cwloc-synth").string() + " --preset demo --queries 3 -o " +
-                                 (dir / "city").string(),
+  ASSERT_EQ(test::RunCommand(test::ToolPath("cwloc-synth").string() +
+                                 " --preset demo --queries 3 -o " + (dir / "city").string(),
                              &output),
             0)
       << output;
   ASSERT_EQ(test::RunCommand(test::ToolPath("cwloc-index").string() + " build --model " +
-                                 (dir / "city" / "mapping_model" / "bin").string() + " --database " +
-                                 (dir / "city" / "database.db").string() + " -o " + (dir / "city.cwl").string(),
+                                 (dir / "city" / "mapping_model" / "bin").string() +
+                                 " --database " + (dir / "city" / "database.db").string() + " -o " +
+                                 (dir / "city.cwl").string(),
                              &output),
             0)
       << output;
@@ -54,12 +55,14 @@ TEST(CorruptIndex, RandomWordsInAnySectionNeverCrashTheLocalizer) {
       // Overwrite a few 32-bit words with large or random values: out-of-range indices.
       for (int word = 0; word < 8; ++word) {
         const uint64_t at = section.offset + (rng() % (section.size / 4)) * 4;
-        const uint32_t value = (rng() & 1) ? static_cast<uint32_t>(rng()) : 0xFFFFFFF0u + (rng() % 16);
+        const uint32_t value =
+            (rng() & 1) ? static_cast<uint32_t>(rng()) : 0xFFFFFFF0u + (rng() % 16);
         std::memcpy(bytes.data() + at, &value, 4);
       }
       const auto path = dir / "corrupt.cwl";
       std::filesystem::remove(path);
-      std::ofstream(path, std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+      std::ofstream(path, std::ios::binary)
+          .write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
       try {
         const Index index = Index::Open(path);
         const Localizer localizer(index);

@@ -34,10 +34,12 @@ TEST_F(ExhaustiveMatchingTest, AModelDescriptorMatchesItsOwnPointInItsCluster) {
   Query query;
   for (uint32_t i = 0; i < 3; ++i) AddFeature(&query, index_->descriptor(image.first_view + i));
   ForwardMatchingStats stats;
-  const std::vector<ClusterMatches> found = MatchEachClusterExhaustively(*index_, *clusters_, query, 0.7, &stats);
+  const std::vector<ClusterMatches> found =
+      MatchEachClusterExhaustively(*index_, *clusters_, query, 0.7, &stats);
   EXPECT_EQ(stats.features_searched, 3u);
-  const auto own = std::find_if(found.begin(), found.end(),
-                                [&](const ClusterMatches& c) { return c.cluster == image.cluster; });
+  const auto own = std::find_if(found.begin(), found.end(), [&](const ClusterMatches& c) {
+    return c.cluster == image.cluster;
+  });
   ASSERT_NE(own, found.end());
   ASSERT_EQ(own->matches.size(), 3u);
   for (uint32_t i = 0; i < 3; ++i) {
@@ -52,7 +54,8 @@ TEST_F(ExhaustiveMatchingTest, AModelDescriptorMatchesItsOwnPointInItsCluster) {
   // test for a copied descriptor by chance except its own and the clusters sharing its point.
   for (const ClusterMatches& cluster : found) {
     for (const FeatureMatch& match : cluster.matches) {
-      EXPECT_EQ(index_->view_points()[match.view], index_->view_points()[image.first_view + match.feature]);
+      EXPECT_EQ(index_->view_points()[match.view],
+                index_->view_points()[image.first_view + match.feature]);
     }
   }
 }
@@ -68,13 +71,15 @@ TEST_F(ExhaustiveMatchingTest, AFeatureBetweenTwoPointsOfOneClusterFailsTheRatio
   Query query;
   AddFeature(&query, midpoint);
   ForwardMatchingStats stats;
-  for (const ClusterMatches& cluster : MatchEachClusterExhaustively(*index_, *clusters_, query, 0.7, &stats)) {
+  for (const ClusterMatches& cluster :
+       MatchEachClusterExhaustively(*index_, *clusters_, query, 0.7, &stats)) {
     EXPECT_NE(cluster.cluster, image.cluster) << "nearly equidistant views of two points passed";
   }
   // With tau = 1 the nearer of the two is accepted in that cluster.
   const auto loose = MatchEachClusterExhaustively(*index_, *clusters_, query, 1.0, &stats);
-  const auto own = std::find_if(loose.begin(), loose.end(),
-                                [&](const ClusterMatches& c) { return c.cluster == image.cluster; });
+  const auto own = std::find_if(loose.begin(), loose.end(), [&](const ClusterMatches& c) {
+    return c.cluster == image.cluster;
+  });
   ASSERT_NE(own, loose.end());
   ASSERT_EQ(own->matches.size(), 1u);
   const uint32_t point = index_->view_points()[own->matches[0].view];

@@ -1,9 +1,9 @@
 // cwloc-localize as a user runs it: JSON lines against the schema, the poses file, exit codes,
 // and an error record per bad query while the others finish.
 #include <gmock/gmock.h>
-#include <nlohmann/json.hpp>
 
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "indexer/index_builder.h"
@@ -25,10 +25,11 @@ std::vector<nlohmann::json> JsonLines(const std::string& text) {
 }
 
 int ValidateAgainstSchema(const std::filesystem::path& json_lines, std::string* output) {
-  return test::RunCommand("/usr/bin/python3 " + (test::SourceDir() / "tools" / "validate_json.py").string() + " " +
-                              (test::SourceDir() / "schemas" / "localization-result.schema.json").string() + " " +
-                              json_lines.string() + " --lines",
-                          output);
+  return test::RunCommand(
+      "/usr/bin/python3 " + (test::SourceDir() / "tools" / "validate_json.py").string() + " " +
+          (test::SourceDir() / "schemas" / "localization-result.schema.json").string() + " " +
+          json_lines.string() + " --lines",
+      output);
 }
 
 class LocalizeCliTest : public test::IndexerFixture {
@@ -39,8 +40,9 @@ class LocalizeCliTest : public test::IndexerFixture {
   }
 
   int Run(const std::string& args, std::string* output) const {
-    return test::RunCommand(test::ToolPath("cwloc-localize").string() + " --index " + index_path_.string() + " " + args,
-                            output);
+    return test::RunCommand(
+        test::ToolPath("cwloc-localize").string() + " --index " + index_path_.string() + " " + args,
+        output);
   }
 
   std::string FirstImageName() const { return model_.images.begin()->second.name; }
@@ -49,11 +51,12 @@ class LocalizeCliTest : public test::IndexerFixture {
 TEST_F(LocalizeCliTest, BadQueryGetsAnErrorRecordAndTheOthersFinish) {
   std::string output;
   const auto jsonl = dir_ / "out.jsonl";
-  const int code = Run("--database " + database_path_.string() + " --query nope.jpg --query " + FirstImageName() +
-                           " -o " + jsonl.string(),
+  const int code = Run("--database " + database_path_.string() + " --query nope.jpg --query " +
+                           FirstImageName() + " -o " + jsonl.string(),
                        &output);
   EXPECT_EQ(code, 2) << output;
-  EXPECT_THAT(output, HasSubstr("cwloc-localize: error: " + database_path_.string() + ": no image named 'nope.jpg'"));
+  EXPECT_THAT(output, HasSubstr("cwloc-localize: error: " + database_path_.string() +
+                                ": no image named 'nope.jpg'"));
   std::ifstream in(jsonl);
   const std::string text((std::istreambuf_iterator<char>(in)), {});
   const auto lines = JsonLines(text);
@@ -78,8 +81,8 @@ TEST_F(LocalizeCliTest, EveryMatcherNameRunsAndIsReported) {
   for (const std::string matcher : {"cluster-wise", "global-ratio", "cluster-exhaustive"}) {
     std::string output;
     const auto jsonl = dir_ / (matcher + ".jsonl");
-    EXPECT_LE(Run("--database " + database_path_.string() + " --query " + FirstImageName() + " --matcher " + matcher +
-                      " -o " + jsonl.string(),
+    EXPECT_LE(Run("--database " + database_path_.string() + " --query " + FirstImageName() +
+                      " --matcher " + matcher + " -o " + jsonl.string(),
                   &output),
               1)
         << output;
@@ -95,8 +98,8 @@ TEST_F(LocalizeCliTest, EveryMatcherNameRunsAndIsReported) {
 
 TEST_F(LocalizeCliTest, CorruptOrMissingIndexIsAClearError) {
   std::string output;
-  EXPECT_EQ(test::RunCommand(test::ToolPath("cwloc-localize").string() + " --index " + (dir_ / "none.cwl").string() +
-                                 " --query x",
+  EXPECT_EQ(test::RunCommand(test::ToolPath("cwloc-localize").string() + " --index " +
+                                 (dir_ / "none.cwl").string() + " --query x",
                              &output),
             2);
   EXPECT_THAT(output, HasSubstr("none.cwl: cannot open: No such file or directory"));
@@ -105,7 +108,9 @@ TEST_F(LocalizeCliTest, CorruptOrMissingIndexIsAClearError) {
   file.seekp(200);
   file.put('\x7f');
   file.close();
-  EXPECT_EQ(Run("--verify --database " + database_path_.string() + " --query " + FirstImageName(), &output), 2);
+  EXPECT_EQ(Run("--verify --database " + database_path_.string() + " --query " + FirstImageName(),
+                &output),
+            2);
   EXPECT_THAT(output, HasSubstr("checksum mismatch"));
 }
 
@@ -113,7 +118,10 @@ TEST_F(LocalizeCliTest, QueryWithNoFeaturesIsAnError) {
   const auto features = dir_ / "empty.txt";
   std::ofstream(features) << "0 128\n";
   std::string output;
-  EXPECT_EQ(Run("--features " + features.string() + " --camera \"SIMPLE_PINHOLE 640 480 500 320 240\"", &output), 2);
+  EXPECT_EQ(
+      Run("--features " + features.string() + " --camera \"SIMPLE_PINHOLE 640 480 500 320 240\"",
+          &output),
+      2);
   EXPECT_THAT(output, HasSubstr(features.string() + ": the query has no features"));
   EXPECT_THAT(output, HasSubstr("\"error\""));
 }
@@ -125,7 +133,8 @@ TEST_F(LocalizeCliTest, UnknownCameraModelNamesTheKnownOnes) {
   std::ofstream(features) << line << "\n";
   std::string output;
   EXPECT_EQ(Run("--features " + features.string() + " --camera \"FISH 640 480 500\"", &output), 2);
-  EXPECT_THAT(output, HasSubstr("--camera: unknown camera model 'FISH' (known: SIMPLE_PINHOLE, PINHOLE"));
+  EXPECT_THAT(output,
+              HasSubstr("--camera: unknown camera model 'FISH' (known: SIMPLE_PINHOLE, PINHOLE"));
 }
 
 TEST_F(LocalizeCliTest, AbsurdParametersAreRejected) {
@@ -134,7 +143,8 @@ TEST_F(LocalizeCliTest, AbsurdParametersAreRejected) {
   EXPECT_THAT(output, HasSubstr("--ratio 2.000000: expected a value in (0, 1]"));
   EXPECT_EQ(Run("--database " + database_path_.string() + " --query x --k 0", &output), 2);
   EXPECT_THAT(output, HasSubstr("--k 0: expected 1 to 63"));
-  EXPECT_EQ(Run("--database " + database_path_.string() + " --query x --matcher nearest", &output), 2);
+  EXPECT_EQ(Run("--database " + database_path_.string() + " --query x --matcher nearest", &output),
+            2);
   EXPECT_THAT(output, HasSubstr("--matcher"));
   EXPECT_EQ(Run("", &output), 2);
   EXPECT_THAT(output, HasSubstr("no queries"));
@@ -144,18 +154,19 @@ TEST(LocalizeCliHerzJesu, LocalizesEveryQueryWithValidJsonAndPoses) {
   CWLOC_REQUIRE_SHARED_DATA(data, "herz_jesu_p25");
   test::TempDir dir;
   std::string output;
-  ASSERT_EQ(test::RunCommand(test::ToolPath("cwloc-index").string() + " build --model " +
-                                 (data / "mapping_model" / "bin").string() + " --database " +
-                                 (data / "database.db").string() + " -o " + (dir / "hj.cwl").string(),
-                             &output),
-            0)
+  ASSERT_EQ(
+      test::RunCommand(test::ToolPath("cwloc-index").string() + " build --model " +
+                           (data / "mapping_model" / "bin").string() + " --database " +
+                           (data / "database.db").string() + " -o " + (dir / "hj.cwl").string(),
+                       &output),
+      0)
       << output;
-  const int code = test::RunCommand(test::ToolPath("cwloc-localize").string() + " --index " +
-                                        (dir / "hj.cwl").string() + " --database " + (data / "database.db").string() +
-                                        " --query-list " + (data / "queries_with_intrinsics.txt").string() +
-                                        " --threads 2 -o " + (dir / "out.jsonl").string() + " --poses " +
-                                        (dir / "poses.txt").string(),
-                                    &output);
+  const int code = test::RunCommand(
+      test::ToolPath("cwloc-localize").string() + " --index " + (dir / "hj.cwl").string() +
+          " --database " + (data / "database.db").string() + " --query-list " +
+          (data / "queries_with_intrinsics.txt").string() + " --threads 2 -o " +
+          (dir / "out.jsonl").string() + " --poses " + (dir / "poses.txt").string(),
+      &output);
   EXPECT_EQ(code, 0) << output;
   EXPECT_THAT(output, HasSubstr("localized 5 of 5 queries"));
   std::string validation;

@@ -1,7 +1,6 @@
 // cwloc-eval: compares localization results (cwloc-localize JSON lines or a poses file) with
 // ground-truth query poses and prints recall and error statistics. See docs/eval.md.
 #include <CLI/CLI.hpp>
-
 #include <cstdio>
 #include <iostream>
 
@@ -21,23 +20,33 @@ int main(int argc, char** argv) {
   std::string scale_path;
   bool json = false;
   app.add_option("--results", results_paths,
-                 "cwloc-localize JSON lines or a poses file (NAME QW QX QY QZ TX TY TZ); repeat to compare runs")
+                 "cwloc-localize JSON lines or a poses file (NAME QW QX QY QZ TX TY TZ); repeat to "
+                 "compare runs")
       ->required();
-  app.add_option("--label", labels, "name of each run in the table, in --results order (default: file name)");
-  app.add_option("--gt", gt_path, "ground-truth poses: NAME QW QX QY QZ TX TY TZ [CAMERA...], COLMAP world-to-camera")
+  app.add_option("--label", labels,
+                 "name of each run in the table, in --results order (default: file name)");
+  app.add_option(
+         "--gt", gt_path,
+         "ground-truth poses: NAME QW QX QY QZ TX TY TZ [CAMERA...], COLMAP world-to-camera")
       ->required();
-  app.add_option("--scale", scale_path, "scale_to_metres.txt ('scale S' line) to report metres instead of model units");
+  app.add_option("--scale", scale_path,
+                 "scale_to_metres.txt ('scale S' line) to report metres instead of model units");
   std::string model_dir, gt_points, gt_model;
   int min_shared = 12;
-  app.add_option("--model", model_dir, "mapping model (COLMAP sparse dir): score the ranked images (location recognition)");
-  auto* points_option = app.add_option("--gt-points", gt_points,
-                                       "with --model: 'NAME POINT3D_ID...' lines, the 3D points each query sees "
-                                       "(cwloc-synth's queries_gt_points.txt)");
+  app.add_option(
+      "--model", model_dir,
+      "mapping model (COLMAP sparse dir): score the ranked images (location recognition)");
+  auto* points_option =
+      app.add_option("--gt-points", gt_points,
+                     "with --model: 'NAME POINT3D_ID...' lines, the 3D points each query sees "
+                     "(cwloc-synth's queries_gt_points.txt)");
   app.add_option("--gt-model", gt_model,
-                 "with --model: a COLMAP model containing the queries (e.g. full_model); its points are what each "
+                 "with --model: a COLMAP model containing the queries (e.g. full_model); its "
+                 "points are what each "
                  "query sees")
       ->excludes(points_option);
-  app.add_option("--min-shared", min_shared, "3D points a ranked image must share with the query to be right")
+  app.add_option("--min-shared", min_shared,
+                 "3D points a ranked image must share with the query to be right")
       ->capture_default_str();
   app.add_flag("--json", json, "print the report as JSON (schemas/eval-report.schema.json)");
   try {
@@ -50,7 +59,8 @@ int main(int argc, char** argv) {
     using namespace cwloc::eval;
     if (!labels.empty() && labels.size() != results_paths.size()) {
       throw cwloc::InputError("got " + std::to_string(labels.size()) + " --label for " +
-                              std::to_string(results_paths.size()) + " --results; give one per run or none");
+                              std::to_string(results_paths.size()) +
+                              " --results; give one per run or none");
     }
     EvalReport report;
     report.ground_truth_path = gt_path;
@@ -65,10 +75,12 @@ int main(int argc, char** argv) {
     for (const NamedPose& query : ground_truth) query_names.push_back(query.name);
     if (!model_dir.empty()) {
       if (gt_points.empty() && gt_model.empty()) {
-        throw cwloc::InputError("--model needs --gt-points or --gt-model to know what each query sees");
+        throw cwloc::InputError(
+            "--model needs --gt-points or --gt-model to know what each query sees");
       }
       if (min_shared < 1) throw cwloc::InputError("--min-shared must be at least 1");
-      const auto points = gt_points.empty() ? QueryPointsFromModel(gt_model, query_names) : ReadQueryPoints(gt_points);
+      const auto points = gt_points.empty() ? QueryPointsFromModel(gt_model, query_names)
+                                            : ReadQueryPoints(gt_points);
       recognition = MakeRecognitionTruth(model_dir, points, min_shared);
       report.recognition_min_shared = min_shared;
     }
@@ -77,7 +89,8 @@ int main(int argc, char** argv) {
       const std::string label =
           labels.empty() ? std::filesystem::path(results_paths[i]).filename().string() : labels[i];
       report.runs.push_back(EvaluateRun(ground_truth, run, report.scale, label));
-      if (recognition) report.runs.back().recognition = ScoreRecognition(run, query_names, *recognition);
+      if (recognition)
+        report.runs.back().recognition = ScoreRecognition(run, query_names, *recognition);
     }
     if (json) {
       std::cout << ReportToJson(report).dump(2) << "\n";

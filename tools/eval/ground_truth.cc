@@ -33,7 +33,8 @@ std::string Where(const std::filesystem::path& path, int line) {
 
 std::vector<std::string> ReadLines(const std::filesystem::path& path) {
   std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) throw InputError(path.string() + ": is a directory, expected a file");
+  if (std::filesystem::is_directory(path, ec))
+    throw InputError(path.string() + ": is a directory, expected a file");
   std::ifstream file(path);
   if (!file) throw InputError(path.string() + ": cannot open (" + std::strerror(errno) + ")");
   std::vector<std::string> lines;
@@ -64,7 +65,8 @@ std::vector<NamedPose> ReadPosesFile(const std::filesystem::path& path) {
     }
     if (!ok) throw InputError(Where(path, line_number) + "expected NAME QW QX QY QZ TX TY TZ");
     const Eigen::Quaterniond q(v[0], v[1], v[2], v[3]);
-    if (q.norm() < 1e-12) throw InputError(Where(path, line_number) + "quaternion QW QX QY QZ is zero");
+    if (q.norm() < 1e-12)
+      throw InputError(Where(path, line_number) + "quaternion QW QX QY QZ is zero");
     entry.pose.qvec = q.normalized();
     entry.pose.tvec = Eigen::Vector3d(v[4], v[5], v[6]);
     poses.push_back(std::move(entry));
@@ -74,7 +76,9 @@ std::vector<NamedPose> ReadPosesFile(const std::filesystem::path& path) {
 
 std::vector<NamedPose> ReadGroundTruth(const std::filesystem::path& path) {
   std::vector<NamedPose> poses = ReadPosesFile(path);
-  if (poses.empty()) throw InputError(path.string() + ": no ground-truth queries (expected NAME QW QX QY QZ TX TY TZ lines)");
+  if (poses.empty())
+    throw InputError(path.string() +
+                     ": no ground-truth queries (expected NAME QW QX QY QZ TX TY TZ lines)");
   std::unordered_map<std::string, int> first_line;
   for (const NamedPose& p : poses) {
     const auto [it, inserted] = first_line.emplace(p.name, p.line);

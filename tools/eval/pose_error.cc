@@ -12,7 +12,8 @@ double PositionError(const Pose& estimate, const Pose& truth) {
 }
 
 double RotationErrorDeg(const Pose& estimate, const Pose& truth) {
-  const Eigen::Quaterniond relative = estimate.qvec.normalized() * truth.qvec.normalized().conjugate();
+  const Eigen::Quaterniond relative =
+      estimate.qvec.normalized() * truth.qvec.normalized().conjugate();
   // |w| folds q and -q, which are the same rotation.
   const double angle = 2.0 * std::atan2(relative.vec().norm(), std::abs(relative.w()));
   return angle * 180.0 / std::numbers::pi;

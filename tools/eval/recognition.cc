@@ -29,8 +29,8 @@ std::map<std::string, std::vector<uint64_t>> ReadQueryPoints(const std::filesyst
         used = 0;
       }
       if (used != token.size() || token[0] == '-') {
-        throw InputError(path.string() + ":" + std::to_string(number) + ": expected NAME POINT3D_ID..., got '" +
-                         token + "'");
+        throw InputError(path.string() + ":" + std::to_string(number) +
+                         ": expected NAME POINT3D_ID..., got '" + token + "'");
       }
       ids.push_back(id);
     }
@@ -38,8 +38,8 @@ std::map<std::string, std::vector<uint64_t>> ReadQueryPoints(const std::filesyst
   return points;
 }
 
-std::map<std::string, std::vector<uint64_t>> QueryPointsFromModel(const std::filesystem::path& model_dir,
-                                                                  const std::vector<std::string>& names) {
+std::map<std::string, std::vector<uint64_t>> QueryPointsFromModel(
+    const std::filesystem::path& model_dir, const std::vector<std::string>& names) {
   const colmap::Reconstruction model = colmap::ReadReconstruction(model_dir);
   std::unordered_map<std::string, const colmap::Image*> by_name;
   for (const auto& [id, image] : model.images) by_name[image.name] = &image;
@@ -55,9 +55,9 @@ std::map<std::string, std::vector<uint64_t>> QueryPointsFromModel(const std::fil
   return points;
 }
 
-RecognitionTruth MakeRecognitionTruth(const std::filesystem::path& mapping_model_dir,
-                                      const std::map<std::string, std::vector<uint64_t>>& query_points,
-                                      int min_shared) {
+RecognitionTruth MakeRecognitionTruth(
+    const std::filesystem::path& mapping_model_dir,
+    const std::map<std::string, std::vector<uint64_t>>& query_points, int min_shared) {
   const colmap::Reconstruction model = colmap::ReadReconstruction(mapping_model_dir);
   RecognitionTruth truth;
   truth.min_shared = min_shared;
@@ -66,7 +66,8 @@ RecognitionTruth MakeRecognitionTruth(const std::filesystem::path& mapping_model
     for (const uint64_t id : ids) {
       const auto point = model.points3D.find(id);
       if (point == model.points3D.end()) continue;  // not in the mapping model
-      for (const colmap::TrackElement& element : point->second.track) shared[element.image_id].insert(id);
+      for (const colmap::TrackElement& element : point->second.track)
+        shared[element.image_id].insert(id);
     }
     std::set<uint32_t>& right = truth.right_images[name];
     for (const auto& [image_id, points] : shared) {
@@ -76,7 +77,8 @@ RecognitionTruth MakeRecognitionTruth(const std::filesystem::path& mapping_model
   return truth;
 }
 
-RecognitionScores ScoreRecognition(const RunResults& run, const std::vector<std::string>& query_names,
+RecognitionScores ScoreRecognition(const RunResults& run,
+                                   const std::vector<std::string>& query_names,
                                    const RecognitionTruth& truth) {
   std::unordered_map<std::string, const QueryResult*> results;
   for (const QueryResult& result : run.queries) results[result.name] = &result;

@@ -26,13 +26,13 @@ std::map<std::string, std::vector<uint64_t>> ReadQueryPoints(const std::filesyst
 
 // The same from a COLMAP model that contains the queries (e.g. herz_jesu_p25's full_model):
 // each named image's observed 3D points. Queries missing from the model see no point.
-std::map<std::string, std::vector<uint64_t>> QueryPointsFromModel(const std::filesystem::path& model_dir,
-                                                                  const std::vector<std::string>& names);
+std::map<std::string, std::vector<uint64_t>> QueryPointsFromModel(
+    const std::filesystem::path& model_dir, const std::vector<std::string>& names);
 
 // Right images of every query, counted against the mapping model's tracks.
-RecognitionTruth MakeRecognitionTruth(const std::filesystem::path& mapping_model_dir,
-                                      const std::map<std::string, std::vector<uint64_t>>& query_points,
-                                      int min_shared);
+RecognitionTruth MakeRecognitionTruth(
+    const std::filesystem::path& mapping_model_dir,
+    const std::map<std::string, std::vector<uint64_t>>& query_points, int min_shared);
 
 struct RecognitionScores {
   int queries = 0;                                   // ground-truth queries scored
@@ -41,7 +41,8 @@ struct RecognitionScores {
 };
 
 // Scores the ranked images of each ground-truth query (queries without a result are misses).
-RecognitionScores ScoreRecognition(const RunResults& run, const std::vector<std::string>& query_names,
+RecognitionScores ScoreRecognition(const RunResults& run,
+                                   const std::vector<std::string>& query_names,
                                    const RecognitionTruth& truth);
 
 }  // namespace cwloc::eval

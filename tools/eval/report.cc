@@ -108,16 +108,20 @@ std::optional<TimeQuantiles> ComputeTimeQuantiles(std::vector<double> values) {
 
 const char* QueryStatusName(QueryStatus status) {
   switch (status) {
-    case QueryStatus::kLocalized: return "localized";
-    case QueryStatus::kNotLocalized: return "not_localized";
-    case QueryStatus::kError: return "error";
-    case QueryStatus::kMissing: return "missing";
+    case QueryStatus::kLocalized:
+      return "localized";
+    case QueryStatus::kNotLocalized:
+      return "not_localized";
+    case QueryStatus::kError:
+      return "error";
+    case QueryStatus::kMissing:
+      return "missing";
   }
   return "missing";
 }
 
-RunReport EvaluateRun(const std::vector<NamedPose>& ground_truth, const RunResults& run, double scale,
-                      const std::string& label) {
+RunReport EvaluateRun(const std::vector<NamedPose>& ground_truth, const RunResults& run,
+                      double scale, const std::string& label) {
   RunReport report;
   report.label = label;
   report.path = run.path;
@@ -166,13 +170,15 @@ RunReport EvaluateRun(const std::vector<NamedPose>& ground_truth, const RunResul
     // Timing does not depend on the ground truth, so every timed record counts.
     if (!result.times_ms) continue;
     ++report.timed_records;
-    for (size_t s = 0; s < kStageNames.size(); ++s) stage_values[s].push_back((*result.times_ms)[s]);
+    for (size_t s = 0; s < kStageNames.size(); ++s)
+      stage_values[s].push_back((*result.times_ms)[s]);
   }
   report.position_error = ComputeQuartiles(std::move(position_errors));
   report.rotation_error_deg = ComputeQuartiles(std::move(rotation_errors));
   if (report.timed_records > 0) {
     std::array<TimeQuantiles, kStageNames.size()> times;
-    for (size_t s = 0; s < kStageNames.size(); ++s) times[s] = *ComputeTimeQuantiles(std::move(stage_values[s]));
+    for (size_t s = 0; s < kStageNames.size(); ++s)
+      times[s] = *ComputeTimeQuantiles(std::move(stage_values[s]));
     report.times_ms = times;
   }
   return report;
@@ -185,10 +191,12 @@ nlohmann::ordered_json ReportToJson(const EvalReport& report) {
   json["ground_truth"] = {{"path", report.ground_truth_path.string()}, {"queries", report.queries}};
   json["unit"] = report.Unit();
   json["scale"] = report.scale;
-  json["scale_path"] = report.scale_path ? ordered_json(report.scale_path->string()) : ordered_json(nullptr);
+  json["scale_path"] =
+      report.scale_path ? ordered_json(report.scale_path->string()) : ordered_json(nullptr);
   json["quantile_method"] = "linear";
   ordered_json thresholds = ordered_json::array();
-  for (const Threshold& t : kThresholds) thresholds.push_back({{"position", t.position}, {"rotation_deg", t.rotation_deg}});
+  for (const Threshold& t : kThresholds)
+    thresholds.push_back({{"position", t.position}, {"rotation_deg", t.rotation_deg}});
   json["thresholds"] = thresholds;
 
   ordered_json runs = ordered_json::array();
@@ -217,7 +225,8 @@ nlohmann::ordered_json ReportToJson(const EvalReport& report) {
     r["timed_records"] = run.timed_records;
     if (run.times_ms) {
       ordered_json times;
-      for (size_t s = 0; s < kStageNames.size(); ++s) times[kStageNames[s]] = TimeQuantilesJson((*run.times_ms)[s]);
+      for (size_t s = 0; s < kStageNames.size(); ++s)
+        times[kStageNames[s]] = TimeQuantilesJson((*run.times_ms)[s]);
       r["times_ms"] = times;
     } else {
       r["times_ms"] = nullptr;
@@ -237,7 +246,8 @@ nlohmann::ordered_json ReportToJson(const EvalReport& report) {
       ordered_json top = ordered_json::object();
       for (size_t k = 0; k < kRecognitionRanks.size(); ++k) {
         top["top" + std::to_string(kRecognitionRanks[k])] = {
-            {"count", scores.hits[k]}, {"share", scores.queries ? double(scores.hits[k]) / scores.queries : 0.0}};
+            {"count", scores.hits[k]},
+            {"share", scores.queries ? double(scores.hits[k]) / scores.queries : 0.0}};
       }
       r["recognition"] = {{"min_shared_points", report.recognition_min_shared},
                           {"queries", scores.queries},
@@ -253,25 +263,28 @@ nlohmann::ordered_json ReportToJson(const EvalReport& report) {
 std::string FormatTable(const EvalReport& report) {
   std::ostringstream out;
   const char* unit = report.Metric() ? "m" : "units";
-  out << "cwloc-eval: " << report.queries << " ground-truth queries from " << report.ground_truth_path.string()
-      << "\n";
+  out << "cwloc-eval: " << report.queries << " ground-truth queries from "
+      << report.ground_truth_path.string() << "\n";
   if (report.Metric()) {
-    out << "distances in metres (scale " << Format("%.10g", report.scale) << " from " << report.scale_path->string()
-        << ")\n";
+    out << "distances in metres (scale " << Format("%.10g", report.scale) << " from "
+        << report.scale_path->string() << ")\n";
   } else {
-    out << "distances in model units (no --scale given); the thresholds below use the metre values as model units\n";
+    out << "distances in model units (no --scale given); the thresholds below use the metre values "
+           "as model units\n";
   }
   out << "errors: Q1 / median / Q3 over localized queries; shares: of all ground-truth queries\n\n";
 
   std::vector<std::vector<std::string>> rows;
-  std::vector<std::string> header = {"run", "localized", std::string("position error (") + unit + ")",
-                                     "rotation error (deg)"};
+  std::vector<std::string> header = {
+      "run", "localized", std::string("position error (") + unit + ")", "rotation error (deg)"};
   for (const Threshold& t : kThresholds) header.push_back(ThresholdName(t, unit));
   rows.push_back(header);
   for (const RunReport& run : report.runs) {
-    std::vector<std::string> row = {run.label, std::to_string(run.localized) + "/" + std::to_string(run.queries),
-                                    QuartileCell(run.position_error), QuartileCell(run.rotation_error_deg)};
-    for (size_t t = 0; t < kThresholds.size(); ++t) row.push_back(Percent(run.within[t], run.queries));
+    std::vector<std::string> row = {
+        run.label, std::to_string(run.localized) + "/" + std::to_string(run.queries),
+        QuartileCell(run.position_error), QuartileCell(run.rotation_error_deg)};
+    for (size_t t = 0; t < kThresholds.size(); ++t)
+      row.push_back(Percent(run.within[t], run.queries));
     rows.push_back(row);
   }
   out << Columns(rows);
@@ -279,8 +292,8 @@ std::string FormatTable(const EvalReport& report) {
   // Why a query is not localized matters when comparing runs.
   for (const RunReport& run : report.runs) {
     if (run.not_localized + run.errors + run.missing > 0) {
-      out << "  " << run.label << ": not localized " << run.not_localized << ", error records " << run.errors
-          << ", missing from results " << run.missing << "\n";
+      out << "  " << run.label << ": not localized " << run.not_localized << ", error records "
+          << run.errors << ", missing from results " << run.missing << "\n";
     }
   }
   for (const RunReport& run : report.runs) {
@@ -291,7 +304,8 @@ std::string FormatTable(const EvalReport& report) {
   }
 
   if (report.recognition_min_shared > 0) {
-    out << "\nlocation recognition: a ranked image is right when it sees >= " << report.recognition_min_shared
+    out << "\nlocation recognition: a ranked image is right when it sees >= "
+        << report.recognition_min_shared
         << " of the query's ground-truth 3D points; shares of all ground-truth queries\n";
     std::vector<std::vector<std::string>> recognition_rows;
     std::vector<std::string> recognition_header = {"run", "queries with a right image"};

@@ -20,7 +20,8 @@ struct Quartiles {
 };
 
 // The p-quantile (0 <= p <= 1) of sorted values by linear interpolation between closest
-// ranks, numpy's default: h = p (n - 1), Q = x[floor h] + (h - floor h) (x[floor h + 1] - x[floor h]).
+// ranks, numpy's default: h = p (n - 1), Q = x[floor h] + (h - floor h) (x[floor h + 1] - x[floor
+// h]).
 double Quantile(const std::vector<double>& sorted, double p);
 
 // Q1, median and Q3 as above; nullopt for no values.
@@ -42,7 +43,8 @@ struct Threshold {
 inline constexpr std::array<Threshold, 3> kThresholds = {{{0.25, 2.0}, {0.5, 5.0}, {5.0, 10.0}}};
 
 enum class QueryStatus { kLocalized, kNotLocalized, kError, kMissing };
-const char* QueryStatusName(QueryStatus status);  // "localized", "not_localized", "error", "missing"
+const char* QueryStatusName(
+    QueryStatus status);  // "localized", "not_localized", "error", "missing"
 
 struct QueryOutcome {
   std::string name;
@@ -55,18 +57,18 @@ struct RunReport {
   std::string label;
   std::filesystem::path path;
   ResultFormat format = ResultFormat::kPoses;
-  int queries = 0;        // ground-truth queries
+  int queries = 0;  // ground-truth queries
   int localized = 0;
-  int not_localized = 0;  // "success": false without "error"
-  int errors = 0;         // error records
-  int missing = 0;        // ground-truth queries with no result
-  int unknown_names = 0;  // results for names not in the ground truth (ignored)
-  std::optional<Quartiles> position_error;      // over localized queries
-  std::optional<Quartiles> rotation_error_deg;  // over localized queries
+  int not_localized = 0;                    // "success": false without "error"
+  int errors = 0;                           // error records
+  int missing = 0;                          // ground-truth queries with no result
+  int unknown_names = 0;                    // results for names not in the ground truth (ignored)
+  std::optional<Quartiles> position_error;  // over localized queries
+  std::optional<Quartiles> rotation_error_deg;   // over localized queries
   std::array<int, kThresholds.size()> within{};  // localized queries inside each threshold
-  int timed_records = 0;  // result records that carry times_ms
+  int timed_records = 0;                         // result records that carry times_ms
   std::optional<std::array<TimeQuantiles, kStageNames.size()>> times_ms;
-  std::vector<QueryOutcome> per_query;  // in ground-truth order
+  std::vector<QueryOutcome> per_query;           // in ground-truth order
   std::optional<RecognitionScores> recognition;  // with --model and query points
 };
 
@@ -83,8 +85,8 @@ struct EvalReport {
 };
 
 // Compares one run with the ground truth; distances are multiplied by scale.
-RunReport EvaluateRun(const std::vector<NamedPose>& ground_truth, const RunResults& run, double scale,
-                      const std::string& label);
+RunReport EvaluateRun(const std::vector<NamedPose>& ground_truth, const RunResults& run,
+                      double scale, const std::string& label);
 
 // The report as described by schemas/eval-report.schema.json.
 nlohmann::ordered_json ReportToJson(const EvalReport& report);

@@ -26,17 +26,21 @@ std::array<double, N> NumberArray(const json& object, const char* key, const std
   const bool ok = it != object.end() && it->is_array() && it->size() == N;
   for (size_t i = 0; ok && i < N; ++i) {
     if (!(*it)[i].is_number() || !std::isfinite(values[i] = (*it)[i].get<double>())) {
-      throw InputError(where + "\"" + field + "\" must be an array of " + std::to_string(N) + " finite numbers");
+      throw InputError(where + "\"" + field + "\" must be an array of " + std::to_string(N) +
+                       " finite numbers");
     }
   }
-  if (!ok) throw InputError(where + "\"" + field + "\" must be an array of " + std::to_string(N) + " finite numbers");
+  if (!ok)
+    throw InputError(where + "\"" + field + "\" must be an array of " + std::to_string(N) +
+                     " finite numbers");
   return values;
 }
 
 QueryResult ParseJsonLine(const std::string& line, const std::string& where) {
   const json record = json::parse(line, nullptr, /*allow_exceptions=*/false);
   if (record.is_discarded()) throw InputError(where + "not valid JSON");
-  if (!record.is_object()) throw InputError(where + "expected a JSON object (one cwloc-localize result per line)");
+  if (!record.is_object())
+    throw InputError(where + "expected a JSON object (one cwloc-localize result per line)");
   QueryResult result;
   const auto name = record.find("name");
   if (name == record.end() || !name->is_string() || name->get<std::string>().empty()) {
@@ -44,7 +48,8 @@ QueryResult ParseJsonLine(const std::string& line, const std::string& where) {
   }
   result.name = name->get<std::string>();
   const auto success = record.find("success");
-  if (success == record.end() || !success->is_boolean()) throw InputError(where + "expected a boolean \"success\"");
+  if (success == record.end() || !success->is_boolean())
+    throw InputError(where + "expected a boolean \"success\"");
 
   if (success->get<bool>()) {
     const auto pose = record.find("pose");
@@ -78,7 +83,8 @@ QueryResult ParseJsonLine(const std::string& line, const std::string& where) {
     for (const auto& image : *ranked) {
       const auto id = image.is_object() ? image.find("image_id") : image.end();
       if (id == image.end() || !id->is_number_unsigned()) {
-        throw InputError(where + "\"ranked_images\" entries need a non-negative integer \"image_id\"");
+        throw InputError(where +
+                         "\"ranked_images\" entries need a non-negative integer \"image_id\"");
       }
       result.ranked_image_ids.push_back(id->get<uint32_t>());
     }
@@ -126,8 +132,8 @@ RunResults ReadResults(const std::filesystem::path& path) {
   for (const QueryResult& result : run.queries) {
     const auto [it, inserted] = first_line.emplace(result.name, result.line);
     if (!inserted) {
-      throw InputError(Where(path, result.line) + "duplicate result for " + result.name + " (first on line " +
-                       std::to_string(it->second) + ")");
+      throw InputError(Where(path, result.line) + "duplicate result for " + result.name +
+                       " (first on line " + std::to_string(it->second) + ")");
     }
   }
   return run;

@@ -11,8 +11,8 @@
 namespace cwloc::eval {
 
 // The per-stage times of cwloc-localize's "times_ms", in the schema's order.
-inline constexpr std::array<const char*, 6> kStageNames = {"forward_knn",   "ratio_test", "query_tree",
-                                                           "back_matching", "pose",       "total"};
+inline constexpr std::array<const char*, 6> kStageNames = {
+    "forward_knn", "ratio_test", "query_tree", "back_matching", "pose", "total"};
 using StageTimes = std::array<double, kStageNames.size()>;
 
 enum class ResultStatus { kLocalized, kNotLocalized, kError };

@@ -1,10 +1,9 @@
 #include "tools/synth/city_layout.h"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <numbers>
-
-#include <Eigen/Geometry>
 
 #include "tools/synth/sift_descriptors.h"
 
@@ -164,10 +163,11 @@ std::vector<CameraPose> CityLayout::PlaceMappingCameras(uint64_t seed) const {
       // Across the street, from the far sidewalk.
       {
         const double offset = std::max(2.0, f.street_width - rng.Uniform(1.5, 3.0));
-        const Eigen::Vector2d g = f.origin + (u + 0.3 * rng.Gaussian()) * f.direction + offset * f.normal;
-        CameraPose pose =
-            MakeCameraPose({g.x(), g.y(), rng.Uniform(1.5, 1.8)}, facing + rng.Uniform(-30, 30) * kDegree,
-                           rng.Uniform(5, 20) * kDegree, 1.5 * kDegree * rng.Gaussian());
+        const Eigen::Vector2d g =
+            f.origin + (u + 0.3 * rng.Gaussian()) * f.direction + offset * f.normal;
+        CameraPose pose = MakeCameraPose(
+            {g.x(), g.y(), rng.Uniform(1.5, 1.8)}, facing + rng.Uniform(-30, 30) * kDegree,
+            rng.Uniform(5, 20) * kDegree, 1.5 * kDegree * rng.Gaussian());
         pose.facade = id;
         cameras.push_back(pose);
       }

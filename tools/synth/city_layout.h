@@ -4,11 +4,10 @@
 // on every block side, and where the street-level cameras stand. World frame: x east, y north,
 // z up, metres. Blocks are solid for occlusion (as if infinitely tall).
 
+#include <Eigen/Core>
 #include <array>
 #include <cstdint>
 #include <vector>
-
-#include <Eigen/Core>
 
 namespace cwloc::synth {
 
@@ -35,12 +34,12 @@ struct Block {
 // One building's face on one block side: a vertical rectangle.
 struct Facade {
   uint32_t block = 0;
-  int side = 0;                  // 0 south, 1 east, 2 north, 3 west
-  Eigen::Vector2d origin;        // ground-level corner where the facade starts
-  Eigen::Vector2d direction;     // unit, along the facade: "right" for a viewer facing it
-  Eigen::Vector2d normal;        // unit, outward (towards the street)
+  int side = 0;               // 0 south, 1 east, 2 north, 3 west
+  Eigen::Vector2d origin;     // ground-level corner where the facade starts
+  Eigen::Vector2d direction;  // unit, along the facade: "right" for a viewer facing it
+  Eigen::Vector2d normal;     // unit, outward (towards the street)
   double width = 0, height = 0;
-  double street_width = 0;       // width of the street in front of it
+  double street_width = 0;  // width of the street in front of it
   std::array<uint8_t, 3> color{};
 
   // The 3D point at facade coordinates (u along, v up, depth out of the wall).
@@ -68,9 +67,9 @@ class CityLayout {
   const LayoutOptions& options() const { return options_; }
   const std::vector<Block>& blocks() const { return blocks_; }
   const std::vector<Facade>& facades() const { return facades_; }
-  double width() const { return column_edges_.back(); }   // extent in x, streets included
-  double depth() const { return row_edges_.back(); }      // extent in y
-  double FacadeLength() const;                            // sum of facade widths
+  double width() const { return column_edges_.back(); }  // extent in x, streets included
+  double depth() const { return row_edges_.back(); }     // extent in y
+  double FacadeLength() const;                           // sum of facade widths
 
   // Facades of blocks whose footprint comes within `radius` of `centre`.
   void FacadesNear(const Eigen::Vector2d& centre, double radius,

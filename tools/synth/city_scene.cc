@@ -1,5 +1,6 @@
 #include "tools/synth/city_scene.h"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
 #include <atomic>
@@ -8,10 +9,8 @@
 #include <numbers>
 #include <span>
 
-#include <Eigen/Geometry>
-
-#include "format/camera/camera_models.h"
 #include "format/base/parallel_for.h"
+#include "format/camera/camera_models.h"
 
 namespace cwloc::synth {
 namespace {
@@ -34,7 +33,8 @@ enum Stream : uint64_t {
 
 constexpr double kMinKeypointScale = 1.3;  // pixels; smaller blobs are not detected
 constexpr double kMaxKeypointScale = 80;
-constexpr double kReferenceDistance = 12;  // metres; the distance a feature's canonical look is from
+constexpr double kReferenceDistance =
+    12;  // metres; the distance a feature's canonical look is from
 constexpr double kKeypointScaleError = 0.13;  // log2, sigma; the descriptor sees the same error
 constexpr double kMinDepth = 0.3;
 constexpr int kMaxQueryDraws = 64;
@@ -92,11 +92,13 @@ CityScene CityScene::Generate(const SceneOptions& options, const Progress& progr
 
   // Mapping images: observe in parallel, one slot per image.
   std::vector<CameraPose> poses = scene.layout_.PlaceMappingCameras(options.seed);
-  const size_t budget = size_t(std::lround(options.features_per_image * (1 - options.clutter_fraction)));
+  const size_t budget =
+      size_t(std::lround(options.features_per_image * (1 - options.clutter_fraction)));
   std::vector<std::vector<Observation>> observations(poses.size());
   std::atomic<size_t> done{0};
   ParallelFor(poses.size(), options.threads, [&](size_t i) {
-    observations[i] = scene.Observe(poses[i], Rng::Seed(options.seed, kObserveStream, i + 1), budget);
+    observations[i] =
+        scene.Observe(poses[i], Rng::Seed(options.seed, kObserveStream, i + 1), budget);
     const size_t d = ++done;
     if (d % 64 == 0) report("mapping views", double(d) / double(poses.size()));
   });
@@ -113,9 +115,9 @@ CityScene CityScene::Generate(const SceneOptions& options, const Progress& progr
     changed = false;
     for (size_t i = 0; i < poses.size(); ++i) {
       if (!registered[i]) continue;
-      const size_t model_views = size_t(std::count_if(
-          observations[i].begin(), observations[i].end(),
-          [&](const Observation& o) { return view_count[o.point] >= 2; }));
+      const size_t model_views =
+          size_t(std::count_if(observations[i].begin(), observations[i].end(),
+                               [&](const Observation& o) { return view_count[o.point] >= 2; }));
       if (model_views >= min_model_views) continue;
       registered[i] = false;
       changed = true;
@@ -157,7 +159,8 @@ CityScene CityScene::Generate(const SceneOptions& options, const Progress& progr
   ParallelFor(num_queries, options.threads, [&](size_t q) {
     size_t best = 0;
     for (int draw = 0; draw < kMaxQueryDraws; ++draw) {
-      const CameraPose pose = scene.layout_.DrawQueryCamera(options.seed, q * kMaxQueryDraws + draw);
+      const CameraPose pose =
+          scene.layout_.DrawQueryCamera(options.seed, q * kMaxQueryDraws + draw);
       auto obs = scene.Observe(pose, Rng::Seed(options.seed, kQueryObserveStream, q, draw), budget);
       size_t in_model = 0;
       for (const Observation& o : obs) in_model += scene.point3D_ids_[o.point] != kInvalidPoint3DId;
@@ -466,7 +469,8 @@ bool CityScene::Project(const CameraPose& pose, const Eigen::Vector3d& xyz,
   const Eigen::Vector3d x = pose.cam_from_world_rotation * (xyz - pose.centre);
   if (x.z() <= 0) return false;
   std::array<double, 2> px;
-  if (!ProjectToPixel(options_.camera.model_id, options_.camera.params, {x.x(), x.y(), x.z()}, &px)) {
+  if (!ProjectToPixel(options_.camera.model_id, options_.camera.params, {x.x(), x.y(), x.z()},
+                      &px)) {
     return false;
   }
   *pixel = {px[0], px[1]};

@@ -6,6 +6,7 @@
 // Describe() renders any feature's descriptor on demand from seeds, so memory stays at a few
 // tens of bytes per feature.
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <functional>
 #include <limits>
@@ -13,10 +14,8 @@
 #include <string_view>
 #include <vector>
 
-#include <Eigen/Core>
-
-#include "format/colmap/types.h"
 #include "format/colmap/reconstruction.h"
+#include "format/colmap/types.h"
 #include "tools/synth/city_layout.h"
 #include "tools/synth/sift_descriptors.h"
 
@@ -27,22 +26,22 @@ struct SceneOptions {
   LayoutOptions layout;
   int queries = 100;
   int features_per_image = 1500;
-  double clutter_fraction = 0.33;   // share of each image's features that belong to no point
-  double repetition = 0.3;          // share of facade points drawn from the motif pool
-  int motifs = 256;                 // size of the global motif pool
-  double instance_noise = 0.3;      // how much two instances of one motif differ
-  double keypoint_noise = 0.7;      // pixels, sigma per axis (truncated at 2.5 sigma)
-  double point_noise = 0.01;        // metres, sigma per axis of the model's xyz at 20 m from
-                                    // the nearest mapping camera (scaled with that distance,
-                                    // as triangulation error is)
-  double point_density = 0;         // facade points per m^2; 0: derived from features_per_image
-  double max_distance = 60;         // metres
-  double max_obliquity_deg = 70;    // between the viewing ray and the facade normal
-  int min_query_points = 50;        // model points a query must see (redrawn otherwise)
-  colmap::Camera camera;            // shared by every image; camera_id 1
+  double clutter_fraction = 0.33;  // share of each image's features that belong to no point
+  double repetition = 0.3;         // share of facade points drawn from the motif pool
+  int motifs = 256;                // size of the global motif pool
+  double instance_noise = 0.3;     // how much two instances of one motif differ
+  double keypoint_noise = 0.7;     // pixels, sigma per axis (truncated at 2.5 sigma)
+  double point_noise = 0.01;       // metres, sigma per axis of the model's xyz at 20 m from
+                                   // the nearest mapping camera (scaled with that distance,
+                                   // as triangulation error is)
+  double point_density = 0;        // facade points per m^2; 0: derived from features_per_image
+  double max_distance = 60;        // metres
+  double max_obliquity_deg = 70;   // between the viewing ray and the facade normal
+  int min_query_points = 50;       // model points a query must see (redrawn otherwise)
+  colmap::Camera camera;           // shared by every image; camera_id 1
   PatchModel patch;
   ViewNoiseModel view_noise;
-  int threads = 0;                  // 0: all cores
+  int threads = 0;  // 0: all cores
 };
 
 // Facade points per m^2 that fill an image's feature budget at typical distances.
@@ -55,19 +54,19 @@ inline constexpr uint32_t kNoPoint = std::numeric_limits<uint32_t>::max();
 inline constexpr int32_t kUniqueTexture = -1;
 
 struct ScenePoint {
-  Eigen::Vector3d xyz;          // true position
+  Eigen::Vector3d xyz;  // true position
   uint32_t facade = 0;
   int32_t motif = kUniqueTexture;
-  float size = 0;               // metric scale of the feature (SIFT sigma), metres
-  float angle = 0;              // its dominant gradient's direction on the facade, radians
+  float size = 0;   // metric scale of the feature (SIFT sigma), metres
+  float angle = 0;  // its dominant gradient's direction on the facade, radians
 };
 
 // One keypoint of an image: a view of a point (with detection noise) or clutter.
 struct SceneFeature {
-  float x = 0, y = 0;           // pixels, COLMAP convention
-  float scale = 0;              // pixels
-  float orientation = 0;        // radians
-  uint32_t point = kNoPoint;    // index into CityScene::points, kNoPoint for clutter
+  float x = 0, y = 0;         // pixels, COLMAP convention
+  float scale = 0;            // pixels
+  float orientation = 0;      // radians
+  uint32_t point = kNoPoint;  // index into CityScene::points, kNoPoint for clutter
 };
 
 struct SceneImage {
@@ -82,17 +81,17 @@ struct SceneCounts {
   size_t mapping_images = 0;
   size_t queries = 0;
   size_t facades = 0;
-  size_t scene_points = 0;          // all facade points, seen or not
-  size_t model_points = 0;          // seen by >= 2 mapping images
-  size_t views = 0;                 // model observations
-  size_t features = 0;              // all keypoints, queries included
+  size_t scene_points = 0;  // all facade points, seen or not
+  size_t model_points = 0;  // seen by >= 2 mapping images
+  size_t views = 0;         // model observations
+  size_t features = 0;      // all keypoints, queries included
   size_t clutter_features = 0;
   size_t mapping_features = 0;
   size_t mapping_clutter = 0;
   size_t single_view_features = 0;  // mapping features of points that did not make the model
   size_t motif_model_points = 0;    // model points that are motif instances
   size_t motif_views = 0;
-  size_t distinct_motifs = 0;       // motifs with at least one model point
+  size_t distinct_motifs = 0;  // motifs with at least one model point
   size_t query_model_observations = 0;
   size_t min_query_model_points = 0;
 };
@@ -128,7 +127,8 @@ class CityScene {
  private:
   explicit CityScene(const SceneOptions& options);
   struct Observation;
-  std::vector<Observation> Observe(const CameraPose& pose, uint64_t image_seed, size_t budget) const;
+  std::vector<Observation> Observe(const CameraPose& pose, uint64_t image_seed,
+                                   size_t budget) const;
   void MakePoints();
   void MakeFeatures(SceneImage* image, std::vector<Observation>&& observations) const;
 

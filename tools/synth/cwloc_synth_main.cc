@@ -1,19 +1,19 @@
 // cwloc-synth: generates a city with globally repeated structure and writes it as real COLMAP
 // data (model, database, queries with ground truth). See docs/synth.md.
-#include <CLI/CLI.hpp>
-#include <nlohmann/json.hpp>
 #include <sys/resource.h>
 #include <unistd.h>
 
+#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <iostream>
 #include <mutex>
+#include <nlohmann/json.hpp>
 
 #include "cwloc/version.h"
-#include "format/camera/camera_models.h"
 #include "format/base/error.h"
 #include "format/base/stopwatch.h"
 #include "format/base/tool_main.h"
+#include "format/camera/camera_models.h"
 #include "tools/synth/city_scene.h"
 #include "tools/synth/scene_writer.h"
 #include "tools/synth/synth_options.h"
@@ -60,8 +60,8 @@ class ProgressBar {
     stage_ = stage;
     const int filled = int(30 * std::clamp(fraction, 0.0, 1.0));
     std::fprintf(stderr, "\r%-16.*s [%s%s] %3d%%", int(stage.size()), stage.data(),
-                 std::string(size_t(filled), '#').c_str(), std::string(size_t(30 - filled), ' ').c_str(),
-                 int(100 * fraction));
+                 std::string(size_t(filled), '#').c_str(),
+                 std::string(size_t(30 - filled), ' ').c_str(), int(100 * fraction));
     std::fflush(stderr);
     shown_ = true;
   }
@@ -110,27 +110,27 @@ nlohmann::ordered_json Summary(const std::filesystem::path& output, const SynthK
                    {"point_noise", o.point_noise},
                    {"threads", o.threads},
                    {"text", text}};
-  json["counts"] = {
-      {"mapping_images", c.mapping_images},
-      {"queries", c.queries},
-      {"facades", c.facades},
-      {"scene_points", c.scene_points},
-      {"points3D", c.model_points},
-      {"views", c.views},
-      {"mean_track_length", share(c.views, c.model_points)},
-      {"features", c.features},
-      {"features_per_mapping_image", {{"min", min_features},
-                                      {"mean", share(c.mapping_features, c.mapping_images)},
-                                      {"max", max_features}}},
-      {"clutter_features", c.clutter_features},
-      {"clutter_share", share(c.clutter_features, c.features)},
-      {"single_view_features", c.single_view_features},
-      {"distinct_motifs", c.distinct_motifs},
-      {"repeated_points", c.motif_model_points},
-      {"repeated_share", share(c.motif_model_points, c.model_points)},
-      {"repeated_view_share", share(c.motif_views, c.views)},
-      {"query_model_observations", c.query_model_observations},
-      {"min_query_model_points", c.min_query_model_points}};
+  json["counts"] = {{"mapping_images", c.mapping_images},
+                    {"queries", c.queries},
+                    {"facades", c.facades},
+                    {"scene_points", c.scene_points},
+                    {"points3D", c.model_points},
+                    {"views", c.views},
+                    {"mean_track_length", share(c.views, c.model_points)},
+                    {"features", c.features},
+                    {"features_per_mapping_image",
+                     {{"min", min_features},
+                      {"mean", share(c.mapping_features, c.mapping_images)},
+                      {"max", max_features}}},
+                    {"clutter_features", c.clutter_features},
+                    {"clutter_share", share(c.clutter_features, c.features)},
+                    {"single_view_features", c.single_view_features},
+                    {"distinct_motifs", c.distinct_motifs},
+                    {"repeated_points", c.motif_model_points},
+                    {"repeated_share", share(c.motif_model_points, c.model_points)},
+                    {"repeated_view_share", share(c.motif_views, c.views)},
+                    {"query_model_observations", c.query_model_observations},
+                    {"min_query_model_points", c.min_query_model_points}};
   json["timings"] = {{"scene_seconds", scene_seconds},
                      {"model_seconds", write.model_seconds},
                      {"database_seconds", write.database_seconds},
@@ -146,21 +146,24 @@ void PrintSummary(const nlohmann::ordered_json& s) {
   const auto& t = s["timings"];
   std::printf("cwloc-synth: wrote %s (seed %llu)\n", s["output"].get<std::string>().c_str(),
               static_cast<unsigned long long>(s["seed"].get<uint64_t>()));
-  std::printf("  city:     %d x %d blocks, %zu facades\n", k["blocks_x"].get<int>(), k["blocks_y"].get<int>(),
-              c["facades"].get<size_t>());
+  std::printf("  city:     %d x %d blocks, %zu facades\n", k["blocks_x"].get<int>(),
+              k["blocks_y"].get<int>(), c["facades"].get<size_t>());
   std::printf("  images:   %zu mapping, %zu queries\n", c["mapping_images"].get<size_t>(),
               c["queries"].get<size_t>());
-  std::printf("  model:    %zu 3D points, %zu views (mean track %.2f)\n", c["points3D"].get<size_t>(),
-              c["views"].get<size_t>(), c["mean_track_length"].get<double>());
+  std::printf("  model:    %zu 3D points, %zu views (mean track %.2f)\n",
+              c["points3D"].get<size_t>(), c["views"].get<size_t>(),
+              c["mean_track_length"].get<double>());
   std::printf("  features: %zu, clutter %.1f%%\n", c["features"].get<size_t>(),
               100 * c["clutter_share"].get<double>());
   std::printf("  repeated: %zu distinct motifs; %.1f%% of 3D points, %.1f%% of views\n",
               c["distinct_motifs"].get<size_t>(), 100 * c["repeated_share"].get<double>(),
               100 * c["repeated_view_share"].get<double>());
-  std::printf("  time:     %.2f s (scene %.2f, model %.2f, database %.2f, files %.2f); peak memory %.0f MB\n",
-              t["total_seconds"].get<double>(), t["scene_seconds"].get<double>(),
-              t["model_seconds"].get<double>(), t["database_seconds"].get<double>(),
-              t["files_seconds"].get<double>(), double(s["peak_memory_bytes"].get<uint64_t>()) / 1e6);
+  std::printf(
+      "  time:     %.2f s (scene %.2f, model %.2f, database %.2f, files %.2f); peak memory %.0f "
+      "MB\n",
+      t["total_seconds"].get<double>(), t["scene_seconds"].get<double>(),
+      t["model_seconds"].get<double>(), t["database_seconds"].get<double>(),
+      t["files_seconds"].get<double>(), double(s["peak_memory_bytes"].get<uint64_t>()) / 1e6);
 }
 
 }  // namespace
@@ -168,26 +171,33 @@ void PrintSummary(const nlohmann::ordered_json& s) {
 
 int main(int argc, char** argv) {
   using namespace cwloc::synth;
-  CLI::App app{"cwloc-synth: generate a city with globally repeated structure, written as a COLMAP model, "
-               "database and held-out queries with ground truth"};
+  CLI::App app{
+      "cwloc-synth: generate a city with globally repeated structure, written as a COLMAP model, "
+      "database and held-out queries with ground truth"};
   app.set_version_flag("--version", std::string("cwloc-synth ") + cwloc::kToolVersion);
   std::string output;
   SynthKnobs knobs;
   bool text = false, overwrite = false, json = false;
-  app.add_option("-o,--output", output, "Output directory (must not exist or be empty, see --overwrite)")
+  app.add_option("-o,--output", output,
+                 "Output directory (must not exist or be empty, see --overwrite)")
       ->required();
-  app.add_option("--preset", knobs.preset, "Preset: 'demo' (a small city in a few seconds); knobs override it");
+  app.add_option("--preset", knobs.preset,
+                 "Preset: 'demo' (a small city in a few seconds); knobs override it");
   app.add_option("--seed", knobs.seed, "Seed; the same seed and knobs give byte-identical output")
       ->capture_default_str();
-  app.add_option("--views", knobs.views,
-                 "Approximate number of model views (observations); sets the number of blocks [200000]");
+  app.add_option(
+      "--views", knobs.views,
+      "Approximate number of model views (observations); sets the number of blocks [200000]");
   app.add_option("--blocks", knobs.blocks, "Number of city blocks (overrides --views)");
-  app.add_option("--queries", knobs.queries, "Query images (in the database, not in the model) [100]");
-  app.add_option("--features-per-image", knobs.features_per_image, "Keypoints per image, clutter included [1500]");
+  app.add_option("--queries", knobs.queries,
+                 "Query images (in the database, not in the model) [100]");
+  app.add_option("--features-per-image", knobs.features_per_image,
+                 "Keypoints per image, clutter included [1500]");
   app.add_option("--clutter-fraction", knobs.clutter_fraction,
                  "Share of each image's features that belong to no 3D point, in [0, 1) [0.33]");
-  app.add_option("--repetition", knobs.repetition,
-                 "Share of facade points that are instances of globally repeated motifs, in [0, 1] [0.3]");
+  app.add_option(
+      "--repetition", knobs.repetition,
+      "Share of facade points that are instances of globally repeated motifs, in [0, 1] [0.3]");
   app.add_option("--motifs", knobs.motifs, "Size of the global motif pool [256]");
   app.add_option("--instance-noise", knobs.instance_noise,
                  "How much two instances of one motif differ, in [0, 1] [0.3]");
@@ -196,12 +206,17 @@ int main(int argc, char** argv) {
   app.add_option("--width", knobs.width, "Image width in pixels [1024]");
   app.add_option("--height", knobs.height, "Image height in pixels [768]");
   app.add_option("--focal", knobs.focal, "Focal length in pixels [900]");
-  app.add_option("--radial", knobs.radial, "Radial distortion k of SIMPLE_RADIAL / k1 of RADIAL [-0.01]");
-  app.add_option("--camera-spacing", knobs.camera_spacing, "Metres between mapping camera stations [3]");
-  app.add_option("--keypoint-noise", knobs.keypoint_noise, "Keypoint noise, pixels (sigma per axis) [0.7]");
-  app.add_option("--point-noise", knobs.point_noise,
-                 "Noise of the model's 3D points, metres (sigma at 20 m from the nearest camera) [0.01]");
-  app.add_option("--threads", knobs.threads, "Worker threads (0 = all cores); never changes the output")
+  app.add_option("--radial", knobs.radial,
+                 "Radial distortion k of SIMPLE_RADIAL / k1 of RADIAL [-0.01]");
+  app.add_option("--camera-spacing", knobs.camera_spacing,
+                 "Metres between mapping camera stations [3]");
+  app.add_option("--keypoint-noise", knobs.keypoint_noise,
+                 "Keypoint noise, pixels (sigma per axis) [0.7]");
+  app.add_option(
+      "--point-noise", knobs.point_noise,
+      "Noise of the model's 3D points, metres (sigma at 20 m from the nearest camera) [0.01]");
+  app.add_option("--threads", knobs.threads,
+                 "Worker threads (0 = all cores); never changes the output")
       ->capture_default_str();
   app.add_flag("--text", text, "Also write mapping_model/txt");
   app.add_flag("--overwrite", overwrite, "Replace an existing non-empty output directory");

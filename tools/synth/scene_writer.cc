@@ -11,12 +11,12 @@
 #include <mutex>
 #include <thread>
 
-#include "format/camera/camera_models.h"
 #include "format/base/error.h"
-#include "format/colmap/database.h"
-#include "format/colmap/reconstruction_io.h"
 #include "format/base/parallel_for.h"
 #include "format/base/stopwatch.h"
+#include "format/camera/camera_models.h"
+#include "format/colmap/database.h"
+#include "format/colmap/reconstruction_io.h"
 
 namespace cwloc::synth {
 namespace fs = std::filesystem;
@@ -71,11 +71,14 @@ std::string ReadmeText(const CityScene& scene, const WriteOptions& options) {
   const SceneCounts& c = scene.counts();
   const LayoutOptions& l = o.layout;
   std::string t;
-  t += "Generated city scene (cwloc-synth): COLMAP model + database + held-out queries with exact ground truth\n";
-  t += "=========================================================================================================\n\n";
+  t += "Generated city scene (cwloc-synth): COLMAP model + database + held-out queries with exact "
+       "ground truth\n";
+  t += "==========================================================================================="
+       "==============\n\n";
   t += "HOW IT WAS MADE\n";
   t += "  Command: " + options.command_line + "\n";
-  t += "  Seed " + std::to_string(o.seed) + ". The output is byte-identical for the same seed and knobs\n";
+  t += "  Seed " + std::to_string(o.seed) +
+       ". The output is byte-identical for the same seed and knobs\n";
   t += "  (whatever --threads), except this command line and the timings in stats.json.\n\n";
   t += "  A grid of " + std::to_string(l.blocks_x) + " x " + std::to_string(l.blocks_y) +
        " blocks separated by streets; every block side is split into buildings whose facades\n";
@@ -85,16 +88,20 @@ std::string ReadmeText(const CityScene& scene, const WriteOptions& options) {
        "). Mapping cameras walk along every block side\n";
   t += "  (one view across the street every " + Format("%.3g", l.camera_spacing) +
        " m, an oblique one every second station); queries stand at random places\n";
-  t += "  in the streets. A view sees the facade points in its frustum that are not occluded by a block,\n";
-  t += "  within " + Format("%.3g", o.max_distance) + " m and " + Format("%.3g", o.max_obliquity_deg) +
+  t += "  in the streets. A view sees the facade points in its frustum that are not occluded by a "
+       "block,\n";
+  t += "  within " + Format("%.3g", o.max_distance) + " m and " +
+       Format("%.3g", o.max_obliquity_deg) +
        " deg of obliquity, detected with a probability that falls with obliquity;\n";
   t += "  each image keeps its " + std::to_string(o.features_per_image) +
        " x (1 - clutter) strongest features and adds clutter (share " +
        Format("%.3g", o.clutter_fraction) + ") that belongs to no point.\n";
   t += "  Keypoints carry " + Format("%.3g", o.keypoint_noise) +
-       " px Gaussian noise (truncated at 2.5 sigma); model xyz carry " + Format("%.3g", o.point_noise) +
+       " px Gaussian noise (truncated at 2.5 sigma); model xyz carry " +
+       Format("%.3g", o.point_noise) +
        " m noise at 20 m from the nearest camera (scaled with distance).\n";
-  t += "  Descriptors are SIFT-like (COLMAP's uint8 L1-root convention), rendered from a patch model\n";
+  t += "  Descriptors are SIFT-like (COLMAP's uint8 L1-root convention), rendered from a patch "
+       "model\n";
   t += "  seen through each view's affine distortion; see docs/synth.md in the cwloc sources.\n\n";
   t += "COUNTS\n";
   t += "  mapping images:      " + std::to_string(c.mapping_images) + "\n";
@@ -106,16 +113,23 @@ std::string ReadmeText(const CityScene& scene, const WriteOptions& options) {
        std::to_string(c.clutter_features) + "\n";
   t += "  camera (shared, id 1): " + CameraText(o.camera) + "\n\n";
   t += "FILES\n";
-  t += "  database.db                 COLMAP 3.8 database: cameras, images, keypoints (6 columns), descriptors\n";
-  t += "                              for ALL images, queries included; no matches. Image ids match the model.\n";
-  t += "  mapping_model/bin (/txt)    the model to localize against: mapping images only. Every keypoint of an\n";
-  t += "                              image is a POINTS2D entry in database row order; clutter and points seen\n";
+  t += "  database.db                 COLMAP 3.8 database: cameras, images, keypoints (6 columns), "
+       "descriptors\n";
+  t += "                              for ALL images, queries included; no matches. Image ids "
+       "match the model.\n";
+  t += "  mapping_model/bin (/txt)    the model to localize against: mapping images only. Every "
+       "keypoint of an\n";
+  t += "                              image is a POINTS2D entry in database row order; clutter and "
+       "points seen\n";
   t += "                              by a single image have POINT3D_ID -1.\n";
   t += "  query_list.txt              query image names, one per line\n";
-  t += "  queries_gt.txt              NAME QW QX QY QZ TX TY TZ CAMERA_MODEL W H PARAMS (exact poses)\n";
+  t += "  queries_gt.txt              NAME QW QX QY QZ TX TY TZ CAMERA_MODEL W H PARAMS (exact "
+       "poses)\n";
   t += "  queries_with_intrinsics.txt NAME CAMERA_MODEL W H PARAMS\n";
-  t += "  queries_gt_points.txt       NAME then the model POINT3D_IDs the query sees (location recognition GT)\n";
-  t += "  queries_gt_matches.txt      NAME then POINT2D_IDX:POINT3D_ID pairs (true 2D-3D matches)\n";
+  t += "  queries_gt_points.txt       NAME then the model POINT3D_IDs the query sees (location "
+       "recognition GT)\n";
+  t +=
+      "  queries_gt_matches.txt      NAME then POINT2D_IDX:POINT3D_ID pairs (true 2D-3D matches)\n";
   t += "  scale_to_metres.txt         identity similarity: the city is built in metres\n";
   t += "  stats.json                  counts, timings, peak memory\n";
   return t;
@@ -218,13 +232,21 @@ void WriteDatabase(const CityScene& scene, const fs::path& path, int threads,
 void WriteQueryFiles(const CityScene& scene, const fs::path& dir) {
   const std::string camera = CameraText(scene.options().camera);
   std::string list, gt, intrinsics, points, matches;
-  gt += "# Ground-truth query poses (exact: the generator placed these cameras; same frame as mapping_model).\n";
+  gt +=
+      "# Ground-truth query poses (exact: the generator placed these cameras; same frame as "
+      "mapping_model).\n";
   gt += "# COLMAP convention: world-to-camera, X_cam = R(q) * X_world + t, q = (qw qx qy qz).\n";
-  gt += "# Camera centre C = -R^T t. Pixel coords: COLMAP convention (origin at top-left corner of top-left pixel).\n";
+  gt +=
+      "# Camera centre C = -R^T t. Pixel coords: COLMAP convention (origin at top-left corner of "
+      "top-left pixel).\n";
   gt += "# NAME QW QX QY QZ TX TY TZ CAMERA_MODEL WIDTH HEIGHT PARAMS...\n";
   points += "# Model 3D points each query sees: the ground truth for location recognition.\n";
-  points += "# One line per query: NAME POINT3D_ID... (ids of mapping_model, ascending; none when it sees no model point)\n";
-  matches += "# True 2D-3D matches of each query: its keypoint rows (database.db) that are views of model points.\n";
+  points +=
+      "# One line per query: NAME POINT3D_ID... (ids of mapping_model, ascending; none when it "
+      "sees no model point)\n";
+  matches +=
+      "# True 2D-3D matches of each query: its keypoint rows (database.db) that are views of model "
+      "points.\n";
   matches += "# One line per query: NAME POINT2D_IDX:POINT3D_ID... (ascending POINT2D_IDX)\n";
   for (const SceneImage& image : scene.images()) {
     if (!image.query) continue;
@@ -258,12 +280,13 @@ void WriteQueryFiles(const CityScene& scene, const fs::path& dir) {
   WriteTextFile(dir / "queries_with_intrinsics.txt", intrinsics);
   WriteTextFile(dir / "queries_gt_points.txt", points);
   WriteTextFile(dir / "queries_gt_matches.txt", matches);
-  WriteTextFile(dir / "scale_to_metres.txt",
-                "# Similarity model->metric frame (metres): identity, the generated city is built in metres\n"
-                "# X_gt = s * R * X_model + t\n"
-                "scale 1\n"
-                "R 1 0 0 0 1 0 0 0 1\n"
-                "t 0 0 0\n");
+  WriteTextFile(
+      dir / "scale_to_metres.txt",
+      "# Similarity model->metric frame (metres): identity, the generated city is built in metres\n"
+      "# X_gt = s * R * X_model + t\n"
+      "scale 1\n"
+      "R 1 0 0 0 1 0 0 0 1\n"
+      "t 0 0 0\n");
 }
 
 }  // namespace
@@ -322,14 +345,16 @@ colmap::Reconstruction BuildReconstruction(const CityScene& scene, int threads) 
         const SceneImage& image = images[e.image_id - 1];
         const SceneFeature& f = image.features[e.point2D_idx];
         Eigen::Vector2d pixel;
-        if (scene.Project(image.pose, xyz, &pixel)) error += (pixel - Eigen::Vector2d(f.x, f.y)).norm();
+        if (scene.Project(image.pose, xyz, &pixel))
+          error += (pixel - Eigen::Vector2d(f.x, f.y)).norm();
       }
       out.error = tracks[j].empty() ? 0 : error / double(tracks[j].size());
       out.track = std::move(tracks[j]);
     }
   });
   std::vector<std::vector<colmap::TrackElement>>().swap(tracks);
-  for (auto& point : points) rec.points3D.emplace_hint(rec.points3D.end(), point.point3D_id, std::move(point));
+  for (auto& point : points)
+    rec.points3D.emplace_hint(rec.points3D.end(), point.point3D_id, std::move(point));
   return rec;
 }
 
@@ -386,8 +411,8 @@ WriteTimings SceneWriter::Write(const CityScene& scene, const WriteOptions& opti
       std::error_code ec;
       fs::create_directories(dir, ec);
       if (ec) throw InputError("cannot create '" + dir.string() + "': " + ec.message());
-      colmap::WriteReconstruction(rec, dir,
-                                  format[0] == 'b' ? colmap::ModelFormat::kBinary : colmap::ModelFormat::kText);
+      colmap::WriteReconstruction(
+          rec, dir, format[0] == 'b' ? colmap::ModelFormat::kBinary : colmap::ModelFormat::kText);
     }
   }
   timings.model_seconds = stage.Seconds();

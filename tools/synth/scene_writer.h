@@ -14,9 +14,9 @@
 namespace cwloc::synth {
 
 struct WriteOptions {
-  bool text = false;          // also write mapping_model/txt
-  int threads = 0;            // for rendering descriptors; 0: all cores
-  std::string command_line;   // recorded in README.txt
+  bool text = false;         // also write mapping_model/txt
+  int threads = 0;           // for rendering descriptors; 0: all cores
+  std::string command_line;  // recorded in README.txt
 };
 
 struct WriteTimings {

@@ -75,7 +75,8 @@ int DrawStructures(const PatchModel& model, Rng& rng, Structure* out) {
 inline void FastCosSin(float angle, float* c, float* s) {
   constexpr float kInvTwoPi = float(1 / kTwoPi);
   const float turns = angle * kInvTwoPi;
-  const float nearest = float(int(turns + (turns >= 0 ? 0.5f : -0.5f)));  // inline, unlike nearbyint
+  const float nearest =
+      float(int(turns + (turns >= 0 ? 0.5f : -0.5f)));  // inline, unlike nearbyint
   const float h = 0.5f * (angle - float(kTwoPi) * nearest);
   const float h2 = h * h;
   const float ch = 1 - h2 * (0.5f - h2 * (1.0f / 24 - h2 * (1.0f / 720)));
@@ -137,7 +138,8 @@ inline float FastExp(float x) {
   const float fl = std::floor(y);
   const float f = y - fl;
   const float p =
-      1.0f + f * (0.693147f + f * (0.240227f + f * (0.0555041f + f * (0.00961813f + f * 0.00133336f))));
+      1.0f +
+      f * (0.693147f + f * (0.240227f + f * (0.0555041f + f * (0.00961813f + f * 0.00133336f))));
   return std::bit_cast<float>(std::bit_cast<int32_t>(p) + (int32_t(fl) << 23));
 }
 
@@ -232,8 +234,8 @@ SiftGenerator::SiftGenerator(const PatchModel& patch_model, const ViewNoiseModel
   }
 }
 
-void SiftGenerator::Describe(const Appearance& appearance, const ViewChange& view,
-                             Rng& view_rng, SiftVector* out) const {
+void SiftGenerator::Describe(const Appearance& appearance, const ViewChange& view, Rng& view_rng,
+                             SiftVector* out) const {
   Rng patch_rng(appearance.patch_seed);
   Structure structures[kMaxStructures];
   const int n = DrawStructures(patch_model_, patch_rng, structures);
@@ -271,7 +273,7 @@ void SiftGenerator::Describe(const Appearance& appearance, const ViewChange& vie
   }
   const double det = t00 * t11 - t01 * t10;
   const float f00 = float(t00), f01 = float(t01), f10 = float(t10), f11 = float(t11);  // T
-  const float i00 = float(t11 / det), i01 = float(-t01 / det);                          // T^-1
+  const float i00 = float(t11 / det), i01 = float(-t01 / det);                         // T^-1
   const float i10 = float(-t10 / det), i11 = float(t00 / det);
   const float shift_x = float(noise_model_.shift_error * view_rng.Normal());
   const float shift_y = float(noise_model_.shift_error * view_rng.Normal());
@@ -323,8 +325,7 @@ void SiftGenerator::Describe(const Appearance& appearance, const ViewChange& vie
   const float scale_turn = float(noise_model_.scale_texture * view.log2_scale);
   const float relief_u = float(noise_model_.relief * view.u);
   const float relief_v = float(noise_model_.relief * view.v);
-  const float inv_window2 =
-      float(1 / (2 * patch_model_.window_sigma * patch_model_.window_sigma));
+  const float inv_window2 = float(1 / (2 * patch_model_.window_sigma * patch_model_.window_sigma));
   for (int k = 0; k < num_textures; ++k) {
     const TextureGradient& t = textures[k];
     const float x = f00 * t.x + f01 * t.y + shift_x, y = f10 * t.x + f11 * t.y + shift_y;

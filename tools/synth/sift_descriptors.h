@@ -81,8 +81,8 @@ struct Appearance {
 // The viewpoint relative to the feature's own frame (its x axis is the direction of its
 // dominant gradient on the facade).
 struct ViewChange {
-  double u = 0, v = 0;              // viewing ray along the feature's axes (|(u,v)| = sin obliquity)
-  double log2_scale = 0;            // log2: the scale the patch is seen at / its reference scale
+  double u = 0, v = 0;    // viewing ray along the feature's axes (|(u,v)| = sin obliquity)
+  double log2_scale = 0;  // log2: the scale the patch is seen at / its reference scale
   double log2_detection_error = 0;  // log2: detected / true keypoint scale
 };
 

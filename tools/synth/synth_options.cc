@@ -3,8 +3,8 @@
 #include <cmath>
 #include <sstream>
 
-#include "format/camera/camera_models.h"
 #include "format/base/error.h"
+#include "format/camera/camera_models.h"
 
 namespace cwloc::synth {
 namespace {
@@ -93,8 +93,9 @@ SceneOptions MakeSceneOptions(const SynthKnobs& knobs) {
   Require(o.point_noise >= 0 && o.point_noise <= 0.5,
           "--point-noise must be in [0, 0.5] metres (got " + Str(o.point_noise) + ")");
   o.layout.camera_spacing = Pick(knobs.camera_spacing, preset.camera_spacing, 3.0);
-  Require(o.layout.camera_spacing >= 0.5 && o.layout.camera_spacing <= 50,
-          "--camera-spacing must be in [0.5, 50] metres (got " + Str(o.layout.camera_spacing) + ")");
+  Require(
+      o.layout.camera_spacing >= 0.5 && o.layout.camera_spacing <= 50,
+      "--camera-spacing must be in [0.5, 50] metres (got " + Str(o.layout.camera_spacing) + ")");
   if (preset.small_blocks) {
     o.layout.min_block_side = 24;
     o.layout.max_block_side = 40;
@@ -107,7 +108,8 @@ SceneOptions MakeSceneOptions(const SynthKnobs& knobs) {
           "--width and --height must be in [64, 100000] pixels (got " + Str(width) + "x" +
               Str(height) + ")");
   const double focal = Pick(knobs.focal, {}, 900.0);
-  Require(focal > 0 && focal <= 1e6, "--focal must be in (0, 1000000] pixels (got " + Str(focal) + ")");
+  Require(focal > 0 && focal <= 1e6,
+          "--focal must be in (0, 1000000] pixels (got " + Str(focal) + ")");
   const double radial = Pick(knobs.radial, {}, -0.01);
   Require(std::abs(radial) <= 0.5, "--radial must be in [-0.5, 0.5] (got " + Str(radial) + ")");
   const std::string model = Pick(knobs.camera_model, {}, std::string("SIMPLE_RADIAL"));
@@ -128,25 +130,31 @@ SceneOptions MakeSceneOptions(const SynthKnobs& knobs) {
     o.camera.model_id = CameraModelId::kRadial;
     o.camera.params = {focal, cx, cy, radial, 0};
   } else {
-    throw InputError("--camera-model must be SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL or RADIAL (got '" +
-                     model + "')");
+    throw InputError(
+        "--camera-model must be SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL or RADIAL (got '" + model +
+        "')");
   }
 
   // The city size: explicit blocks, or as many as the target number of views needs.
-  const std::optional<int64_t> blocks = knobs.blocks ? knobs.blocks : knobs.views ? std::nullopt : preset.blocks;
+  const std::optional<int64_t> blocks = knobs.blocks  ? knobs.blocks
+                                        : knobs.views ? std::nullopt
+                                                      : preset.blocks;
   if (blocks) {
-    Require(*blocks >= 1 && *blocks <= 100000, "--blocks must be in [1, 100000] (got " + Str(*blocks) + ")");
+    Require(*blocks >= 1 && *blocks <= 100000,
+            "--blocks must be in [1, 100000] (got " + Str(*blocks) + ")");
     o.layout.blocks_x = int(std::ceil(std::sqrt(double(*blocks))));
     o.layout.blocks_y = int((*blocks + o.layout.blocks_x - 1) / o.layout.blocks_x);
     return o;
   }
   const int64_t views = Pick(knobs.views, preset.views, kDefaultViews);
   Require(views > 0, "--views must be positive (got " + Str(views) + ")");
-  Require(views <= kMaxViews, "--views must be at most " + Str(kMaxViews) + " (got " + Str(views) + ")");
+  Require(views <= kMaxViews,
+          "--views must be at most " + Str(kMaxViews) + " (got " + Str(views) + ")");
   const int64_t minimum = MinimumViews(o);
   Require(views >= minimum, "--views " + Str(views) + " is too small to make a city: at least " +
                                 Str(minimum) + " views are needed with --features-per-image " +
-                                Str(features) + " and --camera-spacing " + Str(o.layout.camera_spacing));
+                                Str(features) + " and --camera-spacing " +
+                                Str(o.layout.camera_spacing));
   const double per_metre = EstimatedViewsPerFacadeMetre(o);
   const double mean_side = 0.5 * (o.layout.min_block_side + o.layout.max_block_side);
   const double per_block = per_metre * 4 * mean_side;

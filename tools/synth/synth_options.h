@@ -13,20 +13,20 @@ namespace cwloc::synth {
 
 // Unset knobs take the preset's value, then the default.
 struct SynthKnobs {
-  std::string preset;                        // "" or "demo"
+  std::string preset;  // "" or "demo"
   uint64_t seed = 1;
-  std::optional<int64_t> views;              // approximate model views; sets the city size
-  std::optional<int64_t> blocks;             // explicit number of blocks (overrides views)
+  std::optional<int64_t> views;   // approximate model views; sets the city size
+  std::optional<int64_t> blocks;  // explicit number of blocks (overrides views)
   std::optional<int64_t> queries;
   std::optional<int64_t> features_per_image;
   std::optional<double> clutter_fraction;
   std::optional<double> repetition;
   std::optional<int64_t> motifs;
   std::optional<double> instance_noise;
-  std::optional<std::string> camera_model;   // SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL
+  std::optional<std::string> camera_model;  // SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL
   std::optional<int64_t> width, height;
   std::optional<double> focal;
-  std::optional<double> radial;              // k (k1 for RADIAL)
+  std::optional<double> radial;  // k (k1 for RADIAL)
   std::optional<double> camera_spacing;
   std::optional<double> keypoint_noise;
   std::optional<double> point_noise;

@@ -1,10 +1,10 @@
+#include "format/base/split_mix64.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <numeric>
 #include <vector>
-
-#include "format/base/split_mix64.h"
 
 namespace cwloc {
 namespace {

@@ -16,7 +16,8 @@ using testing::HasSubstr;
 class ToolCli : public testing::TestWithParam<std::string> {
  protected:
   int Run(const std::string& args, std::string* output) {
-    return test::RunCommand(test::ToolPath(GetParam()).string() + " " + args + " </dev/null", output);
+    return test::RunCommand(test::ToolPath(GetParam()).string() + " " + args + " </dev/null",
+                            output);
   }
 };
 
@@ -52,7 +53,9 @@ INSTANTIATE_TEST_SUITE_P(AllTools, ToolCli,
 
 TEST(IndexCli, BuildWithoutRequiredOptionsNamesTheMissingOne) {
   std::string output;
-  EXPECT_EQ(test::RunCommand(test::ToolPath("cwloc-index").string() + " build --model m -o x.cwl", &output), 2);
+  EXPECT_EQ(test::RunCommand(test::ToolPath("cwloc-index").string() + " build --model m -o x.cwl",
+                             &output),
+            2);
   EXPECT_THAT(output, HasSubstr("--database"));
 }
 

@@ -66,7 +66,6 @@ std::map<std::string, uint64_t> AnalyzerCounts(const std::string& output) {
   return counts;
 }
 
-
 Reconstruction CompatModel() {
   test::SyntheticModelOptions options;
   options.num_cameras = 11;  // one camera per model colmap 3.8 knows
@@ -107,7 +106,8 @@ TEST(ColmapCompatTest, ColmapConvertsOurBinaryToTextAndBack) {
   WriteReconstruction(model, ours_txt, ModelFormat::kText);
   for (const auto& [name, lines] : std::vector<std::pair<std::string, int>>{
            {"cameras.txt", 1}, {"images.txt", 2}, {"points3D.txt", 1}}) {
-    EXPECT_TRUE(test::SortedRecords(ours_txt / name, lines) == test::SortedRecords(colmap_txt / name, lines))
+    EXPECT_TRUE(test::SortedRecords(ours_txt / name, lines) ==
+                test::SortedRecords(colmap_txt / name, lines))
         << name << " differs between our writer and colmap's";
     EXPECT_EQ(fs::file_size(ours_txt / name), fs::file_size(colmap_txt / name)) << name;
   }

@@ -26,7 +26,6 @@ std::string ReadFile(const fs::path& path) {
   return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
-
 std::vector<std::string> HeaderLines(const fs::path& path) {
   std::istringstream in(ReadFile(path));
   std::vector<std::string> lines;

@@ -23,7 +23,8 @@ std::vector<uint8_t> ReadBytes(const std::filesystem::path& path) {
 
 void WriteBytes(const std::filesystem::path& path, const std::vector<uint8_t>& bytes) {
   std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  out.write(reinterpret_cast<const char*>(bytes.data()),
+            static_cast<std::streamsize>(bytes.size()));
 }
 
 std::string OpenError(const std::filesystem::path& path) {
@@ -104,7 +105,8 @@ TEST_F(IndexFileTest, OutputIsByteIdenticalForTheSameInput) {
 TEST_F(IndexFileTest, WritingReplacesAtomicallyAndLeavesNoTemporaryFile) {
   Write(path_);
   size_t files = 0;
-  for ([[maybe_unused]] const auto& entry : std::filesystem::directory_iterator(dir_.path())) ++files;
+  for ([[maybe_unused]] const auto& entry : std::filesystem::directory_iterator(dir_.path()))
+    ++files;
   EXPECT_EQ(files, 1u);
 }
 
@@ -131,7 +133,8 @@ TEST_F(IndexFileTest, WrongMagicIsReported) {
   std::vector<uint8_t> bytes = ReadBytes(path_);
   bytes[0] = 'X';
   WriteBytes(path_, bytes);
-  EXPECT_EQ(OpenError(path_), path_.string() + ": not a cwloc index (wrong magic; expected \"CWLOCIDX\")");
+  EXPECT_EQ(OpenError(path_),
+            path_.string() + ": not a cwloc index (wrong magic; expected \"CWLOCIDX\")");
 }
 
 TEST_F(IndexFileTest, NewerMajorVersionNamesBothVersions) {
@@ -140,9 +143,11 @@ TEST_F(IndexFileTest, NewerMajorVersionNamesBothVersions) {
   const uint64_t checksum = XxHash64({bytes.data(), 120});
   std::memcpy(bytes.data() + 120, &checksum, 8);
   WriteBytes(path_, bytes);
-  EXPECT_EQ(OpenError(path_),
-            path_.string() + ": index format 2.0 is not readable by this cwloc, which reads format 1.x (up to 1.0); "
-                             "rebuild the index with this cwloc-index or upgrade cwloc");
+  EXPECT_EQ(
+      OpenError(path_),
+      path_.string() +
+          ": index format 2.0 is not readable by this cwloc, which reads format 1.x (up to 1.0); "
+          "rebuild the index with this cwloc-index or upgrade cwloc");
 }
 
 TEST_F(IndexFileTest, FlippedHeaderByteIsReported) {
@@ -199,11 +204,13 @@ TEST_F(IndexFileTest, UnknownOptionalSectionIsSkippedUnknownRequiredIsRefused) {
   EXPECT_NO_THROW(IndexFile::Open(path_));
   sections.back().flags = kSectionRequired;
   WriteIndexFile(path_, sections);
-  EXPECT_THAT(OpenError(path_), HasSubstr("section 3 'ZZZZ': a required section unknown to this cwloc"));
+  EXPECT_THAT(OpenError(path_),
+              HasSubstr("section 3 'ZZZZ': a required section unknown to this cwloc"));
 }
 
 TEST_F(IndexFileTest, MissingFileIsAClearError) {
-  EXPECT_THAT(OpenError(dir_ / "nope.cwl"), HasSubstr("nope.cwl: cannot open: No such file or directory"));
+  EXPECT_THAT(OpenError(dir_ / "nope.cwl"),
+              HasSubstr("nope.cwl: cannot open: No such file or directory"));
 }
 
 }  // namespace

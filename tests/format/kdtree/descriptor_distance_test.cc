@@ -45,11 +45,20 @@ TEST(DescriptorDistance, AllKernelsExactOnRandomAndExtremeData) {
     for (size_t d = 0; d < kDescriptorDim; ++d) {
       uint8_t v;
       switch (r) {
-        case 0: v = 0; break;
-        case 1: v = 255; break;
-        case 2: v = d % 2 ? 255 : 0; break;
-        case 3: v = d % 2 ? 0 : 255; break;
-        default: v = uint8_t(r % 2 ? rng() % 256 : rng() % 64);
+        case 0:
+          v = 0;
+          break;
+        case 1:
+          v = 255;
+          break;
+        case 2:
+          v = d % 2 ? 255 : 0;
+          break;
+        case 3:
+          v = d % 2 ? 0 : 255;
+          break;
+        default:
+          v = uint8_t(r % 2 ? rng() % 256 : rng() % 64);
       }
       data[r * kDescriptorDim + d] = v;
     }

@@ -33,7 +33,8 @@ TEST(KdForestDeterminism, ResultsDoNotDependOnTheArraysAddresses) {
     }
     results.push_back(all);
   }
-  for (size_t shift = 1; shift < results.size(); ++shift) EXPECT_EQ(results[shift], results[0]) << "shift " << shift;
+  for (size_t shift = 1; shift < results.size(); ++shift)
+    EXPECT_EQ(results[shift], results[0]) << "shift " << shift;
 }
 
 }  // namespace

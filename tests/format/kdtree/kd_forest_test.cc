@@ -85,7 +85,8 @@ class Guarded {
     const size_t page = size_t(sysconf(_SC_PAGESIZE));
     const size_t bytes = src.size_bytes();
     body_ = (bytes + page - 1) / page * page;
-    void* p = mmap(nullptr, body_ + page, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+    void* p =
+        mmap(nullptr, body_ + page, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
     EXPECT_NE(p, MAP_FAILED);
     base_ = static_cast<uint8_t*>(p);
     EXPECT_EQ(mprotect(base_ + body_, page, PROT_NONE), 0);
@@ -191,7 +192,8 @@ TEST(KdForest, ExhaustiveBudgetEqualsBruteForce) {
   std::vector<KdNeighbor> out(9);
   const KdSearchResult r = small_searcher.Search(queries.data(), KdSearchOptions{}, out);
   EXPECT_EQ(r.num_neighbors, 5u);
-  EXPECT_EQ(std::vector<KdNeighbor>(out.begin(), out.begin() + 5), BruteForce(small, queries.data(), 5));
+  EXPECT_EQ(std::vector<KdNeighbor>(out.begin(), out.begin() + 5),
+            BruteForce(small, queries.data(), 5));
 }
 
 TEST(KdForest, EveryKernelGivesTheSameExactResults) {
@@ -248,8 +250,8 @@ TEST(KdForest, RecallAtTheDefaultBudget) {
       }
     }
     const double recall1 = double(hits1) / num_queries, recall2 = double(hits2) / num_queries;
-    std::cout << "interleave " << interleave << ": recall@1 " << recall1 << ", recall@2 "
-              << recall2 << ", checks/query " << double(checks) / num_queries << "\n";
+    std::cout << "interleave " << interleave << ": recall@1 " << recall1 << ", recall@2 " << recall2
+              << ", checks/query " << double(checks) / num_queries << "\n";
     EXPECT_EQ(checks, num_queries * options.max_checks);
     EXPECT_GE(recall1, 0.93);
     EXPECT_GE(recall2, 0.85);
@@ -465,9 +467,15 @@ TEST_F(CorruptForest, RandomByteFlipsNeverReadOutOfBounds) {
     for (int f = 0; f < flips; ++f) {
       const uint8_t value = uint8_t(rng());
       switch (rng() % 6) {
-        case 0: root_bytes[rng() % (g.roots.size() * 4)] = value; break;
-        case 1: case 2: leaf_bytes[rng() % (g.leaves.size() * 4)] = value; break;
-        default: node_bytes[rng() % (g.nodes.size() * sizeof(KdNode))] = value;
+        case 0:
+          root_bytes[rng() % (g.roots.size() * 4)] = value;
+          break;
+        case 1:
+        case 2:
+          leaf_bytes[rng() % (g.leaves.size() * 4)] = value;
+          break;
+        default:
+          node_bytes[rng() % (g.nodes.size() * sizeof(KdNode))] = value;
       }
     }
     std::string error;
@@ -490,7 +498,8 @@ TEST_F(CorruptForest, RandomByteFlipsNeverReadOutOfBounds) {
         ASSERT_LE(r.num_neighbors, 6u);
         for (uint32_t j = 0; j < r.num_neighbors; ++j) {
           ASSERT_LT(out[j].index, n);
-          ASSERT_EQ(out[j].distance, SquaredL2(query, data_.data() + out[j].index * kDescriptorDim));
+          ASSERT_EQ(out[j].distance,
+                    SquaredL2(query, data_.data() + out[j].index * kDescriptorDim));
           if (j > 0) {
             ASSERT_LE(out[j - 1].distance, out[j].distance);
           }

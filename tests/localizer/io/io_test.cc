@@ -22,7 +22,8 @@ std::string ErrorOf(const std::function<void()>& body) {
 }
 
 TEST(CameraSpec, ParsesEveryFieldOfAColmapCameraLine) {
-  const QueryCamera camera = ParseCameraSpec("SIMPLE_RADIAL 1536 1024 1375.77 768 512 -0.0008", "--camera");
+  const QueryCamera camera =
+      ParseCameraSpec("SIMPLE_RADIAL 1536 1024 1375.77 768 512 -0.0008", "--camera");
   EXPECT_EQ(camera.model_id, CameraModelId::kSimpleRadial);
   EXPECT_EQ(camera.width, 1536u);
   EXPECT_EQ(camera.height, 1024u);
@@ -70,7 +71,8 @@ class FeatureFileTest : public testing::Test {
 };
 
 TEST_F(FeatureFileTest, ReadsKeypointsAndDescriptors) {
-  const std::string path = Write("2 128\n10.5 20.25 3.1 0.5" + Descriptor(0) + "\n1 2 1 0" + Descriptor(200) + "\n");
+  const std::string path =
+      Write("2 128\n10.5 20.25 3.1 0.5" + Descriptor(0) + "\n1 2 1 0" + Descriptor(200) + "\n");
   Query query;
   ReadFeatureFile(path, &query);
   ASSERT_EQ(query.NumFeatures(), 2u);
@@ -82,16 +84,19 @@ TEST_F(FeatureFileTest, ReadsKeypointsAndDescriptors) {
 TEST_F(FeatureFileTest, MalformedFilesNameTheLine) {
   Query query;
   std::string path = Write("2 64\n");
-  EXPECT_EQ(ErrorOf([&] { ReadFeatureFile(path, &query); }), path + ":1: descriptors have 64 dimensions, expected 128");
+  EXPECT_EQ(ErrorOf([&] { ReadFeatureFile(path, &query); }),
+            path + ":1: descriptors have 64 dimensions, expected 128");
   path = Write("2 128\n1 2 3 4" + Descriptor(0) + "\n");
-  EXPECT_EQ(ErrorOf([&] { ReadFeatureFile(path, &query); }), path + ":3: file ends after 1 of 2 features");
+  EXPECT_EQ(ErrorOf([&] { ReadFeatureFile(path, &query); }),
+            path + ":3: file ends after 1 of 2 features");
   path = Write("1 128\n1 2 3 4 256" + Descriptor(0).substr(3) + "\n");
   EXPECT_EQ(ErrorOf([&] { ReadFeatureFile(path, &query); }),
             path + ":2: descriptor value 1 is not an integer in 0..255");
   path = Write("1 128\n1 2 x 4" + Descriptor(0) + "\n");
   EXPECT_EQ(ErrorOf([&] { ReadFeatureFile(path, &query); }),
             path + ":2: expected X Y SCALE ORIENTATION then 128 descriptor values");
-  EXPECT_THAT(ErrorOf([&] { ReadFeatureFile(dir_ / "none.txt", &query); }), HasSubstr("cannot open feature file"));
+  EXPECT_THAT(ErrorOf([&] { ReadFeatureFile(dir_ / "none.txt", &query); }),
+              HasSubstr("cannot open feature file"));
 }
 
 }  // namespace

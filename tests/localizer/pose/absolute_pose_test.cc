@@ -83,9 +83,11 @@ TEST(AbsolutePose, ReportsTooFewInliers) {
             "best pose has " + std::to_string(result.num_inliers) + " inliers < 12");
   EXPECT_EQ(result.inliers.size(), problem.pixels.size());
 
-  const AbsolutePoseResult unknown = EstimateAbsolutePoseUnknownFocal(problem.pixels, problem.points3D);
+  const AbsolutePoseResult unknown =
+      EstimateAbsolutePoseUnknownFocal(problem.pixels, problem.points3D);
   EXPECT_FALSE(unknown.success);
-  EXPECT_NE(unknown.failure_reason.find("inliers < 12"), std::string::npos) << unknown.failure_reason;
+  EXPECT_NE(unknown.failure_reason.find("inliers < 12"), std::string::npos)
+      << unknown.failure_reason;
 }
 
 TEST(AbsolutePose, ReportsBadInput) {
@@ -120,8 +122,10 @@ TEST(AbsolutePose, DeterministicForASeed) {
   const auto problem = test::MakeSyntheticProblem({}, rng);
   AbsolutePoseOptions options;
   options.ransac.seed = 7;
-  const auto a = EstimateAbsolutePose(problem.normalized, problem.points3D, problem.focal_px, options);
-  const auto b = EstimateAbsolutePose(problem.normalized, problem.points3D, problem.focal_px, options);
+  const auto a =
+      EstimateAbsolutePose(problem.normalized, problem.points3D, problem.focal_px, options);
+  const auto b =
+      EstimateAbsolutePose(problem.normalized, problem.points3D, problem.focal_px, options);
   EXPECT_EQ(a.pose.rotation.coeffs(), b.pose.rotation.coeffs());
   EXPECT_EQ(a.pose.translation, b.pose.translation);
   EXPECT_EQ(a.inliers, b.inliers);
@@ -132,7 +136,8 @@ TEST(AbsolutePose, DeterministicForASeed) {
   EXPECT_EQ(c.pose.translation, d.pose.translation);
   // Another seed takes other samples but finds the same pose.
   options.ransac.seed = 8;
-  const auto e = EstimateAbsolutePose(problem.normalized, problem.points3D, problem.focal_px, options);
+  const auto e =
+      EstimateAbsolutePose(problem.normalized, problem.points3D, problem.focal_px, options);
   ASSERT_TRUE(e.success);
   EXPECT_LT(test::RotationErrorDeg(e.pose, a.pose), 0.01);
 }

@@ -84,8 +84,8 @@ TEST(P3P, NearDegenerateConfigurationsGiveNoNaN) {
     P3PProblem problem = RandomP3PProblem(rng);
     // Almost collinear world points (and the rays accordingly).
     P3PProblem collinear = problem;
-    collinear.points[2] = 0.5 * (collinear.points[0] + collinear.points[1]) +
-                          1e-9 * Eigen::Vector3d::UnitX();
+    collinear.points[2] =
+        0.5 * (collinear.points[0] + collinear.points[1]) + 1e-9 * Eigen::Vector3d::UnitX();
     collinear.bearings[2] = collinear.pose.Apply(collinear.points[2]).normalized();
     P3P(collinear.bearings, collinear.points, &poses);
     ExpectValidSolutions(poses, collinear);
@@ -127,8 +127,9 @@ TEST(P3P, NearDegenerateConfigurationsGiveNoNaN) {
 
 TEST(CameraPose, CenterAndApplyFollowColmap) {
   // A 90 degree rotation about z: x_cam = R x_world + t, C = -R^T t.
-  const CameraPose pose(Eigen::Quaterniond(Eigen::AngleAxisd(std::numbers::pi / 2, Eigen::Vector3d::UnitZ())),
-                        Eigen::Vector3d(1, 2, 3));
+  const CameraPose pose(
+      Eigen::Quaterniond(Eigen::AngleAxisd(std::numbers::pi / 2, Eigen::Vector3d::UnitZ())),
+      Eigen::Vector3d(1, 2, 3));
   EXPECT_TRUE(pose.Apply(Eigen::Vector3d(1, 0, 0)).isApprox(Eigen::Vector3d(1, 3, 3)));
   EXPECT_TRUE(pose.Apply(pose.Center()).isZero(1e-12));
   EXPECT_TRUE(pose.Center().isApprox(Eigen::Vector3d(-2, 1, -3)));

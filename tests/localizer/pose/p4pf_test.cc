@@ -44,8 +44,8 @@ double BestFocalError(const P4PfProblem& problem, const std::vector<CameraPose>&
   double best = std::numeric_limits<double>::infinity();
   for (size_t k = 0; k < poses.size(); ++k) {
     const double rot = poses[k].rotation.angularDistance(problem.pose.rotation);
-    const double center = (poses[k].Center() - problem.pose.Center()).norm() /
-                          (1.0 + problem.pose.Center().norm());
+    const double center =
+        (poses[k].Center() - problem.pose.Center()).norm() / (1.0 + problem.pose.Center().norm());
     if (rot < pose_tolerance && center < pose_tolerance) {
       best = std::min(best, std::abs(focals[k] - problem.focal) / problem.focal);
     }
@@ -115,7 +115,8 @@ TEST(P4Pf, DegenerateInputGivesNoNaN) {
 
   P4PfProblem collinear = problem;  // all four world points on a line
   for (int i = 2; i < 4; ++i) {
-    collinear.points[i] = collinear.points[0] + (i - 1.0) * (collinear.points[1] - collinear.points[0]);
+    collinear.points[i] =
+        collinear.points[0] + (i - 1.0) * (collinear.points[1] - collinear.points[0]);
   }
   EXPECT_EQ(P4Pf(collinear.pixels, collinear.points, &poses, &focals), 0);
 
@@ -142,7 +143,8 @@ TEST(P4Pf, DegenerateInputGivesNoNaN) {
   // Random pixels (an all-outlier sample).
   for (int trial = 0; trial < 500; ++trial) {
     P4PfProblem random = RandomP4PfProblem(rng);
-    for (auto& p : random.pixels) p = Eigen::Vector2d(test::Uniform(rng, -800, 800), test::Uniform(rng, -600, 600));
+    for (auto& p : random.pixels)
+      p = Eigen::Vector2d(test::Uniform(rng, -800, 800), test::Uniform(rng, -600, 600));
     P4Pf(random.pixels, random.points, &poses, &focals);
     for (size_t k = 0; k < poses.size(); ++k) {
       ASSERT_TRUE(poses[k].rotation.coeffs().allFinite() && poses[k].translation.allFinite());

@@ -2,9 +2,8 @@
 
 #include <gtest/gtest.h>
 
-#include <set>
-
 #include <Eigen/Core>
+#include <set>
 
 #include "tests/localizer/pose/synthetic_pose.h"
 #include "tests/test_util.h"

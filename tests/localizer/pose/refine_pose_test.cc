@@ -20,9 +20,11 @@ std::vector<uint32_t> AllIndices(size_t n) {
 
 CameraPose Perturb(const CameraPose& pose, double angle_rad, double shift, std::mt19937_64& rng) {
   const Eigen::Vector3d axis = Eigen::Vector3d(test::Uniform(rng, -1, 1), test::Uniform(rng, -1, 1),
-                                               test::Uniform(rng, -1, 1)).normalized();
+                                               test::Uniform(rng, -1, 1))
+                                   .normalized();
   const Eigen::Vector3d dir = Eigen::Vector3d(test::Uniform(rng, -1, 1), test::Uniform(rng, -1, 1),
-                                              test::Uniform(rng, -1, 1)).normalized();
+                                              test::Uniform(rng, -1, 1))
+                                  .normalized();
   return CameraPose(Eigen::Quaterniond(Eigen::AngleAxisd(angle_rad, axis)) * pose.rotation,
                     pose.translation + shift * dir);
 }
@@ -42,8 +44,8 @@ TEST(RefinePose, ConvergesFromAPerturbedPose) {
     CameraPose pose = Perturb(problem.pose, 0.02, 0.3, rng);
     double f = problem.focal_px;
     PoseRefinementSummary summary;
-    ASSERT_TRUE(RefinePose(problem.pixels, problem.points3D, AllIndices(problem.pixels.size()),
-                           {}, &pose, &f, &summary));
+    ASSERT_TRUE(RefinePose(problem.pixels, problem.points3D, AllIndices(problem.pixels.size()), {},
+                           &pose, &f, &summary));
     EXPECT_TRUE(summary.usable);
     EXPECT_LT(summary.final_cost, summary.initial_cost);
     EXPECT_LT(test::RotationErrorDeg(pose, problem.pose), 1e-6);

@@ -1,13 +1,12 @@
 #pragma once
 
+#include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <random>
 #include <vector>
-
-#include <Eigen/Core>
-#include <Eigen/Geometry>
 
 #include "localizer/pose/camera_pose.h"
 
@@ -40,9 +39,9 @@ struct SyntheticPoseOptions {
   double outlier_ratio = 0.7;  // fraction of wrong correspondences
   double noise_px = 1.0;       // Gaussian noise (sigma, pixels) on the inliers
   double focal_px = 1000.0;
-  double width_px = 1600.0;    // principal point at the image centre
+  double width_px = 1600.0;  // principal point at the image centre
   double height_px = 1200.0;
-  double min_depth = 5.0;      // world units
+  double min_depth = 5.0;  // world units
   double max_depth = 50.0;
   double min_outlier_error_px = 20.0;  // outliers are at least this far off
 };
@@ -66,7 +65,8 @@ inline SyntheticPoseProblem MakeSyntheticProblem(const SyntheticPoseOptions& opt
   problem.pose = RandomPose(rng);
   problem.focal_px = options.focal_px;
   std::normal_distribution<double> noise(0.0, options.noise_px);
-  const int num_outliers = static_cast<int>(std::lround(options.outlier_ratio * options.num_points));
+  const int num_outliers =
+      static_cast<int>(std::lround(options.outlier_ratio * options.num_points));
   const double hw = 0.5 * options.width_px, hh = 0.5 * options.height_px;
   for (int i = 0; i < options.num_points; ++i) {
     const Eigen::Vector2d pixel(Uniform(rng, -hw, hw), Uniform(rng, -hh, hh));

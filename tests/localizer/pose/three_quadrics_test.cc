@@ -31,7 +31,8 @@ TEST(ThreeQuadrics, FindsAKnownSolution) {
   int found = 0;
   const int kTrials = 2000;
   for (int trial = 0; trial < kTrials; ++trial) {
-    const Eigen::Vector3d p(test::Uniform(rng, -2, 2), test::Uniform(rng, -2, 2), test::Uniform(rng, -2, 2));
+    const Eigen::Vector3d p(test::Uniform(rng, -2, 2), test::Uniform(rng, -2, 2),
+                            test::Uniform(rng, -2, 2));
     const Eigen::Matrix<double, 3, 10> c = QuadricsThrough(p, rng);
     const int n = SolveThreeQuadrics(c, &solutions);
     ASSERT_GE(n, 0);
@@ -40,7 +41,8 @@ TEST(ThreeQuadrics, FindsAKnownSolution) {
     for (int i = 0; i < n; ++i) {
       ASSERT_TRUE(solutions.col(i).allFinite());
       // Every returned point solves the system.
-      EXPECT_LT(Evaluate(c, solutions.col(i)).norm(), 1e-8 * (1.0 + solutions.col(i).squaredNorm()));
+      EXPECT_LT(Evaluate(c, solutions.col(i)).norm(),
+                1e-8 * (1.0 + solutions.col(i).squaredNorm()));
       hit = hit || (solutions.col(i) - p).norm() < 1e-8;
     }
     found += hit;

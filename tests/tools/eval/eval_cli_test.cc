@@ -5,8 +5,8 @@
 #include <nlohmann/json.hpp>
 
 #include "cwloc/version.h"
-#include "tests/tools/eval/eval_fixtures.h"
 #include "tests/test_util.h"
+#include "tests/tools/eval/eval_fixtures.h"
 
 namespace cwloc::eval {
 namespace {
@@ -35,9 +35,10 @@ int EvalStdout(const std::string& args, const fs::path& out_file) {
 
 int ValidateReport(const fs::path& report, std::string* output) {
   const fs::path source = cwloc::test::SourceDir();
-  return cwloc::test::RunCommand("/usr/bin/python3 " + Quote(source / "tools" / "validate_json.py") + " " +
-                                     Quote(source / "schemas" / "eval-report.schema.json") + " " + Quote(report),
-                                 output);
+  return cwloc::test::RunCommand(
+      "/usr/bin/python3 " + Quote(source / "tools" / "validate_json.py") + " " +
+          Quote(source / "schemas" / "eval-report.schema.json") + " " + Quote(report),
+      output);
 }
 
 nlohmann::json ReadJson(const fs::path& path) { return nlohmann::json::parse(std::ifstream(path)); }
@@ -56,27 +57,37 @@ TEST(EvalCli, ExitCodes) {
   s.WriteGroundTruth(dir / "gt.txt");
   s.WriteJsonLines(dir / "run.jsonl");
   std::string output;
-  EXPECT_EQ(Eval("--gt " + Quote(dir / "gt.txt") + " --results " + Quote(dir / "run.jsonl"), &output), 0) << output;
+  EXPECT_EQ(
+      Eval("--gt " + Quote(dir / "gt.txt") + " --results " + Quote(dir / "run.jsonl"), &output), 0)
+      << output;
   EXPECT_NE(output.find("4/5"), std::string::npos) << output;
   EXPECT_NE(output.find("model units"), std::string::npos) << output;
 
   // Usage errors.
   EXPECT_EQ(Eval("--results " + Quote(dir / "run.jsonl"), &output), 2) << output;
   EXPECT_EQ(Eval("--gt " + Quote(dir / "gt.txt") + " --bogus", &output), 2) << output;
-  EXPECT_EQ(Eval("--gt " + Quote(dir / "gt.txt") + " --results " + Quote(dir / "run.jsonl") + " --label a --label b",
+  EXPECT_EQ(Eval("--gt " + Quote(dir / "gt.txt") + " --results " + Quote(dir / "run.jsonl") +
+                     " --label a --label b",
                  &output),
             2);
   EXPECT_EQ(output, "cwloc-eval: error: got 2 --label for 1 --results; give one per run or none\n");
 
   // A missing file and a malformed line name the file (and line).
-  EXPECT_EQ(Eval("--gt " + Quote(dir / "gt.txt") + " --results " + Quote(dir / "none.jsonl"), &output), 2);
-  EXPECT_EQ(output, "cwloc-eval: error: " + (dir / "none.jsonl").string() + ": cannot open (No such file or directory)\n");
+  EXPECT_EQ(
+      Eval("--gt " + Quote(dir / "gt.txt") + " --results " + Quote(dir / "none.jsonl"), &output),
+      2);
+  EXPECT_EQ(output, "cwloc-eval: error: " + (dir / "none.jsonl").string() +
+                        ": cannot open (No such file or directory)\n");
   std::ofstream(dir / "bad.jsonl") << "{\"name\": \"q0.jpg\", \"success\": false}\n\n{oops\n";
-  EXPECT_EQ(Eval("--gt " + Quote(dir / "gt.txt") + " --results " + Quote(dir / "bad.jsonl"), &output), 2);
+  EXPECT_EQ(
+      Eval("--gt " + Quote(dir / "gt.txt") + " --results " + Quote(dir / "bad.jsonl"), &output), 2);
   EXPECT_EQ(output, "cwloc-eval: error: " + (dir / "bad.jsonl").string() + ":3: not valid JSON\n");
   std::ofstream(dir / "bad_gt.txt") << "# header\nq0.jpg 1 0 0 0 1 2\n";
-  EXPECT_EQ(Eval("--gt " + Quote(dir / "bad_gt.txt") + " --results " + Quote(dir / "run.jsonl"), &output), 2);
-  EXPECT_EQ(output, "cwloc-eval: error: " + (dir / "bad_gt.txt").string() + ":2: expected NAME QW QX QY QZ TX TY TZ\n");
+  EXPECT_EQ(
+      Eval("--gt " + Quote(dir / "bad_gt.txt") + " --results " + Quote(dir / "run.jsonl"), &output),
+      2);
+  EXPECT_EQ(output, "cwloc-eval: error: " + (dir / "bad_gt.txt").string() +
+                        ":2: expected NAME QW QX QY QZ TX TY TZ\n");
 }
 
 TEST(EvalCli, JsonReportMatchesSchemaAndComparesRuns) {
@@ -86,10 +97,13 @@ TEST(EvalCli, JsonReportMatchesSchemaAndComparesRuns) {
   s.WriteJsonLines(dir / "run.jsonl");
   s.WritePoses(dir / "run.txt");
   std::ofstream(dir / "scale.txt") << "scale 2\n";
-  const std::string common = "--gt " + Quote(dir / "gt.txt") + " --results " + Quote(dir / "run.jsonl") +
-                             " --results " + Quote(dir / "run.txt") + " --label cwr --label poses";
+  const std::string common = "--gt " + Quote(dir / "gt.txt") + " --results " +
+                             Quote(dir / "run.jsonl") + " --results " + Quote(dir / "run.txt") +
+                             " --label cwr --label poses";
   ASSERT_EQ(EvalStdout(common + " --json", dir / "units.json"), 0);
-  ASSERT_EQ(EvalStdout(common + " --scale " + Quote(dir / "scale.txt") + " --json", dir / "metres.json"), 0);
+  ASSERT_EQ(
+      EvalStdout(common + " --scale " + Quote(dir / "scale.txt") + " --json", dir / "metres.json"),
+      0);
   for (const char* name : {"units.json", "metres.json"}) {
     std::string output;
     EXPECT_EQ(ValidateReport(dir / name, &output), 0) << name << "\n" << output;
@@ -156,7 +170,8 @@ TEST(EvalCli, HerzJesuGroundTruthAgainstItself) {
   EXPECT_EQ(run["queries"], 5);
   EXPECT_EQ(run["localized"], 5);
   for (const char* key : {"position_error", "rotation_error_deg"}) {
-    for (const char* q : {"q1", "median", "q3"}) EXPECT_NEAR(run[key][q].get<double>(), 0.0, 1e-9) << key << " " << q;
+    for (const char* q : {"q1", "median", "q3"})
+      EXPECT_NEAR(run[key][q].get<double>(), 0.0, 1e-9) << key << " " << q;
   }
   for (const auto& within : run["within"]) EXPECT_EQ(within["share"], 1.0);
 }

@@ -4,8 +4,8 @@
 #include <fstream>
 
 #include "format/base/error.h"
-#include "tests/tools/eval/eval_fixtures.h"
 #include "tests/test_util.h"
+#include "tests/tools/eval/eval_fixtures.h"
 #include "tools/eval/ground_truth.h"
 #include "tools/eval/report.h"
 #include "tools/eval/result_reader.h"
@@ -17,7 +17,9 @@ using test::PoseFromCenter;
 using test::Radians;
 using test::Scenario;
 
-void WriteFile(const std::filesystem::path& path, const std::string& text) { std::ofstream(path) << text; }
+void WriteFile(const std::filesystem::path& path, const std::string& text) {
+  std::ofstream(path) << text;
+}
 
 // The InputError message of body(), or "" if it did not throw one.
 template <typename F>
@@ -79,7 +81,8 @@ TEST(PoseError, RotationAngleOfRelativeRotation) {
   const Eigen::Quaterniond gt(Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, -2, 0.5).normalized()));
   const Pose truth = PoseFromCenter(gt, Eigen::Vector3d(1, 2, 3));
   for (const double degrees : {0.0, 0.01, 2.0, 45.0, 179.0, 180.0}) {
-    const Eigen::Quaterniond delta(Eigen::AngleAxisd(Radians(degrees), Eigen::Vector3d(0.3, 0.4, -1).normalized()));
+    const Eigen::Quaterniond delta(
+        Eigen::AngleAxisd(Radians(degrees), Eigen::Vector3d(0.3, 0.4, -1).normalized()));
     const Pose estimate = PoseFromCenter(delta * gt, Eigen::Vector3d(1, 2, 3));
     EXPECT_NEAR(RotationErrorDeg(estimate, truth), degrees, 1e-9) << degrees;
     EXPECT_NEAR(PositionError(estimate, truth), 0, 1e-12);
@@ -107,7 +110,8 @@ TEST(Report, KnownErrorsGiveKnownQuartilesAndShares) {
   const Scenario s;
   s.WriteGroundTruth(dir / "gt.txt");
   s.WriteJsonLines(dir / "run.jsonl");
-  const RunReport r = EvaluateRun(ReadGroundTruth(dir / "gt.txt"), ReadResults(dir / "run.jsonl"), 1.0, "run");
+  const RunReport r =
+      EvaluateRun(ReadGroundTruth(dir / "gt.txt"), ReadResults(dir / "run.jsonl"), 1.0, "run");
   EXPECT_EQ(r.queries, 5);
   EXPECT_EQ(r.localized, 4);
   EXPECT_EQ(r.missing, 1);
@@ -144,7 +148,8 @@ TEST(Report, ScaleMultipliesDistancesOnly) {
   WriteFile(dir / "scale.txt", "# comment\nscale 2\nR 1 0 0 0 1 0 0 0 1\nt 5 6 7\n");
   const double scale = ReadScale(dir / "scale.txt");
   EXPECT_EQ(scale, 2.0);
-  const RunReport r = EvaluateRun(ReadGroundTruth(dir / "gt.txt"), ReadResults(dir / "run.txt"), scale, "run");
+  const RunReport r =
+      EvaluateRun(ReadGroundTruth(dir / "gt.txt"), ReadResults(dir / "run.txt"), scale, "run");
   EXPECT_NEAR(r.position_error->median, 1.3, 1e-9);
   EXPECT_NEAR(r.rotation_error_deg->median, 5.5, 1e-9);
   // Doubled distances 0.2, 0.6, 2, 12: only q0 within 0.5 now.
@@ -174,7 +179,8 @@ TEST(Report, PosesFileAndJsonLinesGiveTheSameReport) {
   }
   // Both texts round-trip doubles exactly, so the errors agree to the last bit or nearly.
   for (size_t i = 0; i < 4; ++i) {
-    EXPECT_NEAR(ja["per_query"][i]["position_error"].get<double>(), jb["per_query"][i]["position_error"].get<double>(), 1e-12);
+    EXPECT_NEAR(ja["per_query"][i]["position_error"].get<double>(),
+                jb["per_query"][i]["position_error"].get<double>(), 1e-12);
     EXPECT_NEAR(ja["per_query"][i]["rotation_error_deg"].get<double>(),
                 jb["per_query"][i]["rotation_error_deg"].get<double>(), 1e-9);
   }
@@ -182,7 +188,8 @@ TEST(Report, PosesFileAndJsonLinesGiveTheSameReport) {
   jb.erase("per_query");
   for (auto* j : {&ja, &jb}) {
     for (const char* key : {"position_error", "rotation_error_deg"}) {
-      for (const char* q : {"q1", "median", "q3"}) (*j)[key][q] = std::round((*j)[key][q].get<double>() * 1e9) / 1e9;
+      for (const char* q : {"q1", "median", "q3"})
+        (*j)[key][q] = std::round((*j)[key][q].get<double>() * 1e9) / 1e9;
     }
   }
   EXPECT_EQ(ja.dump(), jb.dump());
@@ -196,9 +203,11 @@ TEST(Report, CountsFailuresErrorsMissingAndUnknownNames) {
       << Scenario::JsonRecord("q0.jpg", s.estimates[0], 5).dump() << "\n"
       << R"({"name":"q1.jpg","success":false,"failure_reason":"too few inliers","times_ms":{"forward_knn":1,"ratio_test":1,"query_tree":1,"back_matching":1,"pose":1,"total":5}})"
       << "\n"
-      << R"({"name":"q2.jpg","success":false,"error":"cannot read image"})" << "\n\n"
+      << R"({"name":"q2.jpg","success":false,"error":"cannot read image"})"
+      << "\n\n"
       << Scenario::JsonRecord("other.jpg", s.estimates[1], 5).dump() << "\n";
-  const RunReport r = EvaluateRun(ReadGroundTruth(dir / "gt.txt"), ReadResults(dir / "run.jsonl"), 1.0, "run");
+  const RunReport r =
+      EvaluateRun(ReadGroundTruth(dir / "gt.txt"), ReadResults(dir / "run.jsonl"), 1.0, "run");
   EXPECT_EQ(r.localized, 1);
   EXPECT_EQ(r.not_localized, 1);
   EXPECT_EQ(r.errors, 1);
@@ -208,16 +217,20 @@ TEST(Report, CountsFailuresErrorsMissingAndUnknownNames) {
   EXPECT_EQ(r.within, (std::array<int, 3>{1, 1, 1}));
   EXPECT_EQ(r.per_query[1].status, QueryStatus::kNotLocalized);
   EXPECT_EQ(r.per_query[2].status, QueryStatus::kError);
-  EXPECT_NE(FormatTable(EvalReport{"gt.txt", 5, std::nullopt, 1.0, {r}}).find("1 result(s) for names not in the ground truth"),
+  EXPECT_NE(FormatTable(EvalReport{"gt.txt", 5, std::nullopt, 1.0, {r}})
+                .find("1 result(s) for names not in the ground truth"),
             std::string::npos);
 }
 
 TEST(Readers, MissingFileNamesTheFile) {
   cwloc::test::TempDir dir;
   const auto path = dir / "results.jsonl";
-  EXPECT_EQ(InputErrorOf([&] { ReadResults(path); }), path.string() + ": cannot open (No such file or directory)");
-  EXPECT_EQ(InputErrorOf([&] { ReadGroundTruth(path); }), path.string() + ": cannot open (No such file or directory)");
-  EXPECT_EQ(InputErrorOf([&] { ReadResults(dir.path()); }), dir.path().string() + ": is a directory, expected a file");
+  EXPECT_EQ(InputErrorOf([&] { ReadResults(path); }),
+            path.string() + ": cannot open (No such file or directory)");
+  EXPECT_EQ(InputErrorOf([&] { ReadGroundTruth(path); }),
+            path.string() + ": cannot open (No such file or directory)");
+  EXPECT_EQ(InputErrorOf([&] { ReadResults(dir.path()); }),
+            dir.path().string() + ": is a directory, expected a file");
 }
 
 TEST(Readers, MalformedLinesNameFileAndLine) {
@@ -232,11 +245,16 @@ TEST(Readers, MalformedLinesNameFileAndLine) {
   expect(good + "\n\n{\"name\": \"q1.jpg\", \"success\": tru\n", ":3: not valid JSON");
   expect("{\"name\": \"q1.jpg\"}\n", ":1: expected a boolean \"success\"");
   expect("{\"success\": true}\n", ":1: expected a non-empty string \"name\"");
-  expect("{\"name\": \"a\", \"success\": true}\n", ":1: \"success\" is true but there is no \"pose\" object");
-  expect("{\"name\": \"a\", \"success\": true, \"pose\": {\"qvec\": [1, 0, 0], \"tvec\": [0, 0, 0]}}\n",
-         ":1: \"pose.qvec\" must be an array of 4 finite numbers");
-  expect("{\"name\": \"a\", \"success\": true, \"pose\": {\"qvec\": [0, 0, 0, 0], \"tvec\": [0, 0, 0]}}\n",
-         ":1: \"pose.qvec\" is zero");
+  expect("{\"name\": \"a\", \"success\": true}\n",
+         ":1: \"success\" is true but there is no \"pose\" object");
+  expect(
+      "{\"name\": \"a\", \"success\": true, \"pose\": {\"qvec\": [1, 0, 0], \"tvec\": [0, 0, "
+      "0]}}\n",
+      ":1: \"pose.qvec\" must be an array of 4 finite numbers");
+  expect(
+      "{\"name\": \"a\", \"success\": true, \"pose\": {\"qvec\": [0, 0, 0, 0], \"tvec\": [0, 0, "
+      "0]}}\n",
+      ":1: \"pose.qvec\" is zero");
   expect("{\"name\": \"a\", \"success\": false, \"times_ms\": {\"total\": 3}}\n",
          ":1: \"times_ms.forward_knn\" must be a number");
   expect(good + "\n[1, 2]\n", ":2: expected a JSON object (one cwloc-localize result per line)");
@@ -246,11 +264,14 @@ TEST(Readers, MalformedLinesNameFileAndLine) {
 
   const auto gt = dir / "queries_gt.txt";
   WriteFile(gt, "# comment\nq0.jpg 1 0 0 x 1 2 3\n");
-  EXPECT_EQ(InputErrorOf([&] { ReadGroundTruth(gt); }), gt.string() + ":2: expected NAME QW QX QY QZ TX TY TZ");
+  EXPECT_EQ(InputErrorOf([&] { ReadGroundTruth(gt); }),
+            gt.string() + ":2: expected NAME QW QX QY QZ TX TY TZ");
   WriteFile(gt, "q0.jpg 0 0 0 0 1 2 3\n");
-  EXPECT_EQ(InputErrorOf([&] { ReadGroundTruth(gt); }), gt.string() + ":1: quaternion QW QX QY QZ is zero");
+  EXPECT_EQ(InputErrorOf([&] { ReadGroundTruth(gt); }),
+            gt.string() + ":1: quaternion QW QX QY QZ is zero");
   WriteFile(gt, "q0.jpg 1 0 0 0 1 2 3\nq0.jpg 1 0 0 0 1 2 3\n");
-  EXPECT_EQ(InputErrorOf([&] { ReadGroundTruth(gt); }), gt.string() + ":2: duplicate query q0.jpg (first on line 1)");
+  EXPECT_EQ(InputErrorOf([&] { ReadGroundTruth(gt); }),
+            gt.string() + ":2: duplicate query q0.jpg (first on line 1)");
   WriteFile(gt, "# nothing\n");
   EXPECT_EQ(InputErrorOf([&] { ReadGroundTruth(gt); }),
             gt.string() + ": no ground-truth queries (expected NAME QW QX QY QZ TX TY TZ lines)");
@@ -259,7 +280,8 @@ TEST(Readers, MalformedLinesNameFileAndLine) {
   WriteFile(scale, "R 1 0 0 0 1 0 0 0 1\n");
   EXPECT_EQ(InputErrorOf([&] { ReadScale(scale); }), scale.string() + ": no 'scale S' line");
   WriteFile(scale, "# x\nscale -1\n");
-  EXPECT_EQ(InputErrorOf([&] { ReadScale(scale); }), scale.string() + ":2: expected 'scale S' with a number S > 0");
+  EXPECT_EQ(InputErrorOf([&] { ReadScale(scale); }),
+            scale.string() + ":2: expected 'scale S' with a number S > 0");
 }
 
 }  // namespace

@@ -33,7 +33,8 @@ TEST(Recognition, TopKCountsARightImageAmongTheFirstK) {
 TEST(Recognition, RightImagesShareAtLeastMinSharedPointsWithTheQuery) {
   colmap::Reconstruction model;
   model.cameras[1] = {1, CameraModelId::kSimplePinhole, 100, 100, {100, 50, 50}};
-  for (image_t id : {1u, 2u}) model.images[id] = {id, 1, "img" + std::to_string(id) + ".jpg", {}, {}};
+  for (image_t id : {1u, 2u})
+    model.images[id] = {id, 1, "img" + std::to_string(id) + ".jpg", {}, {}};
   for (point3D_t p = 1; p <= 15; ++p) {
     colmap::Point3D point;
     point.point3D_id = p;
@@ -52,7 +53,8 @@ TEST(Recognition, RightImagesShareAtLeastMinSharedPointsWithTheQuery) {
   const RecognitionTruth truth = MakeRecognitionTruth(dir.path(), seen, 12);
   EXPECT_EQ(truth.right_images.at("q"), (std::set<uint32_t>{1}));
   EXPECT_TRUE(truth.right_images.at("far").empty());
-  EXPECT_EQ(MakeRecognitionTruth(dir.path(), seen, 5).right_images.at("q"), (std::set<uint32_t>{1, 2}));
+  EXPECT_EQ(MakeRecognitionTruth(dir.path(), seen, 5).right_images.at("q"),
+            (std::set<uint32_t>{1, 2}));
 }
 
 TEST(Recognition, QueryPointsFileErrorsNameTheLine) {
@@ -73,7 +75,8 @@ TEST(Recognition, QueryPointsFileErrorsNameTheLine) {
 
 TEST(Recognition, HerzJesuQueriesHaveRightImagesFromTheFullModel) {
   CWLOC_REQUIRE_SHARED_DATA(data, "herz_jesu_p25");
-  const std::vector<std::string> names = {"0002.jpg", "0007.jpg", "0012.jpg", "0017.jpg", "0022.jpg"};
+  const std::vector<std::string> names = {"0002.jpg", "0007.jpg", "0012.jpg", "0017.jpg",
+                                          "0022.jpg"};
   const auto seen = QueryPointsFromModel(data / "full_model" / "bin", names);
   // README.txt: 2581 / 4347 / 2074 / 4375 / 2806 observations per query.
   EXPECT_EQ(seen.at("0002.jpg").size(), 2581u);
@@ -93,11 +96,13 @@ TEST(RecognitionCli, ModelWithoutQueryPointsIsAUsageError) {
   std::ofstream(dir / "gt.txt") << "q 1 0 0 0 0 0 0\n";
   std::ofstream(dir / "poses.txt") << "q 1 0 0 0 0 0 0\n";
   std::string output;
-  EXPECT_EQ(test::RunCommand(test::ToolPath("cwloc-eval").string() + " --results " + (dir / "poses.txt").string() +
-                                 " --gt " + (dir / "gt.txt").string() + " --model " + dir.path().string(),
+  EXPECT_EQ(test::RunCommand(test::ToolPath("cwloc-eval").string() + " --results " +
+                                 (dir / "poses.txt").string() + " --gt " +
+                                 (dir / "gt.txt").string() + " --model " + dir.path().string(),
                              &output),
             2);
-  EXPECT_THAT(output, testing::HasSubstr("--model needs --gt-points or --gt-model to know what each query sees"));
+  EXPECT_THAT(output, testing::HasSubstr(
+                          "--model needs --gt-points or --gt-model to know what each query sees"));
 }
 
 }  // namespace

@@ -33,11 +33,12 @@ int Plot(const std::string& args, std::string* output) {
 }
 
 // stdout into *out, stderr into *err.
-int PlotSplit(const std::string& args, const test::TempDir& dir, std::string* out, std::string* err) {
+int PlotSplit(const std::string& args, const test::TempDir& dir, std::string* out,
+              std::string* err) {
   // RunCommand sends the command's stderr to the pipe; the group's stdout goes to the file.
-  const int code =
-      test::RunCommand("{ " + Quote(test::ToolPath("cwloc-plot")) + " " + args + " > " + Quote(dir / "stdout.txt") + "; }",
-                       err);
+  const int code = test::RunCommand("{ " + Quote(test::ToolPath("cwloc-plot")) + " " + args +
+                                        " > " + Quote(dir / "stdout.txt") + "; }",
+                                    err);
   std::ifstream in(dir / "stdout.txt");
   std::stringstream text;
   text << in.rdbuf();
@@ -55,7 +56,8 @@ std::optional<std::pair<uint32_t, uint32_t>> PngSize(const fs::path& path) {
   if (!std::equal(signature.begin(), signature.end(), head.begin())) return std::nullopt;
   if (std::string(head.begin() + 12, head.begin() + 16) != "IHDR") return std::nullopt;
   const auto big_endian = [&](size_t at) {
-    return uint32_t(head[at]) << 24 | uint32_t(head[at + 1]) << 16 | uint32_t(head[at + 2]) << 8 | uint32_t(head[at + 3]);
+    return uint32_t(head[at]) << 24 | uint32_t(head[at + 1]) << 16 | uint32_t(head[at + 2]) << 8 |
+           uint32_t(head[at + 3]);
   };
   return std::make_pair(big_endian(16), big_endian(20));
 }
@@ -64,7 +66,8 @@ std::optional<std::pair<uint32_t, uint32_t>> PngSize(const fs::path& path) {
 std::vector<std::string> TempFiles(const fs::path& dir) {
   std::vector<std::string> names;
   for (const auto& entry : fs::directory_iterator(dir)) {
-    if (entry.path().filename().string().starts_with(".cwloc-plot-")) names.push_back(entry.path().filename());
+    if (entry.path().filename().string().starts_with(".cwloc-plot-"))
+      names.push_back(entry.path().filename());
   }
   return names;
 }
@@ -88,20 +91,22 @@ void WriteRun(const fs::path& path, const std::vector<std::pair<double, double>>
     name += std::to_string(i) + ".jpg";
     nlohmann::json record = {{"name", name}, {"success", error >= 0}};
     if (error >= 0) record["pose"] = {{"qvec", {1, 0, 0, 0}}, {"tvec", {-error, 0, 0}}};
-    record["times_ms"] = {{"forward_knn", 0.5 * total}, {"ratio_test", 0.01 * total}, {"query_tree", 0.1 * total},
-                          {"back_matching", 0.2 * total}, {"pose", 0.1 * total}, {"total", total}};
+    record["times_ms"] = {{"forward_knn", 0.5 * total}, {"ratio_test", 0.01 * total},
+                          {"query_tree", 0.1 * total},  {"back_matching", 0.2 * total},
+                          {"pose", 0.1 * total},        {"total", total}};
     out << record.dump() << "\n";
   }
 }
 
 // Runs the real cwloc-eval --json on (label, results file) runs; extra arguments go last.
-void Evaluate(const test::TempDir& dir, const fs::path& report, const std::vector<std::pair<std::string, fs::path>>& runs,
+void Evaluate(const test::TempDir& dir, const fs::path& report,
+              const std::vector<std::pair<std::string, fs::path>>& runs,
               const std::string& extra = "") {
   std::string args = "--gt " + Quote(dir / "gt.txt");
   for (const auto& [label, path] : runs) args += " --results " + Quote(path) + " --label " + label;
   std::string output;
-  ASSERT_EQ(test::RunCommand(Quote(test::ToolPath("cwloc-eval")) + " " + args + " --json " + extra + " > " +
-                                 Quote(report),
+  ASSERT_EQ(test::RunCommand(Quote(test::ToolPath("cwloc-eval")) + " " + args + " --json " + extra +
+                                 " > " + Quote(report),
                              &output),
             0)
       << output;
@@ -122,7 +127,8 @@ TEST(PlotCli, HelpAndVersion) {
     EXPECT_NE(output.find(word), std::string::npos) << word << "\n" << output;
   }
   EXPECT_EQ(Plot("errors --help", &output), 0);
-  for (const char* word : {"--report", "--max-error", "--x-scale", "--output", "--title", "--size", "ALL ground-truth"}) {
+  for (const char* word : {"--report", "--max-error", "--x-scale", "--output", "--title", "--size",
+                           "ALL ground-truth"}) {
     EXPECT_NE(output.find(word), std::string::npos) << word << "\n" << output;
   }
   EXPECT_EQ(Plot("anytime --help", &output), 0);
@@ -130,17 +136,20 @@ TEST(PlotCli, HelpAndVersion) {
     EXPECT_NE(output.find(word), std::string::npos) << word << "\n" << output;
   }
   EXPECT_EQ(Plot("scale --help", &output), 0);
-  for (const char* word : {"--point", "VIEWS:JSON", "--run", "--series-label", "growth exponent", "p90"}) {
+  for (const char* word :
+       {"--point", "VIEWS:JSON", "--run", "--series-label", "growth exponent", "p90"}) {
     EXPECT_NE(output.find(word), std::string::npos) << word << "\n" << output;
   }
   EXPECT_EQ(Plot("--version", &output), 0);
   EXPECT_EQ(output, std::string("cwloc-plot ") + kToolVersion + "\n");
   EXPECT_EQ(Plot("", &output), 2);
-  EXPECT_EQ(output, "cwloc-plot: error: the following arguments are required: COMMAND\n"
-                    "Run 'cwloc-plot --help' for usage.\n");
+  EXPECT_EQ(output,
+            "cwloc-plot: error: the following arguments are required: COMMAND\n"
+            "Run 'cwloc-plot --help' for usage.\n");
   EXPECT_EQ(Plot("errors --report x.json", &output), 2);
-  EXPECT_EQ(output, "cwloc-plot: error: the following arguments are required: -o/--output\n"
-                    "Run 'cwloc-plot errors --help' for usage.\n");
+  EXPECT_EQ(output,
+            "cwloc-plot: error: the following arguments are required: -o/--output\n"
+            "Run 'cwloc-plot errors --help' for usage.\n");
 }
 
 TEST(PlotCli, ErrorsDrawsOneCurvePerRun) {
@@ -149,11 +158,12 @@ TEST(PlotCli, ErrorsDrawsOneCurvePerRun) {
   WriteRun(dir / "a.jsonl", {{0.1, 10}, {0.3, 20}, {1.0, 30}, {6.0, 40}});  // q4 missing
   WriteRun(dir / "b.jsonl", {{0.05, 5}, {0.2, 6}, {-1, 7}, {2.0, 8}, {8.0, 9}});
   // The ground truth against itself: zero errors, which a log axis cannot show (left edge).
-  Evaluate(dir, dir / "r1.json", {{"cwr", dir / "a.jsonl"}, {"global", dir / "b.jsonl"}, {"exact", dir / "gt.txt"}});
+  Evaluate(dir, dir / "r1.json",
+           {{"cwr", dir / "a.jsonl"}, {"global", dir / "b.jsonl"}, {"exact", dir / "gt.txt"}});
   Evaluate(dir, dir / "r2.json", {{"cwr", dir / "b.jsonl"}});  // a label r1.json has too
   std::string output;
-  ASSERT_EQ(Plot("errors --report " + Quote(dir / "r1.json") + " --report " + Quote(dir / "r2.json") + " -o " +
-                     Quote(dir / "cdf.png"),
+  ASSERT_EQ(Plot("errors --report " + Quote(dir / "r1.json") + " --report " +
+                     Quote(dir / "r2.json") + " -o " + Quote(dir / "cdf.png"),
                  &output),
             0)
       << output;
@@ -168,18 +178,21 @@ TEST(PlotCli, ErrorsDrawsOneCurvePerRun) {
             0)
       << output;
   EXPECT_EQ(PngSize(dir / "cdf2.png"), std::make_pair(640u, 400u));
-  EXPECT_EQ(fs::status(dir / "cdf2.png").permissions() & fs::perms::others_read, fs::perms::others_read);
+  EXPECT_EQ(fs::status(dir / "cdf2.png").permissions() & fs::perms::others_read,
+            fs::perms::others_read);
   EXPECT_TRUE(TempFiles(dir.path()).empty());
 
   // Metres and model units do not share an axis.
   std::ofstream(dir / "scale.txt") << "scale 2\n";
-  Evaluate(dir, dir / "metres.json", {{"cwr", dir / "a.jsonl"}}, "--scale " + Quote(dir / "scale.txt"));
-  EXPECT_EQ(Plot("errors --report " + Quote(dir / "r1.json") + " --report " + Quote(dir / "metres.json") + " -o " +
-                     Quote(dir / "mixed.png"),
+  Evaluate(dir, dir / "metres.json", {{"cwr", dir / "a.jsonl"}},
+           "--scale " + Quote(dir / "scale.txt"));
+  EXPECT_EQ(Plot("errors --report " + Quote(dir / "r1.json") + " --report " +
+                     Quote(dir / "metres.json") + " -o " + Quote(dir / "mixed.png"),
                  &output),
             2);
-  EXPECT_EQ(output, "cwloc-plot: error: reports differ in unit (" + (dir / "r1.json").string() + " in model units, " +
-                        (dir / "metres.json").string() + " in m); evaluate all with --scale or all without\n");
+  EXPECT_EQ(output, "cwloc-plot: error: reports differ in unit (" + (dir / "r1.json").string() +
+                        " in model units, " + (dir / "metres.json").string() +
+                        " in m); evaluate all with --scale or all without\n");
   EXPECT_FALSE(fs::exists(dir / "mixed.png"));
 }
 
@@ -191,31 +204,41 @@ TEST(PlotCli, AnytimeDrawsOneSeriesPerReport) {
   WriteRun(dir / "nf100.jsonl", {{0.1, 20}, {0.2, 20}, {0.3, 20}, {0.4, 20}, {-1, 20}});
   WriteRun(dir / "nf200.jsonl", {{0.1, 40}, {0.2, 40}, {0.3, 40}, {0.4, 40}, {0.5, 40}});
   Evaluate(dir, dir / "sweep.json",
-           {{"N_F=50", dir / "nf50.jsonl"}, {"N_F=100", dir / "nf100.jsonl"}, {"N_F=200", dir / "nf200.jsonl"}});
-  Evaluate(dir, dir / "baseline.json", {{"N_F=50", dir / "nf100.jsonl"}, {"N_F=200", dir / "nf200.jsonl"}});
+           {{"N_F=50", dir / "nf50.jsonl"},
+            {"N_F=100", dir / "nf100.jsonl"},
+            {"N_F=200", dir / "nf200.jsonl"}});
+  Evaluate(dir, dir / "baseline.json",
+           {{"N_F=50", dir / "nf100.jsonl"}, {"N_F=200", dir / "nf200.jsonl"}});
   std::string output;
-  ASSERT_EQ(Plot("anytime --report " + Quote(dir / "sweep.json") + " --series cluster-wise --report " +
-                     Quote(dir / "baseline.json") + " --series global-ratio -o " + Quote(dir / "anytime.png"),
+  ASSERT_EQ(Plot("anytime --report " + Quote(dir / "sweep.json") +
+                     " --series cluster-wise --report " + Quote(dir / "baseline.json") +
+                     " --series global-ratio -o " + Quote(dir / "anytime.png"),
                  &output),
             0)
       << output;
   EXPECT_EQ(output, "cwloc-plot: wrote " + (dir / "anytime.png").string() + " (2 series)\n");
   EXPECT_EQ(PngSize(dir / "anytime.png"), std::make_pair(960u, 600u));
-  ASSERT_EQ(Plot("anytime --report " + Quote(dir / "sweep.json") + " --stage forward_knn --x-scale log --size 800x800 -o " +
-                     Quote(dir / "knn.png"),
-                 &output),
-            0)
+  ASSERT_EQ(
+      Plot("anytime --report " + Quote(dir / "sweep.json") +
+               " --stage forward_knn --x-scale log --size 800x800 -o " + Quote(dir / "knn.png"),
+           &output),
+      0)
       << output;
   EXPECT_EQ(PngSize(dir / "knn.png"), std::make_pair(800u, 800u));
 
-  EXPECT_EQ(Plot("anytime --report " + Quote(dir / "sweep.json") + " --report " + Quote(dir / "baseline.json") +
-                     " --series one -o " + Quote(dir / "x.png"),
+  EXPECT_EQ(Plot("anytime --report " + Quote(dir / "sweep.json") + " --report " +
+                     Quote(dir / "baseline.json") + " --series one -o " + Quote(dir / "x.png"),
                  &output),
             2);
-  EXPECT_EQ(output, "cwloc-plot: error: got 1 --series for 2 --report; give one per report or none\n");
-  EXPECT_EQ(Plot("anytime --report " + Quote(dir / "sweep.json") + " --stage nope -o " + Quote(dir / "x.png"), &output),
+  EXPECT_EQ(output,
+            "cwloc-plot: error: got 1 --series for 2 --report; give one per report or none\n");
+  EXPECT_EQ(Plot("anytime --report " + Quote(dir / "sweep.json") + " --stage nope -o " +
+                     Quote(dir / "x.png"),
+                 &output),
             2);
-  EXPECT_NE(output.find("cwloc-plot: error: argument --stage: invalid choice: 'nope'"), std::string::npos) << output;
+  EXPECT_NE(output.find("cwloc-plot: error: argument --stage: invalid choice: 'nope'"),
+            std::string::npos)
+      << output;
   EXPECT_TRUE(TempFiles(dir.path()).empty());
 }
 
@@ -224,18 +247,21 @@ TEST(PlotCli, ScalePrintsTheGrowthExponent) {
   WriteGroundTruth(dir / "gt.txt");
   // Times double per 4x views, so time ~ views^0.5. Totals {t, t, 2t}: median t, p90 at
   // h = 1.8 is t + 0.8 t = 1.8 t. A second run "slow" takes 3 t throughout.
-  const std::vector<std::pair<int, double>> sizes = {{1000, 10}, {4000, 20}, {16000, 40}, {64000, 80}};
+  const std::vector<std::pair<int, double>> sizes = {
+      {1000, 10}, {4000, 20}, {16000, 40}, {64000, 80}};
   std::string points;
   for (auto it = sizes.rbegin(); it != sizes.rend(); ++it) {  // out of order on purpose
     const auto [views, t] = *it;
     const std::string name = "s" + std::to_string(views);
     WriteRun(dir / (name + ".jsonl"), {{0.1, t}, {0.2, t}, {0.3, 2 * t}});
     WriteRun(dir / (name + "_slow.jsonl"), {{0.1, 3 * t}, {0.2, 3 * t}, {0.3, 3 * t}});
-    Evaluate(dir, dir / (name + ".json"), {{"cw", dir / (name + ".jsonl")}, {"slow", dir / (name + "_slow.jsonl")}});
+    Evaluate(dir, dir / (name + ".json"),
+             {{"cw", dir / (name + ".jsonl")}, {"slow", dir / (name + "_slow.jsonl")}});
     points += " --point " + std::to_string(views) + ":" + Quote(dir / (name + ".json"));
   }
   std::string out, err;
-  ASSERT_EQ(PlotSplit("scale" + points + " -o " + Quote(dir / "scale.png"), dir, &out, &err), 0) << err;
+  ASSERT_EQ(PlotSplit("scale" + points + " -o " + Quote(dir / "scale.png"), dir, &out, &err), 0)
+      << err;
   EXPECT_EQ(out,
             "cwloc-plot scale: cw, time per query by model size\n"
             "  views  median total ms  p90 total ms\n"
@@ -243,14 +269,15 @@ TEST(PlotCli, ScalePrintsTheGrowthExponent) {
             "  4000   20.0             36.0\n"
             "  16000  40.0             72.0\n"
             "  64000  80.0             144.0\n"
-            "growth exponent: 0.500 (median total time ~ views^0.500; least-squares slope of log time against log "
+            "growth exponent: 0.500 (median total time ~ views^0.500; least-squares slope of log "
+            "time against log "
             "views over 4 reports)\n");
   EXPECT_EQ(err, "cwloc-plot: wrote " + (dir / "scale.png").string() + " (4 model sizes)\n");
   EXPECT_EQ(PngSize(dir / "scale.png"), std::make_pair(960u, 600u));
 
   // Another run by label, a series name, a view count written as 1e3, and one model size only.
-  ASSERT_EQ(PlotSplit("scale --point 1e3:" + Quote(dir / "s1000.json") + " --run slow --series-label 'CW slow' -o " +
-                          Quote(dir / "one.png"),
+  ASSERT_EQ(PlotSplit("scale --point 1e3:" + Quote(dir / "s1000.json") +
+                          " --run slow --series-label 'CW slow' -o " + Quote(dir / "one.png"),
                       dir, &out, &err),
             0)
       << err;
@@ -260,10 +287,12 @@ TEST(PlotCli, ScalePrintsTheGrowthExponent) {
             "  1000   30.0             30.0\n"
             "growth exponent: - (needs two or more model sizes and non-zero times)\n");
   EXPECT_EQ(PngSize(dir / "one.png"), std::make_pair(960u, 600u));
-  EXPECT_EQ(PlotSplit("scale --point 1000:" + Quote(dir / "s1000.json") + " --run zzz -o " + Quote(dir / "x.png"), dir,
-                      &out, &err),
+  EXPECT_EQ(PlotSplit("scale --point 1000:" + Quote(dir / "s1000.json") + " --run zzz -o " +
+                          Quote(dir / "x.png"),
+                      dir, &out, &err),
             2);
-  EXPECT_EQ(err, "cwloc-plot: error: " + (dir / "s1000.json").string() + ": no run labelled \"zzz\" (runs: cw, slow)\n");
+  EXPECT_EQ(err, "cwloc-plot: error: " + (dir / "s1000.json").string() +
+                     ": no run labelled \"zzz\" (runs: cw, slow)\n");
   EXPECT_TRUE(TempFiles(dir.path()).empty());
 }
 
@@ -282,25 +311,32 @@ TEST(PlotCli, BadInputNamesTheFileAndExits2) {
   };
 
   const fs::path none = dir / "none.json";
-  expect("errors --report " + Quote(none) + out, none.string() + ": cannot open (No such file or directory)");
-  expect("anytime --report " + Quote(none) + out, none.string() + ": cannot open (No such file or directory)");
-  expect("scale --point 10:" + Quote(none) + out, none.string() + ": cannot open (No such file or directory)");
-  expect("errors --report " + Quote(dir.path()) + out, dir.path().string() + ": is a directory, expected a file");
+  expect("errors --report " + Quote(none) + out,
+         none.string() + ": cannot open (No such file or directory)");
+  expect("anytime --report " + Quote(none) + out,
+         none.string() + ": cannot open (No such file or directory)");
+  expect("scale --point 10:" + Quote(none) + out,
+         none.string() + ": cannot open (No such file or directory)");
+  expect("errors --report " + Quote(dir.path()) + out,
+         dir.path().string() + ": is a directory, expected a file");
 
   std::ofstream(dir / "text.json") << "views 1000\n";
   expect("errors --report " + Quote(dir / "text.json") + out,
          (dir / "text.json").string() + ":1: not valid JSON (Expecting value)");
   std::ofstream(dir / "cut.json") << "{\n  \"tool\": \"cwloc-eval\",\n";
   expect("errors --report " + Quote(dir / "cut.json") + out,
-         (dir / "cut.json").string() + ":3: not valid JSON (Expecting property name enclosed in double quotes)");
+         (dir / "cut.json").string() +
+             ":3: not valid JSON (Expecting property name enclosed in double quotes)");
   // cwloc-localize results instead of the report.
   expect("errors --report " + Quote(dir / "run.jsonl") + out,
          (dir / "run.jsonl").string() +
-             ":2: a second JSON value; expected one cwloc-eval --json report (JSON lines are cwloc-localize results: "
+             ":2: a second JSON value; expected one cwloc-eval --json report (JSON lines are "
+             "cwloc-localize results: "
              "evaluate them with cwloc-eval --json)");
   std::ofstream(dir / "info.json") << R"({"tool": "cwloc-index", "views": 3})";
   expect("errors --report " + Quote(dir / "info.json") + out,
-         (dir / "info.json").string() + ": not a cwloc-eval --json report (no \"tool\": \"cwloc-eval\")");
+         (dir / "info.json").string() +
+             ": not a cwloc-eval --json report (no \"tool\": \"cwloc-eval\")");
 
   const auto write_edited = [&](const std::string& name, const auto& edit) {
     nlohmann::json edited = report;
@@ -308,44 +344,62 @@ TEST(PlotCli, BadInputNamesTheFileAndExits2) {
     std::ofstream(dir / name) << edited.dump(2);
     return dir / name;
   };
-  const fs::path no_per_query = write_edited("no_per_query.json", [](nlohmann::json& j) { j["runs"][0].erase("per_query"); });
-  expect("errors --report " + Quote(no_per_query) + out, no_per_query.string() + ": runs[0].per_query: missing");
-  const fs::path bad_error = write_edited(
-      "bad_error.json", [](nlohmann::json& j) { j["runs"][0]["per_query"][1]["position_error"] = "far"; });
+  const fs::path no_per_query =
+      write_edited("no_per_query.json", [](nlohmann::json& j) { j["runs"][0].erase("per_query"); });
+  expect("errors --report " + Quote(no_per_query) + out,
+         no_per_query.string() + ": runs[0].per_query: missing");
+  const fs::path bad_error = write_edited("bad_error.json", [](nlohmann::json& j) {
+    j["runs"][0]["per_query"][1]["position_error"] = "far";
+  });
   expect("errors --report " + Quote(bad_error) + out,
-         bad_error.string() + ": runs[0].per_query[1].position_error: expected a number, got a string");
-  const fs::path no_runs = write_edited("no_runs.json", [](nlohmann::json& j) { j["runs"] = nlohmann::json::array(); });
-  expect("errors --report " + Quote(no_runs) + out, no_runs.string() + ": runs: empty (a report has at least one run)");
+         bad_error.string() +
+             ": runs[0].per_query[1].position_error: expected a number, got a string");
+  const fs::path no_runs =
+      write_edited("no_runs.json", [](nlohmann::json& j) { j["runs"] = nlohmann::json::array(); });
+  expect("errors --report " + Quote(no_runs) + out,
+         no_runs.string() + ": runs: empty (a report has at least one run)");
 
   // Times: a poses file has none; a report from before p90 cannot give the p90 line.
   expect("anytime --report " + Quote(dir / "report.json") + out,
          (dir / "report.json").string() +
-             ": runs[1].times_ms: null (run \"poses\" has no stage times: it was a poses file; evaluate "
+             ": runs[1].times_ms: null (run \"poses\" has no stage times: it was a poses file; "
+             "evaluate "
              "cwloc-localize JSON lines)");
-  const fs::path no_times = write_edited("no_times.json", [](nlohmann::json& j) { j["runs"][0].erase("times_ms"); });
-  expect("scale --point 10:" + Quote(no_times) + out, no_times.string() + ": runs[0].times_ms: missing");
+  const fs::path no_times =
+      write_edited("no_times.json", [](nlohmann::json& j) { j["runs"][0].erase("times_ms"); });
+  expect("scale --point 10:" + Quote(no_times) + out,
+         no_times.string() + ": runs[0].times_ms: missing");
   const fs::path old = write_edited("old.json", [](nlohmann::json& j) {
     for (auto& [stage, quantiles] : j["runs"][0]["times_ms"].items()) quantiles.erase("p90");
   });
   expect("scale --point 10:" + Quote(old) + out,
-         old.string() + ": runs[0].times_ms.total.p90: missing (the report is from a cwloc-eval without p90; "
-                        "evaluate again)");
+         old.string() +
+             ": runs[0].times_ms.total.p90: missing (the report is from a cwloc-eval without p90; "
+             "evaluate again)");
 
   // --point syntax.
-  for (const std::string point : {"report.json", "x:report.json", "0:report.json", "-4:report.json", "100:", "nan:r"}) {
+  for (const std::string point :
+       {"report.json", "x:report.json", "0:report.json", "-4:report.json", "100:", "nan:r"}) {
     EXPECT_EQ(Plot("scale --point=" + point + out, &output), 2) << point;
     EXPECT_EQ(output, "cwloc-plot: error: argument --point: '" + point +
-                          "': expected VIEWS:REPORT with VIEWS a positive number of views (e.g. 100000:eval.json)\n"
+                          "': expected VIEWS:REPORT with VIEWS a positive number of views (e.g. "
+                          "100000:eval.json)\n"
                           "Run 'cwloc-plot scale --help' for usage.\n");
   }
-  EXPECT_EQ(Plot("errors --report " + Quote(dir / "report.json") + " --size 10x10" + out, &output), 2);
-  EXPECT_NE(output.find("argument --size: '10x10': expected WIDTHxHEIGHT in pixels"), std::string::npos) << output;
-  EXPECT_EQ(Plot("errors --report " + Quote(dir / "report.json") + " --max-error 0" + out, &output), 2);
-  EXPECT_NE(output.find("argument --max-error: '0': expected a positive number"), std::string::npos) << output;
+  EXPECT_EQ(Plot("errors --report " + Quote(dir / "report.json") + " --size 10x10" + out, &output),
+            2);
+  EXPECT_NE(output.find("argument --size: '10x10': expected WIDTHxHEIGHT in pixels"),
+            std::string::npos)
+      << output;
+  EXPECT_EQ(Plot("errors --report " + Quote(dir / "report.json") + " --max-error 0" + out, &output),
+            2);
+  EXPECT_NE(output.find("argument --max-error: '0': expected a positive number"), std::string::npos)
+      << output;
 
   // Where the figure cannot be written.
-  expect("errors --report " + Quote(dir / "report.json") + " -o " + Quote(dir / "no_dir" / "out.png"),
-         (dir / "no_dir" / "out.png").string() + ": cannot write (No such file or directory)");
+  expect(
+      "errors --report " + Quote(dir / "report.json") + " -o " + Quote(dir / "no_dir" / "out.png"),
+      (dir / "no_dir" / "out.png").string() + ": cannot write (No such file or directory)");
   expect("errors --report " + Quote(dir / "report.json") + " -o " + Quote(dir.path()),
          dir.path().string() + ": is a directory, expected a PNG file name");
   EXPECT_FALSE(fs::exists(dir / "out.png"));

@@ -7,14 +7,13 @@
 #include <cmath>
 #include <fstream>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <numeric>
 #include <set>
 #include <sstream>
 
-#include <nlohmann/json.hpp>
-
-#include "format/camera/camera_models.h"
 #include "format/base/error.h"
+#include "format/camera/camera_models.h"
 #include "format/colmap/database.h"
 #include "format/colmap/reconstruction_io.h"
 #include "tests/test_util.h"
@@ -61,7 +60,8 @@ class Fnv {
 uint64_t SceneHash(const CityScene& scene) {
   Fnv h;
   for (const ScenePoint& p : scene.points()) {
-    h.Add(p.xyz.x()), h.Add(p.xyz.y()), h.Add(p.xyz.z()), h.Add(p.motif), h.Add(p.size), h.Add(p.angle);
+    h.Add(p.xyz.x()), h.Add(p.xyz.y()), h.Add(p.xyz.z()), h.Add(p.motif), h.Add(p.size),
+        h.Add(p.angle);
   }
   for (uint32_t p = 0; p < scene.points().size(); ++p) h.Add(scene.Point3DId(p));
   uint8_t descriptor[128];
@@ -126,10 +126,11 @@ TEST(CitySceneTest, WrittenOutputIsByteIdenticalForAnyThreadCount) {
     writer.Write(scene, {.text = true, .threads = threads, .command_line = "test"});
     writer.Commit("{}\n");
   }
-  for (const char* file : {"database.db", "mapping_model/bin/cameras.bin", "mapping_model/bin/images.bin",
-                           "mapping_model/bin/points3D.bin", "mapping_model/txt/points3D.txt",
-                           "queries_gt.txt", "queries_gt_points.txt", "queries_gt_matches.txt",
-                           "queries_with_intrinsics.txt", "query_list.txt", "README.txt"}) {
+  for (const char* file :
+       {"database.db", "mapping_model/bin/cameras.bin", "mapping_model/bin/images.bin",
+        "mapping_model/bin/points3D.bin", "mapping_model/txt/points3D.txt", "queries_gt.txt",
+        "queries_gt_points.txt", "queries_gt_matches.txt", "queries_with_intrinsics.txt",
+        "query_list.txt", "README.txt"}) {
     const std::string a = ReadBytes(dir / "out1" / file), b = ReadBytes(dir / "out3" / file);
     EXPECT_FALSE(a.empty()) << file;
     EXPECT_TRUE(a == b) << file << " differs between 1 and 3 threads";
@@ -171,7 +172,8 @@ TEST(CitySceneTest, ClutterShareFollowsTheKnob) {
     for (const SceneImage& image : scene.images()) {
       const auto n = std::count_if(image.features.begin(), image.features.end(),
                                    [](const SceneFeature& f) { return f.point == kNoPoint; });
-      EXPECT_NEAR(double(n) / double(image.features.size()), clutter, 1.0 / double(image.features.size()) + 1e-9);
+      EXPECT_NEAR(double(n) / double(image.features.size()), clutter,
+                  1.0 / double(image.features.size()) + 1e-9);
     }
   }
 }
@@ -235,7 +237,8 @@ TEST(CitySceneTest, DescriptorsAreSiftLikeAndViewsOfOnePointAreClose) {
     if (list.size() >= 2) same.push_back(Distance(list[0].data(), list[1].data()));
   }
   for (size_t i = 0; i < 4000; ++i) {
-    random.push_back(Distance(all[test::Rng()() % all.size()].data(), all[test::Rng()() % all.size()].data()));
+    random.push_back(
+        Distance(all[test::Rng()() % all.size()].data(), all[test::Rng()() % all.size()].data()));
   }
   ASSERT_GT(same.size(), 500u);
   // Real data: true matches median 129, random pairs median 416 (docs/synth.md).
@@ -301,8 +304,10 @@ TEST(CitySceneTest, GlobalRatioTestFailsOnRepeatedMotifsWhereThePerImageOneSucce
   const double global_unique = double(global_pass[0]) / total[0];
   const double global_motif = double(global_pass[1]) / total[1];
   const double local_motif = double(local_pass[1]) / total[1];
-  EXPECT_LT(global_motif, 0.6 * global_unique) << "unique " << global_unique << ", motif " << global_motif;
-  EXPECT_GT(local_motif, 1.5 * global_motif) << "global " << global_motif << ", per image " << local_motif;
+  EXPECT_LT(global_motif, 0.6 * global_unique)
+      << "unique " << global_unique << ", motif " << global_motif;
+  EXPECT_GT(local_motif, 1.5 * global_motif)
+      << "global " << global_motif << ", per image " << local_motif;
 }
 
 Eigen::Vector2d ProjectWith(const colmap::Camera& camera, const colmap::Rigid3d& cam_from_world,
@@ -345,14 +350,16 @@ TEST(SceneWriterTest, OutputReadsBackWithTheColmapReaders) {
     const SceneImage& image = scene.images()[db_image.image_id - 1];
     ASSERT_EQ(db_image.name, image.name);
     EXPECT_EQ(queries.count(image.name), image.query ? 1u : 0u);
-    EXPECT_EQ(rec.images.count(db_image.image_id), image.query ? 0u : 1u) << "queries are not in the model";
+    EXPECT_EQ(rec.images.count(db_image.image_id), image.query ? 0u : 1u)
+        << "queries are not in the model";
     const colmap::ImageFeatures features = db.ReadFeatures(db_image.image_id);
     ASSERT_EQ(features.keypoints.size(), image.features.size());
     for (size_t k = 0; k < image.features.size(); k += 7) {
       EXPECT_FLOAT_EQ(features.keypoints[k].x, image.features[k].x);
       EXPECT_NEAR(features.keypoints[k].Scale(), image.features[k].scale, 1e-3);
       scene.Describe(image, k, expected.data());
-      ASSERT_TRUE(std::equal(expected.begin(), expected.end(), features.descriptors.Row(uint32_t(k))));
+      ASSERT_TRUE(
+          std::equal(expected.begin(), expected.end(), features.descriptors.Row(uint32_t(k))));
     }
     if (image.query) continue;
     // Model points2D are the database keypoint rows, and the model projects onto them.
@@ -362,7 +369,8 @@ TEST(SceneWriterTest, OutputReadsBackWithTheColmapReaders) {
       const colmap::Point2D& p2 = model_image.points2D[k];
       ASSERT_EQ(p2.x, double(features.keypoints[k].x));
       if (p2.point3D_id == kInvalidPoint3DId) continue;
-      const Eigen::Vector2d pixel = ProjectWith(camera, model_image.cam_from_world, rec.points3D.at(p2.point3D_id).xyz);
+      const Eigen::Vector2d pixel =
+          ProjectWith(camera, model_image.cam_from_world, rec.points3D.at(p2.point3D_id).xyz);
       EXPECT_LT((pixel - Eigen::Vector2d(p2.x, p2.y)).norm(), 6.0);
     }
   }
@@ -426,8 +434,9 @@ TEST(SceneWriterTest, RefusesANonEmptyDirectoryUnlessOverwriting) {
     SceneWriter writer(dir / "city", false);
     FAIL() << "no error";
   } catch (const InputError& e) {
-    EXPECT_EQ(std::string(e.what()), "output directory '" + (dir / "city").string() +
-                                         "' exists and is not empty (use --overwrite to replace it)");
+    EXPECT_EQ(std::string(e.what()),
+              "output directory '" + (dir / "city").string() +
+                  "' exists and is not empty (use --overwrite to replace it)");
   }
   {
     SceneWriter writer(dir / "city", true);
@@ -440,7 +449,8 @@ TEST(SceneWriterTest, RefusesANonEmptyDirectoryUnlessOverwriting) {
     SceneWriter writer(dir / "file" / "city", false);
     FAIL() << "no error";
   } catch (const InputError& e) {
-    EXPECT_THAT(std::string(e.what()), HasSubstr("cannot create output directory '" + (dir / "file").string() + "'"));
+    EXPECT_THAT(std::string(e.what()),
+                HasSubstr("cannot create output directory '" + (dir / "file").string() + "'"));
   }
 }
 
@@ -450,19 +460,23 @@ TEST(SynthOptionsTest, BadKnobsGiveExactMessages) {
     set(knobs);
     return ErrorOf(knobs);
   };
-  EXPECT_EQ(with([](SynthKnobs& k) { k.clutter_fraction = 1.0; }), "--clutter-fraction must be in [0, 1) (got 1)");
+  EXPECT_EQ(with([](SynthKnobs& k) { k.clutter_fraction = 1.0; }),
+            "--clutter-fraction must be in [0, 1) (got 1)");
   EXPECT_EQ(with([](SynthKnobs& k) { k.clutter_fraction = -0.1; }),
             "--clutter-fraction must be in [0, 1) (got -0.1)");
   EXPECT_EQ(with([](SynthKnobs& k) { k.views = -5; }), "--views must be positive (got -5)");
   EXPECT_EQ(with([](SynthKnobs& k) { k.blocks = 0; }), "--blocks must be in [1, 100000] (got 0)");
-  EXPECT_EQ(with([](SynthKnobs& k) { k.queries = -1; }), "--queries must be in [0, 1000000] (got -1)");
+  EXPECT_EQ(with([](SynthKnobs& k) { k.queries = -1; }),
+            "--queries must be in [0, 1000000] (got -1)");
   EXPECT_EQ(with([](SynthKnobs& k) { k.features_per_image = 5; }),
             "--features-per-image must be in [20, 100000] (got 5)");
-  EXPECT_EQ(with([](SynthKnobs& k) { k.repetition = 1.5; }), "--repetition must be in [0, 1] (got 1.5)");
+  EXPECT_EQ(with([](SynthKnobs& k) { k.repetition = 1.5; }),
+            "--repetition must be in [0, 1] (got 1.5)");
   EXPECT_EQ(with([](SynthKnobs& k) { k.motifs = 0; }),
             "--motifs must be positive when --repetition is above 0 (got 0)");
-  EXPECT_EQ(with([](SynthKnobs& k) { k.camera_model = "OPENCV"; }),
-            "--camera-model must be SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL or RADIAL (got 'OPENCV')");
+  EXPECT_EQ(
+      with([](SynthKnobs& k) { k.camera_model = "OPENCV"; }),
+      "--camera-model must be SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL or RADIAL (got 'OPENCV')");
   EXPECT_EQ(with([](SynthKnobs& k) { k.width = 10; }),
             "--width and --height must be in [64, 100000] pixels (got 10x768)");
   EXPECT_EQ(with([](SynthKnobs& k) { k.preset = "huge"; }), "--preset must be 'demo' (got 'huge')");
@@ -481,7 +495,8 @@ TEST(SynthOptionsTest, ViewsTargetSetsTheCitySize) {
   const SceneOptions big = MakeSceneOptions(knobs);
   knobs.views = 100000;
   const SceneOptions small = MakeSceneOptions(knobs);
-  EXPECT_GT(big.layout.blocks_x * big.layout.blocks_y, 5 * small.layout.blocks_x * small.layout.blocks_y);
+  EXPECT_GT(big.layout.blocks_x * big.layout.blocks_y,
+            5 * small.layout.blocks_x * small.layout.blocks_y);
   knobs.blocks = 6;
   const SceneOptions explicit_blocks = MakeSceneOptions(knobs);
   EXPECT_GE(explicit_blocks.layout.blocks_x * explicit_blocks.layout.blocks_y, 6);
@@ -494,7 +509,8 @@ class SynthCliTest : public testing::Test {
     if (!fs::exists(test::ToolPath("cwloc-synth"))) GTEST_SKIP() << "cwloc-synth is not built";
   }
   int Run(const std::string& args, std::string* output) {
-    return test::RunCommand(test::ToolPath("cwloc-synth").string() + " " + args + " </dev/null", output);
+    return test::RunCommand(test::ToolPath("cwloc-synth").string() + " " + args + " </dev/null",
+                            output);
   }
   test::TempDir dir_;
 };
@@ -509,7 +525,8 @@ TEST_F(SynthCliTest, BadKnobExitsTwoWithTheMessage) {
 TEST_F(SynthCliTest, JsonSummaryAndStatsValidateAgainstTheSchema) {
   std::string output;
   const fs::path out = dir_ / "c";
-  ASSERT_EQ(Run("-o " + out.string() + " --blocks 1 --features-per-image 200 --queries 3 --camera-spacing 8 --json",
+  ASSERT_EQ(Run("-o " + out.string() +
+                    " --blocks 1 --features-per-image 200 --queries 3 --camera-spacing 8 --json",
                 &output),
             0)
       << output;
@@ -521,14 +538,15 @@ TEST_F(SynthCliTest, JsonSummaryAndStatsValidateAgainstTheSchema) {
   const fs::path validator = test::SourceDir() / "tools" / "validate_json.py";
   for (const fs::path& json : {dir_ / "summary.json", out / "stats.json"}) {
     std::string validation;
-    EXPECT_EQ(test::RunCommand("/usr/bin/python3 " + validator.string() + " " + schema.string() + " " + json.string(),
+    EXPECT_EQ(test::RunCommand("/usr/bin/python3 " + validator.string() + " " + schema.string() +
+                                   " " + json.string(),
                                &validation),
               0)
         << json << ": " << validation;
   }
-  for (const char* file : {"README.txt", "database.db", "mapping_model/bin/points3D.bin", "query_list.txt",
-                           "queries_gt.txt", "queries_with_intrinsics.txt", "queries_gt_points.txt",
-                           "scale_to_metres.txt", "stats.json"}) {
+  for (const char* file : {"README.txt", "database.db", "mapping_model/bin/points3D.bin",
+                           "query_list.txt", "queries_gt.txt", "queries_with_intrinsics.txt",
+                           "queries_gt_points.txt", "scale_to_metres.txt", "stats.json"}) {
     EXPECT_TRUE(fs::exists(out / file)) << file;
   }
 }
