@@ -107,7 +107,7 @@ std::vector<RankedImage> RankImages(const Index& index, std::span<const FeatureM
 
 // The one check of a query, whatever it was read from.
 void ValidateQuery(const Query& query) {
-  const std::string& source = query.Source();
+  const std::string source = query.Source();
   if (query.descriptors.size() != size_t{query.NumFeatures()} * 128) {
     throw InputError(source + ": keypoint and descriptor counts differ");
   }
@@ -116,7 +116,14 @@ void ValidateQuery(const Query& query) {
     throw InputError(source + ": camera has no image size");
   if (!query.camera.focal_known) return;
   const auto model = FindCameraModel(static_cast<int32_t>(query.camera.model_id));
-  if (!model || !model->can_project) throw InputError(source + ": unsupported camera model");
+  if (!model) {
+    throw InputError(source + ": unknown camera model id " +
+                     std::to_string(static_cast<int32_t>(query.camera.model_id)));
+  }
+  if (!model->can_project) {
+    throw InputError(source + ": camera model " + std::string(model->name) +
+                     " cannot be used to localize");
+  }
   if (query.camera.params.size() != static_cast<size_t>(model->num_params)) {
     throw InputError(source + ": " + std::string(model->name) + " takes " +
                      std::to_string(model->num_params) + " parameters, got " +
