@@ -96,6 +96,7 @@ class QueryLoader {
     if (!source.camera_spec.empty()) {
       query.camera =
           ParseCameraSpec(source.camera_spec, cli_.query_list + " (" + source.name + ")");
+      query.camera.source = IntrinsicsSource::kQueryList;
     } else if (default_camera_) {
       query.camera = *default_camera_;
     } else if (!source.feature_file.empty()) {

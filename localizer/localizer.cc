@@ -114,7 +114,7 @@ void ValidateQuery(const Query& query) {
   if (query.NumFeatures() == 0) throw InputError(source + ": the query has no features");
   if (query.camera.width == 0 || query.camera.height == 0)
     throw InputError(source + ": camera has no image size");
-  if (!query.camera.focal_known) return;
+  if (!query.camera.FocalKnown()) return;
   const auto model = FindCameraModel(static_cast<int32_t>(query.camera.model_id));
   if (!model) {
     throw InputError(source + ": unknown camera model id " +
@@ -202,7 +202,7 @@ LocalizationResult Localizer::Localize(const Query& query, const LocalizerOption
     result.translation = {p.translation.x(), p.translation.y(), p.translation.z()};
     const Eigen::Vector3d center = p.Center();
     result.center = {center.x(), center.y(), center.z()};
-    if (!query.camera.focal_known) {
+    if (!query.camera.FocalKnown()) {
       const std::array<double, 2> principal_point = query.camera.ImageCenter();
       result.focal_estimated = true;
       result.camera.params = {pose.focal_length_px, principal_point[0], principal_point[1]};

@@ -3,21 +3,57 @@
 #include <array>
 #include <cstdint>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "format/camera/camera_models.h"
 
 namespace cwloc {
 
-// The query's camera. With focal_known == false only the image size is trusted: the
-// principal point is taken at the image centre, distortion is ignored, and P4Pf estimates
-// the focal length.
+// What the pose stage may trust about the query camera; COLMAP's registrator draws the same
+// line with prior_focal_length.
+enum class Calibration {
+  kKnown,       // every parameter is trusted and held fixed
+  kFocalPrior,  // params hold a focal guess (EXIF, --focal): it seeds the estimate
+  kUnknown,     // only the image size: P4Pf estimates the focal
+};
+
+inline constexpr std::array<std::string_view, 3> kCalibrationNames = {"known", "focal-prior",
+                                                                      "unknown"};
+
+inline std::string_view CalibrationName(Calibration calibration) {
+  return kCalibrationNames[static_cast<size_t>(calibration)];
+}
+
+// Where the query camera came from, reported in the JSON.
+enum class IntrinsicsSource {
+  kCameraOption,     // --camera
+  kQueryList,        // a query-list line's "MODEL W H PARAMS"
+  kImageSizeOption,  // --image-size
+  kFocalOption,      // --focal
+  kExif,             // the photo's EXIF focal length
+  kDatabase,         // the COLMAP database's camera
+  kNone,             // nothing but the photo's size
+};
+
+inline constexpr std::array<std::string_view, 7> kIntrinsicsSourceNames = {
+    "camera-option", "query-list", "image-size-option", "focal-option", "exif", "database", "none"};
+
+inline std::string_view IntrinsicsSourceName(IntrinsicsSource source) {
+  return kIntrinsicsSourceNames[static_cast<size_t>(source)];
+}
+
+// The query's camera. Unless the calibration is known, the principal point is taken at the
+// image centre and the focal length (with a radial distortion term) is estimated.
 struct QueryCamera {
   CameraModelId model_id = CameraModelId::kSimplePinhole;
   uint32_t width = 0;
   uint32_t height = 0;
   std::vector<double> params;
-  bool focal_known = true;
+  Calibration calibration = Calibration::kKnown;
+  IntrinsicsSource source = IntrinsicsSource::kCameraOption;
+
+  bool FocalKnown() const { return calibration == Calibration::kKnown; }
 
   // The principal point assumed when the focal length is unknown.
   std::array<double, 2> ImageCenter() const { return {width / 2.0, height / 2.0}; }

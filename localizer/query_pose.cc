@@ -39,7 +39,7 @@ QueryPose EstimateQueryPose(const Index& index, const Query& query,
     const std::array<double, 2> pixel = {query.keypoints[2 * match.feature],
                                          query.keypoints[2 * match.feature + 1]};
     Eigen::Vector2d point2D;
-    if (camera.focal_known) {
+    if (camera.FocalKnown()) {
       std::array<double, 2> normalized;
       if (!PixelToNormalized(camera.model_id, camera.params, pixel, &normalized)) continue;
       point2D = {normalized[0], normalized[1]};
@@ -56,7 +56,7 @@ QueryPose EstimateQueryPose(const Index& index, const Query& query,
   pose_options.refine = refine;
   QueryPose result;
   result.num_used = static_cast<uint32_t>(points2D.size());
-  if (camera.focal_known) {
+  if (camera.FocalKnown()) {
     result.pose = EstimateAbsolutePose(
         points2D, points3D, MeanFocalLength(camera.model_id, camera.params), pose_options);
   } else {

@@ -69,13 +69,16 @@ QueryCamera ParseImageSize(const std::string& spec, const std::string& what) {
   if (in >> rest) throw InputError(what + ": expected 'WIDTH HEIGHT', got extra '" + rest + "'");
   camera.model_id = CameraModelId::kSimplePinhole;
   camera.params = {0.0, camera.width / 2.0, camera.height / 2.0};
-  camera.focal_known = false;
+  camera.calibration = Calibration::kUnknown;
+  camera.source = IntrinsicsSource::kImageSizeOption;
   return camera;
 }
 
 QueryCamera WithUnknownFocal(const QueryCamera& camera) {
-  return ParseImageSize(std::to_string(camera.width) + " " + std::to_string(camera.height),
-                        "camera");
+  QueryCamera unknown =
+      ParseImageSize(std::to_string(camera.width) + " " + std::to_string(camera.height), "camera");
+  unknown.source = camera.source;
+  return unknown;
 }
 
 }  // namespace cwloc

@@ -32,6 +32,7 @@ Query DatabaseQueries::Load(const std::string& name) const {
   query.camera.width = static_cast<uint32_t>(camera->second.width);
   query.camera.height = static_cast<uint32_t>(camera->second.height);
   query.camera.params = camera->second.params;
+  query.camera.source = IntrinsicsSource::kDatabase;
   query.keypoints.reserve(features.keypoints.size() * 2);
   for (const colmap::Keypoint& keypoint : features.keypoints) {
     query.keypoints.push_back(keypoint.x);

@@ -38,7 +38,9 @@ nlohmann::ordered_json ResultToJson(const LocalizationResult& result,
                    {"width", result.camera.width},
                    {"height", result.camera.height},
                    {"params", result.camera.params},
-                   {"focal_estimated", result.focal_estimated}};
+                   {"focal_estimated", result.focal_estimated},
+                   {"calibration", std::string(CalibrationName(result.camera.calibration))},
+                   {"intrinsics_source", std::string(IntrinsicsSourceName(result.camera.source))}};
   out["num_inliers"] = result.num_inliers;
   out["inlier_ratio"] = result.inlier_ratio;
   out["matches"] = {{"features", result.num_features},

@@ -67,7 +67,7 @@ TEST_F(LocalizerQueryCheckTest, AnUnknownCameraModelIsNamedById) {
   query_.camera.model_id = static_cast<CameraModelId>(99);
   EXPECT_EQ(Error(query_), "query 'q.jpg': unknown camera model id 99");
   // With the focal length unknown only the image size is used, so the model does not matter.
-  query_.camera.focal_known = false;
+  query_.camera.calibration = Calibration::kUnknown;
   EXPECT_EQ(Error(query_), "");
 }
 

@@ -28,7 +28,7 @@ TEST(CameraSpec, ParsesEveryFieldOfAColmapCameraLine) {
   EXPECT_EQ(camera.width, 1536u);
   EXPECT_EQ(camera.height, 1024u);
   EXPECT_EQ(camera.params, (std::vector<double>{1375.77, 768, 512, -0.0008}));
-  EXPECT_TRUE(camera.focal_known);
+  EXPECT_EQ(camera.calibration, Calibration::kKnown);
 }
 
 TEST(CameraSpec, BadSpecsNameTheProblem) {
@@ -45,7 +45,7 @@ TEST(CameraSpec, BadSpecsNameTheProblem) {
 
 TEST(CameraSpec, ImageSizeMeansUnknownFocalWithCentredPrincipalPoint) {
   const QueryCamera camera = ParseImageSize("1536x1024", "--image-size");
-  EXPECT_FALSE(camera.focal_known);
+  EXPECT_EQ(camera.calibration, Calibration::kUnknown);
   EXPECT_EQ(camera.width, 1536u);
   EXPECT_EQ(camera.params[1], 768.0);
   EXPECT_EQ(ErrorOf([] { ParseImageSize("1536 1024 7", "--image-size"); }),
