@@ -8,6 +8,7 @@ packages=(
   libeigen3-dev libflann-dev libceres-dev libgeographiclib-dev
   libsqlite3-dev sqlite3 nlohmann-json3-dev libcli11-dev
   libgtest-dev libgmock-dev libbenchmark-dev libvlfeat-dev libstb-dev
+  libjpeg62-turbo-dev libpng-dev libexif-dev
   colmap hyperfine valgrind time python3 python3-jsonschema python3-matplotlib clang-format
 )
 
