@@ -2,6 +2,7 @@
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
@@ -18,6 +19,7 @@
 #include "format/index/index.h"
 #include "localizer/io/camera_spec.h"
 #include "localizer/io/feature_file.h"
+#include "localizer/io/photo_query.h"
 #include "localizer/io/result_json.h"
 #include "localizer/localizer.h"
 #ifdef CWLOC_WITH_COLMAP_DB
@@ -27,11 +29,15 @@
 namespace cwloc {
 namespace {
 
-// One query to run: a database image name or a feature file, with an optional camera.
+// One query to run: a database image name, a feature file or a photo, with an optional camera
+// from its list line.
 struct QuerySource {
+  enum class Kind { kDatabase, kFeatureFile, kPhoto };
   std::string name;
-  std::filesystem::path feature_file;  // empty for database queries
-  std::string camera_spec;             // "MODEL W H PARAMS" from the query list, if any
+  Kind kind = Kind::kDatabase;
+  std::filesystem::path path;  // the feature file or photo
+  std::string camera_spec;     // "MODEL W H PARAMS" from a list line, if any
+  std::string list;            // the list file that line came from
 };
 
 struct CliOptions {
@@ -40,9 +46,14 @@ struct CliOptions {
   std::vector<std::string> query_names;
   std::string query_list;
   std::vector<std::string> feature_files;
+  std::vector<std::string> images;
+  std::string image_list;
+  std::string image_dir;
   std::string camera_spec;
   std::string image_size;
+  double focal = 0.0;
   bool unknown_focal = false;
+  PhotoOptions photo;
   std::string output_path;
   std::string poses_path;
   int threads = 1;
@@ -50,71 +61,135 @@ struct CliOptions {
   bool quiet = false;
 };
 
+// Calls add(name, camera) for each "NAME [MODEL W H PARAMS]" line of a list file.
+template <typename AddLine>
+void ReadListFile(const std::string& list, AddLine add) {
+  std::ifstream in(list);
+  if (!in) throw InputError(list + ": cannot open the list");
+  std::string line;
+  while (std::getline(in, line)) {
+    std::istringstream fields(line);
+    std::string name;
+    if (!(fields >> name) || name[0] == '#') continue;
+    std::string camera;
+    std::getline(fields, camera);
+    camera.erase(0, camera.find_first_not_of(" \t\r"));
+    camera.erase(camera.find_last_not_of(" \t\r") + 1);
+    add(name, camera);
+  }
+}
+
 std::vector<QuerySource> CollectQueries(const CliOptions& cli) {
+  using Kind = QuerySource::Kind;
   std::vector<QuerySource> sources;
-  for (const std::string& name : cli.query_names) sources.push_back({name, {}, {}});
+  for (const std::string& name : cli.query_names)
+    sources.push_back({name, Kind::kDatabase, {}, {}, {}});
   for (const std::string& file : cli.feature_files) {
-    sources.push_back({std::filesystem::path(file).filename().string(), file, {}});
+    sources.push_back(
+        {std::filesystem::path(file).filename().string(), Kind::kFeatureFile, file, {}, {}});
+  }
+  for (const std::string& image : cli.images) {
+    sources.push_back(
+        {std::filesystem::path(image).filename().string(), Kind::kPhoto, image, {}, {}});
   }
   if (!cli.query_list.empty()) {
-    std::ifstream in(cli.query_list);
-    if (!in) throw InputError(cli.query_list + ": cannot open query list");
     const std::filesystem::path base = std::filesystem::path(cli.query_list).parent_path();
-    std::string line;
-    for (int number = 1; std::getline(in, line); ++number) {
-      std::istringstream fields(line);
-      std::string name;
-      if (!(fields >> name) || name[0] == '#') continue;
-      std::string camera;
-      std::getline(fields, camera);
-      camera.erase(0, camera.find_first_not_of(" \t"));
-      QuerySource source{name, {}, camera};
-      if (cli.database_path.empty()) source.feature_file = base / name;
-      sources.push_back(source);
-    }
+    const Kind kind = cli.database_path.empty() ? Kind::kFeatureFile : Kind::kDatabase;
+    ReadListFile(cli.query_list, [&](const std::string& name, const std::string& camera) {
+      sources.push_back(
+          {name, kind, kind == Kind::kFeatureFile ? base / name : "", camera, cli.query_list});
+    });
   }
-  if (sources.empty()) throw InputError("no queries: give --query, --query-list or --features");
+  if (!cli.image_list.empty()) {
+    // hloc's lists name images relative to an image folder: --image-dir, else the list's own.
+    const std::filesystem::path base = cli.image_dir.empty()
+                                           ? std::filesystem::path(cli.image_list).parent_path()
+                                           : std::filesystem::path(cli.image_dir);
+    ReadListFile(cli.image_list, [&](const std::string& name, const std::string& camera) {
+      sources.push_back({name, Kind::kPhoto, base / name, camera, cli.image_list});
+    });
+  }
+  if (sources.empty()) {
+    throw InputError("no queries: give --image, --image-list, --query, --query-list or --features");
+  }
   return sources;
 }
 
 class QueryLoader {
  public:
   explicit QueryLoader(const CliOptions& cli) : cli_(cli) {
-    if (!cli.camera_spec.empty()) default_camera_ = ParseCameraSpec(cli.camera_spec, "--camera");
-    if (!cli.image_size.empty()) default_camera_ = ParseImageSize(cli.image_size, "--image-size");
+    if (!cli.camera_spec.empty()) camera_option_ = ParseCameraSpec(cli.camera_spec, "--camera");
+    if (!cli.image_size.empty())
+      image_size_option_ = ParseImageSize(cli.image_size, "--image-size");
+    if (cli.focal != 0.0 && !(std::isfinite(cli.focal) && cli.focal > 0.0))
+      throw InputError("--focal must be a positive number of pixels");
+    ValidatePhotoOptions(cli.photo);
 #ifdef CWLOC_WITH_COLMAP_DB
     if (!cli.database_path.empty())
       database_ = std::make_unique<DatabaseQueries>(cli.database_path);
 #endif
   }
 
-  // Reads the query's features, then picks its camera once: the query list's, else --camera or
-  // --image-size, else the database's. The Localizer checks the query.
+  // Reads the query's features, then picks its camera once. The Localizer checks the query.
   Query Load(const QuerySource& source) const {
-    Query query =
-        source.feature_file.empty() ? LoadFromDatabase(source.name) : LoadFeatureFile(source);
-    if (!source.camera_spec.empty()) {
-      query.camera =
-          ParseCameraSpec(source.camera_spec, cli_.query_list + " (" + source.name + ")");
-      query.camera.source = IntrinsicsSource::kQueryList;
-    } else if (default_camera_) {
-      query.camera = *default_camera_;
-    } else if (!source.feature_file.empty()) {
-      throw InputError(source.feature_file.string() +
-                       ": no camera: give --camera \"MODEL W H PARAMS\", --image-size \"W H\", or "
-                       "a camera in the "
-                       "query list");
+    Query query;
+    switch (source.kind) {
+      case QuerySource::Kind::kPhoto:
+        query = LoadPhotoQuery(source.path, source.name, cli_.photo);
+        break;
+      case QuerySource::Kind::kFeatureFile:
+        query = LoadFeatureFile(source);
+        break;
+      case QuerySource::Kind::kDatabase:
+        query = LoadFromDatabase(source.name);
+        break;
     }
+    query.camera = ChooseCamera(source, query);
     if (cli_.unknown_focal) query.camera = WithUnknownFocal(query.camera);
     return query;
   }
 
  private:
+  // A list line's camera wins, then --camera, then --focal, then --image-size; a query's own
+  // camera (a photo's EXIF or size, the database's camera) comes last.
+  QueryCamera ChooseCamera(const QuerySource& source, const Query& query) const {
+    const QueryCamera& own = query.camera;  // width 0 for feature files
+    const bool photo = source.kind == QuerySource::Kind::kPhoto;
+    QueryCamera camera = own;
+    if (!source.camera_spec.empty()) {
+      camera = ParseCameraSpec(source.camera_spec, source.list + " (" + source.name + ")");
+      camera.source = IntrinsicsSource::kQueryList;
+    } else if (camera_option_) {
+      camera = *camera_option_;
+    } else if (cli_.focal > 0.0) {
+      const QueryCamera& sized = own.width > 0 || !image_size_option_ ? own : *image_size_option_;
+      if (sized.width == 0) {
+        throw InputError(query.Source() +
+                         ": --focal needs the image size: give --image-size \"W H\"");
+      }
+      camera =
+          FocalPriorCamera(cli_.focal, sized.width, sized.height, IntrinsicsSource::kFocalOption);
+    } else if (image_size_option_ && !photo) {
+      camera = *image_size_option_;
+    }
+    if (camera.width == 0) {
+      throw InputError(query.Source() +
+                       ": no camera: give --camera \"MODEL W H PARAMS\", --image-size \"W H\", or "
+                       "a camera in the query list");
+    }
+    if (photo && (camera.width != own.width || camera.height != own.height)) {
+      throw InputError(query.Source() + ": the camera is " + std::to_string(camera.width) + " x " +
+                       std::to_string(camera.height) + " but the photo is " +
+                       std::to_string(own.width) + " x " + std::to_string(own.height));
+    }
+    return camera;
+  }
+
   static Query LoadFeatureFile(const QuerySource& source) {
     Query query;
-    ReadFeatureFile(source.feature_file, &query);
+    ReadFeatureFile(source.path, &query);
     query.name = source.name;
-    query.source = source.feature_file.string();
+    query.source = source.path.string();
     return query;
   }
 
@@ -129,7 +204,8 @@ class QueryLoader {
   }
 
   const CliOptions& cli_;
-  std::optional<QueryCamera> default_camera_;
+  std::optional<QueryCamera> camera_option_;
+  std::optional<QueryCamera> image_size_option_;
 #ifdef CWLOC_WITH_COLMAP_DB
   std::unique_ptr<DatabaseQueries> database_;
 #endif
@@ -258,6 +334,25 @@ int main(int argc, char** argv) {
   app.add_option("--database", cli.database_path,
                  "COLMAP database holding the queries' keypoints and descriptors");
 #endif
+  app.add_option("--image", cli.images,
+                 "Query photo, JPEG or PNG (repeatable): SIFT is extracted as colmap "
+                 "feature_extractor does");
+  app.add_option("--image-list", cli.image_list,
+                 "File of query photos, one per line, optionally followed by 'MODEL W H PARAMS' "
+                 "(hloc's queries_with_intrinsics.txt)");
+  app.add_option("--image-dir", cli.image_dir,
+                 "Folder the --image-list names are relative to (default: the list's folder)");
+  app.add_option("--max-image-size", cli.photo.max_image_size,
+                 "Photos are shrunk so that their longer side is at most this before SIFT "
+                 "(COLMAP's --SiftExtraction.max_image_size)")
+      ->capture_default_str();
+  app.add_option("--max-features", cli.photo.sift.max_num_features,
+                 "SIFT keeps whole scale levels, coarse first, until their count exceeds this "
+                 "(COLMAP's --SiftExtraction.max_num_features)")
+      ->capture_default_str();
+  app.add_option("--max-image-pixels", cli.photo.max_image_pixels,
+                 "Photos with more pixels are refused before decoding")
+      ->capture_default_str();
   app.add_option("--query", cli.query_names, "Query image name in --database (repeatable)");
   app.add_option("--query-list", cli.query_list,
                  "File of queries, one per line: a name in --database (or a feature file), "
@@ -270,6 +365,10 @@ int main(int argc, char** argv) {
                                 "Query camera 'MODEL W H PARAMS...' (known focal)");
   app.add_option("--image-size", cli.image_size,
                  "Query image size 'W H' when the focal length is unknown (P4Pf)")
+      ->excludes(camera);
+  app.add_option("--focal", cli.focal,
+                 "Query focal length in pixels, a prior: refined with a radial distortion term "
+                 "(principal point at the image centre)")
       ->excludes(camera);
   app.add_flag("--unknown-focal", cli.unknown_focal,
                "Ignore the known focal length and estimate it (P4Pf)");

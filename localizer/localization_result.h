@@ -18,6 +18,7 @@ struct RankedImage {
 
 // Wall-clock seconds per pipeline stage.
 struct StageTimes {
+  double extraction = 0;     // a photo's decoding and SIFT extraction; 0 for given features
   double forward_knn = 0;    // kd-forest searches of the query features
   double ratio_test = 0;     // cluster-wise ratio tests
   double query_tree = 0;     // building the kd-forest over the query features
@@ -46,6 +47,7 @@ struct LocalizationResult {
   uint32_t ransac_iterations = 0;
   uint32_t back_matched_images = 0;
   std::vector<RankedImage> ranked_images;
+  std::optional<PhotoInfo> photo;
   StageTimes times;
 };
 

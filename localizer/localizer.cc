@@ -215,7 +215,9 @@ LocalizationResult Localizer::Localize(const Query& query, const LocalizerOption
   result.times.query_tree = matched.seconds_query_tree;
   result.times.back_matching = matched.seconds_back_matching;
   result.times.pose = matched.seconds_pose + pose_time.Seconds();
-  result.times.total = total.Seconds();
+  result.photo = query.photo;
+  result.times.extraction = query.photo ? query.photo->extraction_seconds : 0.0;
+  result.times.total = total.Seconds() + result.times.extraction;
   return result;
 }
 

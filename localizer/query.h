@@ -2,6 +2,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -59,6 +60,13 @@ struct QueryCamera {
   std::array<double, 2> ImageCenter() const { return {width / 2.0, height / 2.0}; }
 };
 
+// How a photo query became features (absent for feature files and database queries).
+struct PhotoInfo {
+  uint32_t extraction_width = 0;  // the image SIFT ran on, after --max-image-size
+  uint32_t extraction_height = 0;
+  double extraction_seconds = 0;  // decoding, EXIF, resizing and SIFT
+};
+
 // A query image's own features: keypoints in COLMAP's pixel convention and N x 128 uint8
 // SIFT descriptors in COLMAP's normalization.
 struct Query {
@@ -68,6 +76,7 @@ struct Query {
   QueryCamera camera;
   std::vector<float> keypoints;      // x0, y0, x1, y1, ...
   std::vector<uint8_t> descriptors;  // N x 128
+  std::optional<PhotoInfo> photo;
 
   uint32_t NumFeatures() const { return static_cast<uint32_t>(keypoints.size() / 2); }
   const uint8_t* Descriptor(uint32_t i) const { return descriptors.data() + size_t{i} * 128; }

@@ -56,7 +56,12 @@ nlohmann::ordered_json ResultToJson(const LocalizationResult& result,
   }
   out["ranked_images"] = ranked;
   const StageTimes& t = result.times;
-  out["times_ms"] = {{"forward_knn", t.forward_knn * 1e3},
+  if (result.photo) {
+    out["photo"] = {{"extraction_width", result.photo->extraction_width},
+                    {"extraction_height", result.photo->extraction_height}};
+  }
+  out["times_ms"] = {{"extraction", t.extraction * 1e3},
+                     {"forward_knn", t.forward_knn * 1e3},
                      {"ratio_test", t.ratio_test * 1e3},
                      {"query_tree", t.query_tree * 1e3},
                      {"back_matching", t.back_matching * 1e3},

@@ -71,6 +71,7 @@ QueryResult ParseJsonLine(const std::string& line, const std::string& where) {
     StageTimes stage_times{};
     for (size_t s = 0; s < kStageNames.size(); ++s) {
       const auto value = times->find(kStageNames[s]);
+      if (value == times->end() && std::string_view(kStageNames[s]) == "extraction") continue;
       if (value == times->end() || !value->is_number() || !std::isfinite(value->get<double>())) {
         throw InputError(where + "\"times_ms." + kStageNames[s] + "\" must be a number");
       }

@@ -10,9 +10,10 @@
 
 namespace cwloc::eval {
 
-// The per-stage times of cwloc-localize's "times_ms", in the schema's order.
-inline constexpr std::array<const char*, 6> kStageNames = {
-    "forward_knn", "ratio_test", "query_tree", "back_matching", "pose", "total"};
+// The per-stage times of cwloc-localize's "times_ms", in the schema's order. "extraction"
+// (a photo's SIFT) is absent from results written before photo queries existed: read as 0.
+inline constexpr std::array<const char*, 7> kStageNames = {
+    "extraction", "forward_knn", "ratio_test", "query_tree", "back_matching", "pose", "total"};
 using StageTimes = std::array<double, kStageNames.size()>;
 
 enum class ResultStatus { kLocalized, kNotLocalized, kError };

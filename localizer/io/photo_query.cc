@@ -1,0 +1,78 @@
+#include "localizer/io/photo_query.h"
+
+#include <stdexcept>
+
+#include "format/base/error.h"
+#include "format/base/stopwatch.h"
+#include "photo/exif.h"
+
+namespace cwloc {
+
+void ValidatePhotoOptions(const PhotoOptions& options) {
+  if (options.max_image_size < kMinImageSide)
+    throw InputError("--max-image-size must be at least " + std::to_string(kMinImageSide));
+  if (options.max_image_pixels < uint64_t{kMinImageSide} * kMinImageSide)
+    throw InputError("--max-image-pixels must be at least " +
+                     std::to_string(kMinImageSide * kMinImageSide));
+  if (options.sift.max_num_features < 1) throw InputError("--max-features must be at least 1");
+  try {
+    ValidateSiftOptions(options.sift);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(e.what());
+  }
+}
+
+QueryCamera FocalPriorCamera(double focal_length_px, uint32_t width, uint32_t height,
+                             IntrinsicsSource source) {
+  QueryCamera camera;
+  camera.model_id = CameraModelId::kSimpleRadial;
+  camera.width = width;
+  camera.height = height;
+  camera.params = {focal_length_px, width / 2.0, height / 2.0, 0.0};
+  camera.calibration = Calibration::kFocalPrior;
+  camera.source = source;
+  return camera;
+}
+
+Query LoadPhotoQuery(const std::filesystem::path& path, const std::string& name,
+                     const PhotoOptions& options) {
+  const Stopwatch time;
+  const std::vector<uint8_t> bytes = ReadFileBytes(path);
+  GreyImage image = DecodeGreyImage(bytes, path, options.max_image_pixels);
+  const uint32_t width = image.width;
+  const uint32_t height = image.height;
+
+  Query query;
+  query.name = name;
+  query.source = path.string();
+  if (const auto exif = ReadExifFocal(bytes, width, height)) {
+    query.camera = FocalPriorCamera(exif->focal_length_px, width, height, IntrinsicsSource::kExif);
+  } else {
+    query.camera.model_id = CameraModelId::kSimplePinhole;
+    query.camera.width = width;
+    query.camera.height = height;
+    query.camera.params = {0.0, width / 2.0, height / 2.0};
+    query.camera.calibration = Calibration::kUnknown;
+    query.camera.source = IntrinsicsSource::kNone;
+  }
+
+  const ImageSize size = ExtractionSize(width, height, options.max_image_size);
+  if (size.width != width || size.height != height)
+    image = ResizeBilinear(image, size.width, size.height);
+  const SiftFeatures features = ExtractSift(image, options.sift);
+  // COLMAP scales keypoints back in single precision (FeatureKeypoint::Rescale).
+  const float scale_x = static_cast<float>(double(width) / double(size.width));
+  const float scale_y = static_cast<float>(double(height) / double(size.height));
+  query.keypoints.reserve(features.keypoints.size() * 2);
+  for (const SiftKeypoint& keypoint : features.keypoints) {
+    query.keypoints.push_back(keypoint.x * scale_x);
+    query.keypoints.push_back(keypoint.y * scale_y);
+  }
+  query.descriptors = features.descriptors;
+  if (query.NumFeatures() == 0)
+    throw InputError(path.string() + ": no SIFT features found in the photo");
+  query.photo = PhotoInfo{size.width, size.height, time.Seconds()};
+  return query;
+}
+
+}  // namespace cwloc

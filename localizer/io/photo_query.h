@@ -1,0 +1,36 @@
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+
+#include "localizer/query.h"
+#include "photo/image_decode.h"
+#include "photo/image_resize.h"
+#include "photo/sift/sift_extractor.h"
+
+namespace cwloc {
+
+// How photos become features; every default is colmap feature_extractor's.
+struct PhotoOptions {
+  uint32_t max_image_size = kDefaultMaxImageSize;     // --max-image-size
+  uint64_t max_image_pixels = kDefaultMaxImagePixels;  // --max-image-pixels
+  SiftOptions sift;                                    // its max_num_features: --max-features
+};
+
+// Throws InputError naming the CLI flag of a bad option.
+void ValidatePhotoOptions(const PhotoOptions& options);
+
+// Turns a JPEG or PNG into a query as `colmap feature_extractor` would: decoded to grey,
+// shrunk to max_image_size, SIFT, keypoints scaled back to the photo's own pixels. Its camera
+// has the photo's size and, when the EXIF gives a focal length, that focal as a prior
+// (SIMPLE_RADIAL f, w/2, h/2, 0; source exif); otherwise the focal is unknown (source none).
+// Throws InputError naming the file for an unreadable or broken photo.
+Query LoadPhotoQuery(const std::filesystem::path& path, const std::string& name,
+                     const PhotoOptions& options);
+
+// The camera of a focal prior for a width x height image: SIMPLE_RADIAL (f, w/2, h/2, 0).
+QueryCamera FocalPriorCamera(double focal_length_px, uint32_t width, uint32_t height,
+                             IntrinsicsSource source);
+
+}  // namespace cwloc
