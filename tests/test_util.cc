@@ -53,6 +53,14 @@ std::filesystem::path ToolPath(const std::string& name) {
   return std::filesystem::path(dir ? dir : CWLOC_TEST_BIN_DIR) / name;
 }
 
+std::string Quote(const std::filesystem::path& path) {
+  // Appended, not "'" + string: that trips a GCC 12 -Wrestrict false positive.
+  std::string quoted = "'";
+  quoted += path.string();
+  quoted += '\'';
+  return quoted;
+}
+
 int RunCommand(const std::string& command, std::string* output) {
   output->clear();
   FILE* pipe = ::popen((command + " 2>&1").c_str(), "r");

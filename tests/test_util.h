@@ -35,6 +35,9 @@ class TempDir {
 // Path of an executable of ours in build/bin ($CWLOC_BIN_DIR or the configured one).
 std::filesystem::path ToolPath(const std::string& name);
 
+// A path in single quotes for a shell command line.
+std::string Quote(const std::filesystem::path& path);
+
 // Runs a shell command, captures stdout+stderr, returns the exit code.
 int RunCommand(const std::string& command, std::string* output);
 

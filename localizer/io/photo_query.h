@@ -13,7 +13,7 @@ namespace cwloc {
 
 // How photos become features; every default is colmap feature_extractor's.
 struct PhotoOptions {
-  uint32_t max_image_size = kDefaultMaxImageSize;     // --max-image-size
+  uint32_t max_image_size = kDefaultMaxImageSize;      // --max-image-size
   uint64_t max_image_pixels = kDefaultMaxImagePixels;  // --max-image-pixels
   SiftOptions sift;                                    // its max_num_features: --max-features
 };

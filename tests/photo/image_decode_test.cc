@@ -1,14 +1,13 @@
 #include "photo/image_decode.h"
 
 #include <gtest/gtest.h>
-#include <png.h>
 
-#include <cstdio>
 #include <fstream>
 
 #include "format/base/error.h"
 #include "format/index/xxhash64.h"
 #include "photo/image_resize.h"
+#include "tests/test_png.h"
 #include "tests/test_util.h"
 
 namespace cwloc {
@@ -120,24 +119,10 @@ class BadPhotoTest : public ::testing::Test {
     const std::vector<uint8_t> bytes = ReadFileBytes(path);
     return std::string(bytes.begin(), bytes.end());
   }
-  // A grey PNG of any size and bit depth, written row by row so a huge one costs no memory.
   std::filesystem::path WritePng(const std::string& name, uint32_t width, uint32_t height,
                                  uint8_t value, int bit_depth = 8) {
     const auto path = dir_ / name;
-    FILE* file = std::fopen(path.c_str(), "wb");
-    png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
-    png_infop info = png_create_info_struct(png);
-    png_init_io(png, file);
-    png_set_compression_level(png, 1);
-    png_set_filter(png, 0, PNG_FILTER_NONE);
-    png_set_IHDR(png, info, width, height, bit_depth, PNG_COLOR_TYPE_GRAY, PNG_INTERLACE_NONE,
-                 PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
-    png_write_info(png, info);
-    std::vector<uint8_t> row((size_t{width} * bit_depth + 7) / 8, value);
-    for (uint32_t y = 0; y < height; ++y) png_write_row(png, row.data());
-    png_write_end(png, nullptr);
-    png_destroy_write_struct(&png, &info);
-    std::fclose(file);
+    test::WriteGreyPng(path, width, height, value, bit_depth);
     return path;
   }
   test::TempDir dir_;

@@ -40,13 +40,7 @@ std::string Colmap(const std::string& args) {
   return output;
 }
 
-// Built with += : GCC 12 warns falsely (-Wrestrict) about "'" + std::string + "'".
-std::string Quote(const fs::path& path) {
-  std::string quoted = "'";
-  quoted += path.string();
-  quoted += '\'';
-  return quoted;
-}
+using cwloc::test::Quote;
 
 std::string Convert(const fs::path& in, const fs::path& out, const char* type) {
   fs::create_directories(out);

@@ -14,13 +14,7 @@ namespace {
 namespace fs = std::filesystem;
 using test::Scenario;
 
-// Appending rather than "'" + string sidesteps a GCC 12 -Wrestrict false positive.
-std::string Quote(const fs::path& path) {
-  std::string quoted = "'";
-  quoted += path.string();
-  quoted += "'";
-  return quoted;
-}
+using cwloc::test::Quote;
 
 int Eval(const std::string& args, std::string* output) {
   return cwloc::test::RunCommand(Quote(cwloc::test::ToolPath("cwloc-eval")) + " " + args, output);

@@ -19,13 +19,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// Appending rather than "'" + string sidesteps a GCC 12 -Wrestrict false positive.
-std::string Quote(const fs::path& path) {
-  std::string quoted = "'";
-  quoted += path.string();
-  quoted += "'";
-  return quoted;
-}
+using cwloc::test::Quote;
 
 // stdout and stderr together.
 int Plot(const std::string& args, std::string* output) {
