@@ -132,19 +132,22 @@ double AngleDifferenceDeg(double a, double b) {
 
 // Counts keypoints of `a` found in `b`; optionally records nearest descriptor distances.
 size_t CountFound(const SiftFeatures& a, const SiftFeatures& b, const AgreementCriteria& c,
-                  std::vector<float>* nearest) {
+                  std::vector<float>* nearest, size_t* same_position) {
   const PointGrid grid(b.keypoints);
   size_t found = 0;
   for (size_t i = 0; i < a.size(); ++i) {
     const SiftKeypoint& ka = a.keypoints[i];
     float best = std::numeric_limits<float>::infinity();
+    bool same = false;
     grid.ForNear(ka.x, ka.y, [&](size_t j) {
       const SiftKeypoint& kb = b.keypoints[j];
+      if (ka.x == kb.x && ka.y == kb.y) same = true;
       const double dx = ka.x - kb.x, dy = ka.y - kb.y;
       if (dx * dx + dy * dy > c.max_position_px * c.max_position_px) return;
       if (AngleDifferenceDeg(ka.orientation, kb.orientation) > c.max_orientation_deg) return;
       best = std::min(best, DescriptorDistance(a.Descriptor(i), b.Descriptor(j)));
     });
+    if (same && same_position) ++*same_position;
     if (std::isfinite(best)) {
       if (nearest) nearest->push_back(best);
       if (best <= c.max_descriptor_distance) ++found;
@@ -160,8 +163,9 @@ Agreement CompareFeatures(const SiftFeatures& a, const SiftFeatures& b,
   Agreement result;
   result.num_a = a.size();
   result.num_b = b.size();
-  result.a_found_in_b = CountFound(a, b, criteria, &result.nearest_descriptor_distances);
-  result.b_found_in_a = CountFound(b, a, criteria, nullptr);
+  result.a_found_in_b = CountFound(a, b, criteria, &result.nearest_descriptor_distances,
+                                   &result.a_same_position_in_b);
+  result.b_found_in_a = CountFound(b, a, criteria, nullptr, nullptr);
   return result;
 }
 
@@ -169,9 +173,10 @@ Agreement CompareFeatures(const SiftFeatures& a, const SiftFeatures& b,
 
 namespace cwloc::sift_bench {
 
-std::vector<std::string> ImplementationNames() { return {"vlfeat"}; }
+std::vector<std::string> ImplementationNames() { return {"cwloc", "vlfeat"}; }
 
 SiftOptions::Implementation ParseImplementation(const std::string& name) {
+  if (name == "cwloc") return SiftOptions::Implementation::kCwloc;
   if (name == "vlfeat") return SiftOptions::Implementation::kVlfeat;
   throw std::invalid_argument("unknown SIFT implementation " + name);
 }

@@ -35,6 +35,7 @@ struct AgreementCriteria {
 struct Agreement {
   size_t num_a = 0, num_b = 0;
   size_t a_found_in_b = 0, b_found_in_a = 0;
+  size_t a_same_position_in_b = 0;  // a keypoint of b at the bit-identical position
   // For each keypoint of a with a position+orientation neighbour in b: the smallest
   // descriptor distance among those neighbours (the distribution the threshold comes from).
   std::vector<float> nearest_descriptor_distances;
