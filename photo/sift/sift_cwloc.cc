@@ -19,8 +19,15 @@ extern "C" {
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
+#include <memory>
+#include <new>
 #include <stdexcept>
+
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
 
 #include "format/base/parallel_for.h"
 #include "photo/sift/sift_levels.h"
@@ -33,17 +40,77 @@ constexpr int kNumAngleBins = 8;    // VLFeat's NBO
 constexpr double kMagnif = 3.0;
 constexpr double kWindowSize = kNumBinsPerSide / 2;
 
-// A single-channel float image, row-major.
+// A single-channel float image, row-major. Resize keeps the storage when it is large enough
+// and never initializes pixels: each is written before it is read.
 struct Plane {
   int w = 0, h = 0;
-  std::vector<float> data;
+  size_t capacity = 0;
+  struct Free {
+    void operator()(float* p) const { std::free(p); }
+  };
+  std::unique_ptr<float[], Free> storage;
+
+  // Large planes are 2 MiB aligned and ask for transparent huge pages: one page fault per
+  // 2 MiB instead of per 4 KiB (page faults were a third of the time).
+  static std::unique_ptr<float[], Free> Allocate(size_t n) {
+    constexpr size_t kHuge = size_t{2} << 20;
+    const size_t bytes = n * sizeof(float);
+    if (bytes < kHuge) return std::unique_ptr<float[], Free>(new_floats(bytes, 64));
+    const size_t rounded = (bytes + kHuge - 1) / kHuge * kHuge;
+    float* p = new_floats(rounded, kHuge);
+#ifdef MADV_HUGEPAGE
+    madvise(p, rounded, MADV_HUGEPAGE);
+#endif
+    return std::unique_ptr<float[], Free>(p);
+  }
+  static float* new_floats(size_t bytes, size_t alignment) {
+    void* p = std::aligned_alloc(alignment, (bytes + alignment - 1) / alignment * alignment);
+    if (!p) throw std::bad_alloc();
+    return static_cast<float*>(p);
+  }
   void Resize(int width, int height) {
     w = width;
     h = height;
-    data.resize(size_t(w) * size_t(h));
+    if (size() > capacity) {
+      storage = Allocate(size());
+      capacity = size();
+    }
   }
-  float* Row(int y) { return data.data() + size_t(y) * size_t(w); }
-  const float* Row(int y) const { return data.data() + size_t(y) * size_t(w); }
+  size_t size() const { return size_t(w) * size_t(h); }
+  float* data() { return storage.get(); }
+  const float* data() const { return storage.get(); }
+  float* Row(int y) { return data() + size_t(y) * size_t(w); }
+  const float* Row(int y) const { return data() + size_t(y) * size_t(w); }
+};
+
+// Planes handed back for reuse: a photo touches fresh memory only for the planes alive at
+// the same time (fresh pages cost a page fault each and are zeroed by the kernel).
+class PlanePool {
+ public:
+  Plane Take(int w, int h) {
+    const size_t n = size_t(w) * size_t(h);
+    size_t best = free_.size();
+    for (size_t i = 0; i < free_.size(); ++i) {
+      if (free_[i].capacity >= n &&
+          (best == free_.size() || free_[i].capacity < free_[best].capacity)) {
+        best = i;
+      }
+    }
+    Plane plane;
+    if (best < free_.size()) {
+      plane = std::move(free_[best]);
+      free_.erase(free_.begin() + ptrdiff_t(best));
+    }
+    plane.Resize(w, h);
+    return plane;
+  }
+  void Give(Plane&& plane) {
+    if (plane.capacity > 0) free_.push_back(std::move(plane));
+    plane = Plane();
+  }
+
+ private:
+  std::vector<Plane> free_;
 };
 
 // VLFeat's keypoint fields (float position and scale, integer level).
@@ -98,6 +165,7 @@ std::vector<float> GaussianKernel(double sigma) {
 // pixel summing its taps from the first (top/left) to the last with the edge pixel repeated,
 // exactly VLFeat's vl_imconvcol_vf order; vectorized across the pixels of a row.
 void Smooth(const Plane& in, Plane* out, double sigma, int num_threads) {
+  // Callers hand in a plane from their pool; it is sized here.
   const std::vector<float> kernel = GaussianKernel(sigma);
   const int half = int(kernel.size() / 2);
   const int w = in.w, h = in.h;
@@ -142,10 +210,9 @@ void Smooth(const Plane& in, Plane* out, double sigma, int num_threads) {
 
 // VLFeat's copy_and_upsample_rows applied twice: doubles both sides, the new pixels the
 // means of their neighbours (along rows first), the last row and column repeated.
-Plane Upsample(const Plane& in) {
+Plane Upsample(const Plane& in, PlanePool* pool) {
   const int w = in.w, h = in.h;
-  Plane rows;  // each row upsampled: w*2 x h
-  rows.Resize(2 * w, h);
+  Plane rows = pool->Take(2 * w, h);  // each row upsampled
   for (int y = 0; y < h; ++y) {
     const float* src = in.Row(y);
     float* dst = rows.Row(y);
@@ -155,8 +222,7 @@ Plane Upsample(const Plane& in) {
     }
     dst[2 * w - 2] = dst[2 * w - 1] = src[w - 1];
   }
-  Plane out;
-  out.Resize(2 * w, 2 * h);
+  Plane out = pool->Take(2 * w, 2 * h);
   for (int y = 0; y < h; ++y) {
     const float* a = rows.Row(y);
     const float* b = rows.Row(std::min(y + 1, h - 1));
@@ -168,14 +234,14 @@ Plane Upsample(const Plane& in) {
       std::copy(a, a + 2 * w, mid);
     }
   }
+  pool->Give(std::move(rows));
   return out;
 }
 
 // Every 2^d-th pixel of every 2^d-th row, from (0, 0), into a w x h plane.
-Plane Downsample(const Plane& in, int d, int w, int h) {
+Plane Downsample(const Plane& in, int d, int w, int h, PlanePool* pool) {
   const int step = 1 << d;
-  Plane out;
-  out.Resize(w, h);
+  Plane out = pool->Take(w, h);
   for (int y = 0; y < h; ++y) {
     const float* src = in.Row(y * step);
     float* dst = out.Row(y);
@@ -218,8 +284,8 @@ void DetectLevel(const Plane* dogs[3], int s, int o, const Geometry& g, double t
   ParallelFor(size_t(std::max(h - 2, 0)), num_threads, [&](size_t task) {
     const int y0 = int(task) + 1;
     const float* mid = dogs[1]->Row(y0);
-    const ptrdiff_t so_up = dogs[2]->data.data() - dogs[1]->data.data();
-    const ptrdiff_t so_down = dogs[0]->data.data() - dogs[1]->data.data();
+    const ptrdiff_t so_up = dogs[2]->data() - dogs[1]->data();
+    const ptrdiff_t so_down = dogs[0]->data() - dogs[1]->data();
     std::vector<Key>& out = row_keys[size_t(y0)];
     for (int x0 = 1; x0 < w - 1; ++x0) {
       const float v = mid[x0];
@@ -325,15 +391,19 @@ void DetectLevel(const Plane* dogs[3], int s, int o, const Geometry& g, double t
 // VLFeat's update_gradient for one level: per pixel (modulus, angle in [0, 2 pi)), central
 // differences inside, one-sided at the borders; the modulus by VLFeat's fast sqrt and the
 // angle by its fast atan2.
-void Gradient(const Plane& level, std::vector<float>* grad, int num_threads) {
+struct GradientPlanes {
+  Plane mod, angle;
+};
+
+void Gradient(const Plane& level, GradientPlanes* grad, int num_threads) {
   const int w = level.w, h = level.h;
-  grad->resize(size_t(w) * size_t(h) * 2);
   ParallelFor(size_t(h), num_threads, [&](size_t row) {
     const int y = int(row);
     const float* src = level.Row(y);
     const float* up = y > 0 ? level.Row(y - 1) : nullptr;
     const float* down = y < h - 1 ? level.Row(y + 1) : nullptr;
-    float* out = grad->data() + size_t(y) * size_t(w) * 2;
+    float* out_mod = grad->mod.Row(y);
+    float* out_angle = grad->angle.Row(y);
     for (int x = 0; x < w; ++x) {
       float gx, gy;
       if (x == 0) {
@@ -350,14 +420,15 @@ void Gradient(const Plane& level, std::vector<float>* grad, int num_threads) {
       } else {
         gy = float(0.5 * (down[x] - up[x]));
       }
-      out[2 * x] = vl_fast_sqrt_f(gx * gx + gy * gy);
-      out[2 * x + 1] = vl_mod_2pi_f(float(vl_fast_atan2_f(gy, gx) + 2 * VL_PI));
+      out_mod[x] = vl_fast_sqrt_f(gx * gx + gy * gy);
+      out_angle[x] = vl_mod_2pi_f(float(vl_fast_atan2_f(gy, gx) + 2 * VL_PI));
     }
   });
 }
 
 // VLFeat's vl_sift_calc_keypoint_orientations on the gradient of the keypoint's level.
-int Orientations(const Key& k, const float* grad, int w, int h, double angles[4]) {
+int Orientations(const Key& k, const GradientPlanes& grad, double angles[4]) {
+  const int w = grad.mod.w, h = grad.mod.h;
   const double xper = std::pow(2.0, k.o);
   const double x = k.x / xper, y = k.y / xper, sigma = k.sigma / xper;
   const int xi = int(x + 0.5), yi = int(y + 0.5);
@@ -367,7 +438,9 @@ int Orientations(const Key& k, const float* grad, int w, int h, double angles[4]
   if (xi < 0 || xi > w - 1 || yi < 0 || yi > h - 1) return 0;
   double hist[nbins] = {};
   const FastExpn& expn = Expn();
-  const float* pt = grad + 2 * (size_t(yi) * size_t(w) + size_t(xi));
+  const size_t centre = size_t(yi) * size_t(w) + size_t(xi);
+  const float* pt_mod = grad.mod.data() + centre;
+  const float* pt_angle = grad.angle.data() + centre;
   for (int ys = std::max(-W, -yi); ys <= std::min(W, h - 1 - yi); ++ys) {
     for (int xs = std::max(-W, -xi); xs <= std::min(W, w - 1 - xi); ++xs) {
       const double dx = double(xi + xs) - x;
@@ -375,9 +448,9 @@ int Orientations(const Key& k, const float* grad, int w, int h, double angles[4]
       const double r2 = dx * dx + dy * dy;
       if (r2 >= W * W + 0.6) continue;
       const double wgt = expn(r2 / (2 * sigmaw * sigmaw));
-      const ptrdiff_t off = 2 * (ptrdiff_t(ys) * w + xs);
-      const double mod = pt[off];
-      const double ang = pt[off + 1];
+      const ptrdiff_t off = ptrdiff_t(ys) * w + xs;
+      const double mod = pt_mod[off];
+      const double ang = pt_angle[off];
       // VLFeat's sift.c defines VL_SIFT_BILINEAR_ORIENTATIONS: split between two bins.
       const double fbin = nbins * ang / (2 * VL_PI);
       const int bin = int(vl_floor_d(fbin - 0.5));
@@ -423,7 +496,8 @@ float NormalizeHistogram(float* begin, float* end) {
 
 // VLFeat's vl_sift_calc_keypoint_descriptor; pixels whose rotated position lies outside
 // every spatial bin (they would add nothing) are skipped before any other work.
-void Descriptor(const Key& k, double angle0, const float* grad, int w, int h, float* descr) {
+void Descriptor(const Key& k, double angle0, const GradientPlanes& grad, float* descr) {
+  const int w = grad.mod.w, h = grad.mod.h;
   const double xper = std::pow(2.0, k.o);
   const double x = k.x / xper, y = k.y / xper, sigma = k.sigma / xper;
   const int xi = int(x + 0.5), yi = int(y + 0.5);
@@ -433,7 +507,9 @@ void Descriptor(const Key& k, double angle0, const float* grad, int w, int h, fl
   constexpr int binto = 1, binyo = kNumAngleBins * kNumBinsPerSide, binxo = kNumAngleBins;
   std::fill(descr, descr + kSiftDescriptorDim, 0.0f);
   if (xi < 0 || xi >= w || yi < 0 || yi >= h - 1) return;
-  const float* pt = grad + 2 * (size_t(yi) * size_t(w) + size_t(xi));
+  const size_t centre = size_t(yi) * size_t(w) + size_t(xi);
+  const float* pt_mod = grad.mod.data() + centre;
+  const float* pt_angle = grad.angle.data() + centre;
   float* dpt = descr + (kNumBinsPerSide / 2) * binyo + (kNumBinsPerSide / 2) * binxo;
   const FastExpn& expn = Expn();
   const float wsigma = float(kWindowSize);
@@ -446,9 +522,9 @@ void Descriptor(const Key& k, double angle0, const float* grad, int w, int h, fl
       const float nx = float((ct0 * dx + st0 * dy) / SBP);
       const float ny = float((-st0 * dx + ct0 * dy) / SBP);
       if (!(nx > -reach && nx < reach && ny > -reach && ny < reach)) continue;
-      const ptrdiff_t off = 2 * (ptrdiff_t(dyi) * w + dxi);
-      const float mod = pt[off];
-      const float angle = pt[off + 1];
+      const ptrdiff_t off = ptrdiff_t(dyi) * w + dxi;
+      const float mod = pt_mod[off];
+      const float angle = pt_angle[off];
       const float theta = vl_mod_2pi_f(float(angle - angle0));
       const float nt = float(kNumAngleBins * theta / (2 * VL_PI));
       const float win = float(expn((nx * nx + ny * ny) / (2.0 * wsigma * wsigma)));
@@ -478,12 +554,6 @@ void Descriptor(const Key& k, double angle0, const float* grad, int w, int h, fl
   NormalizeHistogram(descr, descr + kSiftDescriptorDim);
 }
 
-// One octave's Gaussian levels s_min .. s_max (index s - s_min).
-struct Octave {
-  int o = 0;
-  std::vector<Plane> levels;
-};
-
 }  // namespace
 
 SiftFeatures ExtractSiftCwloc(const GreyImage& image, const SiftOptions& options) {
@@ -491,64 +561,70 @@ SiftFeatures ExtractSiftCwloc(const GreyImage& image, const SiftOptions& options
   const int threads = options.num_threads;
   const double tp = options.peak_threshold, te = options.edge_threshold;
   const int num_levels = g.s_max - g.s_min + 1;
+  PlanePool pool;
 
   // Detection over every octave; the levels orientations may need (s_min+1 .. s_max-2) are
   // kept for later.
   std::vector<Key> keys;
-  std::vector<std::vector<Plane>> kept(size_t(g.O));  // [octave][s - s_min - 1]
-  Octave octave;
-  octave.levels.resize(size_t(num_levels));
+  std::vector<std::vector<Plane>> kept(size_t(g.O));           // [octave][s - s_min - 1]
+  std::vector<Plane> levels(static_cast<size_t>(num_levels));  // this octave's, index s - s_min
   for (int oi = 0; oi < g.O; ++oi) {
     const int o = g.o_min + oi;
     const int w = ShiftLeft(int(image.width), -o), h = ShiftLeft(int(image.height), -o);
     if (w < 3 || h < 3) break;  // no pixel with 8 neighbours: VLFeat finds nothing either
-    Plane& base = octave.levels[0];
+    Plane base;
     if (oi == 0) {
-      Plane input;
-      input.Resize(int(image.width), int(image.height));
+      Plane input = pool.Take(int(image.width), int(image.height));
       for (size_t i = 0; i < image.pixels.size(); ++i) {
-        input.data[i] = float(image.pixels[i]) / 255.0f;
+        input.data()[i] = float(image.pixels[i]) / 255.0f;
       }
       if (o < 0) {
-        base = Upsample(input);  // first_octave < -1 runs VLFeat (sift_extractor.cc)
+        base = Upsample(input, &pool);  // first_octave < -1 runs VLFeat (sift_extractor.cc)
+        pool.Give(std::move(input));
       } else if (o > 0) {
-        base = Downsample(input, o, w, h);
+        base = Downsample(input, o, w, h, &pool);
+        pool.Give(std::move(input));
       } else {
         base = std::move(input);
       }
       const double sa = g.sigma0 * std::pow(g.sigmak, g.s_min);
       const double sb = g.sigman * std::pow(2.0, -o);
       if (sa > sb) {
-        Plane smoothed;
+        Plane smoothed = pool.Take(w, h);
         Smooth(base, &smoothed, std::sqrt(sa * sa - sb * sb), threads);
+        pool.Give(std::move(base));
         base = std::move(smoothed);
       }
     } else {
       const int s_best = std::min(g.s_min + g.S, g.s_max);
       // The level with twice the first level's sigma, moved into kept[oi - 1] by now.
-      Plane next = Downsample(kept[size_t(oi - 1)][size_t(s_best - g.s_min - 1)], 1, w, h);
+      base = Downsample(kept[size_t(oi - 1)][size_t(s_best - g.s_min - 1)], 1, w, h, &pool);
       const double sa = g.sigma0 * std::pow(float(g.sigmak), float(g.s_min));
       const double sb = g.sigma0 * std::pow(float(g.sigmak), float(s_best - g.S));
       if (sa > sb) {
-        Smooth(next, &base, std::sqrt(sa * sa - sb * sb), threads);
-      } else {
-        base = std::move(next);
+        Plane smoothed = pool.Take(w, h);
+        Smooth(base, &smoothed, std::sqrt(sa * sa - sb * sb), threads);
+        pool.Give(std::move(base));
+        base = std::move(smoothed);
       }
     }
+    levels[0] = std::move(base);
     for (int s = g.s_min + 1; s <= g.s_max; ++s) {
-      Smooth(octave.levels[size_t(s - 1 - g.s_min)], &octave.levels[size_t(s - g.s_min)],
-             g.dsigma0 * std::pow(g.sigmak, s), threads);
+      Plane& level = levels[size_t(s - g.s_min)];
+      level = pool.Take(w, h);
+      Smooth(levels[size_t(s - 1 - g.s_min)], &level, g.dsigma0 * std::pow(g.sigmak, s), threads);
     }
 
     // DoG level s = G(s + 1) - G(s), three at a time.
     std::array<Plane, 3> dog_ring;
+    for (Plane& d : dog_ring) d = pool.Take(w, h);
     auto dog = [&](int s) -> Plane& { return dog_ring[size_t((s - g.s_min) % 3)]; };
     auto make_dog = [&](int s) {
-      Plane& d = dog(s);
-      d.Resize(w, h);
-      const float* a = octave.levels[size_t(s - g.s_min)].data.data();
-      const float* b = octave.levels[size_t(s + 1 - g.s_min)].data.data();
-      for (size_t i = 0; i < d.data.size(); ++i) d.data[i] = b[i] - a[i];
+      float* d = dog(s).data();
+      const float* a = levels[size_t(s - g.s_min)].data();
+      const float* b = levels[size_t(s + 1 - g.s_min)].data();
+      const size_t n = size_t(w) * size_t(h);
+      for (size_t i = 0; i < n; ++i) d[i] = b[i] - a[i];
     };
     make_dog(g.s_min);
     make_dog(g.s_min + 1);
@@ -557,11 +633,16 @@ SiftFeatures ExtractSiftCwloc(const GreyImage& image, const SiftOptions& options
       const Plane* dogs[3] = {&dog(s - 1), &dog(s), &dog(s + 1)};
       DetectLevel(dogs, s, o, g, tp, te, threads, &keys);
     }
-    for (int s = g.s_min + 1; s <= g.s_max - 2; ++s) {
-      kept[size_t(oi)].push_back(std::move(octave.levels[size_t(s - g.s_min)]));
+    for (Plane& d : dog_ring) pool.Give(std::move(d));
+    for (int s = g.s_min; s <= g.s_max; ++s) {
+      Plane& level = levels[size_t(s - g.s_min)];
+      if (s >= g.s_min + 1 && s <= g.s_max - 2) {
+        kept[size_t(oi)].push_back(std::move(level));
+      } else {
+        pool.Give(std::move(level));
+      }
     }
   }
-  octave.levels.clear();
 
   // COLMAP's levels: runs of equal level index (not reset between octaves).
   struct Run {
@@ -580,11 +661,17 @@ SiftFeatures ExtractSiftCwloc(const GreyImage& image, const SiftOptions& options
   const size_t first_key = runs.empty() ? 0 : runs[first_run].begin;
 
   // Gradients of the levels that kept keypoints use.
-  std::vector<std::vector<std::vector<float>>> grads(kept.size());
+  std::vector<std::vector<GradientPlanes>> grads(kept.size());
   for (size_t oi = 0; oi < kept.size(); ++oi) grads[oi].resize(kept[oi].size());
   for (size_t i = first_key; i < keys.size(); ++i) {
     const size_t oi = size_t(keys[i].o - g.o_min), si = size_t(keys[i].is - g.s_min - 1);
-    if (grads[oi][si].empty()) Gradient(kept[oi][si], &grads[oi][si], threads);
+    GradientPlanes& grad = grads[oi][si];
+    if (grad.mod.capacity == 0) {
+      const Plane& level = kept[oi][si];
+      grad.mod = pool.Take(level.w, level.h);
+      grad.angle = pool.Take(level.w, level.h);
+      Gradient(level, &grad, threads);
+    }
   }
 
   // Orientations, then one descriptor per kept orientation, in COLMAP's order.
@@ -597,12 +684,11 @@ SiftFeatures ExtractSiftCwloc(const GreyImage& image, const SiftOptions& options
   ParallelFor(num_kept, threads, [&](size_t j) {
     const Key& k = keys[first_key + j];
     const size_t oi = size_t(k.o - g.o_min), si = size_t(k.is - g.s_min - 1);
-    const Plane& level = kept[oi][si];
     if (options.upright) {
       angles[j].count = 1;
       angles[j].angle[0] = 0.0;
     } else {
-      angles[j].count = Orientations(k, grads[oi][si].data(), level.w, level.h, angles[j].angle);
+      angles[j].count = Orientations(k, grads[oi][si], angles[j].angle);
     }
   });
   std::vector<size_t> first_slot(num_kept + 1, 0);
@@ -618,12 +704,11 @@ SiftFeatures ExtractSiftCwloc(const GreyImage& image, const SiftOptions& options
   ParallelFor(num_kept, threads, [&](size_t j) {
     const Key& k = keys[first_key + j];
     const size_t oi = size_t(k.o - g.o_min), si = size_t(k.is - g.s_min - 1);
-    const Plane& level = kept[oi][si];
     for (size_t slot = first_slot[j]; slot < first_slot[j + 1]; ++slot) {
       const double angle = angles[j].angle[slot - first_slot[j]];
       features.keypoints[slot] = {k.x + 0.5f, k.y + 0.5f, k.sigma, float(angle)};
       float* d = raw.data() + slot * kSiftDescriptorDim;
-      Descriptor(k, angle, grads[oi][si].data(), level.w, level.h, d);
+      Descriptor(k, angle, grads[oi][si], d);
       FinishDescriptor(d, options.normalization,
                        features.descriptors.data() + slot * kSiftDescriptorDim);
     }
