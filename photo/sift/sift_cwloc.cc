@@ -515,8 +515,29 @@ void Descriptor(const Key& k, double angle0, const GradientPlanes& grad, float* 
   const float wsigma = float(kWindowSize);
   // |n| >= 2.5 puts every one of a sample's bins outside [-2, 2): it adds nothing.
   const float reach = 2.5f;
+  // Per row, the columns whose rotated position can fall inside |n| < 2.5, from the two
+  // slabs |ct0 dx + st0 dy| < R and |-st0 dx + ct0 dy| < R (R = 2.5 SBP), widened by a pixel:
+  // a cheap superset; the exact test below still decides.
+  const double R = reach * SBP;
+  auto slab = [](double a, double c, double r, double* lo, double* hi) {
+    // {dx : |a dx + c| < r}
+    if (std::abs(a) < 1e-9) {
+      if (std::abs(c) >= r + 1e-9) *lo = 1, *hi = -1;
+      return;
+    }
+    const double u = (-r - c) / a, v = (r - c) / a;
+    *lo = std::max(*lo, std::min(u, v));
+    *hi = std::min(*hi, std::max(u, v));
+  };
   for (int dyi = std::max(-W, 1 - yi); dyi <= std::min(W, h - yi - 2); ++dyi) {
-    for (int dxi = std::max(-W, 1 - xi); dxi <= std::min(W, w - xi - 2); ++dxi) {
+    const double dyd = yi + dyi - y;
+    double lo = -1e300, hi = 1e300;
+    slab(ct0, st0 * dyd, R, &lo, &hi);
+    slab(-st0, ct0 * dyd, R, &lo, &hi);
+    if (lo > hi) continue;
+    const int first = std::max({-W, 1 - xi, int(std::floor(lo + x - xi)) - 1});
+    const int last = std::min({W, w - xi - 2, int(std::ceil(hi + x - xi)) + 1});
+    for (int dxi = first; dxi <= last; ++dxi) {
       const float dx = float(xi + dxi - x);
       const float dy = float(yi + dyi - y);
       const float nx = float((ct0 * dx + st0 * dy) / SBP);
