@@ -35,7 +35,7 @@ int main(int argc, char** argv) {
   CLI::App app{"How many of COLMAP's SIFT features cwloc's extraction reproduces"};
   fs::path database, images_dir, json_path;
   std::vector<std::string> names;
-  std::string implementation = "vlfeat";
+  std::string implementation = "cwloc";
   SiftOptions options;
   options.max_num_features = 6000;
   sift_bench::AgreementCriteria criteria;
@@ -61,7 +61,7 @@ int main(int argc, char** argv) {
   nlohmann::json report = nlohmann::json::array();
   std::printf(
       "| photo | COLMAP | ours | COLMAP found in ours | ours found in COLMAP | desc dist p50 / p90 "
-      "/ p99 | extract ms |\n|---|---|---|---|---|---|---|\n");
+      "/ p99 | same position | extract ms |\n|---|---|---|---|---|---|---|---|\n");
   for (const std::string& name : names) {
     const SiftFeatures colmap = sift_bench::ReadColmapFeatures(database, name);
     const GreyImage image = sift_bench::DecodeJpegLikeColmap(images_dir / name);
@@ -70,10 +70,10 @@ int main(int argc, char** argv) {
     const double ms = stopwatch.Seconds() * 1e3;
     const auto agreement = sift_bench::CompareFeatures(colmap, ours, criteria);
     const auto& d = agreement.nearest_descriptor_distances;
-    std::printf("| %s | %zu | %zu | %.2f %% | %.2f %% | %.1f / %.1f / %.1f | %.0f |\n",
+    std::printf("| %s | %zu | %zu | %.2f %% | %.2f %% | %.1f / %.1f / %.1f | %.2f %% | %.0f |\n",
                 name.c_str(), agreement.num_a, agreement.num_b, 100 * agreement.ShareAInB(),
                 100 * agreement.ShareBInA(), Percentile(d, 0.5), Percentile(d, 0.9),
-                Percentile(d, 0.99), ms);
+                Percentile(d, 0.99), 100.0 * agreement.a_same_position_in_b / agreement.num_a, ms);
     std::fflush(stdout);
     report.push_back({{"photo", name},
                       {"colmap", agreement.num_a},
@@ -86,6 +86,7 @@ int main(int argc, char** argv) {
                       {"descriptor_distance_p99", Percentile(d, 0.99)},
                       {"descriptor_distance_p999", Percentile(d, 0.999)},
                       {"descriptor_distance_max", Percentile(d, 1.0)},
+                      {"colmap_same_position_in_ours", agreement.a_same_position_in_b},
                       {"extract_ms", ms}});
   }
   if (!json_path.empty()) std::ofstream(json_path) << report.dump(2) << "\n";

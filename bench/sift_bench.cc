@@ -20,7 +20,7 @@ using sift_bench::ParseImplementation;
 int main(int argc, char** argv) {
   CLI::App app{"Times decoding + SIFT extraction per photo"};
   std::vector<std::filesystem::path> photos;
-  std::string implementation = "vlfeat";
+  std::string implementation = "cwloc";
   int repeat = 1;
   SiftOptions options;
   options.max_num_features = 6000;

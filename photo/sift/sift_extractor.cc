@@ -3,6 +3,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "photo/sift/sift_cwloc.h"
 #include "photo/sift/sift_vlfeat.h"
 
 namespace cwloc {
@@ -43,6 +44,12 @@ SiftFeatures ExtractSift(const GreyImage& image, const SiftOptions& options) {
     throw std::invalid_argument("SIFT: image too large");
   }
   switch (options.implementation) {
+    case SiftOptions::Implementation::kCwloc:
+      // VLFeat upsamples a second time with width and height swapped (its
+      // copy_and_upsample_rows calls for o < -1), which only COLMAP's features of square
+      // images survive; reproducing it is not worth it: VLFeat itself runs those.
+      if (options.first_octave < -1) return sift_internal::ExtractSiftVlfeat(image, options);
+      return sift_internal::ExtractSiftCwloc(image, options);
     case SiftOptions::Implementation::kVlfeat:
       return sift_internal::ExtractSiftVlfeat(image, options);
   }

@@ -34,9 +34,11 @@ struct SiftOptions {
 
   // Not COLMAP options: how we compute, never what.
   enum class Implementation {
+    // Ours: VLFeat's algorithm in VLFeat's arithmetic, several times faster (docs/sift.md).
+    kCwloc,
     kVlfeat,  // VLFeat's vl_sift_* called exactly as COLMAP 3.8 calls them (the reference)
   };
-  Implementation implementation = Implementation::kVlfeat;
+  Implementation implementation = Implementation::kCwloc;
   // Threads inside one photo (>= 1); results do not depend on it.
   int num_threads = 1;
 };

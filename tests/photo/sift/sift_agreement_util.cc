@@ -1,11 +1,7 @@
 #include "tests/photo/sift/sift_agreement_util.h"
 
-#include <jpeglib.h>
-
 #include <algorithm>
 #include <cmath>
-#include <csetjmp>
-#include <cstdio>
 #include <limits>
 #include <memory>
 #include <numbers>
@@ -13,65 +9,12 @@
 #include <unordered_map>
 
 #include "format/colmap/database.h"
+#include "photo/image_decode.h"
 
 namespace cwloc::sift_bench {
-namespace {
-
-struct JpegError {
-  jpeg_error_mgr mgr;
-  std::jmp_buf jump;
-  char message[JMSG_LENGTH_MAX];
-};
-
-void OnJpegError(j_common_ptr cinfo) {
-  auto* error = reinterpret_cast<JpegError*>(cinfo->err);
-  (*cinfo->err->format_message)(cinfo, error->message);
-  std::longjmp(error->jump, 1);
-}
-
-}  // namespace
 
 GreyImage DecodeJpegLikeColmap(const std::filesystem::path& path) {
-  std::unique_ptr<FILE, int (*)(FILE*)> file(std::fopen(path.c_str(), "rb"), &std::fclose);
-  if (!file) throw std::runtime_error("cannot open " + path.string());
-  jpeg_decompress_struct cinfo;
-  JpegError error;
-  cinfo.err = jpeg_std_error(&error.mgr);
-  error.mgr.error_exit = OnJpegError;
-  GreyImage image;
-  std::vector<uint8_t> row;
-  if (setjmp(error.jump)) {
-    jpeg_destroy_decompress(&cinfo);
-    throw std::runtime_error(path.string() + ": " + error.message);
-  }
-  jpeg_create_decompress(&cinfo);
-  jpeg_stdio_src(&cinfo, file.get());
-  jpeg_read_header(&cinfo, TRUE);
-  cinfo.dct_method = JDCT_IFAST;
-  cinfo.do_fancy_upsampling = FALSE;
-  cinfo.out_color_space = cinfo.num_components == 1 ? JCS_GRAYSCALE : JCS_RGB;
-  jpeg_start_decompress(&cinfo);
-  image.width = cinfo.output_width;
-  image.height = cinfo.output_height;
-  image.pixels.resize(size_t{image.width} * image.height);
-  const int channels = cinfo.output_components;
-  row.resize(size_t{image.width} * channels);
-  while (cinfo.output_scanline < cinfo.output_height) {
-    uint8_t* out = image.pixels.data() + size_t{cinfo.output_scanline} * image.width;
-    JSAMPROW rows[1] = {row.data()};
-    jpeg_read_scanlines(&cinfo, rows, 1);
-    if (channels == 1) {
-      std::copy(row.begin(), row.end(), out);
-    } else {
-      for (uint32_t x = 0; x < image.width; ++x) {
-        const uint8_t* p = &row[size_t{x} * 3];
-        out[x] = static_cast<uint8_t>(0.2126f * p[0] + 0.7152f * p[1] + 0.0722f * p[2] + 0.5f);
-      }
-    }
-  }
-  jpeg_finish_decompress(&cinfo);
-  jpeg_destroy_decompress(&cinfo);
-  return image;
+  return DecodeGreyImage(ReadFileBytes(path), path);
 }
 
 SiftFeatures ReadColmapFeatures(const std::filesystem::path& database, const std::string& name) {
@@ -132,19 +75,22 @@ double AngleDifferenceDeg(double a, double b) {
 
 // Counts keypoints of `a` found in `b`; optionally records nearest descriptor distances.
 size_t CountFound(const SiftFeatures& a, const SiftFeatures& b, const AgreementCriteria& c,
-                  std::vector<float>* nearest) {
+                  std::vector<float>* nearest, size_t* same_position) {
   const PointGrid grid(b.keypoints);
   size_t found = 0;
   for (size_t i = 0; i < a.size(); ++i) {
     const SiftKeypoint& ka = a.keypoints[i];
     float best = std::numeric_limits<float>::infinity();
+    bool same = false;
     grid.ForNear(ka.x, ka.y, [&](size_t j) {
       const SiftKeypoint& kb = b.keypoints[j];
+      if (ka.x == kb.x && ka.y == kb.y) same = true;
       const double dx = ka.x - kb.x, dy = ka.y - kb.y;
       if (dx * dx + dy * dy > c.max_position_px * c.max_position_px) return;
       if (AngleDifferenceDeg(ka.orientation, kb.orientation) > c.max_orientation_deg) return;
       best = std::min(best, DescriptorDistance(a.Descriptor(i), b.Descriptor(j)));
     });
+    if (same && same_position) ++*same_position;
     if (std::isfinite(best)) {
       if (nearest) nearest->push_back(best);
       if (best <= c.max_descriptor_distance) ++found;
@@ -160,8 +106,9 @@ Agreement CompareFeatures(const SiftFeatures& a, const SiftFeatures& b,
   Agreement result;
   result.num_a = a.size();
   result.num_b = b.size();
-  result.a_found_in_b = CountFound(a, b, criteria, &result.nearest_descriptor_distances);
-  result.b_found_in_a = CountFound(b, a, criteria, nullptr);
+  result.a_found_in_b = CountFound(a, b, criteria, &result.nearest_descriptor_distances,
+                                   &result.a_same_position_in_b);
+  result.b_found_in_a = CountFound(b, a, criteria, nullptr, nullptr);
   return result;
 }
 
@@ -169,9 +116,10 @@ Agreement CompareFeatures(const SiftFeatures& a, const SiftFeatures& b,
 
 namespace cwloc::sift_bench {
 
-std::vector<std::string> ImplementationNames() { return {"vlfeat"}; }
+std::vector<std::string> ImplementationNames() { return {"cwloc", "vlfeat"}; }
 
 SiftOptions::Implementation ParseImplementation(const std::string& name) {
+  if (name == "cwloc") return SiftOptions::Implementation::kCwloc;
   if (name == "vlfeat") return SiftOptions::Implementation::kVlfeat;
   throw std::invalid_argument("unknown SIFT implementation " + name);
 }

@@ -14,9 +14,8 @@
 
 namespace cwloc::sift_bench {
 
-// libjpeg-turbo with FreeImage's default flags (JDCT_IFAST, no fancy upsampling), then
-// grey = (uint8_t)(0.2126 r + 0.7152 g + 0.0722 b + 0.5) as FreeImage_ConvertToGreyscale.
-// Temporary: photo/image_decode.h replaces it once it lands.
+// photo/image_decode.h's DecodeGreyImage of the file: COLMAP 3.8's pixels (FreeImage 3.18's
+// JPEG flags and grey conversion).
 GreyImage DecodeJpegLikeColmap(const std::filesystem::path& path);
 
 // COLMAP's keypoints (scale and orientation from the affine shape) and descriptors of the
@@ -35,6 +34,7 @@ struct AgreementCriteria {
 struct Agreement {
   size_t num_a = 0, num_b = 0;
   size_t a_found_in_b = 0, b_found_in_a = 0;
+  size_t a_same_position_in_b = 0;  // a keypoint of b at the bit-identical position
   // For each keypoint of a with a position+orientation neighbour in b: the smallest
   // descriptor distance among those neighbours (the distribution the threshold comes from).
   std::vector<float> nearest_descriptor_distances;

@@ -3,8 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
 #include <numeric>
 #include <stdexcept>
+#include <string>
 
 #include "photo/sift/sift_levels.h"
 
@@ -36,7 +38,7 @@ GreyImage BlobImage(uint32_t width, uint32_t height) {
 }
 
 std::vector<SiftOptions::Implementation> Implementations() {
-  return {SiftOptions::Implementation::kVlfeat};
+  return {SiftOptions::Implementation::kCwloc, SiftOptions::Implementation::kVlfeat};
 }
 
 TEST(SiftOptionsTest, DefaultsAreColmaps) {
@@ -174,6 +176,41 @@ TEST_P(SiftImplementationTest, UprightGivesZeroOrientation) {
   const SiftFeatures features = ExtractSift(BlobImage(160, 120), options);
   ASSERT_GT(features.size(), 0u);
   for (const SiftKeypoint& k : features.keypoints) EXPECT_EQ(k.orientation, 0.0f);
+}
+
+// Ours reproduces VLFeat bit for bit, for other options too.
+TEST(SiftCwlocTest, EqualsVlfeatForVariousOptions) {
+  const GreyImage image = BlobImage(301, 203);  // odd sizes: odd octave sides
+  std::vector<std::function<void(SiftOptions&)>> variants = {
+      [](SiftOptions&) {},
+      [](SiftOptions& o) { o.first_octave = 0; },
+      [](SiftOptions& o) { o.first_octave = 1; },
+      [](SiftOptions& o) { o.first_octave = -2; },
+      [](SiftOptions& o) { o.octave_resolution = 4, o.peak_threshold = 0.02 / 4; },
+      [](SiftOptions& o) { o.num_octaves = 6; },
+      [](SiftOptions& o) { o.max_num_features = 20; },
+      [](SiftOptions& o) { o.max_num_orientations = 4; },
+      [](SiftOptions& o) { o.edge_threshold = 3; },
+      [](SiftOptions& o) { o.normalization = SiftOptions::Normalization::kL2; },
+      [](SiftOptions& o) { o.upright = true; },
+  };
+  for (size_t v = 0; v < variants.size(); ++v) {
+    SCOPED_TRACE("variant " + std::to_string(v));
+    SiftOptions options;
+    variants[v](options);
+    options.implementation = SiftOptions::Implementation::kVlfeat;
+    const SiftFeatures vlfeat = ExtractSift(image, options);
+    options.implementation = SiftOptions::Implementation::kCwloc;
+    const SiftFeatures ours = ExtractSift(image, options);
+    ASSERT_EQ(ours.size(), vlfeat.size());
+    EXPECT_EQ(ours.descriptors, vlfeat.descriptors);
+    for (size_t i = 0; i < ours.size(); ++i) {
+      EXPECT_EQ(ours.keypoints[i].x, vlfeat.keypoints[i].x);
+      EXPECT_EQ(ours.keypoints[i].y, vlfeat.keypoints[i].y);
+      EXPECT_EQ(ours.keypoints[i].scale, vlfeat.keypoints[i].scale);
+      EXPECT_EQ(ours.keypoints[i].orientation, vlfeat.keypoints[i].orientation);
+    }
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(All, SiftImplementationTest, testing::ValuesIn(Implementations()));
