@@ -47,17 +47,16 @@ TEST_F(PhotoCliTest, EveryBadPhotoGetsItsErrorAndTheOthersFinish) {
   const int code = test::RunCommand(
       test::ToolPath("cwloc-localize").string() + " --index " + Quote(index_path_) +
           " --database " + Quote(database_path_) + " --query " + good + " --threads 2 -o " +
-          Quote(jsonl) + " --image " + Quote(truncated) + " --image " + Quote(text) +
-          " --image " + Quote(tiny) + " --image " + Quote(grey) + " --image " + Quote(bomb) +
-          " --image " + Quote(missing),
+          Quote(jsonl) + " --image " + Quote(truncated) + " --image " + Quote(text) + " --image " +
+          Quote(tiny) + " --image " + Quote(grey) + " --image " + Quote(bomb) + " --image " +
+          Quote(missing),
       &output);
   EXPECT_EQ(code, 2) << output;
 
   const std::map<std::string, std::string> expected_errors = {
       {"truncated.jpg", truncated.string() + ": corrupt JPEG: Premature end of JPEG file"},
       {"notes.jpg", text.string() + ": not a JPEG or PNG image"},
-      {"tiny.png",
-       tiny.string() + ": the image is 1 x 1 pixels; SIFT needs at least 16 x 16"},
+      {"tiny.png", tiny.string() + ": the image is 1 x 1 pixels; SIFT needs at least 16 x 16"},
       {"grey.png", grey.string() + ": no SIFT features found in the photo"},
       {"bomb.png", bomb.string() +
                        ": the image is 30000 x 30000 pixels, more than the limit of 100000000 "
@@ -88,8 +87,8 @@ TEST_F(PhotoCliTest, APhotoCameraMustMatchThePhotosSize) {
                                         " --camera 'SIMPLE_PINHOLE 640 480 500 320 240'",
                                     &output);
   EXPECT_EQ(code, 2) << output;
-  EXPECT_THAT(output,
-              testing::HasSubstr(photo.string() + ": the camera is 640 x 480 but the photo is 40 x 30"));
+  EXPECT_THAT(output, testing::HasSubstr(photo.string() +
+                                         ": the camera is 640 x 480 but the photo is 40 x 30"));
 }
 
 // The five held-out herz_jesu JPEGs (COLMAP extracted them at --SiftExtraction.max_image_size
@@ -117,9 +116,8 @@ class HerzJesuPhotoTest : public testing::Test {
     const auto jsonl = dir_ / "photos.jsonl";
     std::string output;
     const int code = test::RunCommand(
-        test::ToolPath("cwloc-localize").string() + " --index " + Quote(index_) +
-            " --image-list " + Quote(data_ / "query_list.txt") + " --image-dir " +
-            Quote(data_ / "query_images") +
+        test::ToolPath("cwloc-localize").string() + " --index " + Quote(index_) + " --image-list " +
+            Quote(data_ / "query_list.txt") + " --image-dir " + Quote(data_ / "query_images") +
             " --max-image-size 1600 --max-features 6000 --threads 2 -q -o " + Quote(jsonl) + " " +
             camera_args,
         &output);

@@ -130,13 +130,16 @@ TEST(Report, KnownErrorsGiveKnownQuartilesAndShares) {
   EXPECT_EQ(r.within, (std::array<int, 3>{1, 2, 3}));
   ASSERT_TRUE(r.times_ms);
   EXPECT_EQ(r.timed_records, 4);
-  EXPECT_DOUBLE_EQ((*r.times_ms)[5].q1, 17.5);
-  EXPECT_DOUBLE_EQ((*r.times_ms)[5].median, 25);
-  EXPECT_DOUBLE_EQ((*r.times_ms)[5].q3, 32.5);
+  EXPECT_DOUBLE_EQ((*r.times_ms)[6].q1, 17.5);
+  EXPECT_DOUBLE_EQ((*r.times_ms)[6].median, 25);
+  EXPECT_DOUBLE_EQ((*r.times_ms)[6].q3, 32.5);
   // {10, 20, 30, 40}: h = 0.9 * 3 = 2.7, 30 + 0.7 * 10.
-  EXPECT_DOUBLE_EQ((*r.times_ms)[5].p90, 37);
-  EXPECT_DOUBLE_EQ((*r.times_ms)[0].median, 1.0);
-  EXPECT_DOUBLE_EQ((*r.times_ms)[0].p90, 1.0);
+  EXPECT_DOUBLE_EQ((*r.times_ms)[6].p90, 37);
+  EXPECT_DOUBLE_EQ((*r.times_ms)[1].median, 1.0);
+  EXPECT_DOUBLE_EQ((*r.times_ms)[1].p90, 1.0);
+  // Records without "extraction" (written before photo queries) count it as 0.
+  EXPECT_STREQ(kStageNames[0], "extraction");
+  EXPECT_DOUBLE_EQ((*r.times_ms)[0].p90, 0.0);
   EXPECT_EQ(r.per_query[4].status, QueryStatus::kMissing);
 }
 
