@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Photo -> features, one thread, per photo: COLMAP 3.8's CPU SIFT (colmap feature_extractor)
-# against cwloc's (cwloc-sift-bench: decode + ExtractSift), medians of hyperfine runs.
+# against cwloc's (cwloc-sift-bench: decode + ExtractSift), medians of hyperfine runs; then the
+# whole photo -> pose command (cwloc-localize --image) against an index of the photos' dataset
+# (PHOTO_DIR/../mapping_model/bin and PHOTO_DIR/../database.db), also on one thread.
 #
 #   bench/extraction_benchmark.sh [BUILD_DIR] [PHOTO_DIR] [RUNS]
 #   defaults: build, ../shared/data/herz_jesu_p25/query_images, 3
@@ -25,8 +27,12 @@ export OMP_NUM_THREADS=1
 
 median_ms() { jq -r '.results[0].median * 1000 | floor' "$1"; }
 
-printf '| photo | COLMAP feature_extractor ms | cwloc-sift-bench ms | ratio | cwloc in-process decode+extract ms |\n'
-printf '|---|---|---|---|---|\n'
+data="$(cd "$photos/.." && pwd)"
+"$bin/cwloc-index" build --model "$data/mapping_model/bin" --database "$data/database.db" \
+  -o "$tmp/index.cwl" >/dev/null
+
+printf '| photo | COLMAP feature_extractor ms | cwloc-sift-bench ms | ratio | cwloc in-process decode+extract ms | cwloc-localize --image (photo -> pose) ms |\n'
+printf '|---|---|---|---|---|---|\n'
 for photo in "$photos"/*.jpg; do
   name="$(basename "$photo")"
   echo "$name" > "$tmp/list.txt"
@@ -43,10 +49,11 @@ for photo in "$photos"/*.jpg; do
   inproc="$("$bin/cwloc-sift-bench" --max-num-features 6000 --repeat "$runs" "$photo" | awk 'NR==2 {print $5}')"
   colmap_ms="$(median_ms "$tmp/colmap.json")"
   cwloc_ms="$(median_ms "$tmp/cwloc.json")"
+  hyperfine --runs "$runs" --warmup 1 --style none --export-json "$tmp/pose.json" \
+    "$bin/cwloc-localize --index $tmp/index.cwl --image $photo --max-image-size 1600 \
+       --max-features 6000 --threads 1 -q -o $tmp/pose.jsonl" >/dev/null 2>&1
+  pose_ms="$(median_ms "$tmp/pose.json")"
   ratio="$(awk -v a="$colmap_ms" -v b="$cwloc_ms" 'BEGIN {printf "%.2f", a / b}')"
-  printf '| %s | %s | %s | %s | %s |\n' "$name" "$colmap_ms" "$cwloc_ms" "$ratio" "$inproc"
+  printf '| %s | %s | %s | %s | %s | %s |\n' "$name" "$colmap_ms" "$cwloc_ms" "$ratio" "$inproc" \
+    "$pose_ms"
 done
-
-# Photo -> pose (the lead adds it): time `cwloc-localize --image PHOTO ...` per photo here,
-# one more hyperfine run per photo, as a row group of its own:
-# printf '| photo | cwloc-localize --image ms |\n|---|---|\n'
