@@ -114,7 +114,8 @@ void ValidateQuery(const Query& query) {
   if (query.NumFeatures() == 0) throw InputError(source + ": the query has no features");
   if (query.camera.width == 0 || query.camera.height == 0)
     throw InputError(source + ": camera has no image size");
-  if (!query.camera.FocalKnown()) return;
+  // An unknown camera has only its size; a focal prior's model gives the focal length.
+  if (query.camera.calibration == Calibration::kUnknown) return;
   const auto model = FindCameraModel(static_cast<int32_t>(query.camera.model_id));
   if (!model) {
     throw InputError(source + ": unknown camera model id " +
@@ -203,9 +204,12 @@ LocalizationResult Localizer::Localize(const Query& query, const LocalizerOption
     const Eigen::Vector3d center = p.Center();
     result.center = {center.x(), center.y(), center.z()};
     if (!query.camera.FocalKnown()) {
+      // The uncalibrated camera as estimated: SIMPLE_RADIAL (f, cx, cy, k).
       const std::array<double, 2> principal_point = query.camera.ImageCenter();
       result.focal_estimated = true;
-      result.camera.params = {pose.focal_length_px, principal_point[0], principal_point[1]};
+      result.camera.model_id = CameraModelId::kSimpleRadial;
+      result.camera.params = {pose.focal_length_px, principal_point[0], principal_point[1],
+                              pose.radial_distortion};
     }
   } else {
     result.failure_reason = pose.failure_reason;

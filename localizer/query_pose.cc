@@ -56,12 +56,20 @@ QueryPose EstimateQueryPose(const Index& index, const Query& query,
   pose_options.refine = refine;
   QueryPose result;
   result.num_used = static_cast<uint32_t>(points2D.size());
-  if (camera.FocalKnown()) {
-    result.pose = EstimateAbsolutePose(
-        points2D, points3D, MeanFocalLength(camera.model_id, camera.params), pose_options);
-  } else {
-    pose_options.image_diagonal_px = std::hypot(double(camera.width), double(camera.height));
-    result.pose = EstimateAbsolutePoseUnknownFocal(points2D, points3D, pose_options);
+  switch (camera.calibration) {
+    case Calibration::kKnown:
+      result.pose = EstimateAbsolutePose(
+          points2D, points3D, MeanFocalLength(camera.model_id, camera.params), pose_options);
+      break;
+    case Calibration::kFocalPrior:
+      pose_options.image_diagonal_px = std::hypot(double(camera.width), double(camera.height));
+      result.pose = EstimateAbsolutePoseFocalPrior(
+          points2D, points3D, MeanFocalLength(camera.model_id, camera.params), pose_options);
+      break;
+    case Calibration::kUnknown:
+      pose_options.image_diagonal_px = std::hypot(double(camera.width), double(camera.height));
+      result.pose = EstimateAbsolutePoseUnknownFocal(points2D, points3D, pose_options);
+      break;
   }
   return result;
 }

@@ -23,9 +23,12 @@ struct QueryPose {
   uint32_t num_used = 0;  // correspondences that could be normalized and went into RANSAC
 };
 
-// The pose stage: LO-RANSAC with the minimal solver the camera calls for (P3P with a known
-// focal length, P4Pf without, the principal point at QueryCamera::ImageCenter), then, with
-// `refine`, the Ceres refinement. RANSAC is seeded with options.seed.
+// The pose stage: LO-RANSAC with the minimal solver the camera calls for, then, with `refine`,
+// the Ceres refinement (absolute_pose.h). A known camera undistorts the keypoints with its model
+// and P3P holds its focal length. An uncalibrated camera (Calibration::kFocalPrior, kUnknown) is
+// a SIMPLE_RADIAL with its principal point at QueryCamera::ImageCenter: RANSAC runs P3P with the
+// prior focal length (the camera's mean focal) or P4Pf, and the refinement estimates the focal
+// length and the radial distortion with the pose. RANSAC is seeded with options.seed.
 QueryPose EstimateQueryPose(const Index& index, const Query& query,
                             std::span<const FeatureMatch> correspondences,
                             const LocalizerOptions& options, bool refine);

@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -70,7 +71,14 @@ class DatabaseReader {
   // The newer schema (COLMAP >= 4.0) tags descriptors with their extractor type.
   bool has_descriptor_type() const { return has_descriptor_type_; }
 
-  std::vector<Camera> ReadAllCameras() const;        // ordered by camera_id
+  std::vector<Camera> ReadAllCameras() const;  // ordered by camera_id
+  // COLMAP <= 3.9 flags each camera with prior_focal_length: 1 when its focal length is a
+  // prior (from EXIF; COLMAP's mapper still refines it), 0 when it is the feature extractor's
+  // guess 1.2 * max(width, height). Newer schemas may have no such column.
+  bool has_prior_focal_length() const { return has_prior_focal_length_; }
+  // camera_id -> prior_focal_length != 0 (as COLMAP reads it) for every camera; empty without
+  // the column. A non-integer value throws InputError.
+  std::map<camera_t, bool> ReadPriorFocalLengths() const;
   std::vector<DatabaseImage> ReadAllImages() const;  // ordered by image_id
   std::optional<DatabaseImage> FindImage(const std::string& name) const;
   std::vector<Keypoint> ReadKeypoints(image_t image_id) const;  // empty when the image has none
@@ -94,6 +102,7 @@ class DatabaseReader {
   std::unique_ptr<Statements> stmts_;
   int user_version_ = 0;
   bool has_descriptor_type_ = false;
+  bool has_prior_focal_length_ = false;
 };
 
 // Creates a new database in COLMAP 3.8's schema (the one Debian's colmap reads and

@@ -155,6 +155,7 @@ constexpr MatrixTable kDescriptorsTable{"descriptors", kDescriptorCols, sizeof(u
 
 struct DatabaseReader::Statements {
   StmtPtr read_cameras;
+  StmtPtr read_prior_focal_lengths;  // only with the column
   StmtPtr read_images;
   StmtPtr find_image;
   StmtPtr image_name;
@@ -262,12 +263,20 @@ DatabaseReader::DatabaseReader(const std::filesystem::path& path) : path_(path) 
       if (std::string_view(spec.table) == "descriptors") {
         has_descriptor_type_ = std::find(columns.begin(), columns.end(), "type") != columns.end();
       }
+      if (std::string_view(spec.table) == "cameras") {
+        has_prior_focal_length_ =
+            std::find(columns.begin(), columns.end(), "prior_focal_length") != columns.end();
+      }
     }
 
     stmts_ = std::make_unique<Statements>();
     stmts_->read_cameras = Prepare<InputError>(
         db_, "SELECT camera_id, model, width, height, params FROM cameras ORDER BY camera_id",
         file);
+    if (has_prior_focal_length_) {
+      stmts_->read_prior_focal_lengths = Prepare<InputError>(
+          db_, "SELECT camera_id, prior_focal_length FROM cameras ORDER BY camera_id", file);
+    }
     stmts_->read_images = Prepare<InputError>(
         db_, "SELECT image_id, name, camera_id FROM images ORDER BY image_id", file);
     stmts_->find_image = Prepare<InputError>(
@@ -434,6 +443,28 @@ std::vector<Camera> DatabaseReader::ReadAllCameras() const {
     cameras.push_back(std::move(camera));
   }
   return cameras;
+}
+
+std::map<camera_t, bool> DatabaseReader::ReadPriorFocalLengths() const {
+  std::map<camera_t, bool> priors;
+  if (!has_prior_focal_length_) return priors;
+  const std::string file = path_.string();
+  sqlite3_stmt* stmt = stmts_->read_prior_focal_lengths.get();
+  StmtScope scope(stmt);
+  while (CheckSqlite<InputError>(db_, sqlite3_step(stmt), file) == SQLITE_ROW) {
+    const std::string table = file + ": table 'cameras'";
+    const int64_t camera_id = IntegerColumn(
+        stmt, 0, [&] { return table; }, "camera_id");
+    if (camera_id < 0 || camera_id >= std::numeric_limits<camera_t>::max()) {
+      throw InputError(table + ": camera_id " + std::to_string(camera_id) + " out of range");
+    }
+    const std::string where = table + ", camera " + std::to_string(camera_id);
+    // COLMAP reads the flag as an integer != 0.
+    priors[static_cast<camera_t>(camera_id)] =
+        IntegerColumn(
+            stmt, 1, [&] { return where; }, "prior_focal_length") != 0;
+  }
+  return priors;
 }
 
 namespace {

@@ -7,6 +7,7 @@ namespace cwloc {
 DatabaseQueries::DatabaseQueries(const std::filesystem::path& path) : reader_(path) {
   for (colmap::Camera& camera : reader_.ReadAllCameras())
     cameras_.emplace(camera.camera_id, std::move(camera));
+  prior_focal_lengths_ = reader_.ReadPriorFocalLengths();
 }
 
 Query DatabaseQueries::Load(const std::string& name) const {
@@ -33,6 +34,10 @@ Query DatabaseQueries::Load(const std::string& name) const {
   query.camera.height = static_cast<uint32_t>(camera->second.height);
   query.camera.params = camera->second.params;
   query.camera.source = IntrinsicsSource::kDatabase;
+  const auto prior = prior_focal_lengths_.find(camera_id);
+  query.camera.calibration = prior != prior_focal_lengths_.end() && !prior->second
+                                 ? Calibration::kUnknown
+                                 : Calibration::kFocalPrior;
   query.keypoints.reserve(features.keypoints.size() * 2);
   for (const colmap::Keypoint& keypoint : features.keypoints) {
     query.keypoints.push_back(keypoint.x);

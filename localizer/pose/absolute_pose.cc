@@ -37,11 +37,12 @@ bool CheckInput(size_t num_points2D, size_t num_points3D, size_t sample_size,
   return true;
 }
 
-// Final inlier set, error and verdict for `pose` with residual f * pi(X_c) - pixel.
+// Final inlier set, error and verdict for `pose` with residual camera.Project(X_c) - pixel
+// (f * pi(X_c) - pixel for k = 0).
 void Finish(std::span<const Eigen::Vector2d> pixels, std::span<const Eigen::Vector3d> points3D,
             const AbsolutePoseOptions& options, AbsolutePoseResult* result) {
   const Eigen::Matrix3d rot = result->pose.rotation.toRotationMatrix();
-  const double f = result->focal_length_px;
+  const RadialCamera camera{result->focal_length_px, result->radial_distortion};
   const double max_sq = options.max_error_px * options.max_error_px;
   result->inliers.assign(pixels.size(), 0);
   result->num_inliers = 0;
@@ -49,7 +50,7 @@ void Finish(std::span<const Eigen::Vector2d> pixels, std::span<const Eigen::Vect
   for (size_t i = 0; i < pixels.size(); ++i) {
     const Eigen::Vector3d z = rot * points3D[i] + result->pose.translation;
     if (!(z(2) > 0.0)) continue;
-    const double r2 = (f * z.hnormalized() - pixels[i]).squaredNorm();
+    const double r2 = (camera.Project(z) - pixels[i]).squaredNorm();
     if (r2 < max_sq) {
       result->inliers[i] = 1;
       ++result->num_inliers;
@@ -77,10 +78,97 @@ uint32_t CountInliers(std::span<const Eigen::Vector2d> pixels,
   return count;
 }
 
+// Indices of the correspondences in front of the camera with a squared error below max_sq.
+void CollectInliers(std::span<const Eigen::Vector2d> pixels,
+                    std::span<const Eigen::Vector3d> points3D, const CameraPose& pose,
+                    const RadialCamera& camera, double max_sq, std::vector<uint32_t>* inliers) {
+  const Eigen::Matrix3d rot = pose.rotation.toRotationMatrix();
+  inliers->clear();
+  for (size_t i = 0; i < pixels.size(); ++i) {
+    const Eigen::Vector3d z = rot * points3D[i] + pose.translation;
+    if (z(2) > 0.0 && (camera.Project(z) - pixels[i]).squaredNorm() < max_sq) {
+      inliers->push_back(static_cast<uint32_t>(i));
+    }
+  }
+}
+
 // The robust refinement may move a few borderline inliers across the threshold; losing more
 // than 2% of them means it went astray (e.g. an unobservable focal length drifted).
 bool KeepsInliers(size_t refined_count, size_t ransac_count) {
   return refined_count >= ransac_count - ransac_count / 50;
+}
+
+// The focal length bounds of an uncalibrated camera and the image's half diagonal (options, or
+// the extent of the points); false with result->failure_reason set when they make no sense.
+struct FocalBounds {
+  double min_focal = 0.0;
+  double max_focal = 0.0;
+  double image_radius = 0.0;  // half the image diagonal, pixels
+};
+
+bool UncalibratedBounds(std::span<const Eigen::Vector2d> centered_pixels,
+                        const AbsolutePoseOptions& options, FocalBounds* bounds,
+                        AbsolutePoseResult* result) {
+  double diagonal = options.image_diagonal_px;
+  if (!(diagonal > 0.0)) {
+    for (const Eigen::Vector2d& p : centered_pixels) {
+      if (p.allFinite()) diagonal = std::max(diagonal, 2.0 * p.norm());
+    }
+  }
+  bounds->image_radius = 0.5 * diagonal;
+  bounds->min_focal = options.min_focal_px > 0.0 ? options.min_focal_px : 0.1 * diagonal;
+  bounds->max_focal = options.max_focal_px > 0.0 ? options.max_focal_px : 10.0 * diagonal;
+  if (!(bounds->min_focal > 0.0) || !(bounds->max_focal >= bounds->min_focal) ||
+      !std::isfinite(bounds->max_focal)) {
+    result->failure_reason =
+        Concat("invalid focal length range: [", bounds->min_focal, ", ", bounds->max_focal,
+               "] px (all image points at the principal point?)");
+    return false;
+  }
+  return true;
+}
+
+// The sanity rule of the uncalibrated refinement (absolute_pose.h).
+bool SaneCamera(const RadialCamera& camera, const FocalBounds& bounds,
+                const AbsolutePoseOptions& options) {
+  const double f = camera.focal_length_px;
+  if (!(f >= bounds.min_focal && f <= bounds.max_focal)) return false;
+  if (!(std::abs(camera.k) <= options.max_radial_distortion)) return false;
+  const double corner = bounds.image_radius / f;
+  return 1.0 + 3.0 * camera.k * corner * corner > 0.0;
+}
+
+// The uncalibrated refinement: rounds of refining pose, f and k on the inliers, then
+// re-scoring every correspondence, while the camera stays sane and the inliers are kept.
+// Starts from *pose and *camera (RANSAC's, k = 0) with RANSAC's inliers.
+void RefineUncalibrated(std::span<const Eigen::Vector2d> pixels,
+                        std::span<const Eigen::Vector3d> points3D, std::vector<uint32_t> inliers,
+                        const FocalBounds& bounds, const AbsolutePoseOptions& options,
+                        AbsolutePoseResult* result) {
+  PoseRefinementOptions refine;
+  refine.loss_scale_px = options.loss_scale_px;
+  refine.refine_focal_length = true;
+  refine.refine_radial_distortion = options.refine_radial_distortion;
+  const double max_sq = options.max_error_px * options.max_error_px;
+  const size_t ransac_count = inliers.size();
+  std::vector<uint32_t> rescored;
+  for (int round = 0; round < options.camera_refinement_rounds; ++round) {
+    CameraPose pose = result->pose;
+    RadialCamera camera{result->focal_length_px, result->radial_distortion};
+    if (!RefinePoseAndCamera(pixels, points3D, inliers, refine, &pose, &camera) ||
+        !SaneCamera(camera, bounds, options)) {
+      break;
+    }
+    CollectInliers(pixels, points3D, pose, camera, max_sq, &rescored);
+    if (!KeepsInliers(rescored.size(), ransac_count)) break;
+    result->pose = pose;
+    result->focal_length_px = camera.focal_length_px;
+    result->radial_distortion = camera.k;
+    result->refined = true;
+    ++result->camera_refinement_rounds;
+    if (rescored == inliers) break;
+    inliers.swap(rescored);
+  }
 }
 
 }  // namespace
@@ -139,31 +227,20 @@ AbsolutePoseResult EstimateAbsolutePoseUnknownFocal(
                   options, &result)) {
     return result;
   }
-  double diagonal = options.image_diagonal_px;
-  if (!(diagonal > 0.0)) {
-    for (const Eigen::Vector2d& p : centered_pixels) {
-      if (p.allFinite()) diagonal = std::max(diagonal, 2.0 * p.norm());
-    }
-  }
-  const double min_focal = options.min_focal_px > 0.0 ? options.min_focal_px : 0.1 * diagonal;
-  const double max_focal = options.max_focal_px > 0.0 ? options.max_focal_px : 10.0 * diagonal;
-  if (!(min_focal > 0.0) || !(max_focal >= min_focal) || !std::isfinite(max_focal)) {
-    result.failure_reason = Concat("invalid focal length range: [", min_focal, ", ", max_focal,
-                                   "] px (all image points at the principal point?)");
-    return result;
-  }
+  FocalBounds bounds;
+  if (!UncalibratedBounds(centered_pixels, options, &bounds, &result)) return result;
 
   LocalOptimizationOptions lo;
   lo.max_iterations = options.lo_iterations;
   const AbsolutePoseFocalEstimator estimator(centered_pixels, points3D, options.max_error_px,
-                                             min_focal, max_focal, lo);
+                                             bounds.min_focal, bounds.max_focal, lo);
   PoseAndFocal model;
   result.stats = Ransac(estimator, options.ransac, &model);
   if (!std::isfinite(result.stats.score)) {
     result.failure_reason = Concat(
         "no pose hypothesis: every minimal sample was degenerate or "
         "had a focal length outside [",
-        min_focal, ", ", max_focal, "] px");
+        bounds.min_focal, ", ", bounds.max_focal, "] px");
     return result;
   }
   result.pose = model.pose;
@@ -172,19 +249,49 @@ AbsolutePoseResult EstimateAbsolutePoseUnknownFocal(
   if (options.refine) {
     std::vector<uint32_t> inliers;
     estimator.Inliers(model, &inliers);
-    PoseRefinementOptions refine;
-    refine.loss_scale_px = options.loss_scale_px;
-    refine.refine_focal_length = true;
-    CameraPose refined = model.pose;
-    double f = model.focal_length;
-    const double max_sq = options.max_error_px * options.max_error_px;
-    if (RefinePose(centered_pixels, points3D, inliers, refine, &refined, &f) && f >= min_focal &&
-        f <= max_focal &&
-        KeepsInliers(CountInliers(centered_pixels, points3D, refined, f, max_sq), inliers.size())) {
-      result.pose = refined;
-      result.focal_length_px = f;
-      result.refined = true;
-    }
+    RefineUncalibrated(centered_pixels, points3D, std::move(inliers), bounds, options, &result);
+  }
+  Finish(centered_pixels, points3D, options, &result);
+  return result;
+}
+
+AbsolutePoseResult EstimateAbsolutePoseFocalPrior(std::span<const Eigen::Vector2d> centered_pixels,
+                                                  std::span<const Eigen::Vector3d> points3D,
+                                                  double prior_focal_length_px,
+                                                  const AbsolutePoseOptions& options) {
+  if (options.focal_prior_solver == FocalPriorSolver::kP4Pf) {
+    return EstimateAbsolutePoseUnknownFocal(centered_pixels, points3D, options);
+  }
+  AbsolutePoseResult result;
+  result.focal_length_px = prior_focal_length_px;
+  if (!CheckInput(centered_pixels.size(), points3D.size(), AbsolutePoseEstimator::kSampleSize,
+                  options, &result)) {
+    return result;
+  }
+  if (!(prior_focal_length_px > 0.0) || !std::isfinite(prior_focal_length_px)) {
+    result.failure_reason = Concat("invalid focal length prior: ", prior_focal_length_px, " px");
+    return result;
+  }
+  FocalBounds bounds;
+  if (!UncalibratedBounds(centered_pixels, options, &bounds, &result)) return result;
+
+  std::vector<Eigen::Vector2d> normalized(centered_pixels.size());
+  for (size_t i = 0; i < normalized.size(); ++i) {
+    normalized[i] = centered_pixels[i] / prior_focal_length_px;
+  }
+  LocalOptimizationOptions lo;
+  lo.max_iterations = options.lo_iterations;
+  const AbsolutePoseEstimator estimator(normalized, points3D,
+                                        options.max_error_px / prior_focal_length_px, lo);
+  result.stats = Ransac(estimator, options.ransac, &result.pose);
+  if (!std::isfinite(result.stats.score)) {
+    result.failure_reason = "no pose hypothesis: every minimal sample was degenerate";
+    return result;
+  }
+  if (options.refine) {
+    std::vector<uint32_t> inliers;
+    estimator.Inliers(result.pose, &inliers);
+    RefineUncalibrated(centered_pixels, points3D, std::move(inliers), bounds, options, &result);
   }
   Finish(centered_pixels, points3D, options, &result);
   return result;

@@ -15,11 +15,36 @@ namespace cwloc {
 // solver and a focal length P4Pf solver ... an image is localized if the best pose has at least
 // 12 inlier correspondences with a reprojection error less than 6 pixels").
 //
-// Pipeline: LO-RANSAC (ransac.h) over minimal solutions (P3P with a known focal length, P4Pf
-// without), each new best hypothesis refined by Levenberg-Marquardt on its inliers
-// (local_optimization.h); then a Ceres refinement of the best pose (and focal length) on its
-// inliers with a Cauchy loss (refine_pose.h), kept unless it loses more than 2% of the
-// inliers; the inlier set and error are finally recomputed with the reported pose.
+// Pipeline: LO-RANSAC (ransac.h) over minimal solutions (P3P with a known focal length or a
+// focal prior, P4Pf without), each new best hypothesis refined by Levenberg-Marquardt on its
+// inliers (local_optimization.h); then a Ceres refinement on the inliers with a Cauchy loss
+// (refine_pose.h); the inlier set and error are finally recomputed with the reported camera.
+//
+// Known camera: the refinement moves the pose only and is kept unless it loses more than 2% of
+// the inliers.
+//
+// Uncalibrated camera (an unknown focal length or a focal prior), as COLMAP's registrator
+// treats a camera no registered image has refined: the camera is a SIMPLE_RADIAL with its
+// principal point given (the image centre), and the refinement moves the pose, the focal length
+// and the radial distortion k together (refine_pose.h, RadialCamera). Each round re-scores every
+// correspondence with the refined camera (a distorted point far from the centre that RANSAC's
+// pinhole camera missed becomes an inlier) and refines again on the new inlier set, until the
+// set stops changing or after camera_refinement_rounds rounds. A round is kept only if its
+// camera is sane and it keeps the inliers:
+//   - the focal length lies in [min_focal_px, max_focal_px];
+//   - |k| <= max_radial_distortion, and the distortion is invertible over the whole image:
+//     the distorted radius f r (1 + k r^2) grows with r up to the image corner, 1 + 3 k r_c^2 > 0
+//     with r_c = (image diagonal / 2) / f (a strong barrel k folds the corners back);
+//   - it does not lose more than 2% of RANSAC's inliers (re-scored with the refined camera).
+// The first round that fails stops the loop; the camera of the last kept round is reported
+// (RANSAC's own, with k = 0, when none was kept).
+
+// RANSAC's minimal solver for a focal prior (EstimateAbsolutePoseFocalPrior).
+enum class FocalPriorSolver {
+  kP3P,   // hold the prior focal length in RANSAC, as COLMAP does; the refinement frees it
+  kP4Pf,  // ignore the prior in RANSAC and estimate the focal length as if it were unknown
+};
+
 struct AbsolutePoseOptions {
   // Inlier threshold on the reprojection error, pixels (paper: 6).
   double max_error_px = 6.0;
@@ -34,7 +59,7 @@ struct AbsolutePoseOptions {
   // Cauchy loss scale of the final refinement, pixels: residuals well below it count as
   // squared errors, residuals near the 6 px threshold already weigh about 1/(1 + 36/a^2).
   double loss_scale_px = 2.0;
-  // Unknown focal length only: hypotheses and refinements with a focal length outside
+  // Uncalibrated cameras only: hypotheses and refinements with a focal length outside
   // [min_focal_px, max_focal_px] are rejected. A bound <= 0 is derived from the image
   // diagonal d: min = 0.1 d, max = 10 d.
   double min_focal_px = 0.0;
@@ -42,6 +67,15 @@ struct AbsolutePoseOptions {
   // The image diagonal for those defaults, pixels; <= 0: twice the largest distance of an
   // image point from the principal point (the points' extent, at most the true diagonal).
   double image_diagonal_px = 0.0;
+  // Uncalibrated cameras only (see above): refine k with the focal length (else k stays 0),
+  // rounds of refinement and re-scoring, the bound on |k| (COLMAP's max_extra_param).
+  bool refine_radial_distortion = true;
+  int camera_refinement_rounds = 5;
+  double max_radial_distortion = 1.0;
+  // A focal prior's RANSAC solver. P3P with the prior: on sceaux_castle, whose EXIF prior is
+  // 5% short of the refined focal length and whose lens distorts, it gives more RANSAC inliers
+  // than P4Pf and the same refined poses (docs/algorithm.md).
+  FocalPriorSolver focal_prior_solver = FocalPriorSolver::kP3P;
 };
 
 struct AbsolutePoseResult {
@@ -51,10 +85,13 @@ struct AbsolutePoseResult {
   // success is false (too few inliers).
   CameraPose pose;
   double focal_length_px = 0.0;  // the given focal length, or the estimated one
-  std::vector<char> inliers;     // per correspondence: 1 if in front, error < max_error_px
+  // Uncalibrated cameras: the estimated SIMPLE_RADIAL distortion k (0 when not refined).
+  double radial_distortion = 0.0;
+  std::vector<char> inliers;  // per correspondence: 1 if in front, error < max_error_px
   int num_inliers = 0;
   RansacStats stats;                        // of the RANSAC run (before the final refinement)
   bool refined = false;                     // the Ceres refinement was applied
+  int camera_refinement_rounds = 0;         // uncalibrated: refinement rounds kept
   double mean_reprojection_error_px = 0.0;  // over the inliers
 };
 
@@ -66,10 +103,18 @@ AbsolutePoseResult EstimateAbsolutePose(std::span<const Eigen::Vector2d> normali
                                         double focal_length_px,
                                         const AbsolutePoseOptions& options = {});
 
-// Unknown focal length (square pixels, principal point known). centered_pixels: pixel minus
-// principal point, undistorted as far as known.
+// Unknown focal length (square pixels, principal point known): P4Pf in RANSAC, then the
+// uncalibrated refinement. centered_pixels: pixel minus principal point, as observed (the
+// refinement estimates the radial distortion).
 AbsolutePoseResult EstimateAbsolutePoseUnknownFocal(
     std::span<const Eigen::Vector2d> centered_pixels, std::span<const Eigen::Vector3d> points3D,
     const AbsolutePoseOptions& options = {});
+
+// A focal length prior (EXIF, a user's guess): RANSAC as options.focal_prior_solver says, then
+// the uncalibrated refinement, which frees the focal length and k.
+AbsolutePoseResult EstimateAbsolutePoseFocalPrior(std::span<const Eigen::Vector2d> centered_pixels,
+                                                  std::span<const Eigen::Vector3d> points3D,
+                                                  double prior_focal_length_px,
+                                                  const AbsolutePoseOptions& options = {});
 
 }  // namespace cwloc

@@ -18,6 +18,8 @@ struct PoseRefinementOptions {
   double loss_scale_px = 1.0;        // Cauchy scale a, pixels
   bool refine_focal_length = false;  // else the focal length is held constant
   int max_iterations = 50;           // Levenberg-Marquardt iterations
+  // RefinePoseAndCamera only: also refine the radial distortion k (else held constant).
+  bool refine_radial_distortion = false;
 };
 
 struct PoseRefinementSummary {
@@ -35,5 +37,28 @@ bool RefinePose(std::span<const Eigen::Vector2d> centered_pixels,
                 std::span<const Eigen::Vector3d> points3D, std::span<const uint32_t> indices,
                 const PoseRefinementOptions& options, CameraPose* pose, double* focal_length_px,
                 PoseRefinementSummary* summary = nullptr);
+
+// A COLMAP SIMPLE_RADIAL camera whose principal point is the origin of the centred pixels:
+// (u, v) = (x / z, y / z), d = 1 + k (u^2 + v^2), centred pixel = f d (u, v).
+struct RadialCamera {
+  double focal_length_px = 0.0;
+  double k = 0.0;
+
+  // The centred pixel of a point in camera coordinates (z > 0).
+  Eigen::Vector2d Project(const Eigen::Vector3d& point_cam) const {
+    const Eigen::Vector2d uv = point_cam.hnormalized();
+    return focal_length_px * (1.0 + k * uv.squaredNorm()) * uv;
+  }
+};
+
+// RefinePose for a RadialCamera: the pose, and the focal length and k as the options ask, under
+// the same Cauchy loss; the residual is camera.Project(R X_i + t) - p_i. Updates *pose and
+// *camera when Ceres reports a usable solution with a positive focal length. Needs at least 4
+// correspondences, one more per refined intrinsic.
+bool RefinePoseAndCamera(std::span<const Eigen::Vector2d> centered_pixels,
+                         std::span<const Eigen::Vector3d> points3D,
+                         std::span<const uint32_t> indices, const PoseRefinementOptions& options,
+                         CameraPose* pose, RadialCamera* camera,
+                         PoseRefinementSummary* summary = nullptr);
 
 }  // namespace cwloc

@@ -117,6 +117,22 @@ TEST_F(HerzJesuTest, AllQueriesLocalizeWithUnknownFocalAndRecoverIt) {
   }
 }
 
+TEST_F(HerzJesuTest, DatabaseCameraIsTheExtractorsGuessAndIsEstimated) {
+  const DatabaseQueries queries(data_ / "database.db");
+  const Localizer localizer(*index_);
+  for (const auto& [name, truth] : truth_) {
+    const Query query = queries.Load(name);
+    // prior_focal_length = 0: the focal length is COLMAP's guess 1.2 * 1536.
+    EXPECT_EQ(query.camera.calibration, Calibration::kUnknown);
+    EXPECT_EQ(query.camera.params[0], 1.2 * 1536);
+    const LocalizationResult result = localizer.Localize(query, LocalizerOptions{});
+    ExpectPoseClose(result, truth, 0.05, 0.5);
+    ASSERT_TRUE(result.focal_estimated);
+    EXPECT_NEAR(result.camera.params[0], kColmapFocal, 0.01 * kColmapFocal) << name;
+    EXPECT_EQ(result.camera.source, IntrinsicsSource::kDatabase);
+  }
+}
+
 TEST_F(HerzJesuTest, GlobalRatioBaselineAlsoLocalizesThisSmallModel) {
   const DatabaseQueries queries(data_ / "database.db");
   const Localizer localizer(*index_);

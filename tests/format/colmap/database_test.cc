@@ -645,6 +645,11 @@ TEST_P(DatabaseNewerSchemaTest, Reads) {
     EXPECT_EQ(reader.has_descriptor_type(), GetParam() == Schema::kColmap4);
     EXPECT_EQ(reader.user_version(), GetParam() == Schema::kColmap4 ? 4020000 : 3900);
     content.ExpectReads(reader);
+    // Written with prior_focal_length = 1.
+    EXPECT_TRUE(reader.has_prior_focal_length());
+    std::map<camera_t, bool> priors;
+    for (const Camera& camera : content.cameras) priors[camera.camera_id] = true;
+    EXPECT_EQ(reader.ReadPriorFocalLengths(), priors);
   }
   EXPECT_EQ(Snapshot(path), before);
 }
@@ -679,6 +684,40 @@ TEST(DatabaseTest, ReadsDatabaseMigratedByColmap4) {
   content.ExpectReads(reader);
 }
 
+TEST(DatabaseTest, ReadsPriorFocalLengthFlags) {
+  test::TempDir dir;
+  const std::filesystem::path path = dir / "database.db";
+  const SmallDatabase content;
+  content.Write(path);  // the writer stores prior_focal_length = 0
+  {
+    const DatabaseReader reader(path);
+    EXPECT_TRUE(reader.has_prior_focal_length());
+    std::map<camera_t, bool> priors;
+    for (const Camera& camera : content.cameras) priors[camera.camera_id] = false;
+    EXPECT_EQ(reader.ReadPriorFocalLengths(), priors);
+  }
+  RawDb(path).Exec("UPDATE cameras SET prior_focal_length = 1 WHERE camera_id = 2");
+  {
+    const DatabaseReader reader(path);
+    EXPECT_TRUE(reader.ReadPriorFocalLengths().at(2));
+    EXPECT_FALSE(reader.ReadPriorFocalLengths().at(1));
+  }
+  RawDb(path).Exec("UPDATE cameras SET prior_focal_length = 'yes' WHERE camera_id = 2");
+  {
+    const DatabaseReader reader(path);
+    EXPECT_EQ(InputErrorOf([&] { reader.ReadPriorFocalLengths(); }),
+              path.string() +
+                  ": table 'cameras', camera 2: column 'prior_focal_length' is TEXT, expected "
+                  "INTEGER");
+  }
+  // A layout without the column is still read; it just has no flags.
+  RawDb(path).Exec("ALTER TABLE cameras DROP COLUMN prior_focal_length");
+  const DatabaseReader reader(path);
+  EXPECT_FALSE(reader.has_prior_focal_length());
+  EXPECT_TRUE(reader.ReadPriorFocalLengths().empty());
+  content.ExpectReads(reader);
+}
+
 TEST(DatabaseTest, RejectsNonSiftDescriptorType) {
   test::TempDir dir;
   const std::filesystem::path path = dir / "database.db";
@@ -706,6 +745,7 @@ TEST(DatabaseTest, ReadsRealColmapDatabase) {
     // The database keeps colmap's initial guess (1.2 * max(width, height)); the refined
     // focal length lives in the model.
     EXPECT_EQ(cameras[0].params, (std::vector<double>{1.2 * 1536, 768, 512, 0}));
+    EXPECT_EQ(reader.ReadPriorFocalLengths(), (std::map<camera_t, bool>{{1, false}}));
 
     const std::vector<DatabaseImage> images = reader.ReadAllImages();
     ASSERT_EQ(images.size(), 25u);

@@ -5,6 +5,10 @@
 #include "format/base/error.h"
 #include "localizer/io/camera_spec.h"
 #include "localizer/io/feature_file.h"
+#ifdef CWLOC_WITH_COLMAP_DB
+#include "format/colmap/database.h"
+#include "localizer/io/database_queries.h"
+#endif
 #include "tests/test_util.h"
 
 namespace cwloc {
@@ -98,6 +102,33 @@ TEST_F(FeatureFileTest, MalformedFilesNameTheLine) {
   EXPECT_THAT(ErrorOf([&] { ReadFeatureFile(dir_ / "none.txt", &query); }),
               HasSubstr("cannot open feature file"));
 }
+
+#ifdef CWLOC_WITH_COLMAP_DB
+// A database camera with prior_focal_length = 0 (what COLMAP's extractor writes without EXIF,
+// and what DatabaseWriter writes) holds the guess 1.2 * max(w, h): the query's focal length is
+// unknown. (prior_focal_length = 1 gives a focal prior: sceaux_castle_test.cc.)
+TEST(DatabaseQueries, CameraWithoutPriorFocalLengthIsUnknown) {
+  test::TempDir dir;
+  {
+    colmap::DatabaseWriter writer(dir / "database.db");
+    writer.WriteCamera({1, CameraModelId::kSimpleRadial, 1536, 1024, {1843.2, 768, 512, 0}});
+    writer.WriteImage({1, "q.jpg", 1});
+    writer.WriteKeypoints(1, {{10, 20}, {30, 40}});
+    colmap::Descriptors descriptors;
+    descriptors.rows = 2;
+    descriptors.data.assign(2 * 128, 7);
+    writer.WriteDescriptors(1, descriptors);
+    writer.Commit();
+  }
+  const DatabaseQueries queries(dir / "database.db");
+  const Query query = queries.Load("q.jpg");
+  EXPECT_EQ(query.camera.calibration, Calibration::kUnknown);
+  EXPECT_EQ(query.camera.source, IntrinsicsSource::kDatabase);
+  EXPECT_EQ(query.camera.model_id, CameraModelId::kSimpleRadial);
+  EXPECT_EQ(query.camera.params, (std::vector<double>{1843.2, 768, 512, 0}));
+  EXPECT_EQ(query.NumFeatures(), 2u);
+}
+#endif
 
 }  // namespace
 }  // namespace cwloc

@@ -68,6 +68,116 @@ TEST_P(UnknownFocal, RecoversFocalWithinOnePercent) {
 
 INSTANTIATE_TEST_SUITE_P(OutlierRatios, UnknownFocal, testing::Values(0.5, 0.7));
 
+// Uncalibrated cameras: SIMPLE_RADIAL observations; the focal length is unknown (P4Pf) or a
+// prior 5% short (P3P with the prior). The refinement must recover f within 0.1% and k within
+// 1e-3 under 0.5 px noise and half outliers, and re-score the distorted corners as inliers.
+class Uncalibrated : public testing::TestWithParam<std::tuple<double, bool>> {};
+
+AbsolutePoseResult EstimateUncalibrated(const test::SyntheticPoseProblem& problem, bool prior,
+                                        const AbsolutePoseOptions& options = {}) {
+  return prior ? EstimateAbsolutePoseFocalPrior(problem.pixels, problem.points3D,
+                                                0.95 * problem.focal_px, options)
+               : EstimateAbsolutePoseUnknownFocal(problem.pixels, problem.points3D, options);
+}
+
+TEST_P(Uncalibrated, RefinementRecoversFocalAndDistortion) {
+  const auto [k, prior] = GetParam();
+  auto& rng = test::Rng();
+  test::SyntheticPoseOptions options;
+  options.num_points = 600;
+  options.outlier_ratio = 0.5;
+  options.noise_px = 0.5;
+  options.radial_k = k;
+  for (int trial = 0; trial < 4; ++trial) {
+    // A field of view of 60 to 90 degrees across the 1600 px width: with a longer lens, k moves
+    // the corners by too little for 0.5 px noise to pin it within 1e-3.
+    options.focal_px = test::Uniform(rng, 800.0, 1400.0);
+    const auto problem = test::MakeSyntheticProblem(options, rng);
+    const AbsolutePoseResult result = EstimateUncalibrated(problem, prior);
+    ASSERT_TRUE(result.success) << result.failure_reason;
+    EXPECT_TRUE(result.refined);
+    EXPECT_GE(result.camera_refinement_rounds, 1);
+    EXPECT_NEAR(result.focal_length_px, problem.focal_px, 1e-3 * problem.focal_px);
+    EXPECT_NEAR(result.radial_distortion, k, 1e-3);
+    EXPECT_LT(test::RotationErrorDeg(result.pose, problem.pose), 0.05);
+    EXPECT_LT((result.pose.Center() - problem.pose.Center()).norm(), 0.002 * problem.mean_depth);
+    ExpectInlierSet(result, problem);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(DistortionAndPrior, Uncalibrated,
+                         testing::Combine(testing::Values(-0.15, 0.0, 0.08), testing::Bool()));
+
+TEST(UncalibratedRefinement, RescoresTheDistortedCornersAsInliers) {
+  auto& rng = test::Rng();
+  test::SyntheticPoseOptions options;
+  options.outlier_ratio = 0.3;
+  options.radial_k = -0.15;  // corners move by 15%: 150 px at 1000 px from the centre
+  for (const bool prior : {false, true}) {
+    const auto problem = test::MakeSyntheticProblem(options, rng);
+    const AbsolutePoseResult result = EstimateUncalibrated(problem, prior);
+    ASSERT_TRUE(result.success) << result.failure_reason;
+    // RANSAC's pinhole camera sees only the centre; the refined camera sees nearly all.
+    EXPECT_LT(result.stats.num_inliers, 0.8 * problem.num_inliers) << prior;
+    EXPECT_GE(result.camera_refinement_rounds, 2) << prior;
+    ExpectInlierSet(result, problem);
+  }
+}
+
+TEST(UncalibratedRefinement, KeepsOnlySaneCameras) {
+  auto& rng = test::Rng();
+  test::SyntheticPoseOptions synth;
+  synth.outlier_ratio = 0.3;
+  synth.noise_px = 0.5;
+  synth.radial_k = -0.15;
+  const auto problem = test::MakeSyntheticProblem(synth, rng);
+
+  // |k| beyond the bound: no round is kept, RANSAC's pinhole camera is reported.
+  AbsolutePoseOptions options;
+  options.max_radial_distortion = 0.05;
+  AbsolutePoseResult result = EstimateUncalibrated(problem, true, options);
+  EXPECT_FALSE(result.refined);
+  EXPECT_EQ(result.camera_refinement_rounds, 0);
+  EXPECT_EQ(result.radial_distortion, 0.0);
+  EXPECT_EQ(result.focal_length_px, 0.95 * problem.focal_px);
+
+  // A barrel distortion that would fold the corners of a larger image back: 1 + 3 k r_c^2 < 0
+  // at r_c = 1.7 (the corner 1.7 f from the centre) with k = -0.15.
+  options = {};
+  options.image_diagonal_px = 2.0 * 1.7 * problem.focal_px;
+  result = EstimateUncalibrated(problem, false, options);
+  EXPECT_FALSE(result.refined);
+  EXPECT_EQ(result.radial_distortion, 0.0);
+
+  // Without distortion refinement, k stays 0 and the focal length is off.
+  options = {};
+  options.refine_radial_distortion = false;
+  result = EstimateUncalibrated(problem, false, options);
+  ASSERT_TRUE(result.success);
+  EXPECT_EQ(result.radial_distortion, 0.0);
+  EXPECT_GT(std::abs(result.focal_length_px - problem.focal_px), 1e-3 * problem.focal_px);
+}
+
+TEST(UncalibratedRefinement, FocalPriorReportsBadInput) {
+  auto& rng = test::Rng();
+  const auto problem = test::MakeSyntheticProblem({}, rng);
+  AbsolutePoseResult result = EstimateAbsolutePoseFocalPrior(problem.pixels, problem.points3D, 0.0);
+  EXPECT_FALSE(result.success);
+  EXPECT_EQ(result.failure_reason, "invalid focal length prior: 0 px");
+  AbsolutePoseOptions options;
+  options.refine = false;
+  result =
+      EstimateAbsolutePoseFocalPrior(problem.pixels, problem.points3D, problem.focal_px, options);
+  ASSERT_TRUE(result.success);
+  EXPECT_FALSE(result.refined);
+  EXPECT_EQ(result.focal_length_px, problem.focal_px);
+  // P4Pf for the prior: the prior plays no part.
+  options.focal_prior_solver = FocalPriorSolver::kP4Pf;
+  result = EstimateAbsolutePoseFocalPrior(problem.pixels, problem.points3D, 1.0, options);
+  ASSERT_TRUE(result.success);
+  EXPECT_NEAR(result.focal_length_px, problem.focal_px, 0.01 * problem.focal_px);
+}
+
 TEST(AbsolutePose, ReportsTooFewInliers) {
   auto& rng = test::Rng();
   test::SyntheticPoseOptions options;

@@ -67,6 +67,59 @@ TEST(RefinePose, RefinesFocalLength) {
   EXPECT_LT(test::RotationErrorDeg(pose, problem.pose), 1e-6);
 }
 
+TEST(RefinePoseAndCamera, RecoversFocalAndRadialDistortion) {
+  auto& rng = test::Rng();
+  for (const double k : {-0.15, 0.0, 0.1}) {
+    test::SyntheticPoseOptions synth = Clean();
+    synth.radial_k = k;
+    const auto problem = test::MakeSyntheticProblem(synth, rng);
+    CameraPose pose = Perturb(problem.pose, 0.01, 0.1, rng);
+    RadialCamera camera{0.95 * problem.focal_px, 0.0};
+    PoseRefinementOptions options;
+    options.refine_focal_length = true;
+    options.refine_radial_distortion = true;
+    ASSERT_TRUE(RefinePoseAndCamera(problem.pixels, problem.points3D,
+                                    AllIndices(problem.pixels.size()), options, &pose, &camera));
+    EXPECT_NEAR(camera.focal_length_px, problem.focal_px, 1e-6 * problem.focal_px) << k;
+    EXPECT_NEAR(camera.k, k, 1e-8);
+    EXPECT_LT(test::RotationErrorDeg(pose, problem.pose), 1e-6);
+    // The residual it minimised is RadialCamera::Project's.
+    for (size_t i = 0; i < problem.pixels.size(); ++i) {
+      EXPECT_LT((camera.Project(pose.Apply(problem.points3D[i])) - problem.pixels[i]).norm(), 1e-6);
+    }
+  }
+}
+
+TEST(RefinePoseAndCamera, HoldsWhatItIsNotAskedToRefine) {
+  auto& rng = test::Rng();
+  test::SyntheticPoseOptions synth = Clean();
+  synth.radial_k = -0.1;
+  const auto problem = test::MakeSyntheticProblem(synth, rng);
+  CameraPose pose = problem.pose;
+  RadialCamera camera{problem.focal_px, 0.0};
+  PoseRefinementOptions options;
+  options.refine_focal_length = true;  // k stays 0: the focal length absorbs what it can
+  ASSERT_TRUE(RefinePoseAndCamera(problem.pixels, problem.points3D,
+                                  AllIndices(problem.pixels.size()), options, &pose, &camera));
+  EXPECT_EQ(camera.k, 0.0);
+  EXPECT_NE(camera.focal_length_px, problem.focal_px);
+  options.refine_focal_length = false;
+  options.refine_radial_distortion = true;
+  camera = {1.02 * problem.focal_px, 0.0};
+  ASSERT_TRUE(RefinePoseAndCamera(problem.pixels, problem.points3D,
+                                  AllIndices(problem.pixels.size()), options, &pose, &camera));
+  EXPECT_EQ(camera.focal_length_px, 1.02 * problem.focal_px);
+  EXPECT_NE(camera.k, 0.0);
+  // Too few correspondences for pose, focal length and k: nothing changes.
+  options.refine_focal_length = true;
+  const std::vector<uint32_t> five = {0, 1, 2, 3, 4};
+  const RadialCamera before = camera;
+  EXPECT_FALSE(
+      RefinePoseAndCamera(problem.pixels, problem.points3D, five, options, &pose, &camera));
+  EXPECT_EQ(camera.focal_length_px, before.focal_length_px);
+  EXPECT_EQ(camera.k, before.k);
+}
+
 TEST(RefinePose, QuaternionOrderRoundTrips) {
   // A rotation whose w, x, y, z are all different: a w/x swap would be caught.
   auto& rng = test::Rng();

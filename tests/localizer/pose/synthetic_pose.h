@@ -44,6 +44,9 @@ struct SyntheticPoseOptions {
   double min_depth = 5.0;  // world units
   double max_depth = 50.0;
   double min_outlier_error_px = 20.0;  // outliers are at least this far off
+  // SIMPLE_RADIAL distortion of the observed pixels: f d (u, v) with d = 1 + k (u^2 + v^2);
+  // the undistorted projections f (u, v) are uniform over the image.
+  double radial_k = 0.0;
 };
 
 struct SyntheticPoseProblem {
@@ -76,11 +79,13 @@ inline SyntheticPoseProblem MakeSyntheticProblem(const SyntheticPoseOptions& opt
                                (point_cam - problem.pose.translation));
     problem.mean_depth += depth / options.num_points;
     const bool inlier = i >= num_outliers;
-    Eigen::Vector2d observed = pixel + Eigen::Vector2d(noise(rng), noise(rng));
+    const Eigen::Vector2d uv = pixel / options.focal_px;
+    const Eigen::Vector2d distorted = (1.0 + options.radial_k * uv.squaredNorm()) * pixel;
+    Eigen::Vector2d observed = distorted + Eigen::Vector2d(noise(rng), noise(rng));
     if (!inlier) {
       do {
         observed = Eigen::Vector2d(Uniform(rng, -hw, hw), Uniform(rng, -hh, hh));
-      } while ((observed - pixel).norm() < options.min_outlier_error_px);
+      } while ((observed - distorted).norm() < options.min_outlier_error_px);
     }
     problem.pixels.push_back(observed);
     problem.normalized.push_back(observed / options.focal_px);
