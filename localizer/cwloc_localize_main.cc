@@ -370,8 +370,9 @@ int main(int argc, char** argv) {
                  "Query focal length in pixels, a prior: refined with a radial distortion term "
                  "(principal point at the image centre)")
       ->excludes(camera);
-  app.add_flag("--unknown-focal", cli.unknown_focal,
-               "Ignore the known focal length and estimate it (P4Pf)");
+  app.add_flag(
+      "--unknown-focal", cli.unknown_focal,
+      "Withhold the focal length: P4Pf estimates it, then focal and radial distortion are refined");
   app.add_option("-o,--output", cli.output_path, "JSON lines output (default: stdout)");
   app.add_option("--poses", cli.poses_path,
                  "Also write 'NAME QW QX QY QZ TX TY TZ' lines of localized queries");
