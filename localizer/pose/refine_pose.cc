@@ -8,6 +8,18 @@
 namespace cwloc {
 namespace {
 
+// X_cam = R(q) X + t for a Ceres quaternion (w, x, y, z); false behind the camera, so that
+// Ceres rejects the step rather than let the projection flip sign.
+template <typename T>
+bool PointInCamera(const T* q_wxyz, const T* t, const Eigen::Vector3d& point, T* z) {
+  const T p[3] = {T(point(0)), T(point(1)), T(point(2))};
+  ceres::UnitQuaternionRotatePoint(q_wxyz, p, z);
+  z[0] += t[0];
+  z[1] += t[1];
+  z[2] += t[2];
+  return z[2] > T(0.0);
+}
+
 struct ReprojectionCost {
   ReprojectionCost(const Eigen::Vector2d& pixel, const Eigen::Vector3d& point)
       : pixel_(pixel), point_(point) {}
@@ -15,14 +27,8 @@ struct ReprojectionCost {
   // q_wxyz in Ceres' order (w, x, y, z).
   template <typename T>
   bool operator()(const T* q_wxyz, const T* t, const T* focal, T* residuals) const {
-    const T point[3] = {T(point_(0)), T(point_(1)), T(point_(2))};
     T z[3];
-    ceres::UnitQuaternionRotatePoint(q_wxyz, point, z);
-    z[0] += t[0];
-    z[1] += t[1];
-    z[2] += t[2];
-    // Behind the camera: reject the step rather than let the projection flip sign.
-    if (!(z[2] > T(0.0))) return false;
+    if (!PointInCamera(q_wxyz, t, point_, z)) return false;
     residuals[0] = focal[0] * z[0] / z[2] - T(pixel_(0));
     residuals[1] = focal[0] * z[1] / z[2] - T(pixel_(1));
     return true;
@@ -39,13 +45,8 @@ struct RadialReprojectionCost {
 
   template <typename T>
   bool operator()(const T* q_wxyz, const T* t, const T* focal, const T* k, T* residuals) const {
-    const T point[3] = {T(point_(0)), T(point_(1)), T(point_(2))};
     T z[3];
-    ceres::UnitQuaternionRotatePoint(q_wxyz, point, z);
-    z[0] += t[0];
-    z[1] += t[1];
-    z[2] += t[2];
-    if (!(z[2] > T(0.0))) return false;
+    if (!PointInCamera(q_wxyz, t, point_, z)) return false;
     const T u = z[0] / z[2];
     const T v = z[1] / z[2];
     const T scale = focal[0] * (T(1.0) + k[0] * (u * u + v * v));
@@ -68,6 +69,27 @@ ceres::Solver::Options SolverOptions(int max_iterations) {
   solver_options.logging_type = ceres::SILENT;
   solver_options.minimizer_progress_to_stdout = false;
   return solver_options;
+}
+
+// Solves the problem; the solution is usable when Ceres says so and camera_ok() holds.
+template <typename CameraOk>
+bool SolveRefinement(ceres::Problem* problem, int max_iterations, PoseRefinementSummary* summary,
+                     CameraOk camera_ok) {
+  ceres::Solver::Summary ceres_summary;
+  ceres::Solve(SolverOptions(max_iterations), problem, &ceres_summary);
+  const bool usable = ceres_summary.IsSolutionUsable() && camera_ok();
+  if (summary != nullptr) {
+    summary->usable = usable;
+    summary->iterations = static_cast<int>(ceres_summary.iterations.size());
+    summary->initial_cost = ceres_summary.initial_cost;
+    summary->final_cost = ceres_summary.final_cost;
+  }
+  return usable;
+}
+
+void StorePose(const double* q_wxyz, const double* t, CameraPose* pose) {
+  pose->rotation = Eigen::Quaterniond(q_wxyz[0], q_wxyz[1], q_wxyz[2], q_wxyz[3]).normalized();
+  pose->translation = Eigen::Vector3d(t[0], t[1], t[2]);
 }
 
 }  // namespace
@@ -97,20 +119,9 @@ bool RefinePose(std::span<const Eigen::Vector2d> centered_pixels,
   problem.SetManifold(q_wxyz, new ceres::QuaternionManifold);
   if (!options.refine_focal_length) problem.SetParameterBlockConstant(&focal);
 
-  const ceres::Solver::Options solver_options = SolverOptions(options.max_iterations);
-  ceres::Solver::Summary ceres_summary;
-  ceres::Solve(solver_options, &problem, &ceres_summary);
-
-  const bool usable = ceres_summary.IsSolutionUsable() && focal > 0.0;
-  if (summary != nullptr) {
-    summary->usable = usable;
-    summary->iterations = static_cast<int>(ceres_summary.iterations.size());
-    summary->initial_cost = ceres_summary.initial_cost;
-    summary->final_cost = ceres_summary.final_cost;
-  }
-  if (!usable) return false;
-  pose->rotation = Eigen::Quaterniond(q_wxyz[0], q_wxyz[1], q_wxyz[2], q_wxyz[3]).normalized();
-  pose->translation = Eigen::Vector3d(t[0], t[1], t[2]);
+  if (!SolveRefinement(&problem, options.max_iterations, summary, [&] { return focal > 0.0; }))
+    return false;
+  StorePose(q_wxyz, t, pose);
   *focal_length_px = focal;
   return true;
 }
@@ -143,20 +154,10 @@ bool RefinePoseAndCamera(std::span<const Eigen::Vector2d> centered_pixels,
   if (!options.refine_focal_length) problem.SetParameterBlockConstant(&focal);
   if (!options.refine_radial_distortion) problem.SetParameterBlockConstant(&k);
 
-  const ceres::Solver::Options solver_options = SolverOptions(options.max_iterations);
-  ceres::Solver::Summary ceres_summary;
-  ceres::Solve(solver_options, &problem, &ceres_summary);
-
-  const bool usable = ceres_summary.IsSolutionUsable() && focal > 0.0 && std::isfinite(k);
-  if (summary != nullptr) {
-    summary->usable = usable;
-    summary->iterations = static_cast<int>(ceres_summary.iterations.size());
-    summary->initial_cost = ceres_summary.initial_cost;
-    summary->final_cost = ceres_summary.final_cost;
-  }
-  if (!usable) return false;
-  pose->rotation = Eigen::Quaterniond(q_wxyz[0], q_wxyz[1], q_wxyz[2], q_wxyz[3]).normalized();
-  pose->translation = Eigen::Vector3d(t[0], t[1], t[2]);
+  if (!SolveRefinement(&problem, options.max_iterations, summary,
+                       [&] { return focal > 0.0 && std::isfinite(k); }))
+    return false;
+  StorePose(q_wxyz, t, pose);
   camera->focal_length_px = focal;
   camera->k = k;
   return true;
