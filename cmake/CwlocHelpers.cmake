@@ -2,10 +2,15 @@
 
 set(CWLOC_WARNINGS -Wall -Wextra -Wpedantic -Wshadow -Wno-unused-parameter)
 
-# cwloc_add_library(NAME SRCS a.cc b.cc PUBLIC_LINK x y PRIVATE_LINK z)
+# cwloc_add_library(NAME [SHARED] SRCS a.cc b.cc PUBLIC_LINK x y PRIVATE_LINK z): static unless
+# SHARED.
 function(cwloc_add_library name)
-  cmake_parse_arguments(ARG "" "" "SRCS;PUBLIC_LINK;PRIVATE_LINK" ${ARGN})
-  add_library(${name} STATIC ${ARG_SRCS})
+  cmake_parse_arguments(ARG "SHARED" "" "SRCS;PUBLIC_LINK;PRIVATE_LINK" ${ARGN})
+  if(ARG_SHARED)
+    add_library(${name} SHARED ${ARG_SRCS})
+  else()
+    add_library(${name} STATIC ${ARG_SRCS})
+  endif()
   target_include_directories(${name} PUBLIC ${PROJECT_SOURCE_DIR} ${PROJECT_BINARY_DIR}/generated)
   target_compile_options(${name} PRIVATE ${CWLOC_WARNINGS})
   target_link_libraries(${name} PUBLIC ${ARG_PUBLIC_LINK} PRIVATE ${ARG_PRIVATE_LINK})

@@ -23,7 +23,7 @@
 #include "localizer/io/result_json.h"
 #include "localizer/localizer.h"
 #ifdef CWLOC_WITH_COLMAP_DB
-#include "localizer/io/database_queries.h"
+#include "localizer/io/database/database_queries.h"
 #endif
 
 namespace cwloc {

@@ -16,6 +16,12 @@ struct RankedImage {
   uint32_t votes = 0;
 };
 
+// A RANSAC inlier of the reported pose: which query feature saw which 3D point of the index.
+struct InlierMatch {
+  uint32_t feature = 0;  // row of the query's keypoints and descriptors
+  uint32_t point = 0;    // row of the index's points
+};
+
 // Wall-clock seconds per pipeline stage.
 struct StageTimes {
   double extraction = 0;     // a photo's decoding and SIFT extraction; 0 for given features
@@ -46,6 +52,7 @@ struct LocalizationResult {
   double inlier_ratio = 0;
   uint32_t ransac_iterations = 0;
   uint32_t back_matched_images = 0;
+  std::vector<InlierMatch> inliers;  // on success, in feature order
   std::vector<RankedImage> ranked_images;
   std::optional<PhotoInfo> photo;
   StageTimes times;

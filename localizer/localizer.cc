@@ -194,7 +194,7 @@ LocalizationResult Localizer::Localize(const Query& query, const LocalizerOption
   result.ranked_images = RankImages(index_, matched.forward, matched.back, options.ranked_images);
   result.correspondences = static_cast<uint32_t>(matched.correspondences.size());
   result.num_inliers = static_cast<uint32_t>(pose.num_inliers);
-  result.inlier_ratio = fit.num_used == 0 ? 0.0 : double(pose.num_inliers) / double(fit.num_used);
+  result.inlier_ratio = fit.used.empty() ? 0.0 : double(pose.num_inliers) / double(fit.used.size());
   result.ransac_iterations = pose.stats.iterations;
   result.success = pose.success;
   if (pose.success) {
@@ -203,6 +203,11 @@ LocalizationResult Localizer::Localize(const Query& query, const LocalizerOption
     result.translation = {p.translation.x(), p.translation.y(), p.translation.z()};
     const Eigen::Vector3d center = p.Center();
     result.center = {center.x(), center.y(), center.z()};
+    for (size_t i = 0; i < pose.inliers.size(); ++i) {
+      if (!pose.inliers[i]) continue;
+      const FeatureMatch& match = matched.correspondences[fit.used[i]];
+      result.inliers.push_back({match.feature, index_.view_points()[match.view]});
+    }
     if (!query.camera.FocalKnown()) {
       // The uncalibrated camera as estimated: SIMPLE_RADIAL (f, cx, cy, k).
       const std::array<double, 2> principal_point = query.camera.ImageCenter();

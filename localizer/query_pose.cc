@@ -33,9 +33,12 @@ QueryPose EstimateQueryPose(const Index& index, const Query& query,
   std::vector<Eigen::Vector3d> points3D;
   points2D.reserve(correspondences.size());
   points3D.reserve(correspondences.size());
+  QueryPose result;
+  result.used.reserve(correspondences.size());
   const QueryCamera& camera = query.camera;
   const std::array<double, 2> center = camera.ImageCenter();
-  for (const FeatureMatch& match : correspondences) {
+  for (uint32_t i = 0; i < correspondences.size(); ++i) {
+    const FeatureMatch& match = correspondences[i];
     const std::array<double, 2> pixel = {query.keypoints[2 * match.feature],
                                          query.keypoints[2 * match.feature + 1]};
     Eigen::Vector2d point2D;
@@ -49,13 +52,12 @@ QueryPose EstimateQueryPose(const Index& index, const Query& query,
     const IndexPoint& point = index.points()[index.view_points()[match.view]];
     points2D.push_back(point2D);
     points3D.emplace_back(point.xyz[0], point.xyz[1], point.xyz[2]);
+    result.used.push_back(i);
   }
 
   AbsolutePoseOptions pose_options = options.pose;
   pose_options.ransac.seed = options.seed;
   pose_options.refine = refine;
-  QueryPose result;
-  result.num_used = static_cast<uint32_t>(points2D.size());
   switch (camera.calibration) {
     case Calibration::kKnown:
       result.pose = EstimateAbsolutePose(

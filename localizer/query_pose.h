@@ -20,7 +20,9 @@ std::vector<FeatureMatch> UniqueCorrespondences(const Index& index,
 
 struct QueryPose {
   AbsolutePoseResult pose;
-  uint32_t num_used = 0;  // correspondences that could be normalized and went into RANSAC
+  // The correspondences that could be normalized and went into RANSAC, in RANSAC's order:
+  // pose.inliers[i] refers to correspondences[used[i]].
+  std::vector<uint32_t> used;
 };
 
 // The pose stage: LO-RANSAC with the minimal solver the camera calls for, then, with `refine`,

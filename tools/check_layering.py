@@ -77,7 +77,10 @@ def main():
             owner_by_folder.setdefault(src.parent, name)
 
     def owner(header):
-        return owner_by_stem.get(header.with_suffix("")) or owner_by_folder.get(header.parent)
+        # A library's public headers may sit in its folder's include/ tree (api/include/cwloc/).
+        folders = [header.parent] + [p.parent for p in header.parents if p.name == "include"]
+        return owner_by_stem.get(header.with_suffix("")) or next(
+            (owner_by_folder[f] for f in folders if f in owner_by_folder), None)
 
     def closure(name, seen=None):
         seen = set() if seen is None else seen

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "localizer/query.h"
 
@@ -10,6 +11,10 @@ namespace cwloc {
 // 1375.8 768 512 -0.0008"): a fully known camera. Throws InputError naming `what` (the
 // option or file it came from) for an unknown model, a wrong parameter count or bad numbers.
 QueryCamera ParseCameraSpec(const std::string& spec, const std::string& what);
+
+// The same camera from its parts (the library API's input), checked the same way.
+QueryCamera MakeKnownCamera(const std::string& model_name, uint32_t width, uint32_t height,
+                            std::vector<double> params, const std::string& what);
 
 // "WIDTH HEIGHT" (or "WIDTHxHEIGHT"): only the image size is known; the focal is estimated.
 QueryCamera ParseImageSize(const std::string& spec, const std::string& what);

@@ -37,14 +37,21 @@ QueryCamera FocalPriorCamera(double focal_length_px, uint32_t width, uint32_t he
 Query LoadPhotoQuery(const std::filesystem::path& path, const std::string& name,
                      const PhotoOptions& options) {
   const Stopwatch time;
-  const std::vector<uint8_t> bytes = ReadFileBytes(path);
-  GreyImage image = DecodeGreyImage(bytes, path, options.max_image_pixels);
+  Query query = PhotoQueryFromBytes(ReadFileBytes(path), path.string(), name, options);
+  query.photo->extraction_seconds = time.Seconds();
+  return query;
+}
+
+Query PhotoQueryFromBytes(std::span<const uint8_t> bytes, const std::string& source,
+                          const std::string& name, const PhotoOptions& options) {
+  const Stopwatch time;
+  GreyImage image = DecodeGreyImage(bytes, source, options.max_image_pixels);
   const uint32_t width = image.width;
   const uint32_t height = image.height;
 
   Query query;
   query.name = name;
-  query.source = path.string();
+  query.source = source;
   if (const auto exif = ReadExifFocal(bytes, width, height)) {
     query.camera = FocalPriorCamera(exif->focal_length_px, width, height, IntrinsicsSource::kExif);
   } else {
@@ -55,7 +62,15 @@ Query LoadPhotoQuery(const std::filesystem::path& path, const std::string& name,
     query.camera.calibration = Calibration::kUnknown;
     query.camera.source = IntrinsicsSource::kNone;
   }
+  ExtractPhotoFeatures(std::move(image), options, &query);
+  query.photo->extraction_seconds = time.Seconds();
+  return query;
+}
 
+void ExtractPhotoFeatures(GreyImage image, const PhotoOptions& options, Query* query) {
+  const Stopwatch time;
+  const uint32_t width = image.width;
+  const uint32_t height = image.height;
   const ImageSize size = ExtractionSize(width, height, options.max_image_size);
   if (size.width != width || size.height != height)
     image = ResizeBilinear(image, size.width, size.height);
@@ -63,16 +78,16 @@ Query LoadPhotoQuery(const std::filesystem::path& path, const std::string& name,
   // COLMAP scales keypoints back in single precision (FeatureKeypoint::Rescale).
   const float scale_x = static_cast<float>(double(width) / double(size.width));
   const float scale_y = static_cast<float>(double(height) / double(size.height));
-  query.keypoints.reserve(features.keypoints.size() * 2);
+  query->keypoints.clear();
+  query->keypoints.reserve(features.keypoints.size() * 2);
   for (const SiftKeypoint& keypoint : features.keypoints) {
-    query.keypoints.push_back(keypoint.x * scale_x);
-    query.keypoints.push_back(keypoint.y * scale_y);
+    query->keypoints.push_back(keypoint.x * scale_x);
+    query->keypoints.push_back(keypoint.y * scale_y);
   }
-  query.descriptors = features.descriptors;
-  if (query.NumFeatures() == 0)
-    throw InputError(path.string() + ": no SIFT features found in the photo");
-  query.photo = PhotoInfo{size.width, size.height, time.Seconds()};
-  return query;
+  query->descriptors = features.descriptors;
+  if (query->NumFeatures() == 0)
+    throw InputError(query->Source() + ": no SIFT features found in the photo");
+  query->photo = PhotoInfo{size.width, size.height, time.Seconds()};
 }
 
 }  // namespace cwloc

@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <span>
 #include <string>
 
 #include "localizer/query.h"
@@ -28,6 +29,15 @@ void ValidatePhotoOptions(const PhotoOptions& options);
 // Throws InputError naming the file for an unreadable or broken photo.
 Query LoadPhotoQuery(const std::filesystem::path& path, const std::string& name,
                      const PhotoOptions& options);
+
+// The same from the file's bytes in memory; `source` names them in errors.
+Query PhotoQueryFromBytes(std::span<const uint8_t> bytes, const std::string& source,
+                          const std::string& name, const PhotoOptions& options);
+
+// The SIFT part for an already decoded grey image: resize to max_image_size, extract, scale
+// the keypoints back to the image's own pixels; fills query->keypoints, descriptors and photo.
+// Throws InputError naming query->Source() when no feature is found.
+void ExtractPhotoFeatures(GreyImage image, const PhotoOptions& options, Query* query);
 
 // The camera of a focal prior for a width x height image: SIMPLE_RADIAL (f, w/2, h/2, 0).
 QueryCamera FocalPriorCamera(double focal_length_px, uint32_t width, uint32_t height,

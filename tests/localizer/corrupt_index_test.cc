@@ -7,7 +7,7 @@
 #include <iterator>
 
 #include "format/index/index.h"
-#include "localizer/io/database_queries.h"
+#include "localizer/io/database/database_queries.h"
 #include "localizer/localizer.h"
 #include "tests/test_util.h"
 

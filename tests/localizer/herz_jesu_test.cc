@@ -9,7 +9,7 @@
 #include "format/index/index.h"
 #include "indexer/index_builder.h"
 #include "localizer/io/camera_spec.h"
-#include "localizer/io/database_queries.h"
+#include "localizer/io/database/database_queries.h"
 #include "localizer/localizer.h"
 #include "tests/test_util.h"
 

@@ -7,7 +7,7 @@
 #include "localizer/io/feature_file.h"
 #ifdef CWLOC_WITH_COLMAP_DB
 #include "format/colmap/database.h"
-#include "localizer/io/database_queries.h"
+#include "localizer/io/database/database_queries.h"
 #endif
 #include "tests/test_util.h"
 

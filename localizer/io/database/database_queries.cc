@@ -1,4 +1,4 @@
-#include "localizer/io/database_queries.h"
+#include "localizer/io/database/database_queries.h"
 
 #include "format/base/error.h"
 

@@ -1,0 +1,302 @@
+// The C API: opaque handles over the C++ API, exceptions turned into status codes and a
+// per-thread message.
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <map>
+#include <optional>
+#include <string>
+
+#include "cwloc/cwloc.h"
+#include "cwloc/cwloc.hpp"
+
+struct cwloc_localizer {
+  cwloc::api::Localizer localizer;
+};
+
+struct cwloc_options {
+  cwloc::api::Options options;
+};
+
+struct cwloc_result {
+  cwloc::api::Result result;
+};
+
+namespace {
+
+thread_local std::string last_error;
+
+cwloc_status Fail(cwloc_status status, const std::string& message) {
+  last_error = message;
+  return status;
+}
+
+// Runs fn, which may throw; the one place exceptions become status codes.
+cwloc_status Guarded(const std::function<void()>& fn) {
+  try {
+    fn();
+    last_error.clear();
+    return CWLOC_OK;
+  } catch (const cwloc::api::Error& e) {
+    return Fail(static_cast<cwloc_status>(e.code()), e.what());
+  } catch (const std::bad_alloc&) {
+    return Fail(CWLOC_ERROR_OUT_OF_MEMORY, "out of memory");
+  } catch (const std::exception& e) {
+    return Fail(CWLOC_ERROR_INTERNAL, std::string("internal error: ") + e.what());
+  } catch (...) {
+    return Fail(CWLOC_ERROR_INTERNAL, "internal error");
+  }
+}
+
+std::optional<cwloc::api::Camera> ToCamera(const cwloc_camera* camera) {
+  if (camera == nullptr) return std::nullopt;
+  if (camera->params == nullptr && camera->num_params > 0)
+    throw cwloc::api::Error(cwloc::api::ErrorCode::kInvalidArgument, "camera: params is NULL");
+  cwloc::api::Camera out;
+  out.model = camera->model != nullptr ? camera->model : "";
+  out.width = camera->width;
+  out.height = camera->height;
+  out.params.assign(camera->params, camera->params + camera->num_params);
+  out.calibration = static_cast<cwloc::api::Calibration>(camera->calibration);
+  return out;
+}
+
+const cwloc::api::Options& OptionsOrDefault(const cwloc_options* options) {
+  static const cwloc::api::Options defaults;
+  return options != nullptr ? options->options : defaults;
+}
+
+// Checks the handle and output arguments every query shares, then runs the query.
+cwloc_status RunQuery(const cwloc_localizer* localizer, cwloc_result** out,
+                      const std::function<cwloc::api::Result()>& query) {
+  if (out == nullptr) return Fail(CWLOC_ERROR_INVALID_ARGUMENT, "out is NULL");
+  *out = nullptr;
+  if (localizer == nullptr) return Fail(CWLOC_ERROR_INVALID_ARGUMENT, "localizer is NULL");
+  return Guarded([&] { *out = new cwloc_result{query()}; });
+}
+
+// A whole number in [0, 2^digits) fits T exactly.
+template <typename T>
+bool SetWhole(double value, T* field) {
+  if (!(value >= 0 && value < std::ldexp(1.0, std::numeric_limits<T>::digits) &&
+        value == std::floor(value)))
+    return false;
+  *field = static_cast<T>(value);
+  return true;
+}
+
+// cwloc_options_set's names: cwloc-localize's flags. Whole-number knobs refuse fractions and
+// negatives here; every range is checked by the query, as the CLI's are.
+using OptionSetter = bool (*)(double value, cwloc::api::Options* options);
+const std::map<std::string, OptionSetter> kOptionSetters = {
+    {"k", [](double v, cwloc::api::Options* o) { return SetWhole(v, &o->k); }},
+    {"checks", [](double v, cwloc::api::Options* o) { return SetWhole(v, &o->checks); }},
+    {"ratio", [](double v, cwloc::api::Options* o) { return o->ratio = v, true; }},
+    {"nf", [](double v, cwloc::api::Options* o) { return SetWhole(v, &o->forward_matches); }},
+    {"nb", [](double v, cwloc::api::Options* o) { return SetWhole(v, &o->back_matches); }},
+    {"max-back-images",
+     [](double v, cwloc::api::Options* o) { return SetWhole(v, &o->max_back_images); }},
+    {"max-error", [](double v, cwloc::api::Options* o) { return o->max_error_px = v, true; }},
+    {"min-inliers", [](double v, cwloc::api::Options* o) { return SetWhole(v, &o->min_inliers); }},
+    {"max-ransac-iterations",
+     [](double v, cwloc::api::Options* o) { return SetWhole(v, &o->max_ransac_iterations); }},
+    {"refine",
+     [](double v, cwloc::api::Options* o) {
+       if (v != 0 && v != 1) return false;
+       o->refine = v == 1;
+       return true;
+     }},
+    {"ranked-images",
+     [](double v, cwloc::api::Options* o) { return SetWhole(v, &o->ranked_images); }},
+    {"seed", [](double v, cwloc::api::Options* o) { return SetWhole(v, &o->seed); }},
+    {"max-image-size",
+     [](double v, cwloc::api::Options* o) { return SetWhole(v, &o->max_image_size); }},
+    {"max-features",
+     [](double v, cwloc::api::Options* o) { return SetWhole(v, &o->max_features); }},
+    {"max-image-pixels",
+     [](double v, cwloc::api::Options* o) { return SetWhole(v, &o->max_image_pixels); }},
+};
+
+}  // namespace
+
+extern "C" {
+
+const char* cwloc_version(void) { return cwloc::api::Version(); }
+
+const char* cwloc_last_error(void) { return last_error.c_str(); }
+
+cwloc_status cwloc_localizer_open(const char* index_path, int verify, cwloc_localizer** out) {
+  if (out == nullptr) return Fail(CWLOC_ERROR_INVALID_ARGUMENT, "out is NULL");
+  *out = nullptr;
+  if (index_path == nullptr) return Fail(CWLOC_ERROR_INVALID_ARGUMENT, "index_path is NULL");
+  return Guarded(
+      [&] { *out = new cwloc_localizer{cwloc::api::Localizer::Open(index_path, verify != 0)}; });
+}
+
+void cwloc_localizer_close(cwloc_localizer* localizer) { delete localizer; }
+
+cwloc_status cwloc_options_create(cwloc_options** out) {
+  if (out == nullptr) return Fail(CWLOC_ERROR_INVALID_ARGUMENT, "out is NULL");
+  return Guarded([&] { *out = new cwloc_options{}; });
+}
+
+void cwloc_options_destroy(cwloc_options* options) { delete options; }
+
+cwloc_status cwloc_options_set(cwloc_options* options, const char* name, double value) {
+  if (options == nullptr || name == nullptr)
+    return Fail(CWLOC_ERROR_INVALID_ARGUMENT, "options or name is NULL");
+  const std::string key = name;
+  const auto setter = kOptionSetters.find(key);
+  if (setter == kOptionSetters.end())
+    return Fail(CWLOC_ERROR_INVALID_ARGUMENT, "unknown option '" + key + "'");
+  if (!setter->second(value, &options->options)) {
+    return Fail(CWLOC_ERROR_INVALID_ARGUMENT,
+                "option '" + key + "': " + std::to_string(value) + " is not a valid value");
+  }
+  last_error.clear();
+  return CWLOC_OK;
+}
+
+cwloc_status cwloc_options_set_matcher(cwloc_options* options, const char* matcher) {
+  if (options == nullptr || matcher == nullptr)
+    return Fail(CWLOC_ERROR_INVALID_ARGUMENT, "options or matcher is NULL");
+  options->options.matcher = matcher;
+  last_error.clear();
+  return CWLOC_OK;
+}
+
+cwloc_status cwloc_localize_features(const cwloc_localizer* localizer, const float* keypoints,
+                                     const uint8_t* descriptors, uint32_t num_features,
+                                     const cwloc_camera* camera, const cwloc_options* options,
+                                     cwloc_result** out) {
+  return RunQuery(localizer, out, [&] {
+    if (num_features > 0 && (keypoints == nullptr || descriptors == nullptr)) {
+      throw cwloc::api::Error(cwloc::api::ErrorCode::kInvalidArgument,
+                              "keypoints or descriptors is NULL");
+    }
+    const auto query_camera = ToCamera(camera);
+    if (!query_camera) {
+      throw cwloc::api::Error(cwloc::api::ErrorCode::kInvalidArgument,
+                              "features need a camera (at least the image size)");
+    }
+    cwloc::api::Features features;
+    features.keypoints.assign(keypoints, keypoints + size_t{num_features} * 2);
+    features.descriptors.assign(descriptors, descriptors + size_t{num_features} * 128);
+    return localizer->localizer.Localize(features, *query_camera, OptionsOrDefault(options));
+  });
+}
+
+cwloc_status cwloc_localize_photo(const cwloc_localizer* localizer, const char* path,
+                                  const cwloc_camera* camera, const cwloc_options* options,
+                                  cwloc_result** out) {
+  return RunQuery(localizer, out, [&] {
+    if (path == nullptr)
+      throw cwloc::api::Error(cwloc::api::ErrorCode::kInvalidArgument, "path is NULL");
+    return localizer->localizer.LocalizePhoto(path, ToCamera(camera), OptionsOrDefault(options));
+  });
+}
+
+cwloc_status cwloc_localize_encoded_photo(const cwloc_localizer* localizer, const uint8_t* bytes,
+                                          size_t size, const cwloc_camera* camera,
+                                          const cwloc_options* options, cwloc_result** out) {
+  return RunQuery(localizer, out, [&] {
+    return localizer->localizer.LocalizeEncodedPhoto(bytes, size, ToCamera(camera),
+                                                     OptionsOrDefault(options));
+  });
+}
+
+cwloc_status cwloc_localize_grey_image(const cwloc_localizer* localizer, const uint8_t* pixels,
+                                       uint32_t width, uint32_t height, size_t stride,
+                                       const cwloc_camera* camera, const cwloc_options* options,
+                                       cwloc_result** out) {
+  return RunQuery(localizer, out, [&] {
+    const auto query_camera = ToCamera(camera);
+    if (!query_camera) {
+      throw cwloc::api::Error(cwloc::api::ErrorCode::kInvalidArgument,
+                              "a grey image needs a camera (at least the image size)");
+    }
+    return localizer->localizer.LocalizeGreyImage(pixels, width, height, stride, *query_camera,
+                                                  OptionsOrDefault(options));
+  });
+}
+
+void cwloc_result_destroy(cwloc_result* result) { delete result; }
+
+int cwloc_result_success(const cwloc_result* result) {
+  return result != nullptr && result->result.success ? 1 : 0;
+}
+
+const char* cwloc_result_failure_reason(const cwloc_result* result) {
+  return result != nullptr ? result->result.failure_reason.c_str() : "result is NULL";
+}
+
+void cwloc_result_pose(const cwloc_result* result, double rotation_wxyz[4], double translation[3],
+                       double center[3]) {
+  if (result == nullptr) return;
+  const cwloc::api::Result& r = result->result;
+  if (rotation_wxyz != nullptr) std::copy(r.rotation.begin(), r.rotation.end(), rotation_wxyz);
+  if (translation != nullptr) std::copy(r.translation.begin(), r.translation.end(), translation);
+  if (center != nullptr) std::copy(r.center.begin(), r.center.end(), center);
+}
+
+void cwloc_result_camera(const cwloc_result* result, cwloc_camera* camera) {
+  if (result == nullptr || camera == nullptr) return;
+  const cwloc::api::Camera& c = result->result.camera;
+  camera->model = c.model.c_str();
+  camera->width = c.width;
+  camera->height = c.height;
+  camera->params = c.params.data();
+  camera->num_params = c.params.size();
+  camera->calibration = static_cast<cwloc_calibration>(c.calibration);
+}
+
+uint32_t cwloc_result_num_features(const cwloc_result* result) {
+  return result != nullptr ? result->result.num_features : 0;
+}
+
+uint32_t cwloc_result_num_correspondences(const cwloc_result* result) {
+  return result != nullptr ? result->result.correspondences : 0;
+}
+
+uint32_t cwloc_result_num_inliers(const cwloc_result* result) {
+  return result != nullptr ? static_cast<uint32_t>(result->result.inliers.size()) : 0;
+}
+
+cwloc_status cwloc_result_inlier(const cwloc_result* result, uint32_t i, uint32_t* feature,
+                                 float keypoint[2], uint32_t* point, double xyz[3]) {
+  if (result == nullptr || i >= result->result.inliers.size())
+    return Fail(CWLOC_ERROR_INVALID_ARGUMENT, "inlier " + std::to_string(i) + ": out of range");
+  const cwloc::api::Inlier& inlier = result->result.inliers[i];
+  if (feature != nullptr) *feature = inlier.feature;
+  if (keypoint != nullptr) std::copy(inlier.keypoint.begin(), inlier.keypoint.end(), keypoint);
+  if (point != nullptr) *point = inlier.point;
+  if (xyz != nullptr) std::copy(inlier.xyz.begin(), inlier.xyz.end(), xyz);
+  return CWLOC_OK;
+}
+
+uint32_t cwloc_result_num_ranked_images(const cwloc_result* result) {
+  return result != nullptr ? static_cast<uint32_t>(result->result.ranked_images.size()) : 0;
+}
+
+cwloc_status cwloc_result_ranked_image(const cwloc_result* result, uint32_t i, uint32_t* image_id,
+                                       const char** name, uint32_t* votes) {
+  if (result == nullptr || i >= result->result.ranked_images.size()) {
+    return Fail(CWLOC_ERROR_INVALID_ARGUMENT,
+                "ranked image " + std::to_string(i) + ": out of range");
+  }
+  const cwloc::api::RankedImage& image = result->result.ranked_images[i];
+  if (image_id != nullptr) *image_id = image.image_id;
+  if (name != nullptr) *name = image.name.c_str();
+  if (votes != nullptr) *votes = image.votes;
+  return CWLOC_OK;
+}
+
+void cwloc_result_times(const cwloc_result* result, cwloc_stage_times* times) {
+  if (result == nullptr || times == nullptr) return;
+  const cwloc::api::StageTimes& t = result->result.times;
+  *times = {t.extraction,    t.forward_knn, t.ratio_test, t.query_tree,
+            t.back_matching, t.pose,        t.total};
+}
+
+}  // extern "C"

@@ -1,0 +1,122 @@
+#ifndef CWLOC_CWLOC_H_
+#define CWLOC_CWLOC_H_
+
+/* cwloc's C API: the C++ API of cwloc.hpp behind opaque handles, for C, Swift, Kotlin/JNI and
+ * Python ctypes. Every function that can fail returns a cwloc_status; on failure
+ * cwloc_last_error() gives the message (per thread, valid until that thread's next call).
+ * A query that does not localize is no failure: its result says success 0 and why.
+ * One cwloc_localizer may be used by many threads at once; results and options belong to the
+ * thread that uses them. docs/api.md has a complete example. */
+
+#include <stddef.h>
+#include <stdint.h>
+
+#if defined(__GNUC__)
+#define CWLOC_C_API __attribute__((visibility("default")))
+#else
+#define CWLOC_C_API
+#endif
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum cwloc_status {
+  CWLOC_OK = 0,
+  CWLOC_ERROR_INVALID_ARGUMENT = 1, /* a bad argument, option or camera */
+  CWLOC_ERROR_BAD_INPUT = 2,        /* a file or buffer that cannot be used */
+  CWLOC_ERROR_OUT_OF_MEMORY = 3,
+  CWLOC_ERROR_INTERNAL = 4 /* a bug: please report it */
+} cwloc_status;
+
+typedef enum cwloc_calibration {
+  CWLOC_CALIBRATION_KNOWN = 0,       /* every parameter is held fixed */
+  CWLOC_CALIBRATION_FOCAL_PRIOR = 1, /* the focal length is a guess, refined */
+  CWLOC_CALIBRATION_UNKNOWN = 2      /* only the image size; the focal length is estimated */
+} cwloc_calibration;
+
+/* A camera in COLMAP's terms (see cwloc.hpp's Camera). */
+typedef struct cwloc_camera {
+  const char* model; /* "SIMPLE_RADIAL", ...; may be NULL for CWLOC_CALIBRATION_UNKNOWN */
+  uint32_t width;
+  uint32_t height;
+  const double* params; /* COLMAP's order */
+  size_t num_params;
+  cwloc_calibration calibration;
+} cwloc_camera;
+
+/* Wall-clock seconds per stage. */
+typedef struct cwloc_stage_times {
+  double extraction, forward_knn, ratio_test, query_tree, back_matching, pose, total;
+} cwloc_stage_times;
+
+typedef struct cwloc_localizer cwloc_localizer;
+typedef struct cwloc_options cwloc_options;
+typedef struct cwloc_result cwloc_result;
+
+CWLOC_C_API const char* cwloc_version(void);
+CWLOC_C_API const char* cwloc_last_error(void);
+
+/* Opens an index file read-only (verify != 0: also check every checksum). */
+CWLOC_C_API cwloc_status cwloc_localizer_open(const char* index_path, int verify,
+                                              cwloc_localizer** out);
+CWLOC_C_API void cwloc_localizer_close(cwloc_localizer* localizer);
+
+/* Options with cwloc-localize's defaults; NULL options anywhere below means the defaults. */
+CWLOC_C_API cwloc_status cwloc_options_create(cwloc_options** out);
+CWLOC_C_API void cwloc_options_destroy(cwloc_options* options);
+/* Sets a numeric knob by its cwloc-localize flag name without dashes: "k", "checks", "ratio",
+ * "nf", "nb", "max-back-images", "max-error", "min-inliers", "max-ransac-iterations",
+ * "refine" (0 or 1), "ranked-images", "seed", "max-image-size", "max-features",
+ * "max-image-pixels". Values are checked when a query runs. */
+CWLOC_C_API cwloc_status cwloc_options_set(cwloc_options* options, const char* name, double value);
+/* "cluster-wise" (default), "global-ratio" or "cluster-exhaustive". */
+CWLOC_C_API cwloc_status cwloc_options_set_matcher(cwloc_options* options, const char* matcher);
+
+/* Queries. camera may be NULL for photos (EXIF focal prior, else estimated). Keypoints are
+ * x, y pairs in COLMAP's pixel convention; descriptors num_features x 128 bytes. */
+CWLOC_C_API cwloc_status cwloc_localize_features(const cwloc_localizer* localizer,
+                                                 const float* keypoints, const uint8_t* descriptors,
+                                                 uint32_t num_features, const cwloc_camera* camera,
+                                                 const cwloc_options* options, cwloc_result** out);
+CWLOC_C_API cwloc_status cwloc_localize_photo(const cwloc_localizer* localizer, const char* path,
+                                              const cwloc_camera* camera,
+                                              const cwloc_options* options, cwloc_result** out);
+CWLOC_C_API cwloc_status cwloc_localize_encoded_photo(const cwloc_localizer* localizer,
+                                                      const uint8_t* bytes, size_t size,
+                                                      const cwloc_camera* camera,
+                                                      const cwloc_options* options,
+                                                      cwloc_result** out);
+CWLOC_C_API cwloc_status cwloc_localize_grey_image(
+    const cwloc_localizer* localizer, const uint8_t* pixels, uint32_t width, uint32_t height,
+    size_t stride, const cwloc_camera* camera, const cwloc_options* options, cwloc_result** out);
+
+/* Results: read with these accessors, then destroy. Pointers they return live as long as the
+ * result. */
+CWLOC_C_API void cwloc_result_destroy(cwloc_result* result);
+CWLOC_C_API int cwloc_result_success(const cwloc_result* result);
+CWLOC_C_API const char* cwloc_result_failure_reason(const cwloc_result* result); /* "" if ok */
+/* COLMAP's cam_from_world: rotation (w, x, y, z), translation; and the camera centre. */
+CWLOC_C_API void cwloc_result_pose(const cwloc_result* result, double rotation_wxyz[4],
+                                   double translation[3], double center[3]);
+/* The camera as used (estimated when it was not known). */
+CWLOC_C_API void cwloc_result_camera(const cwloc_result* result, cwloc_camera* camera);
+CWLOC_C_API uint32_t cwloc_result_num_features(const cwloc_result* result);
+CWLOC_C_API uint32_t cwloc_result_num_correspondences(const cwloc_result* result);
+CWLOC_C_API uint32_t cwloc_result_num_inliers(const cwloc_result* result);
+/* Inlier i < num_inliers: the query feature, its pixel, the index's 3D point and its xyz.
+ * Any output pointer may be NULL. */
+CWLOC_C_API cwloc_status cwloc_result_inlier(const cwloc_result* result, uint32_t i,
+                                             uint32_t* feature, float keypoint[2], uint32_t* point,
+                                             double xyz[3]);
+CWLOC_C_API uint32_t cwloc_result_num_ranked_images(const cwloc_result* result);
+CWLOC_C_API cwloc_status cwloc_result_ranked_image(const cwloc_result* result, uint32_t i,
+                                                   uint32_t* image_id, const char** name,
+                                                   uint32_t* votes);
+CWLOC_C_API void cwloc_result_times(const cwloc_result* result, cwloc_stage_times* times);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* CWLOC_CWLOC_H_ */

@@ -1,0 +1,189 @@
+#pragma once
+
+// cwloc's C++ API for apps: open an index file once (read-only memory map), then localize
+// queries (SIFT features, a photo file, an encoded photo in memory or a grey image) from any
+// number of threads. Everything here is plain standard C++; docs/api.md has the details and
+// cwloc.h the same API for C.
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#if defined(__GNUC__)
+#define CWLOC_API __attribute__((visibility("default")))
+#else
+#define CWLOC_API
+#endif
+
+namespace cwloc::api {
+
+// What went wrong; the values are the C API's cwloc_status codes.
+enum class ErrorCode : int {
+  kInvalidArgument = 1,  // an argument the caller got wrong (bad option, bad camera)
+  kBadInput = 2,         // a file or buffer that cannot be used (corrupt index, broken photo)
+  kOutOfMemory = 3,
+  kInternal = 4,  // a bug: please report it
+};
+
+// Thrown by every function here; what() names the file or argument and the problem.
+class CWLOC_API Error : public std::runtime_error {
+ public:
+  Error(ErrorCode code, const std::string& message);
+  ErrorCode code() const { return code_; }
+
+ private:
+  ErrorCode code_;
+};
+
+// What the pose stage may trust about the camera (COLMAP's prior_focal_length).
+enum class Calibration : int {
+  kKnown = 0,       // every parameter is held fixed
+  kFocalPrior = 1,  // the focal length is a guess: refined with a radial distortion term
+  kUnknown = 2,     // only the image size: the focal length is estimated (P4Pf)
+};
+
+// A camera in COLMAP's terms: model name (SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL,
+// OPENCV, ...) and its parameters in COLMAP's order. For kUnknown only width and height count.
+// For kFocalPrior the model's mean focal length is the guess; the principal point is taken at
+// the image centre.
+struct Camera {
+  std::string model;
+  uint32_t width = 0;
+  uint32_t height = 0;
+  std::vector<double> params;
+  Calibration calibration = Calibration::kKnown;
+};
+
+// A query's own SIFT features: keypoints in COLMAP's pixel convention (the image's top-left
+// corner is (0, 0), a pixel centre is at +0.5) and N x 128 uint8 descriptors in COLMAP's
+// normalisation (what colmap feature_extractor stores).
+struct Features {
+  std::vector<float> keypoints;      // x0, y0, x1, y1, ...
+  std::vector<uint8_t> descriptors;  // N * 128
+};
+
+// The knobs of cwloc-localize, with its defaults (set by the constructor). docs/cli.md
+// explains each under the flag named in its comment.
+struct CWLOC_API Options {
+  Options();
+  std::string matcher;             // --matcher: cluster-wise, global-ratio, cluster-exhaustive
+  uint32_t k;                      // --k
+  uint32_t checks;                 // --checks
+  double ratio;                    // --ratio
+  uint32_t forward_matches;        // --nf
+  uint32_t back_matches;           // --nb
+  uint32_t max_back_images;        // --max-back-images
+  double max_error_px;             // --max-error
+  int min_inliers;                 // --min-inliers
+  uint32_t max_ransac_iterations;  // --max-ransac-iterations
+  bool refine;                     // false: --no-refine
+  uint32_t ranked_images;          // --ranked-images
+  uint64_t seed;                   // --seed
+  // Photos only: how they become SIFT features, as colmap feature_extractor does.
+  uint32_t max_image_size;    // --max-image-size
+  uint32_t max_features;      // --max-features
+  uint64_t max_image_pixels;  // --max-image-pixels
+};
+
+struct RankedImage {
+  uint32_t image_id = 0;  // COLMAP's image id
+  std::string name;
+  uint32_t votes = 0;
+};
+
+// A RANSAC inlier of the reported pose.
+struct Inlier {
+  uint32_t feature = 0;             // row of the query's features
+  std::array<float, 2> keypoint{};  // its pixel
+  uint32_t point = 0;               // row of the index's 3D points
+  std::array<double, 3> xyz{};      // the point, model frame
+};
+
+// Wall-clock seconds per stage (docs/algorithm.md).
+struct StageTimes {
+  double extraction = 0;  // photo decoding and SIFT; 0 for given features
+  double forward_knn = 0;
+  double ratio_test = 0;
+  double query_tree = 0;
+  double back_matching = 0;
+  double pose = 0;
+  double total = 0;
+};
+
+struct Result {
+  bool success = false;
+  std::string failure_reason;  // why not, when success is false
+  // COLMAP's cam_from_world: X_cam = R(rotation) X_world + translation; rotation = (w, x, y, z).
+  std::array<double, 4> rotation{1, 0, 0, 0};
+  std::array<double, 3> translation{};
+  std::array<double, 3> center{};  // the camera centre in the model frame
+  Camera camera;                   // as used; estimated (SIMPLE_RADIAL) unless it was known
+  bool focal_estimated = false;
+  uint32_t num_features = 0;
+  uint32_t correspondences = 0;  // 2D-3D pairs given to RANSAC
+  uint32_t num_inliers = 0;
+  uint32_t ransac_iterations = 0;
+  std::vector<Inlier> inliers;  // on success
+  std::vector<RankedImage> ranked_images;
+  StageTimes times;
+};
+
+struct IndexInfo {
+  std::string path;
+  std::string format_version;  // "MAJOR.MINOR"
+  uint32_t num_images = 0;
+  uint32_t num_points = 0;
+  uint32_t num_views = 0;  // 3D point observations, one descriptor each
+};
+
+// An opened index. Open maps the file read-only; every Localize* is const and thread-safe, so
+// one Localizer serves all threads. A query that does not localize is no error: it returns
+// success = false and the reason. Bad input throws Error.
+class CWLOC_API Localizer {
+ public:
+  // verify: also check every checksum and stored index (reads the whole file).
+  static Localizer Open(const std::string& index_path, bool verify = false);
+
+  Localizer(Localizer&&) noexcept;
+  Localizer& operator=(Localizer&&) noexcept;
+  ~Localizer();
+
+  IndexInfo Info() const;
+
+  // Features with their camera (at least the image size: Calibration::kUnknown).
+  Result Localize(const Features& features, const Camera& camera,
+                  const Options& options = Options()) const;
+
+  // A JPEG or PNG file. Without a camera the EXIF focal length is the prior; without EXIF the
+  // focal length is estimated. A given camera must have the photo's size.
+  Result LocalizePhoto(const std::string& path, const std::optional<Camera>& camera = std::nullopt,
+                       const Options& options = Options()) const;
+
+  // The same for a JPEG or PNG file's bytes in memory.
+  Result LocalizeEncodedPhoto(const uint8_t* bytes, size_t size,
+                              const std::optional<Camera>& camera = std::nullopt,
+                              const Options& options = Options()) const;
+
+  // An 8-bit grey image, row-major, `stride` bytes from one row to the next (a camera frame).
+  Result LocalizeGreyImage(const uint8_t* pixels, uint32_t width, uint32_t height, size_t stride,
+                           const Camera& camera, const Options& options = Options()) const;
+
+ private:
+  struct Impl;
+  explicit Localizer(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+// COLMAP's text feature file ("N 128", then "X Y SCALE ORIENTATION D1 ... D128" per feature),
+// what cwloc-localize --features reads.
+CWLOC_API Features ReadFeatureFile(const std::string& path);
+
+// "0.1.0"
+CWLOC_API const char* Version();
+
+}  // namespace cwloc::api

@@ -1,0 +1,303 @@
+// The C++ API over the localizer core: converts its public types to the internal ones and
+// every internal exception to api::Error.
+#include <algorithm>
+#include <new>
+#include <span>
+
+#include "cwloc/cwloc.hpp"
+#include "cwloc/version.h"
+#include "format/base/error.h"
+#include "format/index/index.h"
+#include "localizer/io/camera_spec.h"
+#include "localizer/io/feature_file.h"
+#include "localizer/io/photo_query.h"
+#include "localizer/localizer.h"
+
+namespace cwloc::api {
+namespace {
+
+Error InvalidArgument(const std::string& message) {
+  return Error(ErrorCode::kInvalidArgument, message);
+}
+
+// Runs fn; an InputError it throws is the caller's argument, not a bad file.
+template <typename Fn>
+void ValidateOrThrowInvalidArgument(Fn fn) {
+  try {
+    fn();
+  } catch (const InputError& e) {
+    throw InvalidArgument(e.what());
+  }
+}
+
+// Runs fn and returns its value; every exception leaves as api::Error.
+template <typename Fn>
+auto Translated(Fn fn) -> decltype(fn()) {
+  try {
+    return fn();
+  } catch (const Error&) {
+    throw;
+  } catch (const InputError& e) {
+    throw Error(ErrorCode::kBadInput, e.what());
+  } catch (const std::bad_alloc&) {
+    throw Error(ErrorCode::kOutOfMemory, "out of memory");
+  } catch (const std::exception& e) {
+    throw Error(ErrorCode::kInternal, std::string("internal error: ") + e.what());
+  }
+}
+
+LocalizerOptions ToLocalizerOptions(const Options& o) {
+  LocalizerOptions options;
+  const auto matcher = ParseMatcher(o.matcher);
+  if (!matcher) throw InvalidArgument("unknown matcher '" + o.matcher + "'");
+  options.matcher = *matcher;
+  options.k = o.k;
+  options.checks = o.checks;
+  options.ratio = o.ratio;
+  options.forward_matches = o.forward_matches;
+  options.back_matches = o.back_matches;
+  options.max_back_images = o.max_back_images;
+  options.pose.max_error_px = o.max_error_px;
+  options.pose.min_inliers = o.min_inliers;
+  options.pose.ransac.max_iterations = o.max_ransac_iterations;
+  options.pose.refine = o.refine;
+  options.ranked_images = o.ranked_images;
+  options.seed = o.seed;
+  ValidateOrThrowInvalidArgument([&] { ValidateLocalizerOptions(options); });
+  return options;
+}
+
+PhotoOptions ToPhotoOptions(const Options& o) {
+  PhotoOptions options;
+  options.max_image_size = o.max_image_size;
+  options.sift.max_num_features = o.max_features;
+  options.max_image_pixels = o.max_image_pixels;
+  ValidateOrThrowInvalidArgument([&] { ValidatePhotoOptions(options); });
+  return options;
+}
+
+QueryCamera ToQueryCamera(const Camera& camera) {
+  QueryCamera query_camera;
+  ValidateOrThrowInvalidArgument([&] {
+    if (camera.calibration == Calibration::kUnknown) {
+      query_camera = ParseImageSize(
+          std::to_string(camera.width) + " " + std::to_string(camera.height), "camera");
+      return;
+    }
+    query_camera =
+        MakeKnownCamera(camera.model, camera.width, camera.height, camera.params, "camera");
+    if (camera.calibration == Calibration::kFocalPrior) {
+      query_camera = FocalPriorCamera(MeanFocalLength(query_camera.model_id, query_camera.params),
+                                      camera.width, camera.height, IntrinsicsSource::kCameraOption);
+    } else if (camera.calibration != Calibration::kKnown) {
+      throw InputError("camera: unknown calibration " +
+                       std::to_string(static_cast<int>(camera.calibration)));
+    }
+  });
+  query_camera.source = IntrinsicsSource::kCameraOption;
+  return query_camera;
+}
+
+Camera ToCamera(const QueryCamera& query_camera) {
+  Camera camera;
+  camera.model = std::string(CameraModelName(query_camera.model_id));
+  camera.width = query_camera.width;
+  camera.height = query_camera.height;
+  camera.params = query_camera.params;
+  camera.calibration = static_cast<Calibration>(query_camera.calibration);
+  return camera;
+}
+
+Result ToResult(const LocalizationResult& r, const Query& query, const Index& index) {
+  Result result;
+  result.success = r.success;
+  result.failure_reason = r.failure_reason;
+  result.rotation = r.rotation;
+  result.translation = r.translation;
+  result.center = r.center;
+  result.camera = ToCamera(r.camera);
+  result.focal_estimated = r.focal_estimated;
+  result.num_features = r.num_features;
+  result.correspondences = r.correspondences;
+  result.num_inliers = r.num_inliers;
+  result.ransac_iterations = r.ransac_iterations;
+  result.inliers.reserve(r.inliers.size());
+  for (const InlierMatch& match : r.inliers) {
+    const IndexPoint& point = index.points()[match.point];
+    result.inliers.push_back(
+        {match.feature,
+         {query.keypoints[2 * match.feature], query.keypoints[2 * match.feature + 1]},
+         match.point,
+         {point.xyz[0], point.xyz[1], point.xyz[2]}});
+  }
+  for (const cwloc::RankedImage& image : r.ranked_images)
+    result.ranked_images.push_back({image.image_id, image.name, image.votes});
+  result.times = {r.times.extraction, r.times.forward_knn,   r.times.ratio_test,
+                  r.times.query_tree, r.times.back_matching, r.times.pose,
+                  r.times.total};
+  return result;
+}
+
+// A given camera must describe the image it comes with.
+void CheckImageSize(const std::string& source, const Camera& camera, uint32_t width,
+                    uint32_t height) {
+  if (camera.width != width || camera.height != height) {
+    throw InvalidArgument(source + ": the camera is " + std::to_string(camera.width) + " x " +
+                          std::to_string(camera.height) + " but the image is " +
+                          std::to_string(width) + " x " + std::to_string(height));
+  }
+}
+
+// A photo's own camera (EXIF or none) unless the caller gives one.
+void UseCamera(const std::optional<Camera>& camera, Query* query) {
+  if (!camera) return;
+  CheckImageSize(query->Source(), *camera, query->camera.width, query->camera.height);
+  query->camera = ToQueryCamera(*camera);
+}
+
+}  // namespace
+
+Error::Error(ErrorCode code, const std::string& message)
+    : std::runtime_error(message), code_(code) {}
+
+Options::Options() {
+  const LocalizerOptions localizer;
+  const PhotoOptions photo;
+  matcher = std::string(MatcherName(localizer.matcher));
+  k = localizer.k;
+  checks = localizer.checks;
+  ratio = localizer.ratio;
+  forward_matches = localizer.forward_matches;
+  back_matches = localizer.back_matches;
+  max_back_images = localizer.max_back_images;
+  max_error_px = localizer.pose.max_error_px;
+  min_inliers = localizer.pose.min_inliers;
+  max_ransac_iterations = localizer.pose.ransac.max_iterations;
+  refine = localizer.pose.refine;
+  ranked_images = localizer.ranked_images;
+  seed = localizer.seed;
+  max_image_size = photo.max_image_size;
+  max_features = photo.sift.max_num_features;
+  max_image_pixels = photo.max_image_pixels;
+}
+
+struct Localizer::Impl {
+  explicit Impl(Index opened) : index(std::move(opened)), localizer(index) {}
+
+  Result Run(Query query, const Options& options) const {
+    const LocalizerOptions localizer_options = ToLocalizerOptions(options);
+    return ToResult(localizer.Localize(query, localizer_options), query, index);
+  }
+
+  std::string path;
+  Index index;
+  cwloc::Localizer localizer;  // refers to index: Impl is never moved, only its pointer
+};
+
+Localizer::Localizer(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+Localizer::Localizer(Localizer&&) noexcept = default;
+Localizer& Localizer::operator=(Localizer&&) noexcept = default;
+Localizer::~Localizer() = default;
+
+Localizer Localizer::Open(const std::string& index_path, bool verify) {
+  return Translated([&] {
+    auto impl = std::make_unique<Impl>(Index::Open(index_path));
+    impl->path = index_path;
+    if (verify) {
+      impl->index.file().VerifyChecksums();
+      impl->index.Validate();
+    }
+    return Localizer(std::move(impl));
+  });
+}
+
+IndexInfo Localizer::Info() const {
+  const Index& index = impl_->index;
+  IndexInfo info;
+  info.path = impl_->path;
+  info.format_version = std::to_string(index.file().header().format_major) + "." +
+                        std::to_string(index.file().header().format_minor);
+  info.num_images = static_cast<uint32_t>(index.images().size());
+  info.num_points = static_cast<uint32_t>(index.points().size());
+  info.num_views = static_cast<uint32_t>(index.num_views());
+  return info;
+}
+
+Result Localizer::Localize(const Features& features, const Camera& camera,
+                           const Options& options) const {
+  return Translated([&] {
+    Query query;
+    query.name = "query";
+    query.source = "features";
+    query.camera = ToQueryCamera(camera);
+    query.keypoints = features.keypoints;
+    query.descriptors = features.descriptors;
+    return impl_->Run(std::move(query), options);
+  });
+}
+
+Result Localizer::LocalizePhoto(const std::string& path, const std::optional<Camera>& camera,
+                                const Options& options) const {
+  return Translated([&] {
+    Query query = LoadPhotoQuery(path, path, ToPhotoOptions(options));
+    UseCamera(camera, &query);
+    return impl_->Run(std::move(query), options);
+  });
+}
+
+Result Localizer::LocalizeEncodedPhoto(const uint8_t* bytes, size_t size,
+                                       const std::optional<Camera>& camera,
+                                       const Options& options) const {
+  return Translated([&] {
+    if (bytes == nullptr && size > 0) throw InvalidArgument("photo bytes: null pointer");
+    Query query = PhotoQueryFromBytes(std::span<const uint8_t>(bytes, size), "photo bytes", "photo",
+                                      ToPhotoOptions(options));
+    UseCamera(camera, &query);
+    return impl_->Run(std::move(query), options);
+  });
+}
+
+Result Localizer::LocalizeGreyImage(const uint8_t* pixels, uint32_t width, uint32_t height,
+                                    size_t stride, const Camera& camera,
+                                    const Options& options) const {
+  return Translated([&] {
+    if (pixels == nullptr) throw InvalidArgument("grey image: null pointer");
+    if (width == 0 || height == 0 || stride < width) {
+      throw InvalidArgument("grey image: " + std::to_string(width) + " x " +
+                            std::to_string(height) + " with stride " + std::to_string(stride) +
+                            ": expected a positive size and stride >= width");
+    }
+    Query query;
+    query.name = "image";
+    query.source = "grey image";
+    CheckImageSize(query.source, camera, width, height);
+    query.camera = ToQueryCamera(camera);
+    const PhotoOptions photo_options = ToPhotoOptions(options);
+    if (uint64_t{width} * height > photo_options.max_image_pixels) {
+      throw InvalidArgument("grey image: " + std::to_string(uint64_t{width} * height) +
+                            " pixels, more than max_image_pixels " +
+                            std::to_string(photo_options.max_image_pixels));
+    }
+    GreyImage image;
+    image.width = width;
+    image.height = height;
+    image.pixels.resize(size_t{width} * height);
+    for (uint32_t y = 0; y < height; ++y) {
+      std::copy_n(pixels + y * stride, width, image.pixels.data() + size_t{y} * width);
+    }
+    ExtractPhotoFeatures(std::move(image), photo_options, &query);
+    return impl_->Run(std::move(query), options);
+  });
+}
+
+Features ReadFeatureFile(const std::string& path) {
+  return Translated([&] {
+    Query query;
+    cwloc::ReadFeatureFile(path, &query);
+    return Features{std::move(query.keypoints), std::move(query.descriptors)};
+  });
+}
+
+const char* Version() { return kToolVersion; }
+
+}  // namespace cwloc::api

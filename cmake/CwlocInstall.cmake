@@ -1,0 +1,27 @@
+# `cmake --install`: the tools, libcwloc.so with its API headers, and the CMake package that
+# lets another project write find_package(cwloc) and link cwloc::localizer (docs/api.md).
+include(CMakePackageConfigHelpers)
+
+install(TARGETS cwloc_api EXPORT cwlocTargets
+  LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
+  RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+install(FILES api/include/cwloc/cwloc.hpp api/include/cwloc/cwloc.h
+  DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/cwloc)
+
+foreach(tool cwloc_localize_exe cwloc_index_exe cwloc_synth_exe cwloc_eval_exe)
+  if(TARGET ${tool})
+    install(TARGETS ${tool} RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+  endif()
+endforeach()
+if(CWLOC_BUILD_TOOLS)
+  install(PROGRAMS ${CMAKE_RUNTIME_OUTPUT_DIRECTORY}/cwloc-plot DESTINATION ${CMAKE_INSTALL_BINDIR})
+endif()
+
+set(CWLOC_CMAKE_DIR ${CMAKE_INSTALL_LIBDIR}/cmake/cwloc)
+install(EXPORT cwlocTargets NAMESPACE cwloc:: DESTINATION ${CWLOC_CMAKE_DIR})
+configure_package_config_file(cmake/cwlocConfig.cmake.in
+  ${PROJECT_BINARY_DIR}/cwlocConfig.cmake INSTALL_DESTINATION ${CWLOC_CMAKE_DIR})
+write_basic_package_version_file(${PROJECT_BINARY_DIR}/cwlocConfigVersion.cmake
+  COMPATIBILITY SameMinorVersion)
+install(FILES ${PROJECT_BINARY_DIR}/cwlocConfig.cmake ${PROJECT_BINARY_DIR}/cwlocConfigVersion.cmake
+  DESTINATION ${CWLOC_CMAKE_DIR})
