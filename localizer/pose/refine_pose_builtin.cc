@@ -42,71 +42,59 @@ constexpr int kMaxConsecutiveInvalidSteps = 5;
 
 using Matrix = double[kMaxParams][kMaxParams];
 
-// A residual and its derivatives with respect to the point in camera coordinates, the focal
-// length and k.
-struct Linearization {
-  double r[2];
+// A residual's derivatives with respect to the point in camera coordinates, the focal length
+// and k.
+struct Derivatives {
   double dz[2][3];
   double df[2];
   double dk[2];
 };
 
+// d(pixel) / dz from d(pixel) / d(u, v) = [a b; b c] and d(u, v) / dz = [1 0 -u; 0 1 -v] / z.
+void ThroughProjection(double a, double b, double c, double u, double v, double inv_z,
+                       double dz[2][3]) {
+  dz[0][0] = a * inv_z;
+  dz[0][1] = b * inv_z;
+  dz[0][2] = -(a * u + b * v) * inv_z;
+  dz[1][0] = b * inv_z;
+  dz[1][1] = c * inv_z;
+  dz[1][2] = -(b * u + c * v) * inv_z;
+}
+
 struct PinholeModel {
-  static bool Residual(const double* z, const RefinementParameters& x, const Eigen::Vector2d& pixel,
+  static void Residual(const double* z, const RefinementParameters& x, const Eigen::Vector2d& pixel,
                        double* r) {
     PinholeResidual(z, x.focal, pixel, r);
-    return std::isfinite(r[0]) && std::isfinite(r[1]);
   }
-  static bool Linearize(const double* z, const RefinementParameters& x,
-                        const Eigen::Vector2d& pixel, Linearization* out) {
-    if (!Residual(z, x, pixel, out->r)) return false;
+  static void Differentiate(const double* z, const RefinementParameters& x, Derivatives* out) {
     const double inv_z = 1.0 / z[2];
     const double u = z[0] * inv_z;
     const double v = z[1] * inv_z;
-    const double s = x.focal * inv_z;
-    out->dz[0][0] = s;
-    out->dz[0][1] = 0.0;
-    out->dz[0][2] = -s * u;
-    out->dz[1][0] = 0.0;
-    out->dz[1][1] = s;
-    out->dz[1][2] = -s * v;
+    ThroughProjection(x.focal, 0.0, x.focal, u, v, inv_z, out->dz);
     out->df[0] = u;
     out->df[1] = v;
     out->dk[0] = 0.0;
     out->dk[1] = 0.0;
-    return true;
   }
 };
 
 struct RadialModel {
-  static bool Residual(const double* z, const RefinementParameters& x, const Eigen::Vector2d& pixel,
+  static void Residual(const double* z, const RefinementParameters& x, const Eigen::Vector2d& pixel,
                        double* r) {
     RadialResidual(z, x.focal, x.k, pixel, r);
-    return std::isfinite(r[0]) && std::isfinite(r[1]);
   }
-  static bool Linearize(const double* z, const RefinementParameters& x,
-                        const Eigen::Vector2d& pixel, Linearization* out) {
-    if (!Residual(z, x, pixel, out->r)) return false;
+  static void Differentiate(const double* z, const RefinementParameters& x, Derivatives* out) {
     const double inv_z = 1.0 / z[2];
     const double u = z[0] * inv_z;
     const double v = z[1] * inv_z;
     const double rr = u * u + v * v;
     const double d = 1.0 + x.k * rr;
-    // d(pixel) / d(u, v) = [a b; b c]; d(u, v) / dz = [1 0 -u; 0 1 -v] / z.
-    const double a = x.focal * (d + 2.0 * x.k * u * u);
-    const double b = 2.0 * x.focal * x.k * u * v;
-    const double c = x.focal * (d + 2.0 * x.k * v * v);
-    out->dz[0][0] = a * inv_z;
-    out->dz[0][1] = b * inv_z;
-    out->dz[0][2] = -(a * u + b * v) * inv_z;
-    out->dz[1][0] = b * inv_z;
-    out->dz[1][1] = c * inv_z;
-    out->dz[1][2] = -(b * u + c * v) * inv_z;
+    ThroughProjection(x.focal * (d + 2.0 * x.k * u * u), 2.0 * x.focal * x.k * u * v,
+                      x.focal * (d + 2.0 * x.k * v * v), u, v, inv_z, out->dz);
     out->df[0] = d * u;
     out->df[1] = d * v;
     out->dk[0] = x.focal * rr * u;
     out->dk[1] = x.focal * rr * v;
-    return true;
   }
 };
 
@@ -150,12 +138,10 @@ class Evaluator {
       }
       const double z[3] = {y[0] + x.t[0], y[1] + x.t[1], y[2] + x.t[2]};
       if (!(z[2] > 0.0)) return false;
-      Linearization lin;
-      if (linearize ? !Model::Linearize(z, x, problem_.pixels[i], &lin)
-                    : !Model::Residual(z, x, problem_.pixels[i], lin.r)) {
-        return false;
-      }
-      const double s = lin.r[0] * lin.r[0] + lin.r[1] * lin.r[1];
+      double r[2];
+      Model::Residual(z, x, problem_.pixels[i], r);
+      if (!std::isfinite(r[0]) || !std::isfinite(r[1])) return false;
+      const double s = r[0] * r[0] + r[1] * r[1];
       double weight = 1.0;  // rho'(s)
       if (robust) {
         const double sum = 1.0 + s * c;
@@ -165,10 +151,12 @@ class Evaluator {
         out->cost += 0.5 * s;
       }
       if (!linearize) continue;
+      Derivatives deriv;
+      Model::Differentiate(z, x, &deriv);
       // The rotation increment d moves z by -2 [y]x d.
       double jac[2][kMaxParams];
       for (int row = 0; row < 2; ++row) {
-        const double* dz = lin.dz[row];
+        const double* dz = deriv.dz[row];
         jac[row][0] = 2.0 * (dz[2] * y[1] - dz[1] * y[2]);
         jac[row][1] = 2.0 * (dz[0] * y[2] - dz[2] * y[0]);
         jac[row][2] = 2.0 * (dz[1] * y[0] - dz[0] * y[1]);
@@ -176,13 +164,13 @@ class Evaluator {
         jac[row][4] = dz[1];
         jac[row][5] = dz[2];
         int col = 6;
-        if (problem_.refine_focal_length) jac[row][col++] = lin.df[row];
-        if (problem_.radial && problem_.refine_radial_distortion) jac[row][col++] = lin.dk[row];
+        if (problem_.refine_focal_length) jac[row][col++] = deriv.df[row];
+        if (problem_.radial && problem_.refine_radial_distortion) jac[row][col++] = deriv.dk[row];
       }
       for (int a = 0; a < n; ++a) {
         const double w0 = weight * jac[0][a];
         const double w1 = weight * jac[1][a];
-        out->g[a] += w0 * lin.r[0] + w1 * lin.r[1];
+        out->g[a] += w0 * r[0] + w1 * r[1];
         for (int col = 0; col <= a; ++col) out->h[a][col] += w0 * jac[0][col] + w1 * jac[1][col];
       }
     }
