@@ -7,6 +7,7 @@
 #include <span>
 #include <string_view>
 
+#include "format/base/enum_names.h"
 #include "localizer/pose/camera_pose.h"
 
 namespace cwloc {
@@ -31,10 +32,7 @@ inline std::string_view PoseRefinerName(PoseRefiner refiner) {
 }
 
 inline std::optional<PoseRefiner> ParsePoseRefiner(std::string_view name) {
-  for (size_t i = 0; i < kPoseRefinerNames.size(); ++i) {
-    if (kPoseRefinerNames[i] == name) return static_cast<PoseRefiner>(i);
-  }
-  return std::nullopt;
+  return ParseEnumName<PoseRefiner>(kPoseRefinerNames, name);
 }
 
 // Whether this build has the refiner (kCeres needs -DCWLOC_WITH_CERES=ON).
