@@ -57,6 +57,13 @@ std::vector<PoseRefiner> AvailableRefiners() {
   return refiners;
 }
 
+}  // namespace
+
+// For CTest's test names; found by argument-dependent lookup in PoseRefiner's namespace.
+void PrintTo(PoseRefiner refiner, std::ostream* out) { *out << PoseRefinerName(refiner); }
+
+namespace {
+
 std::string RefinerName(const testing::TestParamInfo<PoseRefiner>& param) {
   return std::string(PoseRefinerName(param.param));
 }
@@ -251,6 +258,9 @@ Refined RefineWith(PoseRefiner refiner, const AgreementCase& c,
   }
   return out;
 }
+
+// The case's name in CTest's test names.
+void PrintTo(const AgreementCase& c, std::ostream* out) { *out << c.name; }
 
 class RefinerAgreementTest : public testing::TestWithParam<AgreementCase> {};
 
