@@ -252,9 +252,10 @@ double GradientMaxNorm(const RefinementProblem& problem, const RefinementParamet
   return AmbientDistance(problem, x, Plus(problem, x, minus_gradient), /*max_norm=*/true);
 }
 
-// Solves a y = rhs for a symmetric positive definite a by Cholesky; false on a non-positive
-// pivot or a non-finite solution (Ceres' QR would hand back garbage there, rejected as an
-// invalid step).
+// Solves a y = rhs for a symmetric positive definite a by Cholesky (on the normal equations,
+// where Ceres' DENSE_QR factors [J; D]: the same step up to rounding). False on a non-positive
+// pivot or a non-finite solution, which the caller treats as Ceres treats a failed linear
+// solve: an invalid step.
 bool SolveCholesky(int n, const Matrix& a, const double* rhs, double* y) {
   Matrix l = {};
   for (int j = 0; j < n; ++j) {
