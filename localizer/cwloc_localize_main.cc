@@ -419,7 +419,14 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--seed", options.seed, "Seed of the feature order and RANSAC")
       ->capture_default_str();
-  app.add_flag("!--no-refine", options.pose.refine, "Skip the final Ceres refinement");
+  app.add_flag("!--no-refine", options.pose.refine, "Skip the final refinement");
+  std::string refiner(cwloc::PoseRefinerName(options.pose.refiner));
+  app.add_option("--refiner", refiner,
+                 "Solver of the final refinement: ceres (Ceres' Levenberg-Marquardt, in builds "
+                 "with Ceres) or builtin (ours, the same steps and poses without Ceres)")
+      ->check(CLI::IsMember(std::vector<std::string>(cwloc::kPoseRefinerNames.begin(),
+                                                     cwloc::kPoseRefinerNames.end())))
+      ->capture_default_str();
 
   try {
     app.parse(argc, argv);
@@ -427,5 +434,6 @@ int main(int argc, char** argv) {
     return app.exit(e) == 0 ? cwloc::kExitOk : cwloc::kExitBadInput;
   }
   options.matcher = *cwloc::ParseMatcher(matcher);
+  options.pose.refiner = *cwloc::ParsePoseRefiner(refiner);
   return cwloc::RunTool("cwloc-localize", [&] { return cwloc::Run(cli, options); });
 }

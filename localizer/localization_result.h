@@ -29,7 +29,7 @@ struct StageTimes {
   double ratio_test = 0;     // cluster-wise ratio tests
   double query_tree = 0;     // building the kd-forest over the query features
   double back_matching = 0;  // prioritized back-matching and co-visibility votes
-  double pose = 0;           // LO-RANSAC with the minimal solvers, then the Ceres refinement
+  double pose = 0;           // LO-RANSAC with the minimal solvers, then the final refinement
   double total = 0;
 };
 

@@ -153,6 +153,10 @@ void ValidateLocalizerOptions(const LocalizerOptions& o) {
   require(o.pose.ransac.max_iterations >= 1, "--max-ransac-iterations must be at least 1");
   require(o.pose.ransac.confidence > 0 && o.pose.ransac.confidence < 1,
           "--ransac-confidence: expected a value in (0, 1)");
+  require(PoseRefinerAvailable(o.pose.refiner),
+          "--refiner " + std::string(PoseRefinerName(o.pose.refiner)) +
+              ": this build has no Ceres (configured with -DCWLOC_WITH_CERES=OFF); use "
+              "--refiner builtin");
 }
 
 Localizer::Localizer(const Index& index) : index_(index), clusters_(index) {}

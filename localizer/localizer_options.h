@@ -5,6 +5,7 @@
 #include <optional>
 #include <string_view>
 
+#include "format/base/enum_names.h"
 #include "localizer/pose/absolute_pose.h"
 
 namespace cwloc {
@@ -25,10 +26,7 @@ inline std::string_view MatcherName(Matcher matcher) {
 }
 
 inline std::optional<Matcher> ParseMatcher(std::string_view name) {
-  for (size_t i = 0; i < kMatcherNames.size(); ++i) {
-    if (kMatcherNames[i] == name) return static_cast<Matcher>(i);
-  }
-  return std::nullopt;
+  return ParseEnumName<Matcher>(kMatcherNames, name);
 }
 
 // The largest k: the k + 1 neighbours of a feature fit the ratio test's fixed-size arrays.

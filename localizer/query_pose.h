@@ -26,7 +26,7 @@ struct QueryPose {
 };
 
 // The pose stage: LO-RANSAC with the minimal solver the camera calls for, then, with `refine`,
-// the Ceres refinement (absolute_pose.h). A known camera undistorts the keypoints with its model
+// the final refinement (absolute_pose.h). A known camera undistorts the keypoints with its model
 // and P3P holds its focal length. An uncalibrated camera (Calibration::kFocalPrior, kUnknown) is
 // a SIMPLE_RADIAL with its principal point at QueryCamera::ImageCenter: RANSAC runs P3P with the
 // prior focal length (the camera's mean focal) or P4Pf, and the refinement estimates the focal

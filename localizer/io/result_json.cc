@@ -21,6 +21,7 @@ nlohmann::ordered_json OptionsToJson(const LocalizerOptions& options) {
           {"max_ransac_iterations", options.pose.ransac.max_iterations},
           {"ransac_confidence", options.pose.ransac.confidence},
           {"refine", options.pose.refine},
+          {"refiner", std::string(PoseRefinerName(options.pose.refiner))},
           {"seed", options.seed}};
 }
 

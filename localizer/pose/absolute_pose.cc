@@ -149,6 +149,7 @@ void RefineUncalibrated(std::span<const Eigen::Vector2d> pixels,
   refine.loss_scale_px = options.loss_scale_px;
   refine.refine_focal_length = true;
   refine.refine_radial_distortion = options.refine_radial_distortion;
+  refine.refiner = options.refiner;
   const double max_sq = options.max_error_px * options.max_error_px;
   const size_t ransac_count = inliers.size();
   std::vector<uint32_t> rescored;
@@ -206,6 +207,7 @@ AbsolutePoseResult EstimateAbsolutePose(std::span<const Eigen::Vector2d> normali
     estimator.Inliers(result.pose, &inliers);
     PoseRefinementOptions refine;
     refine.loss_scale_px = options.loss_scale_px;
+    refine.refiner = options.refiner;
     CameraPose refined = result.pose;
     double f = focal_length_px;
     const double max_sq = options.max_error_px * options.max_error_px;

@@ -8,6 +8,7 @@
 
 #include "localizer/pose/camera_pose.h"
 #include "localizer/pose/ransac.h"
+#include "localizer/pose/refine_pose.h"
 
 namespace cwloc {
 
@@ -17,8 +18,9 @@ namespace cwloc {
 //
 // Pipeline: LO-RANSAC (ransac.h) over minimal solutions (P3P with a known focal length or a
 // focal prior, P4Pf without), each new best hypothesis refined by Levenberg-Marquardt on its
-// inliers (local_optimization.h); then a Ceres refinement on the inliers with a Cauchy loss
-// (refine_pose.h); the inlier set and error are finally recomputed with the reported camera.
+// inliers (local_optimization.h); then a final refinement on the inliers with a Cauchy loss
+// (refine_pose.h, Ceres or our own Levenberg-Marquardt); the inlier set and error are finally
+// recomputed with the reported camera.
 //
 // Known camera: the refinement moves the pose only and is kept unless it loses more than 2% of
 // the inliers.
@@ -54,8 +56,9 @@ struct AbsolutePoseOptions {
   RansacOptions ransac;
   // Levenberg-Marquardt iterations per local optimisation inside RANSAC.
   int lo_iterations = 10;
-  // Final Ceres refinement of the best pose (and the focal length when unknown).
+  // Final refinement of the best pose (and the focal length when unknown), and its solver.
   bool refine = true;
+  PoseRefiner refiner = DefaultPoseRefiner();
   // Cauchy loss scale of the final refinement, pixels: residuals well below it count as
   // squared errors, residuals near the 6 px threshold already weigh about 1/(1 + 36/a^2).
   double loss_scale_px = 2.0;
@@ -90,7 +93,7 @@ struct AbsolutePoseResult {
   std::vector<char> inliers;  // per correspondence: 1 if in front, error < max_error_px
   int num_inliers = 0;
   RansacStats stats;                        // of the RANSAC run (before the final refinement)
-  bool refined = false;                     // the Ceres refinement was applied
+  bool refined = false;                     // the final refinement was applied
   int camera_refinement_rounds = 0;         // uncalibrated: refinement rounds kept
   double mean_reprojection_error_px = 0.0;  // over the inliers
 };

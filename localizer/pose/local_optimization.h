@@ -9,9 +9,9 @@
 namespace cwloc {
 
 // A small Levenberg-Marquardt on reprojection error for RANSAC's local optimisation steps,
-// where Ceres' per-problem setup would dominate (the final refinement uses Ceres, see
-// refine_pose.h). The rotation is updated on the left, R <- exp([w]x) R, translation and
-// focal length additively; damping is Marquardt's (scaled by the diagonal of J^T J).
+// cheap enough for the many calls RANSAC makes (the final refinement is refine_pose.h's). The
+// rotation is updated on the left, R <- exp([w]x) R, translation and focal length additively;
+// damping is Marquardt's (scaled by the diagonal of J^T J).
 struct LocalOptimizationOptions {
   int max_iterations = 10;  // LM iterations (accepted or rejected steps)
   // Cauchy loss scale in residual units: rho(r^2) = s^2 log(1 + r^2 / s^2). 0: plain least

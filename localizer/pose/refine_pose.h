@@ -1,38 +1,70 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <cstdint>
+#include <optional>
 #include <span>
+#include <string_view>
 
+#include "format/base/enum_names.h"
 #include "localizer/pose/camera_pose.h"
 
 namespace cwloc {
 
-// Final non-linear refinement of an absolute pose (and optionally the focal length) with
-// Ceres: sum_i rho(|f * pi(R X_i + t) - p_i|^2) over the given correspondences, with a Cauchy
-// loss rho(s) = a^2 log(1 + s / a^2) so that the remaining outliers among the inliers of a
-// 6 px threshold pull little. The rotation is a Ceres quaternion on ceres::QuaternionManifold;
-// Ceres orders quaternions (w, x, y, z) while Eigen stores (x, y, z, w), so the parameter
-// block is filled with w(), x(), y(), z() explicitly.
+// Final non-linear refinement of an absolute pose (and optionally the camera's focal length and
+// radial distortion): sum_i rho(|f * pi(R X_i + t) - p_i|^2) over the given correspondences,
+// with a Cauchy loss rho(s) = a^2 log(1 + s / a^2) so that the remaining outliers among the
+// inliers of a 6 px threshold pull little. Two solvers minimise the same cost to the same
+// minimum (docs/algorithm.md, section 4):
+//   - kCeres: Ceres' Levenberg-Marquardt, the rotation a Ceres quaternion on
+//     ceres::QuaternionManifold (only in builds with -DCWLOC_WITH_CERES=ON);
+//   - kBuiltin: cwloc's own Levenberg-Marquardt in Eigen (refine_pose_builtin.cc), which
+//     follows Ceres' trust-region rules step for step, so that a device build need not link
+//     Ceres and its dependencies (glog, gflags, SuiteSparse, LAPACK, BLAS).
+enum class PoseRefiner { kCeres, kBuiltin };
+
+// The names the CLI takes and the JSON reports, in enum order.
+inline constexpr std::array<std::string_view, 2> kPoseRefinerNames = {"ceres", "builtin"};
+
+inline std::string_view PoseRefinerName(PoseRefiner refiner) {
+  return kPoseRefinerNames[static_cast<size_t>(refiner)];
+}
+
+inline std::optional<PoseRefiner> ParsePoseRefiner(std::string_view name) {
+  return ParseEnumName<PoseRefiner>(kPoseRefinerNames, name);
+}
+
+// Whether this build has the refiner (kCeres needs -DCWLOC_WITH_CERES=ON).
+bool PoseRefinerAvailable(PoseRefiner refiner);
+
+// kCeres in a build with Ceres, else kBuiltin.
+PoseRefiner DefaultPoseRefiner();
+
 struct PoseRefinementOptions {
-  double loss_scale_px = 1.0;        // Cauchy scale a, pixels
+  double loss_scale_px = 1.0;        // Cauchy scale a, pixels; <= 0: plain least squares
   bool refine_focal_length = false;  // else the focal length is held constant
   int max_iterations = 50;           // Levenberg-Marquardt iterations
   // RefinePoseAndCamera only: also refine the radial distortion k (else held constant).
   bool refine_radial_distortion = false;
+  // Asking for one this build does not have throws cwloc::InputError.
+  PoseRefiner refiner = DefaultPoseRefiner();
 };
 
+// Both refiners fill it with Ceres' conventions.
 struct PoseRefinementSummary {
-  bool usable = false;  // Ceres' IsSolutionUsable()
-  int iterations = 0;
+  // The solver converged or ran out of iterations (Ceres' IsSolutionUsable()) and the camera
+  // is sane (f > 0, k finite).
+  bool usable = false;
+  int iterations = 0;         // Ceres' summary.iterations.size(): iteration 0 counts
   double initial_cost = 0.0;  // robust cost, 0.5 * sum rho, pixels^2
   double final_cost = 0.0;
 };
 
 // centered_pixels: pixel minus principal point (for a known focal length, normalised image
 // coordinates times f); indices: the correspondences to use (typically RANSAC's inliers, all
-// in front of the camera). Updates *pose and *focal_length_px in place when Ceres reports a
-// usable solution and returns whether it did. Needs at least 4 correspondences (5 with focal).
+// in front of the camera). Updates *pose and *focal_length_px in place when the solver reports
+// a usable solution and returns whether it did. Needs at least 4 correspondences (5 with focal).
 bool RefinePose(std::span<const Eigen::Vector2d> centered_pixels,
                 std::span<const Eigen::Vector3d> points3D, std::span<const uint32_t> indices,
                 const PoseRefinementOptions& options, CameraPose* pose, double* focal_length_px,
@@ -53,8 +85,8 @@ struct RadialCamera {
 
 // RefinePose for a RadialCamera: the pose, and the focal length and k as the options ask, under
 // the same Cauchy loss; the residual is camera.Project(R X_i + t) - p_i. Updates *pose and
-// *camera when Ceres reports a usable solution with a positive focal length. Needs at least 4
-// correspondences, one more per refined intrinsic.
+// *camera when the solver reports a usable solution with a positive focal length. Needs at
+// least 4 correspondences, one more per refined intrinsic.
 bool RefinePoseAndCamera(std::span<const Eigen::Vector2d> centered_pixels,
                          std::span<const Eigen::Vector3d> points3D,
                          std::span<const uint32_t> indices, const PoseRefinementOptions& options,

@@ -3,11 +3,14 @@
 #include <gmock/gmock.h>
 
 #include <algorithm>
+#include <cmath>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "indexer/index_builder.h"
+#include "localizer/pose/refine_pose.h"
 #include "tests/indexer/indexer_fixture.h"
 #include "tests/localization_check.h"
 
@@ -98,6 +101,28 @@ TEST_F(LocalizeCliTest, EveryMatcherNameRunsAndIsReported) {
   }
 }
 
+TEST_F(LocalizeCliTest, RefinerIsReportedAndCeresNeedsABuildWithIt) {
+  for (const std::string_view name : kPoseRefinerNames) {
+    const std::string refiner(name);
+    std::string output;
+    const auto jsonl = dir_ / (refiner + ".jsonl");
+    const int code = Run("--database " + database_path_.string() + " --query " + FirstImageName() +
+                             " --refiner " + refiner + " -o " + jsonl.string(),
+                         &output);
+    if (!PoseRefinerAvailable(*ParsePoseRefiner(refiner))) {
+      EXPECT_EQ(code, 2) << output;
+      EXPECT_THAT(output, HasSubstr("--refiner ceres: this build has no Ceres"));
+      continue;
+    }
+    EXPECT_LE(code, 1) << output;
+    const auto lines = test::ReadJsonLines(jsonl);
+    ASSERT_EQ(lines.size(), 1u);
+    EXPECT_EQ(lines[0]["parameters"]["refiner"], refiner);
+    std::string validation;
+    EXPECT_EQ(ValidateAgainstSchema(jsonl, &validation), 0) << validation;
+  }
+}
+
 TEST_F(LocalizeCliTest, CorruptOrMissingIndexIsAClearError) {
   std::string output;
   EXPECT_EQ(test::RunCommand(test::ToolPath("cwloc-localize").string() + " --index " +
@@ -152,26 +177,36 @@ TEST_F(LocalizeCliTest, AbsurdParametersAreRejected) {
   EXPECT_THAT(output, HasSubstr("no queries"));
 }
 
+// cwloc-index on herz_jesu_p25's mapping model.
+void BuildHerzJesuIndex(const std::filesystem::path& data, const std::filesystem::path& index) {
+  std::string output;
+  ASSERT_EQ(test::RunCommand(test::ToolPath("cwloc-index").string() + " build --model " +
+                                 (data / "mapping_model" / "bin").string() + " --database " +
+                                 (data / "database.db").string() + " -o " + index.string(),
+                             &output),
+            0)
+      << output;
+}
+
+// cwloc-localize on herz_jesu_p25's database queries listed in `list`, two at a time.
+int LocalizeHerzJesu(const std::filesystem::path& data, const std::filesystem::path& index,
+                     const std::string& list, const std::string& args, std::string* output) {
+  return test::RunCommand(test::ToolPath("cwloc-localize").string() + " --index " + index.string() +
+                              " --database " + (data / "database.db").string() + " --query-list " +
+                              (data / list).string() + " --threads 2 " + args,
+                          output);
+}
+
 // The database's camera of herz_jesu_p25 has prior_focal_length = 0: its focal length 1843.2 is
 // the feature extractor's guess 1.2 * max(w, h), which localized all 5 queries 4.4 m off (median)
 // when it was taken as known. Read as an unknown focal length, they come out within centimetres.
 TEST(LocalizeCliHerzJesu, DatabaseCameraWithoutPriorIsAnUnknownFocal) {
   CWLOC_REQUIRE_SHARED_DATA(data, "herz_jesu_p25");
   test::TempDir dir;
+  ASSERT_NO_FATAL_FAILURE(BuildHerzJesuIndex(data, dir / "hj.cwl"));
   std::string output;
-  ASSERT_EQ(
-      test::RunCommand(test::ToolPath("cwloc-index").string() + " build --model " +
-                           (data / "mapping_model" / "bin").string() + " --database " +
-                           (data / "database.db").string() + " -o " + (dir / "hj.cwl").string(),
-                       &output),
-      0)
-      << output;
-  ASSERT_EQ(test::RunCommand(test::ToolPath("cwloc-localize").string() + " --index " +
-                                 (dir / "hj.cwl").string() + " --database " +
-                                 (data / "database.db").string() + " --query-list " +
-                                 (data / "query_list.txt").string() + " --threads 2 -o " +
-                                 (dir / "out.jsonl").string(),
-                             &output),
+  ASSERT_EQ(LocalizeHerzJesu(data, dir / "hj.cwl", "query_list.txt",
+                             "-o " + (dir / "out.jsonl").string(), &output),
             0)
       << output;
   std::string validation;
@@ -200,23 +235,73 @@ TEST(LocalizeCliHerzJesu, DatabaseCameraWithoutPriorIsAnUnknownFocal) {
   EXPECT_LE(positions[2], 0.05);  // the bound on the median; measured 3.4 mm
 }
 
+// The builtin refiner takes Ceres' steps (refine_pose_builtin.cc), so the whole pipeline gives
+// the same poses, cameras and inlier counts with either: known intrinsics refine the pose, the
+// database cameras (prior_focal_length 0) the pose, f and k. Measured: the same inlier counts,
+// poses and cameras at most 2e-15 apart (relative).
+TEST(LocalizeCliHerzJesu, BuiltinRefinerGivesCeresPoses) {
+  CWLOC_REQUIRE_SHARED_DATA(data, "herz_jesu_p25");
+  if (!PoseRefinerAvailable(PoseRefiner::kCeres)) GTEST_SKIP() << "a build without Ceres";
+  test::TempDir dir;
+  ASSERT_NO_FATAL_FAILURE(BuildHerzJesuIndex(data, dir / "hj.cwl"));
+  std::string output;
+  // |a - b| relative to |a| (or to 1 where a may be near 0, as k and the quaternion).
+  const auto expect_close = [](const nlohmann::json& a, const nlohmann::json& b, bool relative,
+                               const std::string& what) {
+    ASSERT_EQ(a.size(), b.size()) << what;
+    double diff = 0.0, norm = 0.0;
+    for (size_t i = 0; i < a.size(); ++i) {
+      diff += std::pow(a[i].get<double>() - b[i].get<double>(), 2);
+      norm += std::pow(a[i].get<double>(), 2);
+    }
+    EXPECT_LE(std::sqrt(diff), 1e-7 * (relative ? std::sqrt(norm) : 1.0)) << what;
+  };
+  for (const std::string list : {"queries_with_intrinsics.txt", "query_list.txt"}) {
+    SCOPED_TRACE(list);
+    std::map<std::string, nlohmann::json> results[2];
+    for (int r = 0; r < 2; ++r) {
+      const std::string refiner(kPoseRefinerNames[r]);
+      const auto jsonl = dir / (refiner + "_" + list + ".jsonl");
+      ASSERT_EQ(LocalizeHerzJesu(data, dir / "hj.cwl", list,
+                                 "--refiner " + refiner + " -o " + jsonl.string(), &output),
+                0)
+          << output;
+      for (const auto& result : test::ReadJsonLines(jsonl)) {
+        EXPECT_EQ(result.at("parameters").at("refiner"), refiner);
+        results[r][result.at("name")] = result;
+      }
+    }
+    ASSERT_EQ(results[0].size(), 5u);
+    ASSERT_EQ(results[1].size(), 5u);
+    for (const auto& [name, ceres] : results[0]) {
+      SCOPED_TRACE(name);
+      ASSERT_TRUE(results[1].contains(name));
+      const nlohmann::json& builtin = results[1].at(name);
+      ASSERT_EQ(ceres.at("success"), builtin.at("success"));
+      EXPECT_EQ(ceres.at("num_inliers"), builtin.at("num_inliers"));
+      if (!ceres.at("success").get<bool>()) continue;
+      expect_close(ceres["pose"]["qvec"], builtin["pose"]["qvec"], false, "qvec");
+      expect_close(ceres["pose"]["tvec"], builtin["pose"]["tvec"], true, "tvec");
+      expect_close(ceres["pose"]["center"], builtin["pose"]["center"], true, "center");
+      const auto& params_a = ceres["camera"]["params"];
+      const auto& params_b = builtin["camera"]["params"];
+      ASSERT_EQ(params_a.size(), params_b.size());
+      for (size_t i = 0; i < params_a.size(); ++i) {
+        const double a = params_a[i].get<double>(), b = params_b[i].get<double>();
+        EXPECT_LE(std::abs(a - b), 1e-7 * std::max(1.0, std::abs(a))) << "camera param " << i;
+      }
+    }
+  }
+}
+
 TEST(LocalizeCliHerzJesu, LocalizesEveryQueryWithValidJsonAndPoses) {
   CWLOC_REQUIRE_SHARED_DATA(data, "herz_jesu_p25");
   test::TempDir dir;
+  ASSERT_NO_FATAL_FAILURE(BuildHerzJesuIndex(data, dir / "hj.cwl"));
   std::string output;
-  ASSERT_EQ(
-      test::RunCommand(test::ToolPath("cwloc-index").string() + " build --model " +
-                           (data / "mapping_model" / "bin").string() + " --database " +
-                           (data / "database.db").string() + " -o " + (dir / "hj.cwl").string(),
-                       &output),
-      0)
-      << output;
-  const int code = test::RunCommand(
-      test::ToolPath("cwloc-localize").string() + " --index " + (dir / "hj.cwl").string() +
-          " --database " + (data / "database.db").string() + " --query-list " +
-          (data / "queries_with_intrinsics.txt").string() + " --threads 2 -o " +
-          (dir / "out.jsonl").string() + " --poses " + (dir / "poses.txt").string(),
-      &output);
+  const int code = LocalizeHerzJesu(
+      data, dir / "hj.cwl", "queries_with_intrinsics.txt",
+      "-o " + (dir / "out.jsonl").string() + " --poses " + (dir / "poses.txt").string(), &output);
   EXPECT_EQ(code, 0) << output;
   EXPECT_THAT(output, HasSubstr("localized 5 of 5 queries"));
   std::string validation;
