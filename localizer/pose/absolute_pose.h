@@ -58,7 +58,7 @@ struct AbsolutePoseOptions {
   int lo_iterations = 10;
   // Final refinement of the best pose (and the focal length when unknown), and its solver.
   bool refine = true;
-  PoseRefiner refiner = DefaultPoseRefiner();
+  PoseRefiner refiner = PoseRefinementOptions().refiner;
   // Cauchy loss scale of the final refinement, pixels: residuals well below it count as
   // squared errors, residuals near the 6 px threshold already weigh about 1/(1 + 36/a^2).
   double loss_scale_px = 2.0;

@@ -15,14 +15,6 @@ bool PoseRefinerAvailable(PoseRefiner refiner) {
 #endif
 }
 
-PoseRefiner DefaultPoseRefiner() {
-#ifdef CWLOC_WITH_CERES
-  return PoseRefiner::kCeres;
-#else
-  return PoseRefiner::kBuiltin;
-#endif
-}
-
 namespace {
 
 RefinementProblem MakeProblem(std::span<const Eigen::Vector2d> centered_pixels,

@@ -38,17 +38,16 @@ inline std::optional<PoseRefiner> ParsePoseRefiner(std::string_view name) {
 // Whether this build has the refiner (kCeres needs -DCWLOC_WITH_CERES=ON).
 bool PoseRefinerAvailable(PoseRefiner refiner);
 
-// kCeres in a build with Ceres, else kBuiltin.
-PoseRefiner DefaultPoseRefiner();
-
 struct PoseRefinementOptions {
   double loss_scale_px = 1.0;        // Cauchy scale a, pixels; <= 0: plain least squares
   bool refine_focal_length = false;  // else the focal length is held constant
   int max_iterations = 50;           // Levenberg-Marquardt iterations
   // RefinePoseAndCamera only: also refine the radial distortion k (else held constant).
   bool refine_radial_distortion = false;
-  // Asking for one this build does not have throws cwloc::InputError.
-  PoseRefiner refiner = DefaultPoseRefiner();
+  // The builtin solver in every build: the same poses as Ceres (which stays the reference it is
+  // tested against), 6 to 10 times faster, and the same on devices. Asking for one this build
+  // does not have throws cwloc::InputError.
+  PoseRefiner refiner = PoseRefiner::kBuiltin;
 };
 
 // Both refiners fill it with Ceres' conventions.
