@@ -22,7 +22,8 @@ function(cwloc_add_executable name)
   endif()
 endfunction()
 
-# cwloc_add_test(NAME SRCS a_test.cc LINK libs...): one gtest binary, registered with CTest.
+# cwloc_add_test(NAME SRCS a_test.cc LINK libs...): one gtest binary, registered with CTest;
+# its tests carry the label NAME (ctest -L kdtree_tests).
 function(cwloc_add_test name)
   cmake_parse_arguments(ARG "" "" "SRCS;LINK" ${ARGN})
   add_executable(${name} ${ARG_SRCS})
@@ -30,5 +31,5 @@ function(cwloc_add_test name)
   target_link_libraries(${name} PRIVATE cwloc_test_main ${ARG_LINK})
   set_target_properties(${name} PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${PROJECT_BINARY_DIR}/tests)
   gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60
-    PROPERTIES SKIP_REGULAR_EXPRESSION "\\[  SKIPPED \\]")
+    PROPERTIES SKIP_REGULAR_EXPRESSION "\\[  SKIPPED \\]" LABELS ${name})
 endfunction()
