@@ -7,6 +7,7 @@
 #include <numeric>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "photo/sift/sift_levels.h"
 
@@ -38,6 +39,7 @@ GreyImage BlobImage(uint32_t width, uint32_t height) {
 }
 
 std::vector<SiftOptions::Implementation> Implementations() {
+  if (!SiftVlfeatAvailable()) return {SiftOptions::Implementation::kCwloc};
   return {SiftOptions::Implementation::kCwloc, SiftOptions::Implementation::kVlfeat};
 }
 
@@ -77,6 +79,30 @@ TEST(SiftOptionsTest, BadOptionsThrow) {
   EXPECT_THROW(ExtractSift(GreyImage{}, SiftOptions{}), std::invalid_argument);
   EXPECT_THROW(ExtractSift(GreyImage{4, 4, std::vector<uint8_t>(15)}, SiftOptions{}),
                std::invalid_argument);
+}
+
+// A build without VLFeat rejects what only VLFeat computes, naming the option and the cure.
+TEST(SiftOptionsTest, VlfeatOnlyOptionsNeedVlfeat) {
+  SiftOptions reference;
+  reference.implementation = SiftOptions::Implementation::kVlfeat;
+  SiftOptions twice_upsampled;
+  twice_upsampled.first_octave = -2;
+  for (const auto& [options, name] :
+       {std::pair{reference, "implementation"}, std::pair{twice_upsampled, "first_octave"}}) {
+    SCOPED_TRACE(name);
+    if (SiftVlfeatAvailable()) {
+      EXPECT_NO_THROW(ValidateSiftOptions(options));
+      continue;
+    }
+    try {
+      ExtractSift(BlobImage(64, 64), options);
+      ADD_FAILURE() << "accepted without VLFeat";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("-DCWLOC_WITH_VLFEAT=ON"), std::string::npos)
+          << e.what();
+    }
+  }
 }
 
 TEST(SiftLevelsTest, FirstLevelToKeepFollowsColmap) {
@@ -180,6 +206,7 @@ TEST_P(SiftImplementationTest, UprightGivesZeroOrientation) {
 
 // Ours reproduces VLFeat bit for bit, for other options too.
 TEST(SiftCwlocTest, EqualsVlfeatForVariousOptions) {
+  if (!SiftVlfeatAvailable()) GTEST_SKIP() << "built without VLFeat";
   const GreyImage image = BlobImage(301, 203);  // odd sizes: odd octave sides
   std::vector<std::function<void(SiftOptions&)>> variants = {
       [](SiftOptions&) {},
