@@ -9,7 +9,11 @@
 #include <string>
 #include <utility>
 
+#include "format/index/xxhash64.h"
+#include "photo/image_decode.h"
+#include "photo/image_resize.h"
 #include "photo/sift/sift_levels.h"
+#include "tests/test_util.h"
 
 namespace cwloc {
 namespace {
@@ -238,6 +242,23 @@ TEST(SiftCwlocTest, EqualsVlfeatForVariousOptions) {
       EXPECT_EQ(ours.keypoints[i].orientation, vlfeat.keypoints[i].orientation);
     }
   }
+}
+
+// The same photo gives the same features on every platform (a fused multiply-add or another
+// summation order would move them): ours on a real photo, shrunk as COLMAP shrinks it. The
+// hash was taken on x86-64, where ours equals VLFeat bit for bit.
+TEST(SiftCwlocTest, SameFeaturesOnEveryPlatform) {
+  CWLOC_REQUIRE_SHARED_DATA(data, "herz_jesu_p25");
+  const std::filesystem::path path = data / "query_images" / "0002.jpg";
+  GreyImage image = DecodeGreyImage(ReadFileBytes(path), path);
+  const ImageSize size = ExtractionSize(image.width, image.height, 640);
+  image = ResizeBilinear(image, size.width, size.height);
+  const SiftFeatures features = ExtractSift(image, SiftOptions{});
+  std::vector<uint8_t> bytes = features.descriptors;
+  const auto* keypoints = reinterpret_cast<const uint8_t*>(features.keypoints.data());
+  bytes.insert(bytes.end(), keypoints, keypoints + features.size() * sizeof(SiftKeypoint));
+  EXPECT_EQ(features.size(), 3727u);
+  EXPECT_EQ(HashHex(XxHash64(bytes)), HashHex(0xadc72d0fc82e8908ULL));
 }
 
 INSTANTIATE_TEST_SUITE_P(All, SiftImplementationTest, testing::ValuesIn(Implementations()));
