@@ -164,29 +164,35 @@ __attribute__((target(CWLOC_AVX512_VNNI))) void Avx512VnniBatch(const uint8_t* q
 
 #ifdef CWLOC_AARCH64
 
-// Both aarch64 kernels square |a - b| (vabdq_u8: 8 bits, no widening needed first). Plain NEON
-// widens the squares to 16 bits (vmull_u8, <= 255^2) and adds pairs into 32-bit lanes
-// (vpadalq_u16); the dot product squares and sums four bytes per 32-bit lane in one udot.
-// Neither can overflow: a lane sums at most 32 squares.
+// Both aarch64 kernels square |a - b| (vabdq_u8: 8 bits, no widening needed first) and differ
+// only in how they add 16 of those squares to 32-bit lanes. Neither can overflow: a lane sums
+// at most 32 squares.
 
-inline uint32x4_t NeonSquares(uint32x4_t acc, uint8x16_t a, uint8x16_t b) {
-  const uint8x16_t d = vabdq_u8(a, b);
-  acc = vpadalq_u16(acc, vmull_u8(vget_low_u8(d), vget_low_u8(d)));
-  return vpadalq_u16(acc, vmull_high_u8(d, d));
-}
+#define CWLOC_DOTPROD "arch=armv8.2-a+dotprod"
 
-uint32_t NeonOne(const uint8_t* a, const uint8_t* b) {
-  uint32x4_t acc0 = vdupq_n_u32(0);
-  uint32x4_t acc1 = vdupq_n_u32(0);
-  for (size_t i = 0; i < kDescriptorDim; i += 32) {
-    acc0 = NeonSquares(acc0, vld1q_u8(a + i), vld1q_u8(b + i));
-    acc1 = NeonSquares(acc1, vld1q_u8(a + i + 16), vld1q_u8(b + i + 16));
+// Advanced SIMD: widen the squares to 16 bits (vmull_u8, <= 255^2), add pairs into the lanes.
+struct NeonSquares {
+  uint32x4_t operator()(uint32x4_t acc, uint8x16_t a, uint8x16_t b) const {
+    const uint8x16_t d = vabdq_u8(a, b);
+    acc = vpadalq_u16(acc, vmull_u8(vget_low_u8(d), vget_low_u8(d)));
+    return vpadalq_u16(acc, vmull_high_u8(d, d));
   }
-  return vaddvq_u32(vaddq_u32(acc0, acc1));
-}
+};
 
-void NeonBatch(const uint8_t* query, const uint8_t* base, const uint32_t* rows, size_t n,
-               uint32_t* out) {
+// The dot product: one udot squares and sums four bytes per lane.
+struct DotProdSquares {
+  __attribute__((target(CWLOC_DOTPROD))) uint32x4_t operator()(uint32x4_t acc, uint8x16_t a,
+                                                               uint8x16_t b) const {
+    const uint8x16_t d = vabdq_u8(a, b);
+    return vdotq_u32(acc, d, d);
+  }
+};
+
+// Inlined into each kernel, so the dot product kernels get their target's instructions.
+template <typename Squares>
+__attribute__((always_inline)) inline void NeonBatchWith(const uint8_t* query, const uint8_t* base,
+                                                         const uint32_t* rows, size_t n,
+                                                         uint32_t* out) {
   uint8x16_t q[8];
   for (int j = 0; j < 8; ++j) q[j] = vld1q_u8(query + 16 * j);
   for (size_t i = 0; i < n; ++i) {
@@ -194,47 +200,37 @@ void NeonBatch(const uint8_t* query, const uint8_t* base, const uint32_t* rows, 
     uint32x4_t acc0 = vdupq_n_u32(0);
     uint32x4_t acc1 = vdupq_n_u32(0);
     for (int j = 0; j < 8; j += 2) {
-      acc0 = NeonSquares(acc0, q[j], vld1q_u8(v + 16 * j));
-      acc1 = NeonSquares(acc1, q[j + 1], vld1q_u8(v + 16 * j + 16));
+      acc0 = Squares()(acc0, q[j], vld1q_u8(v + 16 * j));
+      acc1 = Squares()(acc1, q[j + 1], vld1q_u8(v + 16 * j + 16));
     }
     out[i] = vaddvq_u32(vaddq_u32(acc0, acc1));
   }
 }
 
-#define CWLOC_DOTPROD "arch=armv8.2-a+dotprod"
-
-__attribute__((target(CWLOC_DOTPROD))) inline uint32x4_t DotSquares(uint32x4_t acc, uint8x16_t a,
-                                                                    uint8x16_t b) {
-  const uint8x16_t d = vabdq_u8(a, b);
-  return vdotq_u32(acc, d, d);
+void NeonBatch(const uint8_t* query, const uint8_t* base, const uint32_t* rows, size_t n,
+               uint32_t* out) {
+  NeonBatchWith<NeonSquares>(query, base, rows, n, out);
 }
 
-__attribute__((target(CWLOC_DOTPROD))) uint32_t NeonDotProdOne(const uint8_t* a, const uint8_t* b) {
-  uint32x4_t acc0 = vdupq_n_u32(0);
-  uint32x4_t acc1 = vdupq_n_u32(0);
-  for (size_t i = 0; i < kDescriptorDim; i += 32) {
-    acc0 = DotSquares(acc0, vld1q_u8(a + i), vld1q_u8(b + i));
-    acc1 = DotSquares(acc1, vld1q_u8(a + i + 16), vld1q_u8(b + i + 16));
-  }
-  return vaddvq_u32(vaddq_u32(acc0, acc1));
+uint32_t NeonOne(const uint8_t* a, const uint8_t* b) {
+  const uint32_t row = 0;
+  uint32_t out;
+  NeonBatchWith<NeonSquares>(a, b, &row, 1, &out);
+  return out;
 }
 
 __attribute__((target(CWLOC_DOTPROD))) void NeonDotProdBatch(const uint8_t* query,
                                                              const uint8_t* base,
                                                              const uint32_t* rows, size_t n,
                                                              uint32_t* out) {
-  uint8x16_t q[8];
-  for (int j = 0; j < 8; ++j) q[j] = vld1q_u8(query + 16 * j);
-  for (size_t i = 0; i < n; ++i) {
-    const uint8_t* v = base + size_t(rows[i]) * kDescriptorDim;
-    uint32x4_t acc0 = vdupq_n_u32(0);
-    uint32x4_t acc1 = vdupq_n_u32(0);
-    for (int j = 0; j < 8; j += 2) {
-      acc0 = DotSquares(acc0, q[j], vld1q_u8(v + 16 * j));
-      acc1 = DotSquares(acc1, q[j + 1], vld1q_u8(v + 16 * j + 16));
-    }
-    out[i] = vaddvq_u32(vaddq_u32(acc0, acc1));
-  }
+  NeonBatchWith<DotProdSquares>(query, base, rows, n, out);
+}
+
+__attribute__((target(CWLOC_DOTPROD))) uint32_t NeonDotProdOne(const uint8_t* a, const uint8_t* b) {
+  const uint32_t row = 0;
+  uint32_t out;
+  NeonBatchWith<DotProdSquares>(a, b, &row, 1, &out);
+  return out;
 }
 
 #endif  // CWLOC_AARCH64
