@@ -69,6 +69,8 @@ CWLOC_KERNEL_BENCH(kScalar)
 CWLOC_KERNEL_BENCH(kAvx2)
 CWLOC_KERNEL_BENCH(kAvx512)
 CWLOC_KERNEL_BENCH(kAvx512Vnni)
+CWLOC_KERNEL_BENCH(kNeon)
+CWLOC_KERNEL_BENCH(kNeonDotProd)
 
 }  // namespace
 }  // namespace cwloc

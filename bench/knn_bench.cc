@@ -391,7 +391,8 @@ int Main(int argc, char** argv) {
                  "threads for our build, data generation and brute force "
                  "(0 = all cores; searches are single-threaded)");
   app.add_option("--seed", seed, "seed for data generation, query sampling and our build");
-  app.add_option("--kernel", kernel_name, "distance kernel: scalar, avx2, avx512, avx512vnni");
+  app.add_option("--kernel", kernel_name,
+                 "distance kernel: scalar, avx2, avx512, avx512vnni, neon, neon-dotprod");
   app.add_option("--interleave", interleave,
                  "descents our search keeps in flight (1 = FLANN order)");
   app.add_flag("--no-flann", no_flann, "skip FLANN");
@@ -406,10 +407,9 @@ int Main(int argc, char** argv) {
   const DistanceFunctions* distance = &BestDistanceFunctions();
   if (!kernel_name.empty()) {
     const std::map<std::string, DistanceKernel> kernels{
-        {"scalar", DistanceKernel::kScalar},
-        {"avx2", DistanceKernel::kAvx2},
-        {"avx512", DistanceKernel::kAvx512},
-        {"avx512vnni", DistanceKernel::kAvx512Vnni}};
+        {"scalar", DistanceKernel::kScalar}, {"avx2", DistanceKernel::kAvx2},
+        {"avx512", DistanceKernel::kAvx512}, {"avx512vnni", DistanceKernel::kAvx512Vnni},
+        {"neon", DistanceKernel::kNeon},     {"neon-dotprod", DistanceKernel::kNeonDotProd}};
     const auto it = kernels.find(kernel_name);
     if (it == kernels.end()) Fail("unknown --kernel " + kernel_name);
     distance = DistanceFunctionsFor(it->second);

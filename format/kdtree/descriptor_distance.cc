@@ -15,6 +15,12 @@
 #endif
 #endif
 
+#if defined(__aarch64__)
+#define CWLOC_AARCH64 1
+#include <arm_neon.h>
+#include <sys/auxv.h>  // getauxval; HWCAP_ASIMDDP
+#endif
+
 namespace cwloc {
 namespace {
 
@@ -156,6 +162,79 @@ __attribute__((target(CWLOC_AVX512_VNNI))) void Avx512VnniBatch(const uint8_t* q
 
 #endif  // CWLOC_X86_64
 
+#ifdef CWLOC_AARCH64
+
+// Both aarch64 kernels square |a - b| (vabdq_u8: 8 bits, no widening needed first) and differ
+// only in how they add 16 of those squares to 32-bit lanes. Neither can overflow: a lane sums
+// at most 32 squares.
+
+#define CWLOC_DOTPROD "arch=armv8.2-a+dotprod"
+
+// Advanced SIMD: widen the squares to 16 bits (vmull_u8, <= 255^2), add pairs into the lanes.
+struct NeonSquares {
+  uint32x4_t operator()(uint32x4_t acc, uint8x16_t a, uint8x16_t b) const {
+    const uint8x16_t d = vabdq_u8(a, b);
+    acc = vpadalq_u16(acc, vmull_u8(vget_low_u8(d), vget_low_u8(d)));
+    return vpadalq_u16(acc, vmull_high_u8(d, d));
+  }
+};
+
+// The dot product: one udot squares and sums four bytes per lane.
+struct DotProdSquares {
+  __attribute__((target(CWLOC_DOTPROD))) uint32x4_t operator()(uint32x4_t acc, uint8x16_t a,
+                                                               uint8x16_t b) const {
+    const uint8x16_t d = vabdq_u8(a, b);
+    return vdotq_u32(acc, d, d);
+  }
+};
+
+// Inlined into each kernel, so the dot product kernels get their target's instructions.
+template <typename Squares>
+__attribute__((always_inline)) inline void NeonBatchWith(const uint8_t* query, const uint8_t* base,
+                                                         const uint32_t* rows, size_t n,
+                                                         uint32_t* out) {
+  uint8x16_t q[8];
+  for (int j = 0; j < 8; ++j) q[j] = vld1q_u8(query + 16 * j);
+  for (size_t i = 0; i < n; ++i) {
+    const uint8_t* v = base + size_t(rows[i]) * kDescriptorDim;
+    uint32x4_t acc0 = vdupq_n_u32(0);
+    uint32x4_t acc1 = vdupq_n_u32(0);
+    for (int j = 0; j < 8; j += 2) {
+      acc0 = Squares()(acc0, q[j], vld1q_u8(v + 16 * j));
+      acc1 = Squares()(acc1, q[j + 1], vld1q_u8(v + 16 * j + 16));
+    }
+    out[i] = vaddvq_u32(vaddq_u32(acc0, acc1));
+  }
+}
+
+void NeonBatch(const uint8_t* query, const uint8_t* base, const uint32_t* rows, size_t n,
+               uint32_t* out) {
+  NeonBatchWith<NeonSquares>(query, base, rows, n, out);
+}
+
+uint32_t NeonOne(const uint8_t* a, const uint8_t* b) {
+  const uint32_t row = 0;
+  uint32_t out;
+  NeonBatchWith<NeonSquares>(a, b, &row, 1, &out);
+  return out;
+}
+
+__attribute__((target(CWLOC_DOTPROD))) void NeonDotProdBatch(const uint8_t* query,
+                                                             const uint8_t* base,
+                                                             const uint32_t* rows, size_t n,
+                                                             uint32_t* out) {
+  NeonBatchWith<DotProdSquares>(query, base, rows, n, out);
+}
+
+__attribute__((target(CWLOC_DOTPROD))) uint32_t NeonDotProdOne(const uint8_t* a, const uint8_t* b) {
+  const uint32_t row = 0;
+  uint32_t out;
+  NeonBatchWith<DotProdSquares>(a, b, &row, 1, &out);
+  return out;
+}
+
+#endif  // CWLOC_AARCH64
+
 constexpr DistanceFunctions kScalarFunctions{DistanceKernel::kScalar, "scalar", ScalarOne,
                                              ScalarBatch};
 #ifdef CWLOC_X86_64
@@ -164,6 +243,11 @@ constexpr DistanceFunctions kAvx512Functions{DistanceKernel::kAvx512, "avx512bw"
                                              Avx512Batch};
 constexpr DistanceFunctions kAvx512VnniFunctions{DistanceKernel::kAvx512Vnni, "avx512vnni",
                                                  Avx512VnniOne, Avx512VnniBatch};
+#endif
+#ifdef CWLOC_AARCH64
+constexpr DistanceFunctions kNeonFunctions{DistanceKernel::kNeon, "neon", NeonOne, NeonBatch};
+constexpr DistanceFunctions kNeonDotProdFunctions{DistanceKernel::kNeonDotProd, "neon-dotprod",
+                                                  NeonDotProdOne, NeonDotProdBatch};
 #endif
 
 }  // namespace
@@ -185,18 +269,26 @@ const DistanceFunctions* DistanceFunctionsFor(DistanceKernel kernel) {
                      __builtin_cpu_supports("avx512vnni")
                  ? &kAvx512VnniFunctions
                  : nullptr;
-#else
-    default:
-      return nullptr;
 #endif
+#ifdef CWLOC_AARCH64
+    // Advanced SIMD is part of ARMv8-A; the dot product is optional from ARMv8.2 on, and the
+    // kernel reports it in the auxiliary vector.
+    case DistanceKernel::kNeon:
+      return &kNeonFunctions;
+    case DistanceKernel::kNeonDotProd:
+      return getauxval(AT_HWCAP) & HWCAP_ASIMDDP ? &kNeonDotProdFunctions : nullptr;
+#endif
+    default:
+      return nullptr;  // another architecture's kernel
   }
-  return nullptr;
 }
 
 const DistanceFunctions& BestDistanceFunctions() {
   static const DistanceFunctions* best = [] {
+    // Fastest first; each architecture finds only its own.
     for (DistanceKernel k :
-         {DistanceKernel::kAvx512Vnni, DistanceKernel::kAvx512, DistanceKernel::kAvx2}) {
+         {DistanceKernel::kAvx512Vnni, DistanceKernel::kAvx512, DistanceKernel::kAvx2,
+          DistanceKernel::kNeonDotProd, DistanceKernel::kNeon}) {
       if (const DistanceFunctions* f = DistanceFunctionsFor(k)) return f;
     }
     return &kScalarFunctions;

@@ -2,7 +2,8 @@
 
 // Squared L2 distance between 128-byte uint8 SIFT descriptors, exact in uint32 (the largest
 // value, 128 * 255^2, fits easily). The kernel is chosen once at run time from what the CPU
-// supports, so one x86-64 binary runs everywhere; other architectures use the portable code.
+// supports, so one x86-64 or aarch64 binary runs everywhere; other architectures use the
+// portable code. Every kernel gives the scalar kernel's results exactly.
 
 #include <cstddef>
 #include <cstdint>
@@ -13,11 +14,18 @@ namespace cwloc {
 inline constexpr size_t kDescriptorDim = 128;
 
 enum class DistanceKernel : uint8_t {
-  kScalar,      // portable C++, any CPU
-  kAvx2,        // x86-64 with AVX2
-  kAvx512,      // x86-64 with AVX-512BW
-  kAvx512Vnni,  // AVX-512BW plus VNNI (vpdpwssd fuses the multiply-add and the sum)
+  kScalar,       // portable C++, any CPU
+  kAvx2,         // x86-64 with AVX2
+  kAvx512,       // x86-64 with AVX-512BW
+  kAvx512Vnni,   // AVX-512BW plus VNNI (vpdpwssd fuses the multiply-add and the sum)
+  kNeon,         // aarch64 Advanced SIMD (every ARMv8-A CPU)
+  kNeonDotProd,  // aarch64 with the ARMv8.2 dot product (udot squares and sums bytes)
 };
+
+// Every kernel, of every architecture (DistanceFunctionsFor says which this CPU has).
+inline constexpr DistanceKernel kAllDistanceKernels[] = {
+    DistanceKernel::kScalar,     DistanceKernel::kAvx2, DistanceKernel::kAvx512,
+    DistanceKernel::kAvx512Vnni, DistanceKernel::kNeon, DistanceKernel::kNeonDotProd};
 
 struct DistanceFunctions {
   DistanceKernel kernel;

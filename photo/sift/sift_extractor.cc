@@ -4,7 +4,9 @@
 #include <string>
 
 #include "photo/sift/sift_cwloc.h"
+#ifdef CWLOC_WITH_VLFEAT
 #include "photo/sift/sift_vlfeat.h"
+#endif
 
 namespace cwloc {
 namespace {
@@ -13,7 +15,23 @@ void Require(bool ok, const std::string& what) {
   if (!ok) throw std::invalid_argument("SIFT option " + what);
 }
 
+SiftFeatures ExtractWithVlfeat(const GreyImage& image, const SiftOptions& options) {
+#ifdef CWLOC_WITH_VLFEAT
+  return sift_internal::ExtractSiftVlfeat(image, options);
+#else
+  throw std::logic_error("SIFT: no VLFeat in this build");  // ValidateSiftOptions rejects it
+#endif
+}
+
 }  // namespace
+
+bool SiftVlfeatAvailable() {
+#ifdef CWLOC_WITH_VLFEAT
+  return true;
+#else
+  return false;
+#endif
+}
 
 void ValidateSiftOptions(const SiftOptions& options) {
   Require(options.max_num_features > 0, "max_num_features must be > 0");
@@ -26,6 +44,13 @@ void ValidateSiftOptions(const SiftOptions& options) {
   Require(options.edge_threshold > 0, "edge_threshold must be > 0");
   Require(options.max_num_orientations > 0, "max_num_orientations must be > 0");
   Require(options.num_threads > 0, "num_threads must be > 0");
+  if (!SiftVlfeatAvailable()) {
+    constexpr const char* kRebuild = " in a build without VLFeat (cmake -DCWLOC_WITH_VLFEAT=ON)";
+    Require(options.implementation != SiftOptions::Implementation::kVlfeat,
+            std::string("implementation kVlfeat (VLFeat itself) is not available") + kRebuild);
+    Require(options.first_octave >= -1,
+            std::string("first_octave must be >= -1 (below, VLFeat runs)") + kRebuild);
+  }
 }
 
 SiftFeatures ExtractSift(const GreyImage& image, const SiftOptions& options) {
@@ -48,10 +73,10 @@ SiftFeatures ExtractSift(const GreyImage& image, const SiftOptions& options) {
       // VLFeat upsamples a second time with width and height swapped (its
       // copy_and_upsample_rows calls for o < -1), which only COLMAP's features of square
       // images survive; reproducing it is not worth it: VLFeat itself runs those.
-      if (options.first_octave < -1) return sift_internal::ExtractSiftVlfeat(image, options);
+      if (options.first_octave < -1) return ExtractWithVlfeat(image, options);
       return sift_internal::ExtractSiftCwloc(image, options);
     case SiftOptions::Implementation::kVlfeat:
-      return sift_internal::ExtractSiftVlfeat(image, options);
+      return ExtractWithVlfeat(image, options);
   }
   throw std::invalid_argument("SIFT: unknown implementation");
 }

@@ -15,7 +15,8 @@ struct SiftOptions {
   // Keep coarse DoG levels until their keypoint count (before orientations) exceeds this;
   // the level that crosses the cap is kept whole, so the result can exceed it.
   int max_num_features = 8192;
-  // First octave of the pyramid; -1 upsamples the image by 2 first.
+  // First octave of the pyramid; -1 upsamples the image by 2 first. Below -1 only in builds
+  // with VLFeat, which runs those (docs/sift.md).
   int first_octave = -1;
   int num_octaves = 4;
   int octave_resolution = 3;  // DoG levels per octave
@@ -36,7 +37,9 @@ struct SiftOptions {
   enum class Implementation {
     // Ours: VLFeat's algorithm in VLFeat's arithmetic, several times faster (docs/sift.md).
     kCwloc,
-    kVlfeat,  // VLFeat's vl_sift_* called exactly as COLMAP 3.8 calls them (the reference)
+    // VLFeat's vl_sift_* called exactly as COLMAP 3.8 calls them (the reference); only in
+    // builds with VLFeat (SiftVlfeatAvailable()).
+    kVlfeat,
   };
   Implementation implementation = Implementation::kCwloc;
   // Threads inside one photo (>= 1); results do not depend on it.
@@ -62,7 +65,12 @@ struct SiftFeatures {
   const uint8_t* Descriptor(size_t i) const { return descriptors.data() + i * kSiftDescriptorDim; }
 };
 
-// Throws std::invalid_argument naming the option when one is out of range.
+// Whether this build has VLFeat (cmake -DCWLOC_WITH_VLFEAT=ON): Implementation::kVlfeat and
+// first_octave < -1 need it.
+bool SiftVlfeatAvailable();
+
+// Throws std::invalid_argument naming the option when one is out of range or needs VLFeat in
+// a build without it.
 void ValidateSiftOptions(const SiftOptions& options);
 
 // Extracts SIFT features from `image` (coordinates in its pixel frame). Throws

@@ -8,6 +8,7 @@
 
 #include "cwloc/cwloc.h"
 #include "cwloc/cwloc.hpp"
+#include "tests/api/api_test_util.h"
 #include "tests/test_util.h"
 
 namespace cwloc {
@@ -15,9 +16,8 @@ namespace {
 
 using testing::HasSubstr;
 
-const std::string kIndex = (test::SourceDir() / "tests/data/golden/index-1.0.cwl").string();
-const std::string kQuery =
-    (test::SourceDir() / "tests/data/golden/index-1.0-queries/query_00001.jpg.txt").string();
+const std::string kIndex = GoldenIndex().string();
+const std::string kQuery = (QueryDir() / "query_00001.jpg.txt").string();
 const double kParams[] = {900, 512, 384, -0.01};  // the generator's camera (queries_gt.txt)
 
 cwloc_camera KnownCamera() {

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdlib>
+#include <string>
 #include <vector>
 
 #include "tests/test_util.h"
@@ -20,20 +22,31 @@ uint32_t Reference(const uint8_t* a, const uint8_t* b) {
 
 std::vector<const DistanceFunctions*> SupportedKernels() {
   std::vector<const DistanceFunctions*> out;
-  for (DistanceKernel k : {DistanceKernel::kScalar, DistanceKernel::kAvx2, DistanceKernel::kAvx512,
-                           DistanceKernel::kAvx512Vnni}) {
+  for (DistanceKernel k : kAllDistanceKernels) {
     if (const DistanceFunctions* f = DistanceFunctionsFor(k)) out.push_back(f);
   }
   return out;
 }
 
+// The tests below run every kernel this list names. CWLOC_TEST_DISTANCE_KERNELS (e.g. "scalar
+// neon" under QEMU_CPU=cortex-a53) makes sure that they are the ones expected.
 TEST(DescriptorDistance, ScalarAlwaysAvailableAndBestIsSupported) {
   ASSERT_NE(DistanceFunctionsFor(DistanceKernel::kScalar), nullptr);
   const DistanceFunctions& best = BestDistanceFunctions();
   EXPECT_EQ(DistanceFunctionsFor(best.kernel), &best);
-  std::cout << "kernels on this CPU:";
-  for (const DistanceFunctions* f : SupportedKernels()) std::cout << " " << f->name;
-  std::cout << " (best: " << best.name << ")\n";
+  std::string names;
+  for (const DistanceFunctions* f : SupportedKernels()) {
+    if (!names.empty()) names += ' ';
+    names += f->name;
+  }
+  std::cout << "kernels on this CPU: " << names << " (best: " << best.name << ")\n";
+  if (const char* expected = std::getenv("CWLOC_TEST_DISTANCE_KERNELS")) {
+    EXPECT_EQ(names, expected);
+  }
+#if defined(__aarch64__)
+  EXPECT_NE(DistanceFunctionsFor(DistanceKernel::kNeon), nullptr);  // part of ARMv8-A
+  EXPECT_NE(best.kernel, DistanceKernel::kScalar);
+#endif
 }
 
 TEST(DescriptorDistance, AllKernelsExactOnRandomAndExtremeData) {
@@ -89,6 +102,32 @@ TEST(DescriptorDistance, AllKernelsExactOnRandomAndExtremeData) {
     EXPECT_EQ(f->one(shifted.data() + 1, shifted.data() + kDescriptorDim + 2),
               Reference(shifted.data() + 1, shifted.data() + kDescriptorDim + 2));
     f->batch(ones, data.data(), rows.data(), 0, nullptr);  // empty batch: no access
+  }
+}
+
+// Batches as a kd leaf makes them: any rows, in any order, repeated, of any count.
+TEST(DescriptorDistance, BatchesOfArbitraryRows) {
+  auto& rng = test::Rng();
+  constexpr size_t kRows = 97;
+  std::vector<uint8_t> data(kRows * kDescriptorDim);
+  for (auto& b : data) b = uint8_t(rng());
+  std::fill_n(data.begin() + 5 * kDescriptorDim, kDescriptorDim, uint8_t{255});
+  std::fill_n(data.begin() + 6 * kDescriptorDim, kDescriptorDim, uint8_t{0});
+  for (const DistanceFunctions* f : SupportedKernels()) {
+    SCOPED_TRACE(std::string(f->name));
+    for (size_t n = 1; n <= 40; ++n) {
+      std::vector<uint32_t> rows(n);
+      for (auto& r : rows) r = uint32_t(rng() % kRows);
+      rows[rng() % n] = rng() % 2 ? 5 : 6;  // an extreme row in every batch
+      const uint8_t* query = data.data() + (rng() % kRows) * kDescriptorDim;
+      std::vector<uint32_t> out(n + 1, 12345);
+      f->batch(query, data.data(), rows.data(), n, out.data());
+      for (size_t i = 0; i < n; ++i) {
+        ASSERT_EQ(out[i], Reference(query, data.data() + size_t(rows[i]) * kDescriptorDim))
+            << "n " << n << " i " << i << " row " << rows[i];
+      }
+      EXPECT_EQ(out[n], 12345u);  // nothing written past n
+    }
   }
 }
 

@@ -203,8 +203,7 @@ TEST(KdForest, EveryKernelGivesTheSameExactResults) {
   KdSearchOptions options;
   options.max_checks = 128;
   std::vector<std::vector<KdNeighbor>> reference;
-  for (DistanceKernel kernel : {DistanceKernel::kScalar, DistanceKernel::kAvx2,
-                                DistanceKernel::kAvx512, DistanceKernel::kAvx512Vnni}) {
+  for (DistanceKernel kernel : kAllDistanceKernels) {
     const DistanceFunctions* f = DistanceFunctionsFor(kernel);
     if (!f) continue;
     KdForestSearcher searcher(forest.View(data), *f);

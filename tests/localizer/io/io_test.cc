@@ -5,6 +5,7 @@
 #include "format/base/error.h"
 #include "localizer/io/camera_spec.h"
 #include "localizer/io/feature_file.h"
+#include "localizer/io/photo_query.h"
 #ifdef CWLOC_WITH_COLMAP_DB
 #include "format/colmap/database.h"
 #include "localizer/io/database/database_queries.h"
@@ -73,6 +74,18 @@ class FeatureFileTest : public testing::Test {
   }
   test::TempDir dir_;
 };
+
+// What only VLFeat computes is a usage error in a build without it (docs/devices.md).
+TEST(PhotoOptions, VlfeatOnlySiftOptionsNeedVlfeat) {
+  PhotoOptions options;
+  options.sift.first_octave = -2;
+  if (SiftVlfeatAvailable()) {
+    EXPECT_NO_THROW(ValidatePhotoOptions(options));
+  } else {
+    EXPECT_THAT(ErrorOf([&] { ValidatePhotoOptions(options); }),
+                HasSubstr("first_octave must be >= -1"));
+  }
+}
 
 TEST_F(FeatureFileTest, ReadsKeypointsAndDescriptors) {
   const std::string path =

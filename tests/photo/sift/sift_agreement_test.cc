@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "photo/sift/sift_extractor.h"
 #include "tests/photo/sift/sift_agreement_util.h"
@@ -52,9 +53,15 @@ TEST_P(SiftAgreementTest, AgreesWithColmapBothWays) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(All, SiftAgreementTest,
-                         testing::Values(SiftOptions::Implementation::kCwloc,
-                                         SiftOptions::Implementation::kVlfeat));
+std::vector<SiftOptions::Implementation> Implementations() {
+  std::vector<SiftOptions::Implementation> out;
+  for (const std::string& name : sift_bench::ImplementationNames()) {
+    out.push_back(sift_bench::ParseImplementation(name));
+  }
+  return out;
+}
+
+INSTANTIATE_TEST_SUITE_P(All, SiftAgreementTest, testing::ValuesIn(Implementations()));
 
 }  // namespace
 }  // namespace cwloc

@@ -116,7 +116,10 @@ Agreement CompareFeatures(const SiftFeatures& a, const SiftFeatures& b,
 
 namespace cwloc::sift_bench {
 
-std::vector<std::string> ImplementationNames() { return {"cwloc", "vlfeat"}; }
+std::vector<std::string> ImplementationNames() {
+  if (!SiftVlfeatAvailable()) return {"cwloc"};
+  return {"cwloc", "vlfeat"};
+}
 
 SiftOptions::Implementation ParseImplementation(const std::string& name) {
   if (name == "cwloc") return SiftOptions::Implementation::kCwloc;

@@ -49,7 +49,8 @@ Agreement CompareFeatures(const SiftFeatures& a, const SiftFeatures& b,
 
 namespace cwloc::sift_bench {
 
-// "vlfeat", ... <-> SiftOptions::Implementation, for the tools' --implementation.
+// "vlfeat", ... <-> SiftOptions::Implementation, for the tools' --implementation (only the
+// ones this build has).
 std::vector<std::string> ImplementationNames();
 SiftOptions::Implementation ParseImplementation(const std::string& name);
 

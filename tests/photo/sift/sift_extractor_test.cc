@@ -7,8 +7,13 @@
 #include <numeric>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
+#include "format/index/xxhash64.h"
+#include "photo/image_decode.h"
+#include "photo/image_resize.h"
 #include "photo/sift/sift_levels.h"
+#include "tests/test_util.h"
 
 namespace cwloc {
 namespace {
@@ -38,6 +43,7 @@ GreyImage BlobImage(uint32_t width, uint32_t height) {
 }
 
 std::vector<SiftOptions::Implementation> Implementations() {
+  if (!SiftVlfeatAvailable()) return {SiftOptions::Implementation::kCwloc};
   return {SiftOptions::Implementation::kCwloc, SiftOptions::Implementation::kVlfeat};
 }
 
@@ -77,6 +83,30 @@ TEST(SiftOptionsTest, BadOptionsThrow) {
   EXPECT_THROW(ExtractSift(GreyImage{}, SiftOptions{}), std::invalid_argument);
   EXPECT_THROW(ExtractSift(GreyImage{4, 4, std::vector<uint8_t>(15)}, SiftOptions{}),
                std::invalid_argument);
+}
+
+// A build without VLFeat rejects what only VLFeat computes, naming the option and the cure.
+TEST(SiftOptionsTest, VlfeatOnlyOptionsNeedVlfeat) {
+  SiftOptions reference;
+  reference.implementation = SiftOptions::Implementation::kVlfeat;
+  SiftOptions twice_upsampled;
+  twice_upsampled.first_octave = -2;
+  for (const auto& [options, name] :
+       {std::pair{reference, "implementation"}, std::pair{twice_upsampled, "first_octave"}}) {
+    SCOPED_TRACE(name);
+    if (SiftVlfeatAvailable()) {
+      EXPECT_NO_THROW(ValidateSiftOptions(options));
+      continue;
+    }
+    try {
+      ExtractSift(BlobImage(64, 64), options);
+      ADD_FAILURE() << "accepted without VLFeat";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("-DCWLOC_WITH_VLFEAT=ON"), std::string::npos)
+          << e.what();
+    }
+  }
 }
 
 TEST(SiftLevelsTest, FirstLevelToKeepFollowsColmap) {
@@ -180,6 +210,7 @@ TEST_P(SiftImplementationTest, UprightGivesZeroOrientation) {
 
 // Ours reproduces VLFeat bit for bit, for other options too.
 TEST(SiftCwlocTest, EqualsVlfeatForVariousOptions) {
+  if (!SiftVlfeatAvailable()) GTEST_SKIP() << "built without VLFeat";
   const GreyImage image = BlobImage(301, 203);  // odd sizes: odd octave sides
   std::vector<std::function<void(SiftOptions&)>> variants = {
       [](SiftOptions&) {},
@@ -211,6 +242,23 @@ TEST(SiftCwlocTest, EqualsVlfeatForVariousOptions) {
       EXPECT_EQ(ours.keypoints[i].orientation, vlfeat.keypoints[i].orientation);
     }
   }
+}
+
+// The same photo gives the same features on every platform (a fused multiply-add or another
+// summation order would move them): ours on a real photo, shrunk as COLMAP shrinks it. The
+// hash was taken on x86-64, where ours equals VLFeat bit for bit.
+TEST(SiftCwlocTest, SameFeaturesOnEveryPlatform) {
+  CWLOC_REQUIRE_SHARED_DATA(data, "herz_jesu_p25");
+  const std::filesystem::path path = data / "query_images" / "0002.jpg";
+  GreyImage image = DecodeGreyImage(ReadFileBytes(path), path);
+  const ImageSize size = ExtractionSize(image.width, image.height, 640);
+  image = ResizeBilinear(image, size.width, size.height);
+  const SiftFeatures features = ExtractSift(image, SiftOptions{});
+  std::vector<uint8_t> bytes = features.descriptors;
+  const auto* keypoints = reinterpret_cast<const uint8_t*>(features.keypoints.data());
+  bytes.insert(bytes.end(), keypoints, keypoints + features.size() * sizeof(SiftKeypoint));
+  EXPECT_EQ(features.size(), 3727u);
+  EXPECT_EQ(HashHex(XxHash64(bytes)), HashHex(0xadc72d0fc82e8908ULL));
 }
 
 INSTANTIATE_TEST_SUITE_P(All, SiftImplementationTest, testing::ValuesIn(Implementations()));
