@@ -1,0 +1,57 @@
+#!/usr/bin/env bash
+# The aarch64 device build, under qemu-user, must return what the x86-64 device build returns
+# from the same index built on x86-64: the same localized set, the same inlier and
+# correspondence counts, poses and cameras within 1e-6 relative (tools/compare_results.py).
+# Data: herz_jesu_p25 from its photos and from its stored query features, and a generated city
+# from its query features.
+#
+# Usage: tools/check_arm64.sh NATIVE_BUILD X86_DEVICE_BUILD ARM64_DEVICE_BUILD
+#   NATIVE_BUILD: a full build (cwloc-index, cwloc-synth) that makes the indexes.
+set -euo pipefail
+native=$(realpath "$1")
+x86=$(realpath "$2")
+arm=$(realpath "$3")
+cd "$(dirname "$0")/.."
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+
+# Runs both builds on one query set and compares; $1 names the set, the rest are the options.
+compare() {
+  local name=$1
+  shift
+  local status=0
+  "$x86/bin/cwloc-localize" "$@" -q -o "$work/$name.x86.jsonl" || status=$?
+  [ "$status" -le 1 ] || { echo "check_arm64: x86-64 failed on $name ($status)" >&2; exit 1; }
+  status=0
+  qemu-aarch64 "$arm/bin/cwloc-localize" "$@" -q -o "$work/$name.arm64.jsonl" || status=$?
+  [ "$status" -le 1 ] || { echo "check_arm64: aarch64 failed on $name ($status)" >&2; exit 1; }
+  echo -n "check_arm64: $name: "
+  python3 tools/compare_results.py "$work/$name.x86.jsonl" "$work/$name.arm64.jsonl"
+}
+
+# Writes a feature-file query list (NAME.txt MODEL W H PARAMS) for the queries of a data set.
+feature_queries() {
+  local database=$1 intrinsics=$2 out=$3
+  mkdir -p "$out"
+  # shellcheck disable=SC2046
+  python3 tests/data/export_query_features.py "$database" "$out" $(awk '!/^#/ && NF { print $1 }' "$intrinsics")
+  awk '!/^#/ && NF { $1 = $1 ".txt"; print }' "$intrinsics" >"$out/list.txt"
+}
+
+data=../shared/data/herz_jesu_p25
+if [ -d "$data" ]; then
+  "$native/bin/cwloc-index" build --model "$data/mapping_model/bin" --database "$data/database.db" \
+    -o "$work/herz_jesu.cwl" >/dev/null 2>&1
+  feature_queries "$data/database.db" "$data/queries_with_intrinsics.txt" "$work/herz_features"
+  compare herz_jesu_features --index "$work/herz_jesu.cwl" --query-list "$work/herz_features/list.txt"
+  compare herz_jesu_photos --index "$work/herz_jesu.cwl" --image-list "$data/query_list.txt" \
+    --image-dir "$data/query_images" --max-image-size 1600 --max-features 6000
+else
+  echo "check_arm64: ../shared/data/herz_jesu_p25 not found; generated city only" >&2
+fi
+
+"$native/bin/cwloc-synth" --preset demo --seed 7 -o "$work/city" >/dev/null
+"$native/bin/cwloc-index" build --model "$work/city/mapping_model/bin" \
+  --database "$work/city/database.db" -o "$work/city.cwl" >/dev/null 2>&1
+feature_queries "$work/city/database.db" "$work/city/queries_with_intrinsics.txt" "$work/city_features"
+compare city_features --index "$work/city.cwl" --query-list "$work/city_features/list.txt"
