@@ -73,7 +73,9 @@ report() {
   t_photo=$(median_ms $runner "$exe" "${photo[@]}")
   m_features=$(peak_mb $runner "$exe" "${features[@]}")
   m_photo=$(peak_mb $runner "$exe" "${photo[@]}")
-  echo "| $arch | $(kb "$(stat -c %s "$exe")") kB / $(kb "$exe_size") kB | $(kb "$lib_size") kB | ${extras[*]/%/,} | $(kb $((exe_size + extra_total))) kB | $runtime | $t_features / $t_photo | $m_features / $m_photo |"
+  local joined
+  joined=$(printf '%s, ' "${extras[@]}")
+  echo "| $arch | $(kb "$(stat -c %s "$exe")") kB / $(kb "$exe_size") kB | $(kb "$lib_size") kB | ${joined%, } | $(kb $((exe_size + extra_total))) kB | $runtime| $t_features / $t_photo | $m_features / $m_photo |"
 }
 
 median_ms() {  # median wall time of 5 runs, milliseconds
