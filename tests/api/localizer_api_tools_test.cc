@@ -8,10 +8,10 @@
 #include <nlohmann/json.hpp>
 
 #include "cwloc/cwloc.hpp"
-#include "indexer/index_builder.h"
 #include "photo/image_decode.h"
 #include "tests/api/api_test_util.h"
 #include "tests/localization_check.h"
+#include "tests/shared_data_index.h"
 #include "tests/test_util.h"
 
 namespace cwloc {
@@ -46,43 +46,28 @@ TEST(LocalizerApiToolsTest, GivesTheSamePosesAsCwlocLocalize) {
 class LocalizerApiPhotoTest : public testing::Test {
  protected:
   static void SetUpTestSuite() {
-    const auto data = test::SharedDataDir("herz_jesu_p25");
-    if (!data) return;
-    data_ = new std::filesystem::path(*data);
-    dir_ = new test::TempDir;
-    IndexBuildOptions options;
-    options.model_dir = *data_ / "mapping_model" / "bin";
-    options.database_path = *data_ / "database.db";
-    options.output_path = *dir_ / "herz_jesu.cwl";
-    BuildIndex(options);
-    localizer_ = new api::Localizer(api::Localizer::Open(options.output_path.string()));
+    const auto shared = test::BuildSharedDataIndex("herz_jesu_p25");
+    if (!shared) return;
+    data_ = shared->data;
+    localizer_ = new api::Localizer(api::Localizer::Open(shared->index.string()));
   }
   static void TearDownTestSuite() {
     delete localizer_;
-    delete dir_;
-    delete data_;
     localizer_ = nullptr;
-    dir_ = nullptr;
-    data_ = nullptr;
   }
   void SetUp() override {
     if (localizer_ == nullptr)
       GTEST_SKIP() << "shared data 'herz_jesu_p25' not found next to the source tree; skipping";
   }
 
-  static std::filesystem::path* data_;
-  static test::TempDir* dir_;
-  static api::Localizer* localizer_;
+  static inline std::filesystem::path data_;
+  static inline api::Localizer* localizer_ = nullptr;
 };
 
-std::filesystem::path* LocalizerApiPhotoTest::data_ = nullptr;
-test::TempDir* LocalizerApiPhotoTest::dir_ = nullptr;
-api::Localizer* LocalizerApiPhotoTest::localizer_ = nullptr;
-
 TEST_F(LocalizerApiPhotoTest, FileBytesAndGreyPixelsGiveOnePoseNearColmaps) {
-  const std::filesystem::path photo = *data_ / "query_images" / "0012.jpg";
-  const auto truth = test::ReadGroundTruth(*data_ / "queries_gt.txt").at("0012.jpg");
-  const double metres_per_unit = test::ReadMetresPerUnit(*data_ / "scale_to_metres.txt");
+  const std::filesystem::path photo = data_ / "query_images" / "0012.jpg";
+  const auto truth = test::ReadGroundTruth(data_ / "queries_gt.txt").at("0012.jpg");
+  const double metres_per_unit = test::ReadMetresPerUnit(data_ / "scale_to_metres.txt");
   api::Options options;  // as the data set was extracted (its README)
   options.max_image_size = 1600;
   options.max_features = 6000;

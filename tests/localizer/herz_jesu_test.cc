@@ -7,10 +7,10 @@
 #include <sstream>
 
 #include "format/index/index.h"
-#include "indexer/index_builder.h"
 #include "localizer/io/camera_spec.h"
 #include "localizer/io/database/database_queries.h"
 #include "localizer/localizer.h"
+#include "tests/shared_data_index.h"
 #include "tests/test_util.h"
 
 namespace cwloc {
@@ -45,22 +45,14 @@ std::map<std::string, GroundTruth> ReadGroundTruth(const std::filesystem::path& 
 class HerzJesuTest : public testing::Test {
  protected:
   static void SetUpTestSuite() {
-    const auto data = test::SharedDataDir("herz_jesu_p25");
-    if (!data) return;
-    data_ = *data;
-    dir_ = new test::TempDir;
-    IndexBuildOptions options;
-    options.model_dir = data_ / "mapping_model" / "bin";
-    options.database_path = data_ / "database.db";
-    options.output_path = *dir_ / "herz_jesu.cwl";
-    BuildIndex(options);
-    index_ = new Index(Index::Open(options.output_path));
+    const auto shared = test::BuildSharedDataIndex("herz_jesu_p25");
+    if (!shared) return;
+    data_ = shared->data;
+    index_ = new Index(Index::Open(shared->index));
   }
   static void TearDownTestSuite() {
     delete index_;
-    delete dir_;
     index_ = nullptr;
-    dir_ = nullptr;
   }
 
   void SetUp() override {
@@ -85,7 +77,6 @@ class HerzJesuTest : public testing::Test {
   }
 
   static inline std::filesystem::path data_;
-  static inline test::TempDir* dir_ = nullptr;
   static inline Index* index_ = nullptr;
   std::map<std::string, GroundTruth> truth_;
 };

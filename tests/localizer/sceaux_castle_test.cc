@@ -12,11 +12,11 @@
 #include <iostream>
 
 #include "format/index/index.h"
-#include "indexer/index_builder.h"
 #include "localizer/io/camera_spec.h"
 #include "localizer/io/database/database_queries.h"
 #include "localizer/localizer.h"
 #include "tests/localization_check.h"
+#include "tests/shared_data_index.h"
 #include "tests/test_util.h"
 
 namespace cwloc {
@@ -41,22 +41,14 @@ PoseError ErrorOf(const LocalizationResult& result, const test::GroundTruthQuery
 class SceauxCastleTest : public testing::Test {
  protected:
   static void SetUpTestSuite() {
-    const auto data = test::SharedDataDir("sceaux_castle");
-    if (!data) return;
-    data_ = *data;
-    dir_ = new test::TempDir;
-    IndexBuildOptions options;
-    options.model_dir = data_ / "mapping_model" / "bin";
-    options.database_path = data_ / "database.db";
-    options.output_path = *dir_ / "sceaux.cwl";
-    BuildIndex(options);
-    index_ = new Index(Index::Open(options.output_path));
+    const auto shared = test::BuildSharedDataIndex("sceaux_castle");
+    if (!shared) return;
+    data_ = shared->data;
+    index_ = new Index(Index::Open(shared->index));
   }
   static void TearDownTestSuite() {
     delete index_;
-    delete dir_;
     index_ = nullptr;
-    dir_ = nullptr;
   }
 
   void SetUp() override {
@@ -81,7 +73,6 @@ class SceauxCastleTest : public testing::Test {
   }
 
   static inline std::filesystem::path data_;
-  static inline test::TempDir* dir_ = nullptr;
   static inline Index* index_ = nullptr;
   std::map<std::string, test::GroundTruthQuery> truth_;
 };
