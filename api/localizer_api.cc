@@ -80,8 +80,7 @@ QueryCamera ToQueryCamera(const Camera& camera) {
   QueryCamera query_camera;
   ValidateOrThrowInvalidArgument([&] {
     if (camera.calibration == Calibration::kUnknown) {
-      query_camera = ParseImageSize(
-          std::to_string(camera.width) + " " + std::to_string(camera.height), "camera");
+      query_camera = ImageSizeCamera(camera.width, camera.height, "camera");
       return;
     }
     query_camera =

@@ -22,6 +22,11 @@ uint32_t ParseDimension(std::istringstream& in, const std::string& field, const 
   return static_cast<uint32_t>(value);
 }
 
+void CheckImageSize(uint32_t width, uint32_t height, const std::string& what) {
+  if (width == 0 || width > kMaxImageSide) throw InputError(DimensionError("width", what));
+  if (height == 0 || height > kMaxImageSide) throw InputError(DimensionError("height", what));
+}
+
 CameraModelInfo ProjectableModel(const std::string& model_name, const std::string& what) {
   const auto model = FindCameraModel(model_name);
   if (!model) {
@@ -42,8 +47,7 @@ CameraModelInfo ProjectableModel(const std::string& model_name, const std::strin
 QueryCamera MakeKnownCamera(const std::string& model_name, uint32_t width, uint32_t height,
                             std::vector<double> params, const std::string& what) {
   const CameraModelInfo model = ProjectableModel(model_name, what);
-  if (width == 0 || width > kMaxImageSide) throw InputError(DimensionError("width", what));
-  if (height == 0 || height > kMaxImageSide) throw InputError(DimensionError("height", what));
+  CheckImageSize(width, height, what);
   for (const double value : params) {
     if (!std::isfinite(value))
       throw InputError(what + ": camera parameters must be finite numbers");
@@ -85,21 +89,28 @@ QueryCamera ParseImageSize(const std::string& spec, const std::string& what) {
     if (c == 'x' || c == 'X') c = ' ';
   }
   std::istringstream in(text);
-  QueryCamera camera;
-  camera.width = ParseDimension(in, "width", what);
-  camera.height = ParseDimension(in, "height", what);
+  const uint32_t width = ParseDimension(in, "width", what);
+  const uint32_t height = ParseDimension(in, "height", what);
   std::string rest;
   if (in >> rest) throw InputError(what + ": expected 'WIDTH HEIGHT', got extra '" + rest + "'");
-  camera.model_id = CameraModelId::kSimplePinhole;
-  camera.params = {0.0, camera.width / 2.0, camera.height / 2.0};
-  camera.calibration = Calibration::kUnknown;
+  QueryCamera camera = ImageSizeCamera(width, height, what);
   camera.source = IntrinsicsSource::kImageSizeOption;
   return camera;
 }
 
+QueryCamera ImageSizeCamera(uint32_t width, uint32_t height, const std::string& what) {
+  CheckImageSize(width, height, what);
+  QueryCamera camera;
+  camera.model_id = CameraModelId::kSimplePinhole;
+  camera.width = width;
+  camera.height = height;
+  camera.params = {0.0, width / 2.0, height / 2.0};
+  camera.calibration = Calibration::kUnknown;
+  return camera;
+}
+
 QueryCamera WithUnknownFocal(const QueryCamera& camera) {
-  QueryCamera unknown =
-      ParseImageSize(std::to_string(camera.width) + " " + std::to_string(camera.height), "camera");
+  QueryCamera unknown = ImageSizeCamera(camera.width, camera.height, "camera");
   unknown.source = camera.source;
   return unknown;
 }

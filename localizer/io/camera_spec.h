@@ -19,6 +19,9 @@ QueryCamera MakeKnownCamera(const std::string& model_name, uint32_t width, uint3
 // "WIDTH HEIGHT" (or "WIDTHxHEIGHT"): only the image size is known; the focal is estimated.
 QueryCamera ParseImageSize(const std::string& spec, const std::string& what);
 
+// The same from the numbers (the library API's input), checked the same way; no source set.
+QueryCamera ImageSizeCamera(uint32_t width, uint32_t height, const std::string& what);
+
 // A camera with an unknown focal length built from a known camera's image size.
 QueryCamera WithUnknownFocal(const QueryCamera& camera);
 
