@@ -23,6 +23,22 @@ nlohmann::ordered_json ParseManifest(const Index& index) {
   return manifest;
 }
 
+// One line on where the model lies, and how well the positions fit.
+void PrintGeoreference(const nlohmann::ordered_json& georeference) {
+  const auto& origin = georeference["origin"];
+  std::printf("  georeferenced (%s): ENU origin %.8f, %.8f, %.3f m; scale %.6g m per unit",
+              georeference["source"].get<std::string>().c_str(),
+              origin["latitude_deg"].get<double>(), origin["longitude_deg"].get<double>(),
+              origin["height_m"].get<double>(), georeference["scale"].get<double>());
+  if (georeference.contains("fit")) {
+    const auto& fit = georeference["fit"];
+    std::printf("; %s of %s positions fit, rms %.3f m, %zu outliers",
+                fit["inliers"].dump().c_str(), fit["observations"].dump().c_str(),
+                fit["rms_residual_m"].get<double>(), fit["outliers"].size());
+  }
+  std::printf("\n");
+}
+
 int RunBuild(const IndexBuildOptions& options, bool json) {
   const IndexBuildReport report = BuildIndex(options);
   if (json) {
@@ -38,7 +54,8 @@ int RunBuild(const IndexBuildOptions& options, bool json) {
           {"view_neighbors", report.seconds_neighbor_distances},
           {"kd_forest", report.seconds_kd_forest},
           {"write", report.seconds_write},
-          {"total", report.seconds_total}}}};
+          {"total", report.seconds_total}}},
+        {"georeference", report.georeference}};
     std::cout << out.dump(2) << "\n";
     return kExitOk;
   }
@@ -53,6 +70,7 @@ int RunBuild(const IndexBuildOptions& options, bool json) {
       report.seconds_total, report.seconds_read, report.seconds_covisibility,
       report.seconds_clustering, report.seconds_neighbor_distances, report.seconds_kd_forest,
       report.seconds_write);
+  if (!report.georeference.is_null()) PrintGeoreference(report.georeference);
   return kExitOk;
 }
 
@@ -93,6 +111,8 @@ int RunInfo(const std::string& path, bool json) {
   std::printf("  built by %s %s from %s\n", manifest["tool"].get<std::string>().c_str(),
               manifest["tool_version"].get<std::string>().c_str(),
               manifest["source"]["model"]["path"].get<std::string>().c_str());
+  if (manifest.contains("georeference") && manifest["georeference"].is_object())
+    PrintGeoreference(manifest["georeference"]);
   std::printf("  %-6s %12s %14s %12s  %s\n", "tag", "offset", "bytes", "count", "bytes/view");
   const double views = static_cast<double>(index.num_views());
   for (const SectionEntry& entry : index.file().sections()) {
@@ -159,6 +179,16 @@ int main(int argc, char** argv) {
   build->add_flag(
       "--keypoints", options.keypoints,
       "Also store each view's keypoint (8 bytes per view; the localizer does not need them)");
+  cwloc::GeoreferencingOptions& geo = options.georeferencing;
+  build->add_option("--georef", geo.georef_file,
+                    "Georeference from lines 'IMAGE_NAME LAT LON HEIGHT [SIGMA_M]' (WGS84)");
+  build->add_option("--georef-images", geo.images_dir,
+                    "Georeference from the EXIF GPS of the model's photos in this folder");
+  build->add_option("--model-frame", geo.model_frame,
+                    "The model is already geographic: 'ecef' or 'enu:LAT,LON,HEIGHT'");
+  build->add_option("--georef-sigma", geo.fit.default_sigma_m,
+                    "Position standard deviation (m) of --georef lines without one, and of EXIF GPS")
+      ->capture_default_str();
   build->add_flag("--json", json, "Print the build report as JSON");
 
   std::string index_path;

@@ -67,6 +67,9 @@ IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
   }
   if (views.num_views() >= UINT32_MAX)
     throw InputError("more than 2^32 - 1 views; split the model");
+  GeoreferencingOptions georeferencing = options.georeferencing;
+  georeferencing.fit.seed = options.seed;
+  const std::optional<ModelGeoreference> georeference = GeoreferenceModel(views, georeferencing);
   report.seconds_read = stage.Seconds();
 
   stage.Restart();
@@ -136,7 +139,8 @@ IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
                           {"layout", model.rigs.empty() ? "classic" : "rigs"},
                           {"fingerprint", FingerprintModel(options.model_dir)}}},
                         {"database", {{"path", options.database_path.string()}}}};
-  manifest["georeference"] = nullptr;
+  manifest["georeference"] = georeference ? georeference->manifest : nlohmann::ordered_json();
+  report.georeference = manifest["georeference"];
   const std::string manifest_text = manifest.dump(2) + "\n";
 
   stage.Restart();
@@ -161,6 +165,11 @@ IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
     // Optional: the localizer does not read model keypoints; tools that draw matches do.
     sections.push_back(
         MakeSection(section::kViewKeypoints, Span(views.view_keypoints), /*flags=*/0));
+  }
+  if (georeference) {
+    sections.push_back(MakeSection(section::kGeoreference,
+                                   std::span<const IndexGeoreference>(&georeference->section, 1),
+                                   /*flags=*/0));
   }
   WriteIndexFile(options.output_path, sections);
   report.seconds_write = stage.Seconds();

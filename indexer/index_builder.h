@@ -2,11 +2,12 @@
 
 #include <cstdint>
 #include <filesystem>
-#include <nlohmann/json_fwd.hpp>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "format/kdtree/kd_forest_builder.h"
 #include "indexer/clustering.h"
+#include "indexer/georeferencing.h"
 
 namespace cwloc {
 
@@ -21,6 +22,7 @@ struct IndexBuildOptions {
   KdForestBuildOptions forest;
   uint64_t seed = 0;       // kd-forest randomization and k-means initialisation
   bool keypoints = false;  // also store each view's keypoint (optional section VKXY, 8 B/view)
+  GeoreferencingOptions georeferencing;  // its fit seed is set from `seed`
   int threads = 0;         // 0 = all cores
 };
 
@@ -28,6 +30,7 @@ struct IndexBuildReport {
   size_t num_cameras = 0, num_images = 0, num_points = 0, num_views = 0;
   size_t num_clusters = 0, num_covisibility_edges = 0;
   uint64_t file_bytes = 0;
+  nlohmann::ordered_json georeference;  // the manifest's; null when not georeferenced
   double seconds_read = 0, seconds_covisibility = 0, seconds_clustering = 0;
   double seconds_neighbor_distances = 0, seconds_kd_forest = 0, seconds_write = 0,
          seconds_total = 0;

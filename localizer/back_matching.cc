@@ -9,13 +9,13 @@
 namespace cwloc {
 BackMatchingResult MatchBack(const Index& index, const ClusterMembers& clusters, const Query& query,
                              std::span<const FeatureMatch> forward_matches,
-                             const LocalizerOptions& options) {
+                             const LocalizerOptions& options, ClusterMask allowed) {
   BackMatchingResult result;
   result.cluster_votes.assign(clusters.num_clusters(), 0);
   std::vector<uint32_t>& votes = result.cluster_votes;
   std::vector<uint32_t> voted;  // clusters with votes, to find the best without scanning all
   auto vote = [&](uint32_t cluster) {
-    if (cluster >= votes.size()) return;
+    if (cluster >= votes.size() || !ClusterAllowed(allowed, cluster)) return;
     if (votes[cluster]++ == 0) voted.push_back(cluster);
   };
   for (const FeatureMatch& match : forward_matches) vote(ClusterOfView(index, match.view));

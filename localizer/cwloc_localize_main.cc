@@ -20,6 +20,7 @@
 #include "localizer/io/camera_spec.h"
 #include "localizer/io/feature_file.h"
 #include "localizer/io/photo_query.h"
+#include "localizer/io/query_priors.h"
 #include "localizer/io/result_json.h"
 #include "localizer/localizer.h"
 #ifdef CWLOC_WITH_COLMAP_DB
@@ -53,6 +54,11 @@ struct CliOptions {
   std::string image_size;
   double focal = 0.0;
   bool unknown_focal = false;
+  std::string prior_position;  // --prior-position, for every query
+  std::string prior_gravity;   // --prior-gravity, for every query
+  std::string priors_path;     // --priors: per query
+  bool use_exif_gps = false;
+  double exif_gps_radius_m = kDefaultExifGpsRadiusM;
   PhotoOptions photo;
   std::string output_path;
   std::string poses_path;
@@ -124,6 +130,13 @@ class QueryLoader {
     if (cli.focal != 0.0 && !(std::isfinite(cli.focal) && cli.focal > 0.0))
       throw InputError("--focal must be a positive number of pixels");
     ValidatePhotoOptions(cli.photo);
+    if (!cli.prior_position.empty())
+      position_option_ = ParsePositionPrior(cli.prior_position, "--prior-position");
+    if (!cli.prior_gravity.empty())
+      gravity_option_ = ParseGravityPrior(cli.prior_gravity, "--prior-gravity");
+    if (!cli.priors_path.empty()) priors_ = ReadPriorsFile(cli.priors_path);
+    if (!(cli.exif_gps_radius_m > 0) || !std::isfinite(cli.exif_gps_radius_m))
+      throw InputError("--exif-gps-radius must be a positive number of metres");
 #ifdef CWLOC_WITH_COLMAP_DB
     if (!cli.database_path.empty())
       database_ = std::make_unique<DatabaseQueries>(cli.database_path);
@@ -146,6 +159,7 @@ class QueryLoader {
     }
     query.camera = ChooseCamera(source, query);
     if (cli_.unknown_focal) query.camera = WithUnknownFocal(query.camera);
+    AddPriors(&query);
     return query;
   }
 
@@ -185,6 +199,16 @@ class QueryLoader {
     return camera;
   }
 
+  // The priors file's line for this query wins, then --prior-*, then the photo's EXIF GPS.
+  void AddPriors(Query* query) const {
+    const auto listed = priors_.find(query->name);
+    const QueryPriors* own = listed == priors_.end() ? nullptr : &listed->second;
+    query->position_prior = own && own->position ? own->position : position_option_;
+    if (!query->position_prior && cli_.use_exif_gps)
+      query->position_prior = ExifPositionPrior(*query, cli_.exif_gps_radius_m);
+    query->gravity = own && own->gravity ? own->gravity : gravity_option_;
+  }
+
   static Query LoadFeatureFile(const QuerySource& source) {
     Query query;
     ReadFeatureFile(source.path, &query);
@@ -206,6 +230,9 @@ class QueryLoader {
   const CliOptions& cli_;
   std::optional<QueryCamera> camera_option_;
   std::optional<QueryCamera> image_size_option_;
+  std::optional<PositionPrior> position_option_;
+  std::optional<std::array<double, 3>> gravity_option_;
+  std::unordered_map<std::string, QueryPriors> priors_;
 #ifdef CWLOC_WITH_COLMAP_DB
   std::unique_ptr<DatabaseQueries> database_;
 #endif
@@ -373,6 +400,23 @@ int main(int argc, char** argv) {
   app.add_flag(
       "--unknown-focal", cli.unknown_focal,
       "Withhold the focal length: P4Pf estimates it, then focal and radial distortion are refined");
+  app.add_option("--prior-position", cli.prior_position,
+                 "GPS prior 'LAT LON [HEIGHT] RADIUS_M' (WGS84): only model cameras within the "
+                 "radius are matched; needs a georeferenced index");
+  app.add_option("--prior-gravity", cli.prior_gravity,
+                 "Gravity direction 'GX GY GZ' in the camera frame (x right, y down, z forward), as "
+                 "an IMU gives it; needs a georeferenced index");
+  app.add_option("--prior-gravity-sigma", options.prior_gravity_sigma_deg,
+                 "Standard deviation of --prior-gravity, degrees")
+      ->capture_default_str();
+  app.add_option("--priors", cli.priors_path,
+                 "Per-query priors: lines 'NAME position LAT LON HEIGHT|- RADIUS_M' and 'NAME "
+                 "gravity GX GY GZ'");
+  app.add_flag("--use-exif-gps", cli.use_exif_gps,
+               "Use a photo's EXIF GPS as a position prior (horizontal, --exif-gps-radius)");
+  app.add_option("--exif-gps-radius", cli.exif_gps_radius_m,
+                 "Radius of the EXIF GPS prior, metres")
+      ->capture_default_str();
   app.add_option("-o,--output", cli.output_path, "JSON lines output (default: stdout)");
   app.add_option("--poses", cli.poses_path,
                  "Also write 'NAME QW QX QY QZ TX TY TZ' lines of localized queries");

@@ -1,5 +1,6 @@
 #include "localizer/forward_matching.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numeric>
 #include <span>
@@ -22,7 +23,7 @@ void ThrowCorrupt(const Index& index) {
 
 std::vector<FeatureMatch> MatchForward(const Index& index, const Query& query,
                                        const LocalizerOptions& options, KdForestSearcher& searcher,
-                                       ForwardMatchingStats* stats) {
+                                       ForwardMatchingStats* stats, ClusterMask allowed) {
   std::vector<uint32_t> order(query.NumFeatures());
   std::iota(order.begin(), order.end(), 0u);
   SplitMix64(options.seed).Shuffle(std::span<uint32_t>(order));
@@ -44,7 +45,17 @@ std::vector<FeatureMatch> MatchForward(const Index& index, const Query& query,
       continue;
     ++stats->passed_k_ratio;
     const Stopwatch ratio_test;
+    const size_t before = matches.size();
     ClusterWiseRatioTest(index, feature, neighbors, options.ratio, &matches, stats);
+    if (!allowed.empty()) {
+      matches.erase(std::remove_if(matches.begin() + static_cast<std::ptrdiff_t>(before),
+                                   matches.end(),
+                                   [&](const FeatureMatch& match) {
+                                     return !ClusterAllowed(allowed,
+                                                            ClusterOfView(index, match.view));
+                                   }),
+                    matches.end());
+    }
     stats->seconds_ratio_test += ratio_test.Seconds();
   }
   return matches;
@@ -53,7 +64,7 @@ std::vector<FeatureMatch> MatchForward(const Index& index, const Query& query,
 std::vector<FeatureMatch> MatchGlobalRatio(const Index& index, const Query& query,
                                            const LocalizerOptions& options,
                                            KdForestSearcher& searcher,
-                                           ForwardMatchingStats* stats) {
+                                           ForwardMatchingStats* stats, ClusterMask allowed) {
   std::vector<KdNeighbor> neighbors(2);
   const KdSearchOptions search_options{options.checks};
   std::vector<FeatureMatch> matches;
@@ -66,6 +77,7 @@ std::vector<FeatureMatch> MatchGlobalRatio(const Index& index, const Query& quer
     if (result.num_neighbors < 2) continue;
     if (!PassesRatioTest(neighbors[0].distance, neighbors[1].distance, options.ratio)) continue;
     ++stats->passed_k_ratio;
+    if (!ClusterAllowed(allowed, ClusterOfView(index, neighbors[0].index))) continue;
     matches.push_back(
         {feature, neighbors[0].index, std::sqrt(static_cast<float>(neighbors[0].distance))});
   }

@@ -2,6 +2,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -33,6 +34,26 @@ struct StageTimes {
   double total = 0;
 };
 
+// A localized camera on the globe, when the index is georeferenced (docs/geo.md).
+struct GeoPose {
+  double latitude_deg = 0;
+  double longitude_deg = 0;
+  double height_m = 0;                // ellipsoidal
+  std::array<double, 3> enu{0, 0, 0};  // metres in the index's ENU frame
+  double heading_deg = 0;             // of the optical axis, clockwise from true north
+  double pitch_deg = 0;               // above the horizon
+  double roll_deg = 0;
+};
+
+// The query's priors as given, and what they did.
+struct PriorUse {
+  std::optional<PositionPrior> position;
+  uint32_t clusters_in_radius = 0;  // clusters with a camera within the position prior
+  std::optional<std::array<double, 3>> gravity;
+  // Angle between the prior gravity and the localized pose's; set when both exist.
+  std::optional<double> gravity_error_deg;
+};
+
 struct LocalizationResult {
   std::string name;
   bool success = false;
@@ -54,6 +75,8 @@ struct LocalizationResult {
   uint32_t back_matched_images = 0;
   std::vector<InlierMatch> inliers;  // on success, in feature order
   std::vector<RankedImage> ranked_images;
+  std::optional<GeoPose> geo;  // on success with a georeferenced index
+  PriorUse priors;
   std::optional<PhotoInfo> photo;
   StageTimes times;
 };

@@ -31,11 +31,12 @@ struct MatcherOutput {
 
 // The paper: forward matching, then back-matching; the pose is fit to the back-matches.
 MatcherOutput MatchClusterWise(const Index& index, const ClusterMembers& clusters,
-                               const Query& query, const LocalizerOptions& options) {
+                               const Query& query, const LocalizerOptions& options,
+                               ClusterMask allowed) {
   MatcherOutput out;
   KdForestSearcher searcher(index.kd_forest());
-  out.forward = MatchForward(index, query, options, searcher, &out.forward_stats);
-  BackMatchingResult back = MatchBack(index, clusters, query, out.forward, options);
+  out.forward = MatchForward(index, query, options, searcher, &out.forward_stats, allowed);
+  BackMatchingResult back = MatchBack(index, clusters, query, out.forward, options, allowed);
   out.back = std::move(back.matches);
   out.back_matched_images = static_cast<uint32_t>(back.visited.size());
   out.seconds_query_tree = back.seconds_query_tree;
@@ -46,10 +47,10 @@ MatcherOutput MatchClusterWise(const Index& index, const ClusterMembers& cluster
 
 // The diagnostic baseline: the pose is fit to the global 1-ratio matches.
 MatcherOutput MatchGlobally(const Index& index, const Query& query,
-                            const LocalizerOptions& options) {
+                            const LocalizerOptions& options, ClusterMask allowed) {
   MatcherOutput out;
   KdForestSearcher searcher(index.kd_forest());
-  out.forward = MatchGlobalRatio(index, query, options, searcher, &out.forward_stats);
+  out.forward = MatchGlobalRatio(index, query, options, searcher, &out.forward_stats, allowed);
   out.correspondences = UniqueCorrespondences(index, out.forward);
   return out;
 }
@@ -57,7 +58,8 @@ MatcherOutput MatchGlobally(const Index& index, const Query& query,
 // Table 1's gold standard: unrefined RANSAC in every cluster that could reach min_inliers;
 // the pose is fit to the matches of the cluster with the most inliers.
 MatcherOutput MatchClusterExhaustive(const Index& index, const ClusterMembers& clusters,
-                                     const Query& query, const LocalizerOptions& options) {
+                                     const Query& query, const LocalizerOptions& options,
+                                     ClusterMask allowed) {
   MatcherOutput out;
   const std::vector<ClusterMatches> per_cluster =
       MatchEachClusterExhaustively(index, clusters, query, options.ratio, &out.forward_stats);
@@ -65,6 +67,7 @@ MatcherOutput MatchClusterExhaustive(const Index& index, const ClusterMembers& c
   const std::vector<FeatureMatch>* best = nullptr;
   int best_inliers = 0;
   for (const ClusterMatches& cluster : per_cluster) {
+    if (!ClusterAllowed(allowed, cluster.cluster)) continue;
     out.forward.insert(out.forward.end(), cluster.matches.begin(), cluster.matches.end());
     if (cluster.matches.size() < static_cast<size_t>(options.pose.min_inliers)) continue;
     const QueryPose candidate =
@@ -114,6 +117,21 @@ void ValidateQuery(const Query& query) {
   if (query.NumFeatures() == 0) throw InputError(source + ": the query has no features");
   if (query.camera.width == 0 || query.camera.height == 0)
     throw InputError(source + ": camera has no image size");
+  if (const auto& prior = query.position_prior) {
+    if (!(std::abs(prior->latitude_deg) <= 90) || !std::isfinite(prior->longitude_deg) ||
+        !std::isfinite(prior->height_m.value_or(0.0))) {
+      throw InputError(source + ": position prior " + std::to_string(prior->latitude_deg) + ", " +
+                       std::to_string(prior->longitude_deg) +
+                       " is not a latitude in [-90, 90] and a longitude");
+    }
+    if (!(prior->radius_m > 0) || !std::isfinite(prior->radius_m))
+      throw InputError(source + ": position prior radius must be a positive number of metres");
+  }
+  if (const auto& g = query.gravity) {
+    const double norm = std::sqrt(g->at(0) * g->at(0) + g->at(1) * g->at(1) + g->at(2) * g->at(2));
+    if (!std::isfinite(norm) || norm < 1e-9)
+      throw InputError(source + ": gravity prior must be a finite, non-zero vector");
+  }
   // An unknown camera has only its size; a focal prior's model gives the focal length.
   if (query.camera.calibration == Calibration::kUnknown) return;
   const auto model = FindCameraModel(static_cast<int32_t>(query.camera.model_id));
@@ -153,35 +171,79 @@ void ValidateLocalizerOptions(const LocalizerOptions& o) {
   require(o.pose.ransac.max_iterations >= 1, "--max-ransac-iterations must be at least 1");
   require(o.pose.ransac.confidence > 0 && o.pose.ransac.confidence < 1,
           "--ransac-confidence: expected a value in (0, 1)");
+  require(o.prior_gravity_sigma_deg > 0 && o.prior_gravity_sigma_deg <= 90,
+          "--prior-gravity-sigma: expected degrees in (0, 90]");
   require(PoseRefinerAvailable(o.pose.refiner),
           "--refiner " + std::string(PoseRefinerName(o.pose.refiner)) +
               ": this build has no Ceres (configured with -DCWLOC_WITH_CERES=OFF); use "
               "--refiner builtin");
 }
 
-Localizer::Localizer(const Index& index) : index_(index), clusters_(index) {}
+Localizer::Localizer(const Index& index)
+    : index_(index), clusters_(index), geo_(IndexGeo::Of(index)) {}
 
 LocalizationResult Localizer::Localize(const Query& query, const LocalizerOptions& options) const {
   const Stopwatch total;
   ValidateQuery(query);
+  if ((query.position_prior || query.gravity) && !geo_) {
+    throw InputError(query.Source() + ": a position or gravity prior needs a georeferenced index (" +
+                     index_.file().path().string() +
+                     " is not; see cwloc-index build --georef)");
+  }
+
+  // The position prior's region: only clusters with a camera within its radius.
+  PriorUse priors;
+  std::vector<char> allowed;
+  if (query.position_prior) {
+    allowed = geo_->ClustersNear(*query.position_prior, clusters_);
+    priors.position = query.position_prior;
+    priors.clusters_in_radius =
+        static_cast<uint32_t>(std::count(allowed.begin(), allowed.end(), char{1}));
+  }
+  const std::string prior_region =
+      query.position_prior
+          ? std::to_string(query.position_prior->radius_m) + " m of the position prior"
+          : "";
 
   MatcherOutput matched;
-  switch (options.matcher) {
-    case Matcher::kClusterWise:
-      matched = MatchClusterWise(index_, clusters_, query, options);
-      break;
-    case Matcher::kGlobalRatio:
-      matched = MatchGlobally(index_, query, options);
-      break;
-    case Matcher::kClusterExhaustive:
-      matched = MatchClusterExhaustive(index_, clusters_, query, options);
-      break;
+  if (query.position_prior && priors.clusters_in_radius == 0) {
+    matched.failure_reason = "no model camera within " + prior_region;
+  } else {
+    switch (options.matcher) {
+      case Matcher::kClusterWise:
+        matched = MatchClusterWise(index_, clusters_, query, options, allowed);
+        break;
+      case Matcher::kGlobalRatio:
+        matched = MatchGlobally(index_, query, options, allowed);
+        break;
+      case Matcher::kClusterExhaustive:
+        matched = MatchClusterExhaustive(index_, clusters_, query, options, allowed);
+        break;
+    }
+    if (query.position_prior && matched.correspondences.empty() && matched.failure_reason.empty())
+      matched.failure_reason = "no match to a model camera within " + prior_region;
+  }
+
+  // The gravity prior: the model's down direction where the query is thought to be.
+  LocalizerOptions pose_options = options;
+  Eigen::Vector3d gravity_in_model = Eigen::Vector3d::Zero();
+  if (query.gravity) {
+    gravity_in_model = geo_->GravityInModel(query.position_prior);
+    GravityPrior prior;
+    prior.in_camera = Eigen::Vector3d((*query.gravity)[0], (*query.gravity)[1],
+                                      (*query.gravity)[2])
+                          .normalized();
+    prior.in_world = gravity_in_model;
+    prior.sigma_deg = options.prior_gravity_sigma_deg;
+    pose_options.pose.gravity = prior;
+    priors.gravity = query.gravity;
   }
 
   const Stopwatch pose_time;
   QueryPose fit;
   if (matched.failure_reason.empty()) {
-    fit = EstimateQueryPose(index_, query, matched.correspondences, options, options.pose.refine);
+    fit = EstimateQueryPose(index_, query, matched.correspondences, pose_options,
+                            options.pose.refine);
   } else {
     fit.pose.failure_reason = matched.failure_reason;
   }
@@ -207,6 +269,13 @@ LocalizationResult Localizer::Localize(const Query& query, const LocalizerOption
     result.translation = {p.translation.x(), p.translation.y(), p.translation.z()};
     const Eigen::Vector3d center = p.Center();
     result.center = {center.x(), center.y(), center.z()};
+    if (geo_) result.geo = geo_->PoseOnGlobe(p.rotation, center);
+    if (query.gravity) {
+      const Eigen::Vector3d predicted = p.rotation * gravity_in_model;
+      const Eigen::Vector3d given = pose_options.pose.gravity->in_camera;
+      priors.gravity_error_deg =
+          std::atan2(predicted.cross(given).norm(), predicted.dot(given)) * 180.0 / M_PI;
+    }
     for (size_t i = 0; i < pose.inliers.size(); ++i) {
       if (!pose.inliers[i]) continue;
       const FeatureMatch& match = matched.correspondences[fit.used[i]];
@@ -228,6 +297,7 @@ LocalizationResult Localizer::Localize(const Query& query, const LocalizerOption
   result.times.query_tree = matched.seconds_query_tree;
   result.times.back_matching = matched.seconds_back_matching;
   result.times.pose = matched.seconds_pose + pose_time.Seconds();
+  result.priors = priors;
   result.photo = query.photo;
   result.times.extraction = query.photo ? query.photo->extraction_seconds : 0.0;
   result.times.total = total.Seconds() + result.times.extraction;

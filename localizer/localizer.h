@@ -1,6 +1,9 @@
 #pragma once
 
+#include <optional>
+
 #include "format/index/index.h"
+#include "localizer/geo_priors.h"
 #include "localizer/localization_result.h"
 #include "localizer/localizer_options.h"
 #include "localizer/matching.h"
@@ -21,10 +24,13 @@ class Localizer {
   LocalizationResult Localize(const Query& query, const LocalizerOptions& options) const;
 
   const Index& index() const { return index_; }
+  // Set when the index is georeferenced.
+  const std::optional<IndexGeo>& geo() const { return geo_; }
 
  private:
   const Index& index_;
   ClusterMembers clusters_;
+  std::optional<IndexGeo> geo_;
 };
 
 // Checks options against absurd values; throws InputError naming the CLI flag.

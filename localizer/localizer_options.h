@@ -54,6 +54,8 @@ struct LocalizerOptions {
   // Robust pose: inlier threshold, minimum inliers, RANSAC's limits, refinement. Its RANSAC
   // seed is not used: the localizer seeds RANSAC with `seed` below.
   AbsolutePoseOptions pose;
+  // A query's gravity prior (--prior-gravity): its standard deviation, degrees.
+  double prior_gravity_sigma_deg = GravityPrior().sigma_deg;
   // Output.
   uint32_t ranked_images = 10;  // model images listed for location recognition
   uint64_t seed = 0;            // query feature order, the query's kd-forest, RANSAC

@@ -4,6 +4,7 @@
 // index. Stage files include this header, not each other.
 
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "format/index/index.h"
@@ -34,6 +35,13 @@ struct ForwardMatchingStats {
 
 // The cluster of a view (UINT32_MAX for a view outside every image's range: a corrupt index).
 uint32_t ClusterOfView(const Index& index, uint32_t view);
+
+// A position prior's region: per cluster, 1 when it may be matched. Empty: every cluster.
+using ClusterMask = std::span<const char>;
+
+inline bool ClusterAllowed(ClusterMask allowed, uint32_t cluster) {
+  return allowed.empty() || (cluster < allowed.size() && allowed[cluster] != 0);
+}
 
 // The clusters of an index as lists of image rows, computed once per index.
 struct ClusterMembers {

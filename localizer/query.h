@@ -60,11 +60,33 @@ struct QueryCamera {
   std::array<double, 2> ImageCenter() const { return {width / 2.0, height / 2.0}; }
 };
 
+// A photo's EXIF GPS position (its altitude, above mean sea level, is not kept).
+struct GpsFix {
+  double latitude_deg = 0;
+  double longitude_deg = 0;
+};
+
 // How a photo query became features (absent for feature files and database queries).
 struct PhotoInfo {
   uint32_t extraction_width = 0;  // the image SIFT ran on, after --max-image-size
   uint32_t extraction_height = 0;
   double extraction_seconds = 0;  // decoding, EXIF, resizing and SIFT
+  std::optional<GpsFix> exif_gps;
+};
+
+// Where a query's prior came from, reported in the JSON.
+enum class PriorSource { kOption, kPriorsFile, kExif };
+inline constexpr std::array<std::string_view, 3> kPriorSourceNames = {"option", "priors-file",
+                                                                      "exif"};
+
+// A GPS fix: the query was taken within radius_m of this WGS84 position (horizontally when
+// the height is unknown). Localization then considers only clusters with a camera that near.
+struct PositionPrior {
+  double latitude_deg = 0;
+  double longitude_deg = 0;
+  std::optional<double> height_m;  // ellipsoidal
+  double radius_m = 0;
+  PriorSource source = PriorSource::kOption;
 };
 
 // A query image's own features: keypoints in COLMAP's pixel convention and N x 128 uint8
@@ -77,6 +99,11 @@ struct Query {
   std::vector<float> keypoints;      // x0, y0, x1, y1, ...
   std::vector<uint8_t> descriptors;  // N x 128
   std::optional<PhotoInfo> photo;
+  // Priors; both need a georeferenced index (docs/geo.md).
+  std::optional<PositionPrior> position_prior;
+  // The direction gravity pulls in the camera frame (x right, y down, z forward), as a phone's
+  // accelerometer gives it at rest (negated: an accelerometer measures the upward reaction).
+  std::optional<std::array<double, 3>> gravity;
 
   uint32_t NumFeatures() const { return static_cast<uint32_t>(keypoints.size() / 2); }
   const uint8_t* Descriptor(uint32_t i) const { return descriptors.data() + size_t{i} * 128; }

@@ -13,6 +13,27 @@ struct DescriptorRow {
   uint8_t bytes[kDescriptorBytes];
 };
 
+// Checked at open (one element): the localizer converts positions through it on every query.
+void ValidateGeoreference(const IndexGeoreference& g, const std::string& name) {
+  auto fail = [&](const std::string& what) { throw InputError(name + ": section 'GEOR': " + what); };
+  const double values[] = {g.origin_latitude_deg, g.origin_longitude_deg, g.origin_height_m,
+                           g.scale,          g.rotation[0],         g.rotation[1],
+                           g.rotation[2],    g.rotation[3],         g.translation[0],
+                           g.translation[1], g.translation[2],      g.rms_residual_m};
+  for (const double value : values) {
+    if (!std::isfinite(value)) fail("a value is not finite");
+  }
+  if (std::abs(g.origin_latitude_deg) > 90 || g.origin_longitude_deg < -180 || g.origin_longitude_deg >= 360)
+    fail("origin latitude/longitude out of range");
+  if (!(g.scale > 0)) fail("scale " + std::to_string(g.scale) + " is not positive");
+  const double norm = std::sqrt(g.rotation[0] * g.rotation[0] + g.rotation[1] * g.rotation[1] +
+                                g.rotation[2] * g.rotation[2] + g.rotation[3] * g.rotation[3]);
+  if (std::abs(norm - 1) > 1e-6) fail("rotation is not a unit quaternion");
+  if (g.source < static_cast<uint32_t>(GeoreferenceSource::kGeorefFile) ||
+      g.source > static_cast<uint32_t>(GeoreferenceSource::kEnuModel))
+    fail("unknown source " + std::to_string(g.source));
+}
+
 }  // namespace
 
 Index Index::Open(const std::filesystem::path& path) {
@@ -35,6 +56,15 @@ Index Index::Open(const std::filesystem::path& path) {
   index.covisibility_offsets_ = file.Section<uint32_t>(section::kCovisOffsets);
   index.covisibility_edges_ = file.Section<CovisibilityEdge>(section::kCovisEdges);
   file.Section<char>(section::kManifest);
+  if (file.FindSection(section::kGeoreference) != nullptr) {
+    const auto georeference = file.Section<IndexGeoreference>(section::kGeoreference);
+    if (georeference.size() != 1) {
+      throw InputError(name + ": section 'GEOR' has " + std::to_string(georeference.size()) +
+                       " elements, expected 1");
+    }
+    ValidateGeoreference(georeference[0], name);
+    index.georeference_ = georeference.data();
+  }
   index.kd_forest_ = {file.Section<KdNode>(section::kKdNodes),
                       file.Section<uint32_t>(section::kKdRoots),
                       file.Section<uint32_t>(section::kKdLeaves), index.descriptors_};

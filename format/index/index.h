@@ -35,6 +35,8 @@ class Index {
   std::span<const float> view_neighbor_distances() const { return view_neighbor_distances_; }
   std::span<const uint32_t> covisibility_offsets() const { return covisibility_offsets_; }
   std::span<const CovisibilityEdge> covisibility_edges() const { return covisibility_edges_; }
+  // nullptr unless the index was georeferenced (format 1.1's optional GEOR section).
+  const IndexGeoreference* georeference() const { return georeference_; }
 
   // The global kd-forest over all view descriptors, searched in place.
   const KdForestView& kd_forest() const { return kd_forest_; }
@@ -71,6 +73,7 @@ class Index {
   std::span<const float> view_neighbor_distances_;
   std::span<const uint32_t> covisibility_offsets_;
   std::span<const CovisibilityEdge> covisibility_edges_;
+  const IndexGeoreference* georeference_ = nullptr;
   KdForestView kd_forest_;
 };
 

@@ -18,7 +18,7 @@ static_assert(
 inline constexpr char kIndexMagic[8] = {'C', 'W', 'L', 'O', 'C', 'I', 'D', 'X'};
 inline constexpr uint32_t kByteOrderMark = 0x01020304;
 inline constexpr uint16_t kFormatMajor = 1;
-inline constexpr uint16_t kFormatMinor = 0;
+inline constexpr uint16_t kFormatMinor = 1;
 inline constexpr uint64_t kSectionAlignment = 64;
 
 // Feature bits: a reader refuses a file with a required bit it does not know.
@@ -83,10 +83,11 @@ inline constexpr uint32_t kKdLeaves = SectionTag("KDLF");
 inline constexpr uint32_t kKdRoots = SectionTag("KDRT");
 inline constexpr uint32_t kCovisOffsets = SectionTag("CVOF");  // CSR row offsets per image
 inline constexpr uint32_t kCovisEdges = SectionTag("CVED");    // (image, shared points)
+inline constexpr uint32_t kGeoreference = SectionTag("GEOR");  // optional, format 1.1
 inline constexpr uint32_t kAll[] = {kManifest,      kCameras,      kImages,      kStrings,
                                     kPoints,        kTracks,       kDescriptors, kViewPoint,
                                     kViewKeypoints, kViewNeighbor, kKdNodes,     kKdLeaves,
-                                    kKdRoots,       kCovisOffsets, kCovisEdges};
+                                    kKdRoots,       kCovisOffsets, kCovisEdges,  kGeoreference};
 }  // namespace section
 
 // "DESC" for a tag, with non-printable bytes escaped, for messages.

@@ -66,4 +66,30 @@ struct CovisibilityEdge {
 };
 static_assert(sizeof(CovisibilityEdge) == 8);
 
+// GEOR (optional, format 1.1): where the model lies on the globe. One element:
+// enu = scale * R(rotation) * model + translation, ENU at the WGS84 origin (docs/geo.md).
+struct IndexGeoreference {
+  double origin_latitude_deg;
+  double origin_longitude_deg;
+  double origin_height_m;  // above the ellipsoid
+  double scale;
+  double rotation[4];  // quaternion w, x, y, z
+  double translation[3];
+  double rms_residual_m;      // of the fit over its inliers; 0 for a given model frame
+  uint32_t source;            // GeoreferenceSource
+  uint32_t num_observations;  // positions the fit used (0 for a given model frame)
+  uint32_t num_inliers;
+  uint32_t reserved[5];  // zero
+};
+static_assert(sizeof(IndexGeoreference) == 128 &&
+              std::is_trivially_copyable_v<IndexGeoreference>);
+static_assert(offsetof(IndexGeoreference, source) == 96);
+
+enum class GeoreferenceSource : uint32_t {
+  kGeorefFile = 1,   // --georef FILE
+  kExifGps = 2,      // --georef-images DIR
+  kEcefModel = 3,    // --model-frame ecef
+  kEnuModel = 4,     // --model-frame enu:LAT,LON,H
+};
+
 }  // namespace cwloc

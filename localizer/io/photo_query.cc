@@ -63,6 +63,8 @@ Query PhotoQueryFromBytes(std::span<const uint8_t> bytes, const std::string& sou
     query.camera.source = IntrinsicsSource::kNone;
   }
   ExtractPhotoFeatures(std::move(image), options, &query);
+  if (const auto gps = ReadExifGps(bytes))
+    query.photo->exif_gps = GpsFix{gps->latitude_deg, gps->longitude_deg};
   query.photo->extraction_seconds = time.Seconds();
   return query;
 }

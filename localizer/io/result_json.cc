@@ -22,6 +22,7 @@ nlohmann::ordered_json OptionsToJson(const LocalizerOptions& options) {
           {"ransac_confidence", options.pose.ransac.confidence},
           {"refine", options.pose.refine},
           {"refiner", std::string(PoseRefinerName(options.pose.refiner))},
+          {"prior_gravity_sigma_deg", options.prior_gravity_sigma_deg},
           {"seed", options.seed}};
 }
 
@@ -42,6 +43,32 @@ nlohmann::ordered_json ResultToJson(const LocalizationResult& result,
                    {"focal_estimated", result.focal_estimated},
                    {"calibration", std::string(CalibrationName(result.camera.calibration))},
                    {"intrinsics_source", std::string(IntrinsicsSourceName(result.camera.source))}};
+  if (result.geo) {
+    const GeoPose& g = *result.geo;
+    out["geo"] = {{"latitude_deg", g.latitude_deg}, {"longitude_deg", g.longitude_deg},
+                  {"height_m", g.height_m},         {"enu", g.enu},
+                  {"heading_deg", g.heading_deg},   {"pitch_deg", g.pitch_deg},
+                  {"roll_deg", g.roll_deg}};
+  }
+  if (result.priors.position || result.priors.gravity) {
+    nlohmann::ordered_json priors = nlohmann::ordered_json::object();
+    if (const auto& p = result.priors.position) {
+      priors["position"] = {{"latitude_deg", p->latitude_deg},
+                            {"longitude_deg", p->longitude_deg},
+                            {"height_m", p->height_m ? nlohmann::ordered_json(*p->height_m)
+                                                     : nlohmann::ordered_json()},
+                            {"radius_m", p->radius_m},
+                            {"source", std::string(kPriorSourceNames[static_cast<size_t>(
+                                           p->source)])},
+                            {"clusters_in_radius", result.priors.clusters_in_radius}};
+    }
+    if (result.priors.gravity) {
+      priors["gravity"] = {{"direction", *result.priors.gravity}};
+      if (result.priors.gravity_error_deg)
+        priors["gravity"]["error_deg"] = *result.priors.gravity_error_deg;
+    }
+    out["priors"] = priors;
+  }
   out["num_inliers"] = result.num_inliers;
   out["inlier_ratio"] = result.inlier_ratio;
   out["matches"] = {{"features", result.num_features},

@@ -1,0 +1,15 @@
+#pragma once
+
+// The index's GEOR section (format/index/index_sections.h) and the geo library's type.
+
+#include "format/geo/georeference.h"
+#include "format/index/index_sections.h"
+
+namespace cwloc {
+
+Georeference GeoreferenceOfSection(const IndexGeoreference& section);
+
+// The fit statistics and source are left for the caller.
+IndexGeoreference SectionOfGeoreference(const Georeference& georeference);
+
+}  // namespace cwloc

@@ -1,0 +1,64 @@
+#include "localizer/geo_priors.h"
+
+#include "format/geo/index_georeference.h"
+
+namespace cwloc {
+
+std::optional<IndexGeo> IndexGeo::Of(const Index& index) {
+  if (index.georeference() == nullptr) return std::nullopt;
+  GeoFrame frame(GeoreferenceOfSection(*index.georeference()));
+  std::vector<Eigen::Vector3d> centers;
+  centers.reserve(index.images().size());
+  for (const IndexImage& image : index.images()) {
+    const Eigen::Quaterniond q(image.cam_from_world_rotation[0], image.cam_from_world_rotation[1],
+                               image.cam_from_world_rotation[2], image.cam_from_world_rotation[3]);
+    const Eigen::Vector3d t(image.cam_from_world_translation[0],
+                            image.cam_from_world_translation[1],
+                            image.cam_from_world_translation[2]);
+    centers.push_back(frame.georeference().ModelToEnu(-(q.normalized().conjugate() * t)));
+  }
+  return IndexGeo(std::move(frame), std::move(centers));
+}
+
+std::vector<char> IndexGeo::ClustersNear(const PositionPrior& prior,
+                                         const ClusterMembers& clusters) const {
+  const Eigen::Vector3d at = frame_.GeodeticToEnu(
+      {prior.latitude_deg, prior.longitude_deg, prior.height_m.value_or(0.0)});
+  std::vector<char> near(clusters.num_clusters(), 0);
+  for (uint32_t c = 0; c < clusters.num_clusters(); ++c) {
+    for (uint32_t i = clusters.offsets[c]; i < clusters.offsets[c + 1] && !near[c]; ++i) {
+      Eigen::Vector3d offset = image_centers_enu_[clusters.images[i]] - at;
+      // Without a height, the ENU "up" offset of a distant fix is mostly the earth's curvature.
+      if (!prior.height_m) offset.z() = 0;
+      near[c] = offset.norm() <= prior.radius_m;
+    }
+  }
+  return near;
+}
+
+Eigen::Vector3d IndexGeo::GravityInModel(const std::optional<PositionPrior>& prior) const {
+  const Georeference& g = frame_.georeference();
+  const Eigen::Vector3d at =
+      prior ? frame_.GeodeticToModel(
+                  {prior->latitude_deg, prior->longitude_deg, prior->height_m.value_or(0.0)})
+            : g.EnuToModel(Eigen::Vector3d::Zero());
+  return frame_.GravityInModel(at);
+}
+
+GeoPose IndexGeo::PoseOnGlobe(const Eigen::Quaterniond& cam_from_model_rotation,
+                              const Eigen::Vector3d& center_model) const {
+  GeoPose pose;
+  const Geodetic position = frame_.ModelToGeodetic(center_model);
+  pose.latitude_deg = position.latitude_deg;
+  pose.longitude_deg = position.longitude_deg;
+  pose.height_m = position.height_m;
+  const Eigen::Vector3d enu = frame_.georeference().ModelToEnu(center_model);
+  pose.enu = {enu.x(), enu.y(), enu.z()};
+  const CameraAttitude attitude = frame_.Attitude(cam_from_model_rotation, center_model);
+  pose.heading_deg = attitude.heading_deg;
+  pose.pitch_deg = attitude.pitch_deg;
+  pose.roll_deg = attitude.roll_deg;
+  return pose;
+}
+
+}  // namespace cwloc

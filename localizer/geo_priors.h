@@ -1,0 +1,45 @@
+#pragma once
+
+// A georeferenced index at query time: poses on the globe, the position prior's clusters,
+// the gravity direction in the model (docs/geo.md).
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <optional>
+#include <vector>
+
+#include "format/geo/georeference.h"
+#include "format/index/index.h"
+#include "localizer/localization_result.h"
+#include "localizer/matching.h"
+#include "localizer/query.h"
+
+namespace cwloc {
+
+class IndexGeo {
+ public:
+  // nullopt when the index has no georeference. O(images).
+  static std::optional<IndexGeo> Of(const Index& index);
+
+  const GeoFrame& frame() const { return frame_; }
+
+  // Per cluster: 1 when one of its cameras lies within the prior's radius (horizontally when
+  // the prior has no height).
+  std::vector<char> ClustersNear(const PositionPrior& prior, const ClusterMembers& clusters) const;
+
+  // The direction gravity pulls, in the model frame: the ellipsoid normal at the prior's
+  // position when there is one, else at the ENU origin.
+  Eigen::Vector3d GravityInModel(const std::optional<PositionPrior>& prior) const;
+
+  GeoPose PoseOnGlobe(const Eigen::Quaterniond& cam_from_model_rotation,
+                      const Eigen::Vector3d& center_model) const;
+
+ private:
+  IndexGeo(GeoFrame frame, std::vector<Eigen::Vector3d> image_centers_enu)
+      : frame_(std::move(frame)), image_centers_enu_(std::move(image_centers_enu)) {}
+
+  GeoFrame frame_;
+  std::vector<Eigen::Vector3d> image_centers_enu_;  // per IMGS row
+};
+
+}  // namespace cwloc
