@@ -6,10 +6,14 @@ set -euo pipefail
 
 # libstdc++6:arm64 is the runtime the test binaries load under qemu (the cross compiler's own
 # copy lives in /usr/aarch64-linux-gnu, where qemu's loader does not look).
+# GeographicLib: only the arm64 runtime library. libgeographiclib-dev is not Multi-Arch: same,
+# so its arm64 package would remove the host's (which the native build needs); the cross build
+# links /usr/lib/aarch64-linux-gnu/libGeographicLib.so.23 with the host -dev's headers, which
+# are the same on both (format/geo/CMakeLists.txt).
 packages=(
   crossbuild-essential-arm64 qemu-user
   libstdc++6:arm64 libjpeg62-turbo-dev:arm64 libpng-dev:arm64 zlib1g-dev:arm64
-  libexif-dev:arm64 libgtest-dev:arm64 libgmock-dev:arm64
+  libexif-dev:arm64 libgtest-dev:arm64 libgmock-dev:arm64 libgeographiclib23:arm64
 )
 
 have_arch=0

@@ -27,23 +27,29 @@ struct Georeference {
 
   Eigen::Vector3d ModelToEnu(const Eigen::Vector3d& model) const;
   Eigen::Vector3d EnuToModel(const Eigen::Vector3d& enu) const;
-  // A direction (unit vector) in the model frame given in ENU, and back.
+  // A direction given in ENU (at the origin) in the model frame, and back: rotation only.
   Eigen::Vector3d EnuDirectionToModel(const Eigen::Vector3d& enu_direction) const;
+  Eigen::Vector3d ModelDirectionToEnu(const Eigen::Vector3d& model_direction) const;
 };
 
 // The orientation of a camera's optical axis in the local ENU frame at the camera itself:
 // heading clockwise from true north in [0, 360), pitch above the horizon in [-90, 90], roll
-// about the optical axis in (-180, 180], positive when the image's x axis tilts down
-// (docs/geo.md has the exact convention).
+// about the optical axis in (-180, 180], positive when the image's x axis tilts down. The camera
+// (x right, y down, z forward) is an aerospace body frame (forward z, right x, down y):
+// ned_from_cam = Rz(heading) Ry(pitch) Rx(roll) in north-east-down. Looking straight up or down
+// (|pitch| > 90 - 5.7e-8 degrees) roll is 0 and the heading is the one the image x axis gives
+// (docs/geo.md has the table).
 struct CameraAttitude {
   double heading_deg = 0;
   double pitch_deg = 0;
   double roll_deg = 0;
 };
 
-// A georeference with the conversions through the globe. Thread-safe (const).
+// A georeference with the conversions through the globe (WGS84). Thread-safe (const).
 class GeoFrame {
  public:
+  // Throws InputError unless the origin passes ValidateGeodetic, the scale is finite and
+  // positive, and the rotation and translation are finite; the rotation is normalized.
   explicit GeoFrame(const Georeference& georeference);
   ~GeoFrame();
   GeoFrame(GeoFrame&&) noexcept;
@@ -55,6 +61,10 @@ class GeoFrame {
   Eigen::Vector3d GeodeticToEnu(const Geodetic& geodetic) const;
   Geodetic ModelToGeodetic(const Eigen::Vector3d& model) const;
   Eigen::Vector3d GeodeticToModel(const Geodetic& geodetic) const;
+
+  // The rotation from the model frame to the local ENU frame at a model point (its rows are
+  // east, north and up there, in model coordinates; no scale).
+  Eigen::Matrix3d LocalEnuFromModel(const Eigen::Vector3d& model_point) const;
 
   // cam_from_world is COLMAP's (world = model); attitude in the ENU frame at the camera centre.
   CameraAttitude Attitude(const Eigen::Quaterniond& cam_from_model_rotation,

@@ -36,8 +36,8 @@ struct GeoFitOptions {
 };
 
 struct GeoFitResult {
-  Georeference georeference;  // ENU origin at the geodetic centroid of the inliers
-  std::vector<char> inliers;  // per observation
+  Georeference georeference;        // ENU origin at the geodetic centroid of the inliers
+  std::vector<char> inliers;        // per observation
   std::vector<double> residuals_m;  // per observation: |fitted ENU - observed ENU|
   int num_inliers = 0;
   double rms_residual_m = 0;  // over the inliers
