@@ -89,7 +89,7 @@ void ExtractPhotoFeatures(GreyImage image, const PhotoOptions& options, Query* q
   query->descriptors = features.descriptors;
   if (query->NumFeatures() == 0)
     throw InputError(query->Source() + ": no SIFT features found in the photo");
-  query->photo = PhotoInfo{size.width, size.height, time.Seconds()};
+  query->photo = PhotoInfo{size.width, size.height, time.Seconds(), std::nullopt};
 }
 
 }  // namespace cwloc
