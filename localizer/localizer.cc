@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <string>
 #include <unordered_map>
 
@@ -200,10 +201,12 @@ LocalizationResult Localizer::Localize(const Query& query, const LocalizerOption
     priors.clusters_in_radius =
         static_cast<uint32_t>(std::count(allowed.begin(), allowed.end(), char{1}));
   }
-  const std::string prior_region =
-      query.position_prior
-          ? std::to_string(query.position_prior->radius_m) + " m of the position prior"
-          : "";
+  std::string prior_region;
+  if (query.position_prior) {
+    char radius[32];
+    std::snprintf(radius, sizeof(radius), "%g", query.position_prior->radius_m);
+    prior_region = std::string(radius) + " m of the position prior";
+  }
 
   MatcherOutput matched;
   if (query.position_prior && priors.clusters_in_radius == 0) {
