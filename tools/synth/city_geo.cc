@@ -184,15 +184,24 @@ GeoFiles MakeGeoFiles(const CityScene& scene, const GeoOptions& geo, const Model
     const Eigen::Vector3d enu = frame.EnuFromWorld(image.pose.centre);
     files.queries_geo += image.name + GeodeticText(globe.EnuToGeodetic(enu)) + "\n";
 
+    // The camera's own tangent plane and vertical (the ellipsoid normal there), as the rows of
+    // local_from_enu: a phone's position error is horizontal where it is, and its gravity
+    // points along the local normal, which turns away from the city centre's (0, 0, -1) by
+    // the camera's distance over the earth radius (0.009 degrees per km).
+    const Eigen::Matrix3d local_from_enu =
+        globe.LocalEnuFromModel(frame.ModelFromWorld(image.pose.centre)) * frame.rotation;
     Rng rng(Rng::Seed(seed, kQueryPriorStream, image.image_id));
     const double heading = rng.Uniform(0, 2 * std::numbers::pi);
     const Eigen::Vector3d prior =
-        enu + geo.prior_position_error * Eigen::Vector3d(std::cos(heading), std::sin(heading), 0);
+        enu + geo.prior_position_error * (std::cos(heading) * local_from_enu.row(0) +
+                                          std::sin(heading) * local_from_enu.row(1))
+                                             .transpose();
     files.query_priors +=
         image.name + " position" + GeodeticText(globe.EnuToGeodetic(prior)) + " " + radius + "\n";
-    // Down (0, 0, -1) of the world (ENU) frame in the camera frame, then turned by exactly the
-    // error about an axis perpendicular to it.
-    const Eigen::Vector3d gravity = image.pose.cam_from_world_rotation * Eigen::Vector3d(0, 0, -1);
+    // Gravity in the camera frame, then turned by exactly the error about an axis
+    // perpendicular to it.
+    const Eigen::Vector3d gravity =
+        (image.pose.cam_from_world_rotation * -local_from_enu.row(2).transpose()).normalized();
     const Eigen::Vector3d axis = Perpendicular(gravity, rng.Uniform(0, 2 * std::numbers::pi));
     const Eigen::Vector3d noisy =
         (std::cos(gravity_error) * gravity + std::sin(gravity_error) * axis.cross(gravity))
