@@ -8,12 +8,14 @@
 #include <iostream>
 #include <mutex>
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "cwloc/version.h"
 #include "format/base/error.h"
 #include "format/base/stopwatch.h"
 #include "format/base/tool_main.h"
 #include "format/camera/camera_models.h"
+#include "tools/synth/city_geo.h"
 #include "tools/synth/city_scene.h"
 #include "tools/synth/scene_writer.h"
 #include "tools/synth/synth_options.h"
@@ -73,8 +75,9 @@ class ProgressBar {
 };
 
 nlohmann::ordered_json Summary(const std::filesystem::path& output, const SynthKnobs& knobs,
-                               const CityScene& scene, bool text, double scene_seconds,
-                               const WriteTimings& write, double total_seconds) {
+                               const GeoOptions& geo, const CityScene& scene, bool text,
+                               double scene_seconds, const WriteTimings& write,
+                               double total_seconds) {
   const SceneOptions& o = scene.options();
   const SceneCounts& c = scene.counts();
   auto share = [](size_t part, size_t whole) { return whole ? double(part) / double(whole) : 0.0; };
@@ -131,6 +134,26 @@ nlohmann::ordered_json Summary(const std::filesystem::path& output, const SynthK
                     {"repeated_view_share", share(c.motif_views, c.views)},
                     {"query_model_observations", c.query_model_observations},
                     {"min_query_model_points", c.min_query_model_points}};
+  if (geo.origin) {
+    const ModelFrame frame = MakeModelFrame(scene, geo);
+    Eigen::Quaterniond q(frame.rotation);
+    if (q.w() < 0) q.coeffs() *= -1;
+    json["geo"] = {
+        {"origin",
+         {{"latitude_deg", geo.origin->latitude_deg},
+          {"longitude_deg", geo.origin->longitude_deg},
+          {"height_m", geo.origin->height_m}}},
+        {"gps_noise_m", geo.gps_noise},
+        {"gps_outliers", geo.gps_outliers},
+        {"gps_outlier_images", NumGpsOutliers(geo, c.mapping_images)},
+        {"prior_position_error_m", geo.prior_position_error},
+        {"prior_radius_m", geo.prior_radius},
+        {"prior_gravity_error_deg", geo.prior_gravity_error_deg},
+        {"model_from_enu",
+         {{"scale", frame.scale},
+          {"rotation_wxyz", {q.w(), q.x(), q.y(), q.z()}},
+          {"translation", {frame.translation.x(), frame.translation.y(), frame.translation.z()}}}}};
+  }
   json["timings"] = {{"scene_seconds", scene_seconds},
                      {"model_seconds", write.model_seconds},
                      {"database_seconds", write.database_seconds},
@@ -158,6 +181,13 @@ void PrintSummary(const nlohmann::ordered_json& s) {
   std::printf("  repeated: %zu distinct motifs; %.1f%% of 3D points, %.1f%% of views\n",
               c["distinct_motifs"].get<size_t>(), 100 * c["repeated_share"].get<double>(),
               100 * c["repeated_view_share"].get<double>());
+  if (s.contains("geo")) {
+    const auto& g = s["geo"];
+    std::printf("  globe:    centre at %.8f %.8f %.2f m; %zu GPS outliers\n",
+                g["origin"]["latitude_deg"].get<double>(),
+                g["origin"]["longitude_deg"].get<double>(), g["origin"]["height_m"].get<double>(),
+                g["gps_outlier_images"].get<size_t>());
+  }
   std::printf(
       "  time:     %.2f s (scene %.2f, model %.2f, database %.2f, files %.2f); peak memory %.0f "
       "MB\n",
@@ -215,6 +245,33 @@ int main(int argc, char** argv) {
   app.add_option(
       "--point-noise", knobs.point_noise,
       "Noise of the model's 3D points, metres (sigma at 20 m from the nearest camera) [0.01]");
+  auto with_default = [](const std::string& help, double value) {
+    std::ostringstream out;
+    out << help << " [" << value << "]";
+    return out.str();
+  };
+  app.add_option("--geo", knobs.geo,
+                 "\"LAT LON HEIGHT\": put the city centre at this WGS84 position (ellipsoidal "
+                 "height), write the model in a random SfM-like frame and add georef.txt, "
+                 "georef_outliers.txt, queries_geo.txt and query_priors.txt");
+  app.add_option("--gps-noise", knobs.gps_noise,
+                 with_default("GPS noise of georef.txt, metres (sigma per axis; needs --geo)",
+                              kDefaultGpsNoise));
+  app.add_option("--gps-outliers", knobs.gps_outliers,
+                 with_default("Share of mapping images with a wildly wrong GPS position "
+                              "(100-1000 m off), in [0, 0.5] (needs --geo)",
+                              kDefaultGpsOutliers));
+  app.add_option("--prior-position-error", knobs.prior_position_error,
+                 with_default("Query position priors lie exactly this many metres off the true "
+                              "centre, horizontally (needs --geo)",
+                              kDefaultPriorPositionError));
+  app.add_option("--prior-radius", knobs.prior_radius,
+                 with_default("Radius of the query position priors, metres (needs --geo)",
+                              kDefaultPriorRadius));
+  app.add_option("--prior-gravity-error", knobs.prior_gravity_error,
+                 with_default("Query gravity priors are turned exactly this many degrees off "
+                              "the true gravity (needs --geo)",
+                              kDefaultPriorGravityErrorDeg));
   app.add_option("--threads", knobs.threads,
                  "Worker threads (0 = all cores); never changes the output")
       ->capture_default_str();
@@ -229,6 +286,7 @@ int main(int argc, char** argv) {
   return cwloc::RunTool("cwloc-synth", [&]() -> int {
     const cwloc::Stopwatch total;
     const SceneOptions options = MakeSceneOptions(knobs);
+    const GeoOptions geo = MakeGeoOptions(knobs);
     SceneWriter writer(output, overwrite);  // checks the output path before the long work
     ProgressBar bar;
     const CityScene scene = CityScene::Generate(options, bar.Callback());
@@ -237,10 +295,11 @@ int main(int argc, char** argv) {
     write_options.text = text;
     write_options.threads = options.threads;
     write_options.command_line = CommandLine(argc, argv);
+    write_options.geo = geo;
     const WriteTimings timings = writer.Write(scene, write_options, bar.Callback());
     bar.Clear();
-    const nlohmann::ordered_json summary =
-        Summary(writer.output_dir(), knobs, scene, text, scene_seconds, timings, total.Seconds());
+    const nlohmann::ordered_json summary = Summary(writer.output_dir(), knobs, geo, scene, text,
+                                                   scene_seconds, timings, total.Seconds());
     writer.Commit(summary.dump(1) + "\n");
     if (json) {
       std::cout << summary.dump(2) << "\n";

@@ -130,8 +130,36 @@ std::string ReadmeText(const CityScene& scene, const WriteOptions& options) {
        "recognition GT)\n";
   t +=
       "  queries_gt_matches.txt      NAME then POINT2D_IDX:POINT3D_ID pairs (true 2D-3D matches)\n";
-  t += "  scale_to_metres.txt         identity similarity: the city is built in metres\n";
-  t += "  stats.json                  counts, timings, peak memory\n";
+  if (!options.geo.origin) {
+    t += "  scale_to_metres.txt         identity similarity: the city is built in metres\n";
+    t += "  stats.json                  counts, timings, peak memory\n";
+    return t;
+  }
+  const GeoOptions& geo = options.geo;
+  t += "  scale_to_metres.txt         similarity model -> ENU metres at the city centre (--geo)\n";
+  t += "  georef.txt                  NAME LAT LON HEIGHT: every mapping image's noisy GPS "
+       "position\n";
+  t += "  georef_outliers.txt         the mapping images whose GPS position is an outlier\n";
+  t += "  queries_geo.txt             NAME LAT LON HEIGHT: the queries' true camera centres\n";
+  t += "  query_priors.txt            NAME position LAT LON HEIGHT RADIUS_M and NAME gravity GX GY "
+       "GZ per query\n";
+  t += "  stats.json                  counts, timings, peak memory\n\n";
+  char origin[96];
+  std::snprintf(origin, sizeof(origin), "%.12f, %.12f, %.3f m", geo.origin->latitude_deg,
+                geo.origin->longitude_deg, geo.origin->height_m);
+  t += "ON THE GLOBE (--geo)\n";
+  t += "  The city centre on the ground lies at WGS84 " + std::string(origin) +
+       " above the ellipsoid;\n";
+  t += "  the east-north-up frame there is the world frame (x east, y north, z up) moved to "
+       "that centre.\n";
+  t += "  The model (mapping_model, queries_gt.txt) is in an arbitrary SfM-like frame, a seeded "
+       "similarity of it;\n";
+  t += "  scale_to_metres.txt maps it back to ENU metres. GPS noise " +
+       Format("%.3g", geo.gps_noise) + " m per axis, outlier share " +
+       Format("%.3g", geo.gps_outliers) + ";\n";
+  t += "  query priors " + Format("%.3g", geo.prior_position_error) +
+       " m off horizontally (radius " + Format("%.3g", geo.prior_radius) + " m), gravity " +
+       Format("%.3g", geo.prior_gravity_error_deg) + " deg off.\n";
   return t;
 }
 
@@ -229,7 +257,7 @@ void WriteDatabase(const CityScene& scene, const fs::path& path, int threads,
   db.Commit();
 }
 
-void WriteQueryFiles(const CityScene& scene, const fs::path& dir) {
+void WriteQueryFiles(const CityScene& scene, const ModelFrame& frame, const fs::path& dir) {
   const std::string camera = CameraText(scene.options().camera);
   std::string list, gt, intrinsics, points, matches;
   gt +=
@@ -251,7 +279,7 @@ void WriteQueryFiles(const CityScene& scene, const fs::path& dir) {
   for (const SceneImage& image : scene.images()) {
     if (!image.query) continue;
     list += image.name + "\n";
-    const colmap::Rigid3d pose = scene.CamFromWorld(image);
+    const colmap::Rigid3d pose = frame.CamFromModel(scene, image);
     gt += image.name;
     for (double q : pose.rotation) AppendField(&gt, Exact(q));
     for (double v : pose.translation) AppendField(&gt, Exact(v));
@@ -280,6 +308,7 @@ void WriteQueryFiles(const CityScene& scene, const fs::path& dir) {
   WriteTextFile(dir / "queries_with_intrinsics.txt", intrinsics);
   WriteTextFile(dir / "queries_gt_points.txt", points);
   WriteTextFile(dir / "queries_gt_matches.txt", matches);
+  if (!frame.identity) return;  // --geo writes the model -> ENU similarity instead
   WriteTextFile(
       dir / "scale_to_metres.txt",
       "# Similarity model->metric frame (metres): identity, the generated city is built in metres\n"
@@ -291,7 +320,8 @@ void WriteQueryFiles(const CityScene& scene, const fs::path& dir) {
 
 }  // namespace
 
-colmap::Reconstruction BuildReconstruction(const CityScene& scene, int threads) {
+colmap::Reconstruction BuildReconstruction(const CityScene& scene, int threads,
+                                           const ModelFrame& frame) {
   colmap::Reconstruction rec;
   colmap::Camera camera = scene.options().camera;
   camera.camera_id = 1;
@@ -306,7 +336,7 @@ colmap::Reconstruction BuildReconstruction(const CityScene& scene, int threads) 
     out.image_id = image.image_id;
     out.camera_id = 1;
     out.name = image.name;
-    out.cam_from_world = scene.CamFromWorld(image);
+    out.cam_from_world = frame.CamFromModel(scene, image);
     out.points2D.resize(image.features.size());
     for (size_t k = 0; k < image.features.size(); ++k) {
       const SceneFeature& f = image.features[k];
@@ -334,7 +364,8 @@ colmap::Reconstruction BuildReconstruction(const CityScene& scene, int threads) 
       colmap::Point3D& out = points[j];
       out.point3D_id = j + 1;
       const Eigen::Vector3d xyz = scene.ModelXyz(p);
-      out.xyz = {xyz.x(), xyz.y(), xyz.z()};
+      const Eigen::Vector3d model_xyz = frame.ModelFromWorld(xyz);
+      out.xyz = {model_xyz.x(), model_xyz.y(), model_xyz.z()};
       const auto& facade = scene.layout().facades()[scene.points()[p].facade];
       Rng rng(Rng::Seed(scene.options().seed, kColorStream, p));
       for (int ch = 0; ch < 3; ++ch) {
@@ -402,9 +433,10 @@ WriteTimings SceneWriter::Write(const CityScene& scene, const WriteOptions& opti
                                 const CityScene::Progress& progress) {
   WriteTimings timings;
   Stopwatch stage;
+  const ModelFrame frame = MakeModelFrame(scene, options.geo);
   {
     if (progress) progress("model", 0);
-    const colmap::Reconstruction rec = BuildReconstruction(scene, options.threads);
+    const colmap::Reconstruction rec = BuildReconstruction(scene, options.threads, frame);
     for (const char* format : {"bin", "txt"}) {
       if (format[0] == 't' && !options.text) continue;
       const fs::path dir = temp_dir_ / "mapping_model" / format;
@@ -420,7 +452,15 @@ WriteTimings SceneWriter::Write(const CityScene& scene, const WriteOptions& opti
   WriteDatabase(scene, temp_dir_ / "database.db", options.threads, progress);
   timings.database_seconds = stage.Seconds();
   stage.Restart();
-  WriteQueryFiles(scene, temp_dir_);
+  WriteQueryFiles(scene, frame, temp_dir_);
+  if (options.geo.origin) {
+    const GeoFiles geo = MakeGeoFiles(scene, options.geo, frame);
+    WriteTextFile(temp_dir_ / "georef.txt", geo.georef);
+    WriteTextFile(temp_dir_ / "georef_outliers.txt", geo.georef_outliers);
+    WriteTextFile(temp_dir_ / "queries_geo.txt", geo.queries_geo);
+    WriteTextFile(temp_dir_ / "query_priors.txt", geo.query_priors);
+    WriteTextFile(temp_dir_ / "scale_to_metres.txt", geo.scale_to_metres);
+  }
   WriteTextFile(temp_dir_ / "README.txt", ReadmeText(scene, options));
   timings.files_seconds = stage.Seconds();
   return timings;

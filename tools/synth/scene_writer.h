@@ -2,13 +2,15 @@
 
 // Writes a generated city in the layout of the shared real-data sets (see docs/synth.md):
 // mapping_model/bin (and txt), database.db with every image's features, the query lists and
-// ground truth, scale_to_metres.txt, README.txt and stats.json. Everything is written into a
+// ground truth, scale_to_metres.txt, README.txt and stats.json; with --geo also the files of
+// city_geo.h, and the model and ground truth in the model frame. Everything is written into a
 // temporary sibling directory that Commit() renames into place, so a failure or an interrupt
 // never leaves a half-written output.
 
 #include <filesystem>
 #include <string>
 
+#include "tools/synth/city_geo.h"
 #include "tools/synth/city_scene.h"
 
 namespace cwloc::synth {
@@ -17,6 +19,7 @@ struct WriteOptions {
   bool text = false;         // also write mapping_model/txt
   int threads = 0;           // for rendering descriptors; 0: all cores
   std::string command_line;  // recorded in README.txt
+  GeoOptions geo;            // --geo: the model frame and the geo files (city_geo.h)
 };
 
 struct WriteTimings {
@@ -54,7 +57,9 @@ class SceneWriter {
 };
 
 // The model a triangulating SfM would give: mapping images only, every keypoint as a point2D
-// (clutter and single-view points with an invalid point3D id), points seen >= 2 times.
-colmap::Reconstruction BuildReconstruction(const CityScene& scene, int threads = 0);
+// (clutter and single-view points with an invalid point3D id), points seen >= 2 times; in the
+// model frame (world coordinates without --geo).
+colmap::Reconstruction BuildReconstruction(const CityScene& scene, int threads = 0,
+                                           const ModelFrame& frame = {});
 
 }  // namespace cwloc::synth

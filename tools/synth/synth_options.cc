@@ -1,7 +1,9 @@
 #include "tools/synth/synth_options.h"
 
 #include <cmath>
+#include <cstdlib>
 #include <sstream>
+#include <vector>
 
 #include "format/base/error.h"
 #include "format/camera/camera_models.h"
@@ -50,7 +52,66 @@ void Require(bool ok, const std::string& message) {
   if (!ok) throw InputError(message);
 }
 
+// "LAT LON HEIGHT": three numbers separated by blanks.
+Geodetic ParseGeo(const std::string& text) {
+  const std::string usage =
+      "--geo must be \"LAT LON HEIGHT\" (WGS84 degrees and metres above the ellipsoid; got '" +
+      text + "')";
+  std::istringstream in(text);
+  std::vector<double> values;
+  for (std::string token; in >> token;) {
+    char* end = nullptr;
+    const double value = std::strtod(token.c_str(), &end);
+    Require(end == token.c_str() + token.size() && std::isfinite(value), usage);
+    values.push_back(value);
+  }
+  Require(values.size() == 3, usage);
+  Geodetic g{values[0], values[1], values[2]};
+  Require(g.latitude_deg >= -90 && g.latitude_deg <= 90,
+          "--geo latitude must be in [-90, 90] degrees (got " + Str(g.latitude_deg) + ")");
+  Require(g.longitude_deg >= -180 && g.longitude_deg <= 180,
+          "--geo longitude must be in [-180, 180] degrees (got " + Str(g.longitude_deg) + ")");
+  Require(g.height_m >= -1000 && g.height_m <= 10000,
+          "--geo height must be in [-1000, 10000] metres (got " + Str(g.height_m) + ")");
+  return g;
+}
+
 }  // namespace
+
+GeoOptions MakeGeoOptions(const SynthKnobs& knobs) {
+  GeoOptions o;
+  if (!knobs.geo) {
+    const std::pair<bool, const char*> geo_only[] = {
+        {knobs.gps_noise.has_value(), "--gps-noise"},
+        {knobs.gps_outliers.has_value(), "--gps-outliers"},
+        {knobs.prior_position_error.has_value(), "--prior-position-error"},
+        {knobs.prior_radius.has_value(), "--prior-radius"},
+        {knobs.prior_gravity_error.has_value(), "--prior-gravity-error"}};
+    for (const auto& [given, name] : geo_only) {
+      Require(!given, std::string(name) + " needs --geo (it changes only the files --geo writes)");
+    }
+    return o;
+  }
+  o.origin = ParseGeo(*knobs.geo);
+  o.gps_noise = Pick(knobs.gps_noise, {}, kDefaultGpsNoise);
+  Require(o.gps_noise >= 0 && o.gps_noise <= 1000,
+          "--gps-noise must be in [0, 1000] metres (got " + Str(o.gps_noise) + ")");
+  o.gps_outliers = Pick(knobs.gps_outliers, {}, kDefaultGpsOutliers);
+  Require(o.gps_outliers >= 0 && o.gps_outliers <= 0.5,
+          "--gps-outliers must be in [0, 0.5] (got " + Str(o.gps_outliers) + ")");
+  o.prior_position_error = Pick(knobs.prior_position_error, {}, kDefaultPriorPositionError);
+  Require(o.prior_position_error >= 0 && o.prior_position_error <= 10000,
+          "--prior-position-error must be in [0, 10000] metres (got " +
+              Str(o.prior_position_error) + ")");
+  o.prior_radius = Pick(knobs.prior_radius, {}, kDefaultPriorRadius);
+  Require(o.prior_radius > 0 && o.prior_radius <= 100000,
+          "--prior-radius must be in (0, 100000] metres (got " + Str(o.prior_radius) + ")");
+  o.prior_gravity_error_deg = Pick(knobs.prior_gravity_error, {}, kDefaultPriorGravityErrorDeg);
+  Require(o.prior_gravity_error_deg >= 0 && o.prior_gravity_error_deg <= 180,
+          "--prior-gravity-error must be in [0, 180] degrees (got " +
+              Str(o.prior_gravity_error_deg) + ")");
+  return o;
+}
 
 int64_t MinimumViews(const SceneOptions& options) {
   return int64_t(std::ceil(EstimatedViewsPerFacadeMetre(options) * 4 * kMinBlockSide));

@@ -7,6 +7,7 @@
 #include <optional>
 #include <string>
 
+#include "tools/synth/city_geo.h"
 #include "tools/synth/city_scene.h"
 
 namespace cwloc::synth {
@@ -31,6 +32,13 @@ struct SynthKnobs {
   std::optional<double> keypoint_noise;
   std::optional<double> point_noise;
   int64_t threads = 0;
+  // On the globe (city_geo.h); the others need --geo.
+  std::optional<std::string> geo;  // "LAT LON HEIGHT": WGS84 degrees, ellipsoidal metres
+  std::optional<double> gps_noise;
+  std::optional<double> gps_outliers;
+  std::optional<double> prior_position_error;
+  std::optional<double> prior_radius;
+  std::optional<double> prior_gravity_error;  // degrees
 };
 
 inline constexpr int64_t kDefaultViews = 200000;
@@ -39,6 +47,10 @@ inline constexpr int64_t kMaxViews = 200000000;
 // Validates the knobs and derives the scene options (the city size from `views` unless
 // `blocks` is given). Throws InputError naming the offending knob.
 SceneOptions MakeSceneOptions(const SynthKnobs& knobs);
+
+// Validates the --geo knobs and derives the geo options (defaults in city_geo.h). Throws
+// InputError naming the offending knob, also for a --geo knob given without --geo.
+GeoOptions MakeGeoOptions(const SynthKnobs& knobs);
 
 // The fewest views --views accepts with these options (a one-block city of 16 m sides).
 int64_t MinimumViews(const SceneOptions& options);

@@ -123,7 +123,7 @@ TEST(CitySceneTest, WrittenOutputIsByteIdenticalForAnyThreadCount) {
     knobs.threads = threads;
     const CityScene scene = CityScene::Generate(MakeSceneOptions(knobs));
     SceneWriter writer(dir / ("out" + std::to_string(threads)), false);
-    writer.Write(scene, {.text = true, .threads = threads, .command_line = "test"});
+    writer.Write(scene, {.text = true, .threads = threads, .command_line = "test", .geo = {}});
     writer.Commit("{}\n");
   }
   for (const char* file :
@@ -324,7 +324,7 @@ TEST(SceneWriterTest, OutputReadsBackWithTheColmapReaders) {
   const fs::path out = dir / "city";
   {
     SceneWriter writer(out, false);
-    writer.Write(scene, {.text = true, .threads = 2, .command_line = "test"});
+    writer.Write(scene, {.text = true, .threads = 2, .command_line = "test", .geo = {}});
     writer.Commit("{}\n");
   }
   const SceneCounts& c = scene.counts();
