@@ -100,7 +100,7 @@ Geodetic GeoFrame::EnuToGeodetic(const Eigen::Vector3d& enu) const {
 }
 
 Eigen::Vector3d GeoFrame::GeodeticToEnu(const Geodetic& geodetic) const {
-  Eigen::Vector3d enu;
+  Eigen::Vector3d enu = Eigen::Vector3d::Zero();
   impl_->local.Forward(geodetic.latitude_deg, geodetic.longitude_deg, geodetic.height_m, enu.x(),
                        enu.y(), enu.z());
   return enu;
@@ -168,7 +168,7 @@ Eigen::Vector3d GeoFrame::GravityInModel(const Eigen::Vector3d& model_point) con
 
 Georeference GeoreferenceFromEcefModel(const Geodetic& origin) {
   ValidateGeodetic(origin, "ECEF georeference origin");
-  Eigen::Vector3d origin_ecef;
+  Eigen::Vector3d origin_ecef = Eigen::Vector3d::Zero();
   const Eigen::Matrix3d enu_from_ecef = EnuFromEcef(origin, &origin_ecef);
   Georeference georeference;
   georeference.origin = origin;
