@@ -3,10 +3,13 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <iostream>
+#include <unordered_map>
 
 #include "cwloc/version.h"
 #include "format/base/error.h"
 #include "format/base/tool_main.h"
+#include "format/geo/index_georeference.h"
+#include "format/index/index.h"
 #include "tools/eval/ground_truth.h"
 #include "tools/eval/report.h"
 #include "tools/eval/result_reader.h"
@@ -29,8 +32,17 @@ int main(int argc, char** argv) {
          "--gt", gt_path,
          "ground-truth poses: NAME QW QX QY QZ TX TY TZ [CAMERA...], COLMAP world-to-camera")
       ->required();
-  app.add_option("--scale", scale_path,
-                 "scale_to_metres.txt ('scale S' line) to report metres instead of model units");
+  auto* scale_option = app.add_option(
+      "--scale", scale_path,
+      "scale_to_metres.txt ('scale S' line) to report metres instead of model units");
+  std::string index_path, gt_geo_path;
+  app.add_option("--index", index_path,
+                 "georeferenced cwloc index of the model: metres through its georeference, and "
+                 "ground and height errors in its east-north-up frame")
+      ->excludes(scale_option);
+  app.add_option("--gt-geo", gt_geo_path,
+                 "the queries' true positions, NAME LAT LON HEIGHT (WGS84 degrees, metres above "
+                 "the ellipsoid; cwloc-synth's queries_geo.txt): compare the results' \"geo\"");
   std::string model_dir, gt_points, gt_model;
   int min_shared = 12;
   app.add_option(
@@ -70,6 +82,27 @@ int main(int argc, char** argv) {
       report.scale_path = scale_path;
       report.scale = ReadScale(scale_path);
     }
+    if (!index_path.empty()) {
+      const cwloc::Index index = cwloc::Index::Open(index_path);
+      if (index.georeference() == nullptr) {
+        throw cwloc::InputError(index_path +
+                                ": the index is not georeferenced (no GEOR section); --index "
+                                "needs one built with --georef, --georef-images or --model-frame");
+      }
+      report.index_path = index_path;
+      report.georeference = cwloc::GeoreferenceOfSection(*index.georeference());
+      report.scale = report.georeference->scale;
+    }
+    std::unordered_map<std::string, cwloc::Geodetic> true_positions;
+    if (!gt_geo_path.empty()) {
+      const std::vector<NamedGeodetic> positions = ReadGeoGroundTruth(gt_geo_path);
+      true_positions = TruePositionsOfQueries(ground_truth, positions, gt_geo_path);
+      report.geo_truth_path = gt_geo_path;
+      report.geo_truth_positions = int(positions.size());
+    }
+    GeoTruth geo_truth;
+    if (report.georeference) geo_truth.georeference = &*report.georeference;
+    if (report.geo_truth_path) geo_truth.true_positions = &true_positions;
     std::optional<RecognitionTruth> recognition;
     std::vector<std::string> query_names;
     for (const NamedPose& query : ground_truth) query_names.push_back(query.name);
@@ -88,7 +121,7 @@ int main(int argc, char** argv) {
       const RunResults run = ReadResults(results_paths[i]);
       const std::string label =
           labels.empty() ? std::filesystem::path(results_paths[i]).filename().string() : labels[i];
-      report.runs.push_back(EvaluateRun(ground_truth, run, report.scale, label));
+      report.runs.push_back(EvaluateRun(ground_truth, run, report.scale, label, geo_truth));
       if (recognition)
         report.runs.back().recognition = ScoreRecognition(run, query_names, *recognition);
     }

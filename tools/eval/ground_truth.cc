@@ -90,6 +90,58 @@ std::vector<NamedPose> ReadGroundTruth(const std::filesystem::path& path) {
   return poses;
 }
 
+std::vector<NamedGeodetic> ReadGeoGroundTruth(const std::filesystem::path& path) {
+  static constexpr const char* kFields[] = {"LAT", "LON", "HEIGHT"};
+  const std::vector<std::string> lines = ReadLines(path);
+  std::vector<NamedGeodetic> positions;
+  std::unordered_map<std::string, int> first_line;
+  for (size_t i = 0; i < lines.size(); ++i) {
+    const std::string line = Trim(lines[i]);
+    if (line.empty() || line[0] == '#') continue;
+    const int line_number = int(i) + 1;
+    std::istringstream stream(line);
+    std::vector<std::string> tokens;
+    for (std::string token; stream >> token;) tokens.push_back(std::move(token));
+    if (tokens.size() != 4) {
+      throw InputError(Where(path, line_number) + "expected NAME LAT LON HEIGHT, got " +
+                       std::to_string(tokens.size()) + " value(s)");
+    }
+    double v[3];
+    for (int k = 0; k < 3; ++k) {
+      if (!ParseDouble(tokens[k + 1], &v[k])) {
+        throw InputError(Where(path, line_number) + kFields[k] + " '" + tokens[k + 1] +
+                         "' is not a finite number");
+      }
+    }
+    NamedGeodetic entry{tokens[0], {v[0], v[1], v[2]}, line_number};
+    // "FILE:LINE: latitude 91 is outside [-90, 90]"
+    ValidateGeodetic(entry.position, path.string() + ":" + std::to_string(line_number));
+    const auto [it, inserted] = first_line.emplace(entry.name, line_number);
+    if (!inserted) {
+      throw InputError(Where(path, line_number) + "duplicate query " + entry.name +
+                       " (first on line " + std::to_string(it->second) + ")");
+    }
+    positions.push_back(std::move(entry));
+  }
+  if (positions.empty())
+    throw InputError(path.string() + ": no positions (expected NAME LAT LON HEIGHT lines)");
+  return positions;
+}
+
+std::unordered_map<std::string, Geodetic> TruePositionsOfQueries(
+    const std::vector<NamedPose>& ground_truth, const std::vector<NamedGeodetic>& positions,
+    const std::filesystem::path& path) {
+  std::unordered_map<std::string, Geodetic> by_name;
+  for (const NamedGeodetic& p : positions) by_name.emplace(p.name, p.position);
+  for (const NamedPose& query : ground_truth) {
+    if (!by_name.contains(query.name)) {
+      throw InputError(path.string() + ": no position for ground-truth query " + query.name +
+                       " (line " + std::to_string(query.line) + " of the --gt file)");
+    }
+  }
+  return by_name;
+}
+
 double ReadScale(const std::filesystem::path& path) {
   const std::vector<std::string> lines = ReadLines(path);
   for (size_t i = 0; i < lines.size(); ++i) {

@@ -2,8 +2,10 @@
 
 #include <filesystem>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
+#include "format/geo/georeference.h"
 #include "tools/eval/pose_error.h"
 
 namespace cwloc::eval {
@@ -26,6 +28,26 @@ std::vector<NamedPose> ReadGroundTruth(const std::filesystem::path& path);
 // Reads the "scale S" line of scale_to_metres.txt (model units -> metres); other lines
 // (R, t of the similarity) do not change distances and are ignored.
 double ReadScale(const std::filesystem::path& path);
+
+// One line of a --gt-geo file (cwloc-synth's queries_geo.txt): NAME LAT LON HEIGHT, a query's
+// true camera centre in WGS84 degrees and metres above the ellipsoid.
+struct NamedGeodetic {
+  std::string name;
+  Geodetic position;
+  int line = 0;
+};
+
+// Reads a --gt-geo file. '#' lines and blank lines are skipped. Throws InputError naming the
+// file and line for a line without exactly four values, a value that is not a finite number, a
+// latitude outside [-90, 90] or longitude outside [-180, 360), a duplicate name, and for a file
+// without positions.
+std::vector<NamedGeodetic> ReadGeoGroundTruth(const std::filesystem::path& path);
+
+// The true positions by name; throws InputError naming `path` when a ground-truth query has none
+// (the two files describe different queries).
+std::unordered_map<std::string, Geodetic> TruePositionsOfQueries(
+    const std::vector<NamedPose>& ground_truth, const std::vector<NamedGeodetic>& positions,
+    const std::filesystem::path& path);
 
 // Opens a text file and returns its lines without trailing '\r'; InputError if it cannot be read.
 std::vector<std::string> ReadLines(const std::filesystem::path& path);

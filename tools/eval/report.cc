@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <sstream>
+#include <stdexcept>
 #include <unordered_map>
 
 #include "cwloc/version.h"
@@ -121,7 +122,7 @@ const char* QueryStatusName(QueryStatus status) {
 }
 
 RunReport EvaluateRun(const std::vector<NamedPose>& ground_truth, const RunResults& run,
-                      double scale, const std::string& label) {
+                      double scale, const std::string& label, const GeoTruth& geo) {
   RunReport report;
   report.label = label;
   report.path = run.path;
@@ -132,6 +133,10 @@ RunReport EvaluateRun(const std::vector<NamedPose>& ground_truth, const RunResul
   for (const QueryResult& result : run.queries) by_name.emplace(result.name, &result);
 
   std::vector<double> position_errors, rotation_errors;
+  std::vector<double> ground_errors, height_errors;                      // --index
+  std::vector<double> geo_errors, geo_ground_errors, geo_height_errors;  // --gt-geo
+  if (geo.true_positions) report.geo.emplace();
+  report.enu_errors = geo.georeference != nullptr;
   for (const NamedPose& truth : ground_truth) {
     QueryOutcome outcome;
     outcome.name = truth.name;
@@ -158,6 +163,27 @@ RunReport EvaluateRun(const std::vector<NamedPose>& ground_truth, const RunResul
         }
       }
       ++report.localized;
+      if (geo.georeference) {
+        outcome.enu_error = ErrorInIndexFrame(*geo.georeference, *it->second->pose, truth.pose);
+        ground_errors.push_back(outcome.enu_error->ground);
+        height_errors.push_back(outcome.enu_error->height);
+      }
+      if (geo.true_positions) {
+        if (it->second->geo) {
+          const auto position = geo.true_positions->find(truth.name);
+          if (position == geo.true_positions->end()) {
+            throw std::logic_error("cwloc-eval: no true position for " + truth.name);
+          }
+          outcome.geo_error = ErrorOnGlobe(*it->second->geo, position->second);
+          geo_errors.push_back(outcome.geo_error->distance);
+          geo_ground_errors.push_back(outcome.geo_error->ground);
+          geo_height_errors.push_back(outcome.geo_error->height);
+          ++report.geo->compared;
+          if (outcome.geo_error->distance <= kGeoWithinMetres) ++report.geo->within;
+        } else {
+          ++report.geo->without_geo;
+        }
+      }
     }
     report.per_query.push_back(std::move(outcome));
   }
@@ -175,6 +201,13 @@ RunReport EvaluateRun(const std::vector<NamedPose>& ground_truth, const RunResul
   }
   report.position_error = ComputeQuartiles(std::move(position_errors));
   report.rotation_error_deg = ComputeQuartiles(std::move(rotation_errors));
+  report.ground_error = ComputeQuartiles(std::move(ground_errors));
+  report.height_error = ComputeQuartiles(std::move(height_errors));
+  if (report.geo) {
+    report.geo->error = ComputeQuartiles(std::move(geo_errors));
+    report.geo->ground_error = ComputeQuartiles(std::move(geo_ground_errors));
+    report.geo->height_error = ComputeQuartiles(std::move(geo_height_errors));
+  }
   if (report.timed_records > 0) {
     std::array<TimeQuantiles, kStageNames.size()> times;
     for (size_t s = 0; s < kStageNames.size(); ++s)
@@ -198,6 +231,20 @@ nlohmann::ordered_json ReportToJson(const EvalReport& report) {
   for (const Threshold& t : kThresholds)
     thresholds.push_back({{"position", t.position}, {"rotation_deg", t.rotation_deg}});
   json["thresholds"] = thresholds;
+  if (report.index_path && report.georeference) {
+    const Geodetic& origin = report.georeference->origin;
+    json["index"] = {{"path", report.index_path->string()},
+                     {"scale", report.georeference->scale},
+                     {"origin",
+                      {{"latitude_deg", origin.latitude_deg},
+                       {"longitude_deg", origin.longitude_deg},
+                       {"height_m", origin.height_m}}}};
+  }
+  if (report.geo_truth_path) {
+    json["ground_truth_geo"] = {{"path", report.geo_truth_path->string()},
+                                {"positions", report.geo_truth_positions},
+                                {"within_m", kGeoWithinMetres}};
+  }
 
   ordered_json runs = ordered_json::array();
   for (const RunReport& run : report.runs) {
@@ -214,6 +261,10 @@ nlohmann::ordered_json ReportToJson(const EvalReport& report) {
     r["localized_share"] = run.queries ? double(run.localized) / run.queries : 0.0;
     r["position_error"] = QuartilesJson(run.position_error);
     r["rotation_error_deg"] = QuartilesJson(run.rotation_error_deg);
+    if (run.enu_errors) {
+      r["ground_error"] = QuartilesJson(run.ground_error);
+      r["height_error"] = QuartilesJson(run.height_error);
+    }
     ordered_json within = ordered_json::array();
     for (size_t t = 0; t < kThresholds.size(); ++t) {
       within.push_back({{"position", kThresholds[t].position},
@@ -222,6 +273,18 @@ nlohmann::ordered_json ReportToJson(const EvalReport& report) {
                         {"share", run.queries ? double(run.within[t]) / run.queries : 0.0}});
     }
     r["within"] = within;
+    if (run.geo) {
+      const GeoComparison& geo = *run.geo;
+      r["geo"] = {{"compared", geo.compared},
+                  {"without_geo", geo.without_geo},
+                  {"error_m", QuartilesJson(geo.error)},
+                  {"ground_error_m", QuartilesJson(geo.ground_error)},
+                  {"height_error_m", QuartilesJson(geo.height_error)},
+                  {"within",
+                   {{"distance_m", kGeoWithinMetres},
+                    {"count", geo.within},
+                    {"share", run.queries ? double(geo.within) / run.queries : 0.0}}}};
+    }
     r["timed_records"] = run.timed_records;
     if (run.times_ms) {
       ordered_json times;
@@ -237,6 +300,17 @@ nlohmann::ordered_json ReportToJson(const EvalReport& report) {
       if (q.status == QueryStatus::kLocalized) {
         entry["position_error"] = q.position_error;
         entry["rotation_error_deg"] = q.rotation_error_deg;
+        if (q.enu_error) {
+          entry["ground_error"] = q.enu_error->ground;
+          entry["height_error"] = q.enu_error->height;
+        }
+        if (run.geo) {
+          // null: the result has no "geo", so it is missing for the comparison on the globe.
+          entry["geo"] = q.geo_error ? ordered_json{{"error_m", q.geo_error->distance},
+                                                    {"ground_error_m", q.geo_error->ground},
+                                                    {"height_error_m", q.geo_error->height}}
+                                     : ordered_json(nullptr);
+        }
       }
       per_query.push_back(entry);
     }
@@ -265,7 +339,11 @@ std::string FormatTable(const EvalReport& report) {
   const char* unit = report.Metric() ? "m" : "units";
   out << "cwloc-eval: " << report.queries << " ground-truth queries from "
       << report.ground_truth_path.string() << "\n";
-  if (report.Metric()) {
+  if (report.georeference) {
+    out << "distances in metres (scale " << Format("%.10g", report.georeference->scale)
+        << " from the georeference of index "
+        << (report.index_path ? report.index_path->string() : std::string("?")) << ")\n";
+  } else if (report.Metric()) {
     out << "distances in metres (scale " << Format("%.10g", report.scale) << " from "
         << report.scale_path->string() << ")\n";
   } else {
@@ -300,6 +378,47 @@ std::string FormatTable(const EvalReport& report) {
     if (run.unknown_names > 0) {
       out << "  warning: " << run.label << ": " << run.unknown_names
           << " result(s) for names not in the ground truth (ignored)\n";
+    }
+  }
+
+  bool any_enu = false, any_geo = false;
+  for (const RunReport& run : report.runs) {
+    any_enu = any_enu || run.enu_errors;
+    any_geo = any_geo || run.geo.has_value();
+  }
+  if (any_enu) {
+    out << "\non the ground, in the index's east-north-up frame\n(horizontal and |vertical| "
+           "distance of the camera centres, m; Q1 / median / Q3 over localized queries)\n";
+    std::vector<std::vector<std::string>> enu_rows = {
+        {"run", "ground error (m)", "height error (m)"}};
+    for (const RunReport& run : report.runs) {
+      if (!run.enu_errors) continue;
+      enu_rows.push_back(
+          {run.label, QuartileCell(run.ground_error), QuartileCell(run.height_error)});
+    }
+    out << Columns(enu_rows);
+  }
+  if (any_geo) {
+    out << "\non the globe, against the true positions in "
+        << (report.geo_truth_path ? report.geo_truth_path->string() : std::string("?"))
+        << "\n(the results' \"geo\" in the local east-north-up frame at each true position, m; "
+           "Q1 / median / Q3 over the compared queries; share: of all ground-truth queries)\n";
+    std::vector<std::vector<std::string>> geo_rows = {
+        {"run", "compared", "3D error (m)", "ground error (m)", "height error (m)",
+         std::string("within ") + Format("%g", kGeoWithinMetres) + " m"}};
+    for (const RunReport& run : report.runs) {
+      if (!run.geo) continue;
+      geo_rows.push_back(
+          {run.label, std::to_string(run.geo->compared) + "/" + std::to_string(run.localized),
+           QuartileCell(run.geo->error), QuartileCell(run.geo->ground_error),
+           QuartileCell(run.geo->height_error), Percent(run.geo->within, run.queries)});
+    }
+    out << Columns(geo_rows);
+    for (const RunReport& run : report.runs) {
+      if (!run.geo || run.geo->without_geo == 0) continue;
+      out << "  " << run.label << ": " << run.geo->without_geo
+          << " localized result(s) without \"geo\" (a poses file, or an index without "
+             "georeference): missing from this comparison\n";
     }
   }
 

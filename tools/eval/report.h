@@ -5,8 +5,11 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
+#include "format/geo/georeference.h"
+#include "tools/eval/geo_error.h"
 #include "tools/eval/ground_truth.h"
 #include "tools/eval/recognition.h"
 #include "tools/eval/result_reader.h"
@@ -42,6 +45,10 @@ struct Threshold {
 };
 inline constexpr std::array<Threshold, 3> kThresholds = {{{0.25, 2.0}, {0.5, 5.0}, {5.0, 10.0}}};
 
+// --gt-geo's threshold: the share of queries whose "geo" lies within this 3D distance (metres)
+// of the true position.
+inline constexpr double kGeoWithinMetres = 0.5;
+
 enum class QueryStatus { kLocalized, kNotLocalized, kError, kMissing };
 const char* QueryStatusName(
     QueryStatus status);  // "localized", "not_localized", "error", "missing"
@@ -51,6 +58,20 @@ struct QueryOutcome {
   QueryStatus status = QueryStatus::kMissing;
   double position_error = 0;      // in the report's unit; only when localized
   double rotation_error_deg = 0;  // only when localized
+  // With a georeference (--index), when localized: the centres compared in its ENU frame.
+  std::optional<GroundError> enu_error;
+  // With true positions (--gt-geo), when localized and the result has "geo".
+  std::optional<GroundError> geo_error;
+};
+
+// A run's "geo" positions against the true positions (--gt-geo), metres.
+struct GeoComparison {
+  int compared = 0;     // localized queries whose result has "geo"
+  int without_geo = 0;  // localized queries whose result has none: missing for this comparison
+  std::optional<Quartiles> error;  // 3D distance, over the compared queries
+  std::optional<Quartiles> ground_error;
+  std::optional<Quartiles> height_error;
+  int within = 0;  // compared queries with a 3D error <= kGeoWithinMetres
 };
 
 struct RunReport {
@@ -70,6 +91,11 @@ struct RunReport {
   std::optional<std::array<TimeQuantiles, kStageNames.size()>> times_ms;
   std::vector<QueryOutcome> per_query;           // in ground-truth order
   std::optional<RecognitionScores> recognition;  // with --model and query points
+  // With a georeference (--index): ground and height errors (metres) over localized queries.
+  bool enu_errors = false;
+  std::optional<Quartiles> ground_error;
+  std::optional<Quartiles> height_error;
+  std::optional<GeoComparison> geo;  // with true positions (--gt-geo)
 };
 
 struct EvalReport {
@@ -79,14 +105,29 @@ struct EvalReport {
   double scale = 1.0;  // model units -> report unit
   std::vector<RunReport> runs;
   int recognition_min_shared = 0;  // set when location recognition was scored
+  // --index: the georeferenced index whose scale and ENU frame the distances use.
+  std::optional<std::filesystem::path> index_path = std::nullopt;
+  std::optional<Georeference> georeference = std::nullopt;
+  // --gt-geo: the true positions' file and how many it holds.
+  std::optional<std::filesystem::path> geo_truth_path = std::nullopt;
+  int geo_truth_positions = 0;
 
-  bool Metric() const { return scale_path.has_value(); }
+  bool Metric() const { return scale_path.has_value() || georeference.has_value(); }
   const char* Unit() const { return Metric() ? "m" : "model units"; }
+};
+
+// What a run is compared with on the ground, beyond the poses.
+struct GeoTruth {
+  // --index: centres are also compared in its ENU frame (ground and height errors); the scale
+  // passed to EvaluateRun should be its scale.
+  const Georeference* georeference = nullptr;
+  // --gt-geo: the true position of every ground-truth query (TruePositionsOfQueries).
+  const std::unordered_map<std::string, Geodetic>* true_positions = nullptr;
 };
 
 // Compares one run with the ground truth; distances are multiplied by scale.
 RunReport EvaluateRun(const std::vector<NamedPose>& ground_truth, const RunResults& run,
-                      double scale, const std::string& label);
+                      double scale, const std::string& label, const GeoTruth& geo = {});
 
 // The report as described by schemas/eval-report.schema.json.
 nlohmann::ordered_json ReportToJson(const EvalReport& report);

@@ -66,6 +66,23 @@ QueryResult ParseJsonLine(const std::string& line, const std::string& where) {
     result.status = record.contains("error") ? ResultStatus::kError : ResultStatus::kNotLocalized;
   }
 
+  if (const auto geo = record.find("geo"); geo != record.end()) {
+    if (!geo->is_object()) throw InputError(where + "\"geo\" must be an object");
+    // Only the position is compared; enu and the attitude angles are not read.
+    double values[3];
+    const char* keys[] = {"latitude_deg", "longitude_deg", "height_m"};
+    for (int k = 0; k < 3; ++k) {
+      const auto value = geo->find(keys[k]);
+      if (value == geo->end() || !value->is_number() ||
+          !std::isfinite(values[k] = value->get<double>())) {
+        throw InputError(where + "\"geo." + keys[k] + "\" must be a finite number");
+      }
+    }
+    result.geo = Geodetic{values[0], values[1], values[2]};
+    // "FILE:LINE: "geo": latitude 91 is outside [-90, 90]"
+    ValidateGeodetic(*result.geo, where + "\"geo\"");
+  }
+
   if (const auto times = record.find("times_ms"); times != record.end()) {
     if (!times->is_object()) throw InputError(where + "\"times_ms\" must be an object");
     StageTimes stage_times{};

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "format/geo/georeference.h"
 #include "tools/eval/pose_error.h"
 
 namespace cwloc::eval {
@@ -23,6 +24,9 @@ struct QueryResult {
   std::string name;
   ResultStatus status = ResultStatus::kNotLocalized;
   std::optional<Pose> pose;  // set when localized
+  // The camera centre on the globe ("geo": latitude_deg, longitude_deg, height_m), which
+  // cwloc-localize writes when its index is georeferenced; never from a poses file.
+  std::optional<Geodetic> geo;
   std::optional<StageTimes> times_ms;
   std::vector<uint32_t> ranked_image_ids;  // "ranked_images", best first (JSON lines only)
   int line = 0;
