@@ -32,9 +32,9 @@ void PrintGeoreference(const nlohmann::ordered_json& georeference) {
               origin["height_m"].get<double>(), georeference["scale"].get<double>());
   if (georeference.contains("fit")) {
     const auto& fit = georeference["fit"];
-    std::printf("; %s of %s positions fit, rms %.3f m, %zu outliers",
-                fit["inliers"].dump().c_str(), fit["observations"].dump().c_str(),
-                fit["rms_residual_m"].get<double>(), fit["outliers"].size());
+    std::printf("; %s of %s positions fit, rms %.3f m, %zu outliers", fit["inliers"].dump().c_str(),
+                fit["observations"].dump().c_str(), fit["rms_residual_m"].get<double>(),
+                fit["outliers"].size());
   }
   std::printf("\n");
 }
@@ -186,8 +186,9 @@ int main(int argc, char** argv) {
                     "Georeference from the EXIF GPS of the model's photos in this folder");
   build->add_option("--model-frame", geo.model_frame,
                     "The model is already geographic: 'ecef' or 'enu:LAT,LON,HEIGHT'");
-  build->add_option("--georef-sigma", geo.fit.default_sigma_m,
-                    "Position standard deviation (m) of --georef lines without one, and of EXIF GPS")
+  build
+      ->add_option("--georef-sigma", geo.fit.default_sigma_m,
+                   "Position standard deviation (m) of --georef lines without one, and of EXIF GPS")
       ->capture_default_str();
   build->add_flag("--json", json, "Print the build report as JSON");
 

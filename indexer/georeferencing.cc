@@ -123,7 +123,8 @@ std::vector<GeoObservation> ExifObservations(const ModelViews& views,
   return observations;
 }
 
-ModelGeoreference FittedGeoreference(const ModelViews& views, const GeoreferencingOptions& options) {
+ModelGeoreference FittedGeoreference(const ModelViews& views,
+                                     const GeoreferencingOptions& options) {
   const bool from_file = !options.georef_file.empty();
   const std::string source =
       from_file ? options.georef_file.string() : "--georef-images " + options.images_dir.string();
@@ -153,7 +154,8 @@ ModelGeoreference FittedGeoreference(const ModelViews& views, const Georeferenci
     if (fit.inliers[i]) {
       max_inlier_residual = std::max(max_inlier_residual, fit.residuals_m[i]);
     } else {
-      outliers.push_back({{"image", observations[i].image_name}, {"residual_m", fit.residuals_m[i]}});
+      outliers.push_back(
+          {{"image", observations[i].image_name}, {"residual_m", fit.residuals_m[i]}});
     }
   }
   out.manifest["source"] = from_file ? "georef-file" : "exif-gps";

@@ -23,7 +23,7 @@ struct IndexBuildOptions {
   uint64_t seed = 0;       // kd-forest randomization and k-means initialisation
   bool keypoints = false;  // also store each view's keypoint (optional section VKXY, 8 B/view)
   GeoreferencingOptions georeferencing;  // its fit seed is set from `seed`
-  int threads = 0;         // 0 = all cores
+  int threads = 0;                       // 0 = all cores
 };
 
 struct IndexBuildReport {

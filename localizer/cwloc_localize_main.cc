@@ -403,9 +403,10 @@ int main(int argc, char** argv) {
   app.add_option("--prior-position", cli.prior_position,
                  "GPS prior 'LAT LON [HEIGHT] RADIUS_M' (WGS84): only model cameras within the "
                  "radius are matched; needs a georeferenced index");
-  app.add_option("--prior-gravity", cli.prior_gravity,
-                 "Gravity direction 'GX GY GZ' in the camera frame (x right, y down, z forward), as "
-                 "an IMU gives it; needs a georeferenced index");
+  app.add_option(
+      "--prior-gravity", cli.prior_gravity,
+      "Gravity direction 'GX GY GZ' in the camera frame (x right, y down, z forward), as "
+      "an IMU gives it; needs a georeferenced index");
   app.add_option("--prior-gravity-sigma", options.prior_gravity_sigma_deg,
                  "Standard deviation of --prior-gravity, degrees")
       ->capture_default_str();
@@ -414,8 +415,7 @@ int main(int argc, char** argv) {
                  "gravity GX GY GZ'");
   app.add_flag("--use-exif-gps", cli.use_exif_gps,
                "Use a photo's EXIF GPS as a position prior (horizontal, --exif-gps-radius)");
-  app.add_option("--exif-gps-radius", cli.exif_gps_radius_m,
-                 "Radius of the EXIF GPS prior, metres")
+  app.add_option("--exif-gps-radius", cli.exif_gps_radius_m, "Radius of the EXIF GPS prior, metres")
       ->capture_default_str();
   app.add_option("-o,--output", cli.output_path, "JSON lines output (default: stdout)");
   app.add_option("--poses", cli.poses_path,

@@ -48,13 +48,12 @@ std::vector<FeatureMatch> MatchForward(const Index& index, const Query& query,
     const size_t before = matches.size();
     ClusterWiseRatioTest(index, feature, neighbors, options.ratio, &matches, stats);
     if (!allowed.empty()) {
-      matches.erase(std::remove_if(matches.begin() + static_cast<std::ptrdiff_t>(before),
-                                   matches.end(),
-                                   [&](const FeatureMatch& match) {
-                                     return !ClusterAllowed(allowed,
-                                                            ClusterOfView(index, match.view));
-                                   }),
-                    matches.end());
+      matches.erase(
+          std::remove_if(matches.begin() + static_cast<std::ptrdiff_t>(before), matches.end(),
+                         [&](const FeatureMatch& match) {
+                           return !ClusterAllowed(allowed, ClusterOfView(index, match.view));
+                         }),
+          matches.end());
     }
     stats->seconds_ratio_test += ratio_test.Seconds();
   }
@@ -63,8 +62,8 @@ std::vector<FeatureMatch> MatchForward(const Index& index, const Query& query,
 
 std::vector<FeatureMatch> MatchGlobalRatio(const Index& index, const Query& query,
                                            const LocalizerOptions& options,
-                                           KdForestSearcher& searcher,
-                                           ForwardMatchingStats* stats, ClusterMask allowed) {
+                                           KdForestSearcher& searcher, ForwardMatchingStats* stats,
+                                           ClusterMask allowed) {
   std::vector<KdNeighbor> neighbors(2);
   const KdSearchOptions search_options{options.checks};
   std::vector<FeatureMatch> matches;

@@ -22,8 +22,8 @@ std::optional<IndexGeo> IndexGeo::Of(const Index& index) {
 
 std::vector<char> IndexGeo::ClustersNear(const PositionPrior& prior,
                                          const ClusterMembers& clusters) const {
-  const Eigen::Vector3d at = frame_.GeodeticToEnu(
-      {prior.latitude_deg, prior.longitude_deg, prior.height_m.value_or(0.0)});
+  const Eigen::Vector3d at =
+      frame_.GeodeticToEnu({prior.latitude_deg, prior.longitude_deg, prior.height_m.value_or(0.0)});
   std::vector<char> near(clusters.num_clusters(), 0);
   for (uint32_t c = 0; c < clusters.num_clusters(); ++c) {
     for (uint32_t i = clusters.offsets[c]; i < clusters.offsets[c + 1] && !near[c]; ++i) {

@@ -38,10 +38,10 @@ struct StageTimes {
 struct GeoPose {
   double latitude_deg = 0;
   double longitude_deg = 0;
-  double height_m = 0;                // ellipsoidal
+  double height_m = 0;                 // ellipsoidal
   std::array<double, 3> enu{0, 0, 0};  // metres in the index's ENU frame
-  double heading_deg = 0;             // of the optical axis, clockwise from true north
-  double pitch_deg = 0;               // above the horizon
+  double heading_deg = 0;              // of the optical axis, clockwise from true north
+  double pitch_deg = 0;                // above the horizon
   double roll_deg = 0;
 };
 

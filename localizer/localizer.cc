@@ -47,8 +47,8 @@ MatcherOutput MatchClusterWise(const Index& index, const ClusterMembers& cluster
 }
 
 // The diagnostic baseline: the pose is fit to the global 1-ratio matches.
-MatcherOutput MatchGlobally(const Index& index, const Query& query,
-                            const LocalizerOptions& options, ClusterMask allowed) {
+MatcherOutput MatchGlobally(const Index& index, const Query& query, const LocalizerOptions& options,
+                            ClusterMask allowed) {
   MatcherOutput out;
   KdForestSearcher searcher(index.kd_forest());
   out.forward = MatchGlobalRatio(index, query, options, searcher, &out.forward_stats, allowed);
@@ -187,9 +187,9 @@ LocalizationResult Localizer::Localize(const Query& query, const LocalizerOption
   const Stopwatch total;
   ValidateQuery(query);
   if ((query.position_prior || query.gravity) && !geo_) {
-    throw InputError(query.Source() + ": a position or gravity prior needs a georeferenced index (" +
-                     index_.file().path().string() +
-                     " is not; see cwloc-index build --georef)");
+    throw InputError(query.Source() +
+                     ": a position or gravity prior needs a georeferenced index (" +
+                     index_.file().path().string() + " is not; see cwloc-index build --georef)");
   }
 
   // The position prior's region: only clusters with a camera within its radius.
@@ -233,9 +233,8 @@ LocalizationResult Localizer::Localize(const Query& query, const LocalizerOption
   if (query.gravity) {
     gravity_in_model = geo_->GravityInModel(query.position_prior);
     GravityPrior prior;
-    prior.in_camera = Eigen::Vector3d((*query.gravity)[0], (*query.gravity)[1],
-                                      (*query.gravity)[2])
-                          .normalized();
+    prior.in_camera =
+        Eigen::Vector3d((*query.gravity)[0], (*query.gravity)[1], (*query.gravity)[2]).normalized();
     prior.in_world = gravity_in_model;
     prior.sigma_deg = options.prior_gravity_sigma_deg;
     pose_options.pose.gravity = prior;

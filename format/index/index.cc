@@ -15,15 +15,18 @@ struct DescriptorRow {
 
 // Checked at open (one element): the localizer converts positions through it on every query.
 void ValidateGeoreference(const IndexGeoreference& g, const std::string& name) {
-  auto fail = [&](const std::string& what) { throw InputError(name + ": section 'GEOR': " + what); };
-  const double values[] = {g.origin_latitude_deg, g.origin_longitude_deg, g.origin_height_m,
-                           g.scale,          g.rotation[0],         g.rotation[1],
-                           g.rotation[2],    g.rotation[3],         g.translation[0],
-                           g.translation[1], g.translation[2],      g.rms_residual_m};
+  auto fail = [&](const std::string& what) {
+    throw InputError(name + ": section 'GEOR': " + what);
+  };
+  const double values[] = {
+      g.origin_latitude_deg, g.origin_longitude_deg, g.origin_height_m, g.scale,
+      g.rotation[0],         g.rotation[1],          g.rotation[2],     g.rotation[3],
+      g.translation[0],      g.translation[1],       g.translation[2],  g.rms_residual_m};
   for (const double value : values) {
     if (!std::isfinite(value)) fail("a value is not finite");
   }
-  if (std::abs(g.origin_latitude_deg) > 90 || g.origin_longitude_deg < -180 || g.origin_longitude_deg >= 360)
+  if (std::abs(g.origin_latitude_deg) > 90 || g.origin_longitude_deg < -180 ||
+      g.origin_longitude_deg >= 360)
     fail("origin latitude/longitude out of range");
   if (!(g.scale > 0)) fail("scale " + std::to_string(g.scale) + " is not positive");
   const double norm = std::sqrt(g.rotation[0] * g.rotation[0] + g.rotation[1] * g.rotation[1] +

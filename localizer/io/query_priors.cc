@@ -24,9 +24,8 @@ std::optional<std::vector<double>> ParseNumbers(const std::string& text) {
   return values;
 }
 
-PositionPrior CheckedPositionPrior(double latitude, double longitude,
-                                   std::optional<double> height, double radius,
-                                   const std::string& what) {
+PositionPrior CheckedPositionPrior(double latitude, double longitude, std::optional<double> height,
+                                   double radius, const std::string& what) {
   if (std::abs(latitude) > 90)
     throw InputError(what + ": latitude " + std::to_string(latitude) + " is outside [-90, 90]");
   if (longitude < -180 || longitude >= 360)
@@ -84,9 +83,8 @@ std::unordered_map<std::string, QueryPriors> ReadPriorsFile(const std::filesyste
       const auto v = ParseNumbers(tokens[0] + " " + tokens[1] + " " + tokens[2] + " " + tokens[3]);
       if (!v) throw InputError(where + ": a position field is not a number");
       if (query.position) throw InputError(where + ": a second position for '" + name + "'");
-      query.position = CheckedPositionPrior((*v)[0], (*v)[1],
-                                            no_height ? std::nullopt : std::optional((*v)[2]),
-                                            (*v)[3], where);
+      query.position = CheckedPositionPrior(
+          (*v)[0], (*v)[1], no_height ? std::nullopt : std::optional((*v)[2]), (*v)[3], where);
       query.position->source = PriorSource::kPriorsFile;
     } else if (kind == "gravity") {
       const auto v = ParseNumbers(rest);

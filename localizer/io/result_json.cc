@@ -53,14 +53,14 @@ nlohmann::ordered_json ResultToJson(const LocalizationResult& result,
   if (result.priors.position || result.priors.gravity) {
     nlohmann::ordered_json priors = nlohmann::ordered_json::object();
     if (const auto& p = result.priors.position) {
-      priors["position"] = {{"latitude_deg", p->latitude_deg},
-                            {"longitude_deg", p->longitude_deg},
-                            {"height_m", p->height_m ? nlohmann::ordered_json(*p->height_m)
-                                                     : nlohmann::ordered_json()},
-                            {"radius_m", p->radius_m},
-                            {"source", std::string(kPriorSourceNames[static_cast<size_t>(
-                                           p->source)])},
-                            {"clusters_in_radius", result.priors.clusters_in_radius}};
+      priors["position"] = {
+          {"latitude_deg", p->latitude_deg},
+          {"longitude_deg", p->longitude_deg},
+          {"height_m",
+           p->height_m ? nlohmann::ordered_json(*p->height_m) : nlohmann::ordered_json()},
+          {"radius_m", p->radius_m},
+          {"source", std::string(kPriorSourceNames[static_cast<size_t>(p->source)])},
+          {"clusters_in_radius", result.priors.clusters_in_radius}};
     }
     if (result.priors.gravity) {
       priors["gravity"] = {{"direction", *result.priors.gravity}};

@@ -24,7 +24,8 @@ class GeoreferencingTest : public test::IndexerFixture {
     Georeference truth;
     truth.origin = {48.8566, 2.3522, 35.0};
     truth.scale = 3.7;
-    truth.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(0.8, Eigen::Vector3d(1, 2, 3).normalized()));
+    truth.rotation =
+        Eigen::Quaterniond(Eigen::AngleAxisd(0.8, Eigen::Vector3d(1, 2, 3).normalized()));
     truth.translation = {120.0, -40.0, 2.0};
     return truth;
   }
@@ -39,8 +40,8 @@ class GeoreferencingTest : public test::IndexerFixture {
       const Eigen::Vector3d center = Center(image);
       const Geodetic g = frame.ModelToGeodetic(center);
       char line[256];
-      std::snprintf(line, sizeof(line), "%s %.12f %.12f %.6f\n", image.name.c_str(),
-                    g.latitude_deg, g.longitude_deg, g.height_m);
+      std::snprintf(line, sizeof(line), "%s %.12f %.12f %.6f\n", image.name.c_str(), g.latitude_deg,
+                    g.longitude_deg, g.height_m);
       out << line;
     }
     out << extra_line;

