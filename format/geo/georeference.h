@@ -22,7 +22,7 @@ struct Geodetic {
 struct Georeference {
   Geodetic origin;
   double scale = 1;
-  Eigen::Quaterniond rotation = Eigen::Quaterniond::Identity();
+  Eigen::Quaterniond rotation = Eigen::Quaterniond::Identity();  // unit (GeoFrame normalizes)
   Eigen::Vector3d translation = Eigen::Vector3d::Zero();
 
   Eigen::Vector3d ModelToEnu(const Eigen::Vector3d& model) const;

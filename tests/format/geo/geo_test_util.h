@@ -1,7 +1,9 @@
 #pragma once
 
 // Test helpers for format/geo: WGS84 written out from its definition (independent of
-// GeographicLib), random rotations and numbers from the tests' shared PRNG.
+// GeographicLib), random rotations and numbers from the tests' shared PRNG. Several draws in
+// one expression go in braces, which fix their order (parentheses do not), so every platform
+// generates the same data.
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -47,12 +49,12 @@ inline double Uniform(double lo, double hi) {
 inline double Normal(double sigma) { return std::normal_distribution<double>(0, sigma)(Rng()); }
 
 inline Eigen::Quaterniond RandomRotation() {
-  Eigen::Quaterniond q(Normal(1), Normal(1), Normal(1), Normal(1));
+  Eigen::Quaterniond q{Normal(1), Normal(1), Normal(1), Normal(1)};
   return q.normalized();
 }
 
 inline Eigen::Vector3d RandomUnitVector() {
-  return Eigen::Vector3d(Normal(1), Normal(1), Normal(1)).normalized();
+  return Eigen::Vector3d{Normal(1), Normal(1), Normal(1)}.normalized();
 }
 
 // Angle in radians between two rotations.

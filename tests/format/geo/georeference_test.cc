@@ -68,7 +68,7 @@ Georeference RandomGeoreference(const Geodetic& origin) {
   g.origin = origin;
   g.scale = std::pow(10.0, Uniform(-2, 2));
   g.rotation = test::RandomRotation();
-  g.translation = Eigen::Vector3d(Uniform(-1000, 1000), Uniform(-1000, 1000), Uniform(-100, 100));
+  g.translation = Eigen::Vector3d{Uniform(-1000, 1000), Uniform(-1000, 1000), Uniform(-100, 100)};
   return g;
 }
 
