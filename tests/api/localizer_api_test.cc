@@ -40,7 +40,7 @@ TEST_F(LocalizerApiTest, OpensTheIndexAndReportsItsContents) {
   const api::Localizer localizer = api::Localizer::Open(GoldenIndex().string(), /*verify=*/true);
   const api::IndexInfo info = localizer.Info();
   EXPECT_EQ(info.path, GoldenIndex().string());
-  EXPECT_EQ(info.format_version, "1.1");
+  EXPECT_EQ(info.format_version, "1.0");
   EXPECT_EQ(info.num_images, 26u);
   EXPECT_EQ(info.num_points, 718u);
   EXPECT_EQ(info.num_views, 1707u);

@@ -116,7 +116,7 @@ TEST_F(IndexCliTest, DamagedFilesGiveTheirOwnErrors) {
   WriteCorrupt(newer);
   EXPECT_EQ(Run("info " + corrupt, &output), 2);
   EXPECT_THAT(output,
-              HasSubstr("index format 3.0 is not readable by this cwloc, which reads format 1.x"));
+              HasSubstr("index format 3.1 is not readable by this cwloc, which reads format 1.x"));
 
   EXPECT_EQ(Run("info " + (dir_ / "missing.cwl").string(), &output), 2);
   EXPECT_THAT(output, HasSubstr("missing.cwl: cannot open: No such file or directory"));

@@ -6,6 +6,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "format/geo/georeference.h"
 #include "format/index/index.h"
 #include "localizer/io/camera_spec.h"
 #include "localizer/io/database/database_queries.h"
@@ -166,6 +167,73 @@ TEST_F(HerzJesuTest, SameSeedGivesTheSamePose) {
   EXPECT_EQ(a.rotation, b.rotation);
   EXPECT_EQ(a.translation, b.translation);
   EXPECT_EQ(a.num_inliers, b.num_inliers);
+}
+
+// Strecha's metric ground-truth frame placed on the globe: its x, y, z are taken as east,
+// north and up of an arbitrary origin (the frame is metric; any rigid placement is a valid
+// test). The georef file gives each mapping image's Strecha camera centre, so the fit must find
+// scale_to_metres.txt's similarity, with its ~2 cm residual, and leave the poses alone.
+TEST_F(HerzJesuTest, AGeorefFileFromStrechasCamerasFitsToItsAlignmentResidual) {
+  const Geodetic origin{50.7753, 6.0839, 180.0};
+  Georeference strecha_as_enu;
+  strecha_as_enu.origin = origin;
+  const GeoFrame strecha(strecha_as_enu);
+  auto strecha_center = [&](const std::string& name) {
+    std::ifstream in(data_ / "strecha_gt_cameras" / (name + ".camera"));
+    std::vector<double> values;
+    for (double v; in >> v;) values.push_back(v);
+    // K (9), distortion (3), R (9), C (3), w h.
+    EXPECT_EQ(values.size(), 26u) << name;
+    return Eigen::Vector3d(values[21], values[22], values[23]);
+  };
+  test::TempDir dir;
+  const auto georef = dir / "georef.txt";
+  {
+    std::ofstream out(georef);
+    for (const IndexImage& image : index_->images()) {
+      const std::string name(index_->ImageName(image));
+      const Geodetic g = strecha.EnuToGeodetic(strecha_center(name));
+      char line[256];
+      std::snprintf(line, sizeof(line), "%s %.12f %.12f %.6f\n", name.c_str(), g.latitude_deg,
+                    g.longitude_deg, g.height_m);
+      out << line;
+    }
+  }
+  IndexBuildOptions options;
+  options.model_dir = data_ / "mapping_model" / "bin";
+  options.database_path = data_ / "database.db";
+  options.output_path = dir / "georeferenced.cwl";
+  options.georeferencing.georef_file = georef;
+  BuildIndex(options);
+  const Index georeferenced = Index::Open(options.output_path);
+  ASSERT_NE(georeferenced.georeference(), nullptr);
+  const IndexGeoreference& fit = *georeferenced.georeference();
+  // scale_to_metres.txt: rms 0.0207 m over all 25 cameras; the index sees the 20 mapping ones.
+  std::printf("herz_jesu georef: %u of %u inliers, rms %.4f m, scale %.6f\n", fit.num_inliers,
+              fit.num_observations, fit.rms_residual_m, fit.scale);
+  EXPECT_EQ(fit.num_inliers, 20u);
+  EXPECT_NEAR(fit.rms_residual_m, 0.0207, 0.006);
+  EXPECT_NEAR(fit.scale, kMetresPerUnit, 2e-3 * kMetresPerUnit);
+
+  // Poses are the same as without a georeference, bit for bit; each query's position on the
+  // globe is its Strecha centre's to within the alignment and localization errors.
+  const DatabaseQueries queries(data_ / "database.db");
+  const Localizer plain(*index_);
+  const Localizer geo(georeferenced);
+  for (const auto& [name, truth] : truth_) {
+    Query query = queries.Load(name);
+    query.camera = ParseCameraSpec(truth.camera, "queries_gt.txt");
+    const LocalizationResult a = plain.Localize(query, LocalizerOptions{});
+    const LocalizationResult b = geo.Localize(query, LocalizerOptions{});
+    ASSERT_TRUE(a.success && b.success) << name;
+    EXPECT_EQ(a.rotation, b.rotation) << name;
+    EXPECT_EQ(a.translation, b.translation) << name;
+    EXPECT_FALSE(a.geo.has_value());
+    ASSERT_TRUE(b.geo.has_value());
+    const Eigen::Vector3d on_globe =
+        strecha.GeodeticToEnu({b.geo->latitude_deg, b.geo->longitude_deg, b.geo->height_m});
+    EXPECT_LT((on_globe - strecha_center(name)).norm(), 0.08) << name;
+  }
 }
 
 }  // namespace

@@ -25,7 +25,8 @@ struct GoldenIndex {
   uint16_t format_minor = 0;
   size_t cameras = 0, images = 0, points = 0, views = 0, clusters = 0;
   size_t covisibility_edges = 0, kd_trees = 0;
-  size_t keypoints = 0;  // rows of the optional VKXY section
+  size_t keypoints = 0;         // rows of the optional VKXY section
+  uint32_t georef_inliers = 0;  // of the optional GEOR section (format 1.1); 0: none
   size_t num_queries = 0;
   double max_position_m = 0, max_rotation_deg = 0;
 };
@@ -47,6 +48,25 @@ const GoldenIndex kGoldenIndexes[] = {
      .covisibility_edges = 76,
      .kd_trees = 4,
      .keypoints = 1707,
+     .num_queries = 4,
+     .max_position_m = 0.25,
+     .max_rotation_deg = 0.7},
+    // Format 1.1 adds the optional GEOR section: the same city placed at 47.3779 N, 8.5403 E
+    // (its model in a random similarity frame), fit to GPS with 3 m noise and 3 of 26 wild.
+    {.name = "Format1_1",
+     .file = "index-1.1.cwl",
+     .queries = "index-1.1-queries",
+     .format_major = 1,
+     .format_minor = 1,
+     .cameras = 1,
+     .images = 26,
+     .points = 718,
+     .views = 1707,
+     .clusters = 8,
+     .covisibility_edges = 76,
+     .kd_trees = 4,
+     .keypoints = 1707,
+     .georef_inliers = 23,
      .num_queries = 4,
      .max_position_m = 0.25,
      .max_rotation_deg = 0.7},
@@ -76,6 +96,12 @@ TEST_P(GoldenIndexTest, OpensValidatesAndHasTheExactVersionAndCounts) {
   EXPECT_EQ(index.view_keypoints().size(), golden.keypoints);
   EXPECT_EQ(index.covisibility_edges().size(), golden.covisibility_edges);
   EXPECT_EQ(index.kd_forest().NumTrees(), golden.kd_trees);
+  if (golden.georef_inliers == 0) {
+    EXPECT_EQ(index.georeference(), nullptr);
+  } else {
+    ASSERT_NE(index.georeference(), nullptr);
+    EXPECT_EQ(index.georeference()->num_inliers, golden.georef_inliers);
+  }
   std::set<uint32_t> clusters;
   for (const IndexImage& image : index.images()) clusters.insert(image.cluster);
   EXPECT_EQ(clusters.size(), golden.clusters);

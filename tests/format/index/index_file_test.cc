@@ -146,7 +146,7 @@ TEST_F(IndexFileTest, NewerMajorVersionNamesBothVersions) {
   EXPECT_EQ(
       OpenError(path_),
       path_.string() +
-          ": index format 2.0 is not readable by this cwloc, which reads format 1.x (up to 1.1); "
+          ": index format 2.1 is not readable by this cwloc, which reads format 1.x (up to 1.1); "
           "rebuild the index with this cwloc-index or upgrade cwloc");
 }
 
