@@ -11,9 +11,8 @@
 # environment can shrink the city for a quick try: GEO_BENCH_VIEWS (default 300000) and
 # GEO_BENCH_QUERIES (default 100).
 #
-# Working now: the generation and a check of the geo files. The index, localization and
-# evaluation steps wait for cwloc-index --georef and cwloc-localize --priors: they are the TODO
-# block at the end, with the intended commands.
+# Then: the index georeferenced by georef.txt, localization without priors, with the GPS prior,
+# with the gravity prior and with both, and cwloc-eval on the ground and on the globe.
 set -euo pipefail
 me="geo_benchmark.sh"
 die() { echo "$me: error: $*" >&2; exit 1; }
@@ -71,41 +70,63 @@ print(f"city at {o['latitude_deg']} {o['longitude_deg']} {o['height_m']} m: {ima
       f"{stats['counts']['views']} views")
 EOF
 
-cat <<EOF
-## done: $city
-The index, localization and evaluation steps wait for cwloc-index --georef and
-cwloc-localize --priors (see the TODO block in $0).
+index="$work/city.cwl"
+if [ ! -f "$index" ]; then
+  echo "## building the index, georeferenced by the noisy GPS positions"
+  timing "$bin/cwloc-index" build --model "$city/mapping_model/bin" \
+    --database "$city/database.db" --georef "$city/georef.txt" -o "$index"
+fi
+
+echo "## the georeference against the truth"
+"$bin/cwloc-index" info --json "$index" >"$work/index_info.json"
+"$python" - "$work/index_info.json" "$city/georef_outliers.txt" <<'EOF'
+import json, sys
+fit = json.load(open(sys.argv[1]))["manifest"]["georeference"]["fit"]
+flagged = {o["image"] for o in fit["outliers"]}
+wild = {l.strip() for l in open(sys.argv[2]) if l.strip()}
+print(f"fit: {fit['inliers']} of {fit['observations']} positions kept, rms residual "
+      f"{fit['rms_residual_m']:.2f} m (3 m per axis: 3 sqrt(3) = 5.20 m expected); "
+      f"{len(flagged)} flagged: {len(flagged & wild)} of the {len(wild)} wild ones, "
+      f"{len(flagged - wild)} good ones")
 EOF
 
-# TODO(integrator): enable once cwloc-index --georef and cwloc-localize --priors exist; the
-# intended commands (flag names as planned):
-#
-# index="$work/city.cwl"
-# echo "## building the index with the noisy GPS positions"
-# timing "$bin/cwloc-index" build --model "$city/mapping_model/bin" \
-#   --database "$city/database.db" --georef "$city/georef.txt" -o "$index"
-# timing "$bin/cwloc-index" verify "$index"
-#   # expected: the fitted georeference rejects the georef_outliers.txt images and matches
-#   # scale_to_metres.txt (model -> ENU) to about 3 m / sqrt(images)
-#
-# for run in no-priors priors; do
-#   extra=()
-#   [ "$run" = priors ] && extra=(--priors "$city/query_priors.txt")
-#   for matcher in cluster-wise global-ratio; do
-#     echo "## localizing: $run, --matcher $matcher (1 thread)"
-#     status=0
-#     timing "$bin/cwloc-localize" --index "$index" --database "$city/database.db" \
-#       --query-list "$city/queries_with_intrinsics.txt" --matcher "$matcher" --threads 1 \
-#       "${extra[@]}" -o "$work/results_${run}_$matcher.jsonl" -q || status=$?
-#     [ "$status" -le 1 ] || exit "$status"
-#   done
-# done
-#
-# echo "## evaluation"
-# "$bin/cwloc-eval" \
-#   --results "$work/results_no-priors_cluster-wise.jsonl" --label cluster-wise \
-#   --results "$work/results_priors_cluster-wise.jsonl" --label cluster-wise+priors \
-#   --results "$work/results_no-priors_global-ratio.jsonl" --label global-ratio \
-#   --results "$work/results_priors_global-ratio.jsonl" --label global-ratio+priors \
-#   --gt "$city/queries_gt.txt" --scale "$city/scale_to_metres.txt" \
-#   --model "$city/mapping_model/bin" --gt-points "$city/queries_gt_points.txt"
+# Priors files: the position lines, the gravity lines, both.
+grep ' position ' "$city/query_priors.txt" >"$work/priors_position.txt"
+grep ' gravity ' "$city/query_priors.txt" >"$work/priors_gravity.txt"
+cp "$city/query_priors.txt" "$work/priors_both.txt"
+
+runs=(none position gravity both)
+for run in "${runs[@]}"; do
+  extra=()
+  [ "$run" = none ] || extra=(--priors "$work/priors_$run.txt")
+  echo "## localizing, priors: $run (1 thread)"
+  status=0
+  timing "$bin/cwloc-localize" --index "$index" --database "$city/database.db" \
+    --query-list "$city/queries_with_intrinsics.txt" --threads 1 -q \
+    "${extra[@]}" -o "$work/results_$run.jsonl" || status=$?
+  [ "$status" -le 1 ] || exit "$status"
+done
+
+echo "## evaluation"
+results=()
+for run in "${runs[@]}"; do results+=(--results "$work/results_$run.jsonl" --label "$run"); done
+"$bin/cwloc-eval" "${results[@]}" --gt "$city/queries_gt.txt" --index "$index" \
+  --gt-geo "$city/queries_geo.txt"
+
+echo "## per run: localized, and medians over the queries every run localized"
+"$python" - "$work" "${runs[@]}" <<'EOF'
+import json, statistics, sys
+work, runs = sys.argv[1], sys.argv[2:]
+data = {r: {j["name"]: j for j in map(json.loads, open(f"{work}/results_{r}.jsonl"))} for r in runs}
+common = set.intersection(*({n for n, j in d.items() if j.get("success")} for d in data.values()))
+print("| priors | localized | total ms | pose ms | RANSAC iterations | back-matched clusters |")
+print("|---|---|---|---|---|---|")
+for r in runs:
+    d = data[r]
+    med = lambda f: statistics.median(f(d[n]) for n in common)
+    print(f"| {r} | {sum(bool(j.get('success')) for j in d.values())}/{len(d)} "
+          f"| {med(lambda j: j['times_ms']['total']):.2f} | {med(lambda j: j['times_ms']['pose']):.2f} "
+          f"| {med(lambda j: j['matches']['ransac_iterations']):.0f} "
+          f"| {med(lambda j: j['matches']['back_matched_images']):.0f} |")
+print(f"(medians over the {len(common)} queries every run localized)")
+EOF

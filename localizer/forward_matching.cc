@@ -31,8 +31,11 @@ std::vector<FeatureMatch> MatchForward(const Index& index, const Query& query,
   std::vector<KdNeighbor> neighbors(options.k + 1);
   const KdSearchOptions search_options{options.checks};
   std::vector<FeatureMatch> matches;
+  // N_F counts every match that passed both tests, kept or not: a position prior then costs no
+  // extra searches, and only its region's matches vote.
+  size_t passed = 0;
   for (const uint32_t feature : order) {
-    if (matches.size() >= options.forward_matches) break;
+    if (passed >= options.forward_matches) break;
     const Stopwatch knn;
     const KdSearchResult result =
         searcher.Search(query.Descriptor(feature), search_options, neighbors);
@@ -47,6 +50,7 @@ std::vector<FeatureMatch> MatchForward(const Index& index, const Query& query,
     const Stopwatch ratio_test;
     const size_t before = matches.size();
     ClusterWiseRatioTest(index, feature, neighbors, options.ratio, &matches, stats);
+    passed += matches.size() - before;
     if (!allowed.empty()) {
       matches.erase(
           std::remove_if(matches.begin() + static_cast<std::ptrdiff_t>(before), matches.end(),

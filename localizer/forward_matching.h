@@ -14,7 +14,7 @@ namespace cwloc {
 // Algorithms 1 and 2 of the paper, interleaved: query features in a random order drawn from
 // options.seed, (k+1)-NN in the global kd-forest, the k-ratio test, then the cluster-wise ratio
 // test on the k neighbours; stops once options.forward_matches matches have passed both.
-// Matches into clusters outside `allowed` are dropped and do not count.
+// Matches into clusters outside `allowed` count towards N_F and are then dropped.
 std::vector<FeatureMatch> MatchForward(const Index& index, const Query& query,
                                        const LocalizerOptions& options, KdForestSearcher& searcher,
                                        ForwardMatchingStats* stats, ClusterMask allowed = {});
