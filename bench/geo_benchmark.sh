@@ -32,7 +32,8 @@ geo="47.3779 8.5403 455"
 views="${GEO_BENCH_VIEWS:-300000}"
 queries="${GEO_BENCH_QUERIES:-100}"
 # The hard case of docs/benchmarks.md: 60 % of the facade points repeat 64 motifs city-wide.
-city_knobs=(--views "$views" --queries "$queries" --repetition 0.6 --motifs 64 --seed 1)
+city_knobs=(--views "$views" --queries "$queries" --repetition "${GEO_BENCH_REPETITION:-0.6}"
+  --motifs "${GEO_BENCH_MOTIFS:-64}" --seed 1)
 geo_knobs=(--geo "$geo" --gps-noise 3 --gps-outliers 0.1 --prior-position-error 10
   --prior-radius 50 --prior-gravity-error 1)
 city="$work/city"
