@@ -56,9 +56,13 @@ double CauchyScaleNoise(double loss_scale_px) {
   return loss_scale_px > 0.0 ? loss_scale_px / kCauchyTuning : 1.0;
 }
 
-double GravityRejectionAngle(double sigma_rad, double confidence) {
+double GravityErrorBound(double sigma_rad, double confidence) {
   const double miss = 1.0 - std::clamp(confidence, 0.0, 1.0 - 1e-16);
-  return std::sqrt(-2.0 * std::log(miss)) * sigma_rad + kGravityHypothesisAllowanceDeg * kDeg;
+  return std::sqrt(-2.0 * std::log(miss)) * sigma_rad;
+}
+
+double GravityRejectionAngle(double sigma_rad, double confidence) {
+  return GravityErrorBound(sigma_rad, confidence) + kGravityHypothesisAllowanceDeg * kDeg;
 }
 
 }  // namespace cwloc
