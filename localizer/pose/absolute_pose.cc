@@ -64,7 +64,7 @@ std::optional<GravityConstraint> SoftGravity(const std::optional<GravityPrior>& 
   return GravityWeight(*gravity, CauchyScaleNoise(options.loss_scale_px) / pixels_per_unit);
 }
 
-// The uncalibrated solvers' test of hypotheses against the prior.
+// The test of P3P's and P4Pf's hypotheses against the prior (absolute_pose.h).
 std::optional<GravityCheck> HypothesisCheck(const std::optional<GravityPrior>& gravity,
                                             const AbsolutePoseOptions& options) {
   if (!gravity.has_value()) return std::nullopt;
@@ -227,8 +227,11 @@ AbsolutePoseResult EstimateAbsolutePose(std::span<const Eigen::Vector2d> normali
                                         const AbsolutePoseOptions& options) {
   AbsolutePoseResult result;
   result.focal_length_px = focal_length_px;
-  const size_t sample_size = options.gravity.has_value() ? GravityPoseEstimator::kSampleSize
-                                                         : AbsolutePoseEstimator::kSampleSize;
+  // GravityP2P for a valid prior not vaguer than kGravityP2PMaxSigmaDeg, else P3P.
+  const bool p2p =
+      options.gravity.has_value() && options.gravity->sigma_deg <= kGravityP2PMaxSigmaDeg;
+  const size_t sample_size =
+      p2p ? GravityPoseEstimator::kSampleSize : AbsolutePoseEstimator::kSampleSize;
   if (!CheckInput(normalized_points.size(), points3D.size(), sample_size, options, &result)) {
     return result;
   }
@@ -246,9 +249,8 @@ AbsolutePoseResult EstimateAbsolutePose(std::span<const Eigen::Vector2d> normali
   // P3P: without a prior; with a vague one, whose hypotheses must agree with it; or after
   // GravityP2P found too few inliers, when the prior may be further off than its sigma says and
   // no hypothesis is checked against it.
-  const bool p2p = gravity.has_value() && gravity->sigma_deg <= kGravityP2PMaxSigmaDeg;
-  const AbsolutePoseEstimator p3p(normalized_points, points3D, max_error, lo,
-                                  p2p ? std::nullopt : HypothesisCheck(gravity, options));
+  const std::optional<GravityCheck> check = p2p ? std::nullopt : HypothesisCheck(gravity, options);
+  const AbsolutePoseEstimator p3p(normalized_points, points3D, max_error, lo, check);
   if (p2p) {
     // GravityP2P's hypotheses are as far off in tilt as the prior (pose_estimators.h): the local
     // optimisation gathers what a tilt error up to the prior's bound moves (tan(bound) beyond
@@ -278,7 +280,8 @@ AbsolutePoseResult EstimateAbsolutePose(std::span<const Eigen::Vector2d> normali
     }
   }
   if (!std::isfinite(result.stats.score)) {
-    result.failure_reason = "no pose hypothesis: every minimal sample was degenerate";
+    result.failure_reason =
+        "no pose hypothesis: every minimal sample was degenerate" + GravityRejectionText(check);
     return result;
   }
 
