@@ -72,8 +72,9 @@ inline constexpr double kGravityP2PMaxSigmaDeg = 3.0;
 // k sigma with probability exp(-k^2 / 2) (4.29 sigma for the default 0.9999).
 double GravityErrorBound(double sigma_rad, double confidence);
 
-// RANSAC with an uncalibrated camera (P3P with a focal prior, P4Pf) drops hypotheses whose
-// gravity angle exceeds GravityErrorBound + kGravityHypothesisAllowanceDeg: a minimal
+// RANSAC with P3P or P4Pf (an uncalibrated camera, or a known focal length with a prior vaguer
+// than kGravityP2PMaxSigmaDeg) drops hypotheses whose gravity angle exceeds
+// GravityErrorBound + kGravityHypothesisAllowanceDeg: a minimal
 // hypothesis may itself be off in tilt, and one within the allowance of the true tilt survives
 // whenever the prior is within its bound. The allowance is measured: on 300 points with 1 px
 // noise (f = 1000 px, 1600 x 1200 px, depths 5 to 50), minimal hypotheses from inlier samples
