@@ -1,7 +1,7 @@
-// Google Benchmark of the robust absolute pose module: the minimal solvers (P3P, P4Pf) on
-// random noise-free problems, and a full LO-RANSAC + refinement run on 300 correspondences with
-// 70% outliers and 1 px noise (the localizer's last stage), with known and unknown focal; and
-// the final refinement alone with each solver (Ceres, builtin).
+// Google Benchmark of the robust absolute pose module: the minimal solvers (P3P, P4Pf, the
+// gravity P2P) on random noise-free problems, and a full LO-RANSAC + refinement run on 300
+// correspondences with 70% outliers and 1 px noise (the localizer's last stage), with known and
+// unknown focal; and the final refinement alone with each solver (Ceres, builtin).
 
 #include <benchmark/benchmark.h>
 
@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "localizer/pose/absolute_pose.h"
+#include "localizer/pose/gravity_p2p.h"
 #include "localizer/pose/p3p.h"
 #include "localizer/pose/p4pf.h"
 #include "localizer/pose/refine_pose.h"
@@ -44,6 +45,37 @@ void BM_P3P(benchmark::State& state) {
   state.counters["solutions"] = static_cast<double>(solutions) / state.iterations();
 }
 BENCHMARK(BM_P3P);
+
+void BM_GravityP2P(benchmark::State& state) {
+  SplitMix64 rng(5);
+  struct Problem {
+    std::array<Eigen::Vector3d, 2> bearings, points;
+    Eigen::Vector3d gravity_in_camera, gravity_in_world;
+  };
+  std::vector<Problem> problems(kNumProblems);
+  for (Problem& problem : problems) {
+    const CameraPose pose = test::RandomPose(rng);
+    problem.gravity_in_world =
+        Eigen::Vector3d(test::Gaussian(rng), test::Gaussian(rng), test::Gaussian(rng)).normalized();
+    problem.gravity_in_camera = pose.rotation * problem.gravity_in_world;
+    for (int i = 0; i < 2; ++i) {
+      const Eigen::Vector3d x(test::Uniform(rng, -1, 1), test::Uniform(rng, -1, 1), 1.0);
+      const Eigen::Vector3d cam = test::Uniform(rng, 2, 20) * x;
+      problem.bearings[i] = cam.normalized();
+      problem.points[i] = pose.rotation.conjugate() * (cam - pose.translation);
+    }
+  }
+  std::vector<CameraPose> poses;
+  size_t k = 0, solutions = 0;
+  for (auto _ : state) {
+    const Problem& p = problems[k++ % kNumProblems];
+    solutions += GravityP2P(p.bearings, p.points, p.gravity_in_camera, p.gravity_in_world, &poses);
+    benchmark::DoNotOptimize(poses.data());
+  }
+  state.SetItemsProcessed(state.iterations());
+  state.counters["solutions"] = static_cast<double>(solutions) / state.iterations();
+}
+BENCHMARK(BM_GravityP2P);
 
 void BM_P4Pf(benchmark::State& state) {
   std::mt19937_64 rng(2);

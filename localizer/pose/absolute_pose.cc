@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <sstream>
 
 #include "localizer/pose/pose_estimators.h"
@@ -37,6 +38,46 @@ bool CheckInput(size_t num_points2D, size_t num_points3D, size_t sample_size,
   return true;
 }
 
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+// The gravity prior, normalised, if the options have one; false with result->failure_reason set
+// when it is invalid.
+bool CheckGravity(const AbsolutePoseOptions& options, std::optional<GravityPrior>* gravity,
+                  AbsolutePoseResult* result) {
+  if (!options.gravity.has_value()) return true;
+  const std::string error = GravityPriorError(*options.gravity);
+  if (!error.empty()) {
+    result->failure_reason = "invalid gravity prior: " + error;
+    return false;
+  }
+  *gravity = NormalizedGravityPrior(*options.gravity);
+  return true;
+}
+
+// The prior's soft constraint for residuals measured in units of pixels_per_unit pixels (1 for
+// pixels, the focal length for normalised image coordinates), with the pixel noise the
+// refinement's Cauchy loss assumes.
+std::optional<GravityConstraint> SoftGravity(const std::optional<GravityPrior>& gravity,
+                                             const AbsolutePoseOptions& options,
+                                             double pixels_per_unit) {
+  if (!gravity.has_value()) return std::nullopt;
+  return GravityWeight(*gravity, CauchyScaleNoise(options.loss_scale_px) / pixels_per_unit);
+}
+
+// The test of P3P's and P4Pf's hypotheses against the prior (absolute_pose.h).
+std::optional<GravityCheck> HypothesisCheck(const std::optional<GravityPrior>& gravity,
+                                            const AbsolutePoseOptions& options) {
+  if (!gravity.has_value()) return std::nullopt;
+  return GravityCheck{gravity->in_camera, gravity->in_world,
+                      GravityRejectionAngle(gravity->sigma_deg * kDeg, options.ransac.confidence)};
+}
+
+std::string GravityRejectionText(const std::optional<GravityCheck>& check) {
+  if (!check.has_value()) return {};
+  return Concat(" or disagreed with the gravity prior by more than ", check->max_angle / kDeg,
+                " deg");
+}
+
 // Final inlier set, error and verdict for `pose` with residual camera.Project(X_c) - pixel
 // (f * pi(X_c) - pixel for k = 0).
 void Finish(std::span<const Eigen::Vector2d> pixels, std::span<const Eigen::Vector3d> points3D,
@@ -59,6 +100,11 @@ void Finish(std::span<const Eigen::Vector2d> pixels, std::span<const Eigen::Vect
   }
   result->mean_reprojection_error_px =
       result->num_inliers > 0 ? error_sum / result->num_inliers : 0.0;
+  if (options.gravity.has_value()) {
+    result->gravity_angle_deg = GravityAngle(rot, options.gravity->in_world.normalized(),
+                                             options.gravity->in_camera.normalized()) /
+                                kDeg;
+  }
   result->success = result->num_inliers >= options.min_inliers;
   if (!result->success) {
     result->failure_reason =
@@ -144,12 +190,13 @@ bool SaneCamera(const RadialCamera& camera, const FocalBounds& bounds,
 void RefineUncalibrated(std::span<const Eigen::Vector2d> pixels,
                         std::span<const Eigen::Vector3d> points3D, std::vector<uint32_t> inliers,
                         const FocalBounds& bounds, const AbsolutePoseOptions& options,
-                        AbsolutePoseResult* result) {
+                        const std::optional<GravityPrior>& gravity, AbsolutePoseResult* result) {
   PoseRefinementOptions refine;
   refine.loss_scale_px = options.loss_scale_px;
   refine.refine_focal_length = true;
   refine.refine_radial_distortion = options.refine_radial_distortion;
   refine.refiner = options.refiner;
+  refine.gravity = SoftGravity(gravity, options, 1.0);
   const double max_sq = options.max_error_px * options.max_error_px;
   const size_t ransac_count = inliers.size();
   std::vector<uint32_t> rescored;
@@ -180,22 +227,61 @@ AbsolutePoseResult EstimateAbsolutePose(std::span<const Eigen::Vector2d> normali
                                         const AbsolutePoseOptions& options) {
   AbsolutePoseResult result;
   result.focal_length_px = focal_length_px;
-  if (!CheckInput(normalized_points.size(), points3D.size(), AbsolutePoseEstimator::kSampleSize,
-                  options, &result)) {
+  // GravityP2P for a valid prior not vaguer than kGravityP2PMaxSigmaDeg, else P3P.
+  const bool p2p =
+      options.gravity.has_value() && options.gravity->sigma_deg <= kGravityP2PMaxSigmaDeg;
+  const size_t sample_size =
+      p2p ? GravityPoseEstimator::kSampleSize : AbsolutePoseEstimator::kSampleSize;
+  if (!CheckInput(normalized_points.size(), points3D.size(), sample_size, options, &result)) {
     return result;
   }
   if (!(focal_length_px > 0.0) || !std::isfinite(focal_length_px)) {
     result.failure_reason = Concat("invalid focal length: ", focal_length_px, " px");
     return result;
   }
+  std::optional<GravityPrior> gravity;
+  if (!CheckGravity(options, &gravity, &result)) return result;
 
   LocalOptimizationOptions lo;
   lo.max_iterations = options.lo_iterations;
-  const AbsolutePoseEstimator estimator(normalized_points, points3D,
-                                        options.max_error_px / focal_length_px, lo);
-  result.stats = Ransac(estimator, options.ransac, &result.pose);
+  lo.gravity = SoftGravity(gravity, options, focal_length_px);
+  const double max_error = options.max_error_px / focal_length_px;
+  // P3P: without a prior; with a vague one, whose hypotheses must agree with it; or after
+  // GravityP2P found too few inliers, when the prior may be further off than its sigma says and
+  // no hypothesis is checked against it.
+  const std::optional<GravityCheck> check = p2p ? std::nullopt : HypothesisCheck(gravity, options);
+  const AbsolutePoseEstimator p3p(normalized_points, points3D, max_error, lo, check);
+  if (p2p) {
+    // GravityP2P's hypotheses are as far off in tilt as the prior (pose_estimators.h): the local
+    // optimisation gathers what a tilt error up to the prior's bound moves (tan(bound) beyond
+    // the threshold, in normalised coordinates) under a Cauchy loss whose scale adds the
+    // displacement of a 1 sigma error.
+    const double sigma = gravity->sigma_deg * kDeg;
+    const double bound = GravityErrorBound(sigma, options.ransac.confidence);
+    LocalOptimizationOptions p2p_lo = lo;
+    p2p_lo.loss_scale = max_error + std::tan(sigma);
+    const GravityPoseEstimator estimator(normalized_points, points3D, max_error, gravity->in_camera,
+                                         gravity->in_world, max_error + std::tan(bound), p2p_lo);
+    result.stats = Ransac(estimator, options.ransac, &result.pose);
+  }
+  if (!p2p || result.stats.num_inliers < static_cast<uint32_t>(std::max(options.min_inliers, 0))) {
+    CameraPose pose;
+    const RansacStats stats = Ransac(p3p, options.ransac, &pose);
+    if (!p2p) {
+      result.stats = stats;
+      result.pose = pose;
+    } else {
+      result.gravity_fallback = true;
+      RansacStats combined = stats.score < result.stats.score ? stats : result.stats;
+      if (stats.score < result.stats.score) result.pose = pose;
+      combined.iterations = stats.iterations + result.stats.iterations;
+      combined.refinements = stats.refinements + result.stats.refinements;
+      result.stats = combined;
+    }
+  }
   if (!std::isfinite(result.stats.score)) {
-    result.failure_reason = "no pose hypothesis: every minimal sample was degenerate";
+    result.failure_reason =
+        "no pose hypothesis: every minimal sample was degenerate" + GravityRejectionText(check);
     return result;
   }
 
@@ -204,10 +290,11 @@ AbsolutePoseResult EstimateAbsolutePose(std::span<const Eigen::Vector2d> normali
   for (size_t i = 0; i < pixels.size(); ++i) pixels[i] = focal_length_px * normalized_points[i];
   if (options.refine) {
     std::vector<uint32_t> inliers;
-    estimator.Inliers(result.pose, &inliers);
+    p3p.Inliers(result.pose, &inliers);
     PoseRefinementOptions refine;
     refine.loss_scale_px = options.loss_scale_px;
     refine.refiner = options.refiner;
+    refine.gravity = SoftGravity(gravity, options, 1.0);
     CameraPose refined = result.pose;
     double f = focal_length_px;
     const double max_sq = options.max_error_px * options.max_error_px;
@@ -231,18 +318,22 @@ AbsolutePoseResult EstimateAbsolutePoseUnknownFocal(
   }
   FocalBounds bounds;
   if (!UncalibratedBounds(centered_pixels, options, &bounds, &result)) return result;
+  std::optional<GravityPrior> gravity;
+  if (!CheckGravity(options, &gravity, &result)) return result;
 
   LocalOptimizationOptions lo;
   lo.max_iterations = options.lo_iterations;
+  lo.gravity = SoftGravity(gravity, options, 1.0);
+  const std::optional<GravityCheck> check = HypothesisCheck(gravity, options);
   const AbsolutePoseFocalEstimator estimator(centered_pixels, points3D, options.max_error_px,
-                                             bounds.min_focal, bounds.max_focal, lo);
+                                             bounds.min_focal, bounds.max_focal, lo, check);
   PoseAndFocal model;
   result.stats = Ransac(estimator, options.ransac, &model);
   if (!std::isfinite(result.stats.score)) {
     result.failure_reason = Concat(
         "no pose hypothesis: every minimal sample was degenerate or "
         "had a focal length outside [",
-        bounds.min_focal, ", ", bounds.max_focal, "] px");
+        bounds.min_focal, ", ", bounds.max_focal, "] px", GravityRejectionText(check));
     return result;
   }
   result.pose = model.pose;
@@ -251,7 +342,8 @@ AbsolutePoseResult EstimateAbsolutePoseUnknownFocal(
   if (options.refine) {
     std::vector<uint32_t> inliers;
     estimator.Inliers(model, &inliers);
-    RefineUncalibrated(centered_pixels, points3D, std::move(inliers), bounds, options, &result);
+    RefineUncalibrated(centered_pixels, points3D, std::move(inliers), bounds, options, gravity,
+                       &result);
   }
   Finish(centered_pixels, points3D, options, &result);
   return result;
@@ -276,6 +368,8 @@ AbsolutePoseResult EstimateAbsolutePoseFocalPrior(std::span<const Eigen::Vector2
   }
   FocalBounds bounds;
   if (!UncalibratedBounds(centered_pixels, options, &bounds, &result)) return result;
+  std::optional<GravityPrior> gravity;
+  if (!CheckGravity(options, &gravity, &result)) return result;
 
   std::vector<Eigen::Vector2d> normalized(centered_pixels.size());
   for (size_t i = 0; i < normalized.size(); ++i) {
@@ -283,17 +377,21 @@ AbsolutePoseResult EstimateAbsolutePoseFocalPrior(std::span<const Eigen::Vector2
   }
   LocalOptimizationOptions lo;
   lo.max_iterations = options.lo_iterations;
+  lo.gravity = SoftGravity(gravity, options, prior_focal_length_px);
+  const std::optional<GravityCheck> check = HypothesisCheck(gravity, options);
   const AbsolutePoseEstimator estimator(normalized, points3D,
-                                        options.max_error_px / prior_focal_length_px, lo);
+                                        options.max_error_px / prior_focal_length_px, lo, check);
   result.stats = Ransac(estimator, options.ransac, &result.pose);
   if (!std::isfinite(result.stats.score)) {
-    result.failure_reason = "no pose hypothesis: every minimal sample was degenerate";
+    result.failure_reason =
+        "no pose hypothesis: every minimal sample was degenerate" + GravityRejectionText(check);
     return result;
   }
   if (options.refine) {
     std::vector<uint32_t> inliers;
     estimator.Inliers(result.pose, &inliers);
-    RefineUncalibrated(centered_pixels, points3D, std::move(inliers), bounds, options, &result);
+    RefineUncalibrated(centered_pixels, points3D, std::move(inliers), bounds, options, gravity,
+                       &result);
   }
   Finish(centered_pixels, points3D, options, &result);
   return result;

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "localizer/pose/camera_pose.h"
+#include "localizer/pose/gravity_prior.h"
 #include "localizer/pose/ransac.h"
 #include "localizer/pose/refine_pose.h"
 
@@ -41,6 +42,23 @@ namespace cwloc {
 //   - it does not lose more than 2% of RANSAC's inliers (re-scored with the refined camera).
 // The first round that fails stops the loop; the camera of the last kept round is reported
 // (RANSAC's own, with k = 0, when none was kept).
+//
+// A gravity prior (AbsolutePoseOptions::gravity, gravity_prior.h; docs/algorithm.md):
+//   - known focal length: RANSAC's minimal sample is 2 points and its solver GravityP2P
+//     (gravity_p2p.h), whose poses honour the prior's direction exactly; the adaptive iteration
+//     count uses the sample size 2, log(1 - confidence) / log(1 - w^2). Its local optimisation
+//     starts from every correspondence a tilt error within the prior's bound can have moved
+//     (GravityPoseEstimator). When its best pose has fewer than min_inliers inliers (the prior
+//     may be further off than its sigma says), P3P RANSAC without the hypothesis check below runs
+//     after it and the better pose is kept. A prior vaguer than kGravityP2PMaxSigmaDeg skips
+//     GravityP2P and runs P3P as below;
+//   - uncalibrated, and P3P for a known focal length: the solvers of the case without a prior,
+//     but hypotheses whose gravity angle exceeds GravityRejectionAngle(sigma,
+//     ransac.confidence) are dropped before they are scored;
+//   - always: the local optimisation and the final refinement add the prior as a soft constraint,
+//     a Gaussian on the angle with the prior's sigma next to reprojection residuals whose noise
+//     is the one the Cauchy loss scale assumes (CauchyScaleNoise: 0.84 px for 2 px).
+// Without a prior every result is bit for bit what it was before the prior existed.
 
 // RANSAC's minimal solver for a focal prior (EstimateAbsolutePoseFocalPrior).
 enum class FocalPriorSolver {
@@ -88,6 +106,9 @@ struct AbsolutePoseOptions {
   // 5% short of the refined focal length and whose lens distorts, it gives more RANSAC inliers
   // than P4Pf and the same refined poses (docs/algorithm.md).
   FocalPriorSolver focal_prior_solver = FocalPriorSolver::kP3P;
+  // The gravity direction in the camera and the model frame, known before the pose (see above).
+  // An invalid prior (GravityPriorError) fails the estimate with failure_reason set.
+  std::optional<GravityPrior> gravity;
 };
 
 struct AbsolutePoseResult {
@@ -105,6 +126,12 @@ struct AbsolutePoseResult {
   bool refined = false;                     // the final refinement was applied
   int camera_refinement_rounds = 0;         // uncalibrated: refinement rounds kept
   double mean_reprojection_error_px = 0.0;  // over the inliers
+  // With a gravity prior: the angle between the reported pose's R * in_world and in_camera.
+  double gravity_angle_deg = 0.0;
+  // Known focal length with a gravity prior: GravityP2P's best pose had fewer than min_inliers
+  // inliers and P3P ran after it (stats then counts the iterations and refinements of both
+  // runs; the rest of stats is the kept model's).
+  bool gravity_fallback = false;
 };
 
 // Known focal length. normalized_points: undistorted image points on the normalised image

@@ -25,6 +25,7 @@ struct LmProblem {
   std::span<const Eigen::Vector3d> points3D;
   std::span<const uint32_t> indices;
   double loss_scale;
+  const GravityConstraint* gravity;  // nullptr: none
 
   // Robust cost and, if requested, the IRLS normal equations (J^T W J, J^T W r).
   double Evaluate(const Eigen::Quaterniond& q, const Eigen::Vector3d& t, double f, Hessian* jtj,
@@ -63,6 +64,19 @@ struct LmProblem {
       if constexpr (kFocal) jac.col(6) = proj;
       jtj->noalias() += weight * jac.transpose() * jac;
       jtr->noalias() += weight * jac.transpose() * r;
+    }
+    if (gravity != nullptr) {
+      // r = w (R g_w - g_c); R <- exp([d]x) R moves R g_w by -[R g_w]x d.
+      const Eigen::Vector3d y = rot * gravity->in_world;
+      const Eigen::Vector3d r = gravity->weight * (y - gravity->in_camera);
+      cost += r.squaredNorm();
+      if (jtj != nullptr) {
+        Eigen::Matrix3d skew;
+        skew << 0.0, -y(2), y(1), y(2), 0.0, -y(0), -y(1), y(0), 0.0;
+        const Eigen::Matrix3d jac = -gravity->weight * skew;
+        jtj->template topLeftCorner<3, 3>().noalias() += jac.transpose() * jac;
+        jtr->template head<3>().noalias() += jac.transpose() * r;
+      }
     }
     return cost;
   }
@@ -119,7 +133,8 @@ int Optimize(const LmProblem<kNumParams>& problem, int max_iterations, CameraPos
 int OptimizePose(std::span<const Eigen::Vector2d> points2D,
                  std::span<const Eigen::Vector3d> points3D, std::span<const uint32_t> indices,
                  const LocalOptimizationOptions& options, CameraPose* pose) {
-  const LmProblem<6> problem{points2D, points3D, indices, options.loss_scale};
+  const LmProblem<6> problem{points2D, points3D, indices, options.loss_scale,
+                             options.gravity ? &*options.gravity : nullptr};
   return Optimize(problem, options.max_iterations, pose, nullptr);
 }
 
@@ -127,7 +142,8 @@ int OptimizePoseAndFocal(std::span<const Eigen::Vector2d> centered_pixels,
                          std::span<const Eigen::Vector3d> points3D,
                          std::span<const uint32_t> indices, const LocalOptimizationOptions& options,
                          CameraPose* pose, double* focal_length) {
-  const LmProblem<7> problem{centered_pixels, points3D, indices, options.loss_scale};
+  const LmProblem<7> problem{centered_pixels, points3D, indices, options.loss_scale,
+                             options.gravity ? &*options.gravity : nullptr};
   return Optimize(problem, options.max_iterations, pose, focal_length);
 }
 

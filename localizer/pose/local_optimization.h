@@ -2,9 +2,11 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <optional>
 #include <span>
 
 #include "localizer/pose/camera_pose.h"
+#include "localizer/pose/gravity_prior.h"
 
 namespace cwloc {
 
@@ -17,11 +19,14 @@ struct LocalOptimizationOptions {
   // Cauchy loss scale in residual units: rho(r^2) = s^2 log(1 + r^2 / s^2). 0: plain least
   // squares.
   double loss_scale = 0.0;
+  // A gravity prior: one more residual weight (R in_world - in_camera), never robustified, with
+  // the weight in residual units (normalised image coordinates or pixels) per radian.
+  std::optional<GravityConstraint> gravity;
 };
 
-// Minimises sum_i rho(|pi(R X_i + t) - x_i|^2) over i in `indices`, with pi(X) = X.xy / X.z and
-// x_i in normalised image coordinates (a calibrated camera). Points behind the camera are
-// skipped. Returns the number of iterations run.
+// Minimises sum_i rho(|pi(R X_i + t) - x_i|^2) over i in `indices` (plus the gravity residual's
+// square), with pi(X) = X.xy / X.z and x_i in normalised image coordinates (a calibrated
+// camera). Points behind the camera are skipped. Returns the number of iterations run.
 int OptimizePose(std::span<const Eigen::Vector2d> points2D,
                  std::span<const Eigen::Vector3d> points3D, std::span<const uint32_t> indices,
                  const LocalOptimizationOptions& options, CameraPose* pose);

@@ -1,7 +1,9 @@
 #include "localizer/pose/pose_estimators.h"
 
+#include <algorithm>
 #include <array>
 
+#include "localizer/pose/gravity_p2p.h"
 #include "localizer/pose/p3p.h"
 #include "localizer/pose/p4pf.h"
 
@@ -49,19 +51,31 @@ void CollectInliers(std::span<const Eigen::Vector2d> points2D,
   }
 }
 
+bool PassesGravityCheck(const std::optional<GravityCheck>& check, const CameraPose& pose) {
+  return !check.has_value() ||
+         GravityAngle(pose.RotationMatrix(), check->in_world, check->in_camera) <= check->max_angle;
+}
+
+std::vector<Eigen::Vector3d> Bearings(std::span<const Eigen::Vector2d> points2D) {
+  std::vector<Eigen::Vector3d> bearings;
+  bearings.reserve(points2D.size());
+  for (const Eigen::Vector2d& x : points2D) bearings.push_back(x.homogeneous().normalized());
+  return bearings;
+}
+
 }  // namespace
 
 AbsolutePoseEstimator::AbsolutePoseEstimator(std::span<const Eigen::Vector2d> points2D,
                                              std::span<const Eigen::Vector3d> points3D,
                                              double max_error,
-                                             const LocalOptimizationOptions& lo_options)
+                                             const LocalOptimizationOptions& lo_options,
+                                             const std::optional<GravityCheck>& gravity_check)
     : points2D_(points2D),
       points3D_(points3D),
+      bearings_(Bearings(points2D)),
       max_error_sq_(max_error * max_error),
-      lo_options_(lo_options) {
-  bearings_.reserve(points2D.size());
-  for (const Eigen::Vector2d& x : points2D) bearings_.push_back(x.homogeneous().normalized());
-}
+      lo_options_(lo_options),
+      gravity_check_(gravity_check) {}
 
 void AbsolutePoseEstimator::GenerateModels(std::span<const uint32_t> sample,
                                            std::vector<Model>* models) const {
@@ -70,6 +84,10 @@ void AbsolutePoseEstimator::GenerateModels(std::span<const uint32_t> sample,
   const std::array<Eigen::Vector3d, 3> points = {points3D_[sample[0]], points3D_[sample[1]],
                                                  points3D_[sample[2]]};
   P3P(bearings, points, models);
+  if (gravity_check_.has_value()) {
+    std::erase_if(*models,
+                  [&](const Model& pose) { return !PassesGravityCheck(gravity_check_, pose); });
+  }
 }
 
 double AbsolutePoseEstimator::Score(const Model& model, uint32_t* num_inliers) const {
@@ -86,16 +104,54 @@ void AbsolutePoseEstimator::Inliers(const Model& model, std::vector<uint32_t>* i
   CollectInliers(points2D_, points3D_, model, 1.0, max_error_sq_, inliers);
 }
 
+GravityPoseEstimator::GravityPoseEstimator(std::span<const Eigen::Vector2d> points2D,
+                                           std::span<const Eigen::Vector3d> points3D,
+                                           double max_error,
+                                           const Eigen::Vector3d& gravity_in_camera,
+                                           const Eigen::Vector3d& gravity_in_world,
+                                           double lo_window,
+                                           const LocalOptimizationOptions& lo_options)
+    : points2D_(points2D),
+      points3D_(points3D),
+      bearings_(Bearings(points2D)),
+      max_error_sq_(max_error * max_error),
+      lo_window_sq_(std::max(lo_window, max_error) * std::max(lo_window, max_error)),
+      gravity_in_camera_(gravity_in_camera),
+      gravity_in_world_(gravity_in_world),
+      lo_options_(lo_options) {}
+
+void GravityPoseEstimator::GenerateModels(std::span<const uint32_t> sample,
+                                          std::vector<Model>* models) const {
+  const std::array<Eigen::Vector3d, 2> bearings = {bearings_[sample[0]], bearings_[sample[1]]};
+  const std::array<Eigen::Vector3d, 2> points = {points3D_[sample[0]], points3D_[sample[1]]};
+  GravityP2P(bearings, points, gravity_in_camera_, gravity_in_world_, models);
+}
+
+double GravityPoseEstimator::Score(const Model& model, uint32_t* num_inliers) const {
+  return MsacScore(points2D_, points3D_, model, 1.0, max_error_sq_, num_inliers);
+}
+
+void GravityPoseEstimator::Refine(Model* model) const {
+  CollectInliers(points2D_, points3D_, *model, 1.0, lo_window_sq_, &scratch_);
+  if (scratch_.size() <= kSampleSize) return;  // the minimal solution is already exact
+  OptimizePose(points2D_, points3D_, scratch_, lo_options_, model);
+}
+
+void GravityPoseEstimator::Inliers(const Model& model, std::vector<uint32_t>* inliers) const {
+  CollectInliers(points2D_, points3D_, model, 1.0, max_error_sq_, inliers);
+}
+
 AbsolutePoseFocalEstimator::AbsolutePoseFocalEstimator(
     std::span<const Eigen::Vector2d> centered_pixels, std::span<const Eigen::Vector3d> points3D,
     double max_error_px, double min_focal_px, double max_focal_px,
-    const LocalOptimizationOptions& lo_options)
+    const LocalOptimizationOptions& lo_options, const std::optional<GravityCheck>& gravity_check)
     : points2D_(centered_pixels),
       points3D_(points3D),
       max_error_sq_(max_error_px * max_error_px),
       min_focal_(min_focal_px),
       max_focal_(max_focal_px),
-      lo_options_(lo_options) {}
+      lo_options_(lo_options),
+      gravity_check_(gravity_check) {}
 
 void AbsolutePoseFocalEstimator::GenerateModels(std::span<const uint32_t> sample,
                                                 std::vector<Model>* models) const {
@@ -109,7 +165,10 @@ void AbsolutePoseFocalEstimator::GenerateModels(std::span<const uint32_t> sample
   models->clear();
   for (size_t k = 0; k < pose_scratch_.size(); ++k) {
     const double f = focal_scratch_[k];
-    if (f >= min_focal_ && f <= max_focal_) models->push_back({pose_scratch_[k], f});
+    if (f >= min_focal_ && f <= max_focal_ &&
+        PassesGravityCheck(gravity_check_, pose_scratch_[k])) {
+      models->push_back({pose_scratch_[k], f});
+    }
   }
 }
 

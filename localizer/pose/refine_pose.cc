@@ -28,6 +28,7 @@ RefinementProblem MakeProblem(std::span<const Eigen::Vector2d> centered_pixels,
   problem.refine_focal_length = options.refine_focal_length;
   problem.loss_scale_px = options.loss_scale_px;
   problem.max_iterations = options.max_iterations;
+  problem.gravity = options.gravity;
   return problem;
 }
 

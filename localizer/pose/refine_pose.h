@@ -9,13 +9,15 @@
 
 #include "format/base/enum_names.h"
 #include "localizer/pose/camera_pose.h"
+#include "localizer/pose/gravity_prior.h"
 
 namespace cwloc {
 
 // Final non-linear refinement of an absolute pose (and optionally the camera's focal length and
 // radial distortion): sum_i rho(|f * pi(R X_i + t) - p_i|^2) over the given correspondences,
 // with a Cauchy loss rho(s) = a^2 log(1 + s / a^2) so that the remaining outliers among the
-// inliers of a 6 px threshold pull little. Two solvers minimise the same cost to the same
+// inliers of a 6 px threshold pull little, plus |w (R g_world - g_camera)|^2 with a gravity
+// prior (PoseRefinementOptions::gravity). Two solvers minimise the same cost to the same
 // minimum (docs/algorithm.md, section 4):
 //   - kCeres: Ceres' Levenberg-Marquardt, the rotation a Ceres quaternion on
 //     ceres::QuaternionManifold (only in builds with -DCWLOC_WITH_CERES=ON);
@@ -48,6 +50,9 @@ struct PoseRefinementOptions {
   // tested against), 6 to 10 times faster, and the same on devices. Asking for one this build
   // does not have throws cwloc::InputError.
   PoseRefiner refiner = PoseRefiner::kBuiltin;
+  // A gravity prior as one more residual block, weight (R in_world - in_camera) with the weight
+  // in pixels per radian (gravity_prior.h); none when absent.
+  std::optional<GravityConstraint> gravity;
 };
 
 // Both refiners fill it with Ceres' conventions.

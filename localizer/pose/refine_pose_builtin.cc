@@ -11,6 +11,7 @@
 //     is divided by max(1/3, 1 - (2 rho - 1)^3); else mu is halved, quartered, ...; a step
 //     whose model does not decrease is invalid, and 5 of them in a row fail the solve;
 //   - a candidate with a point behind the camera (or a non-finite residual) costs infinity;
+//   - a gravity prior is one more residual block without loss, on the rotation only;
 //   - it stops at |cost change| <= 1e-10 cost, a step of at most 1e-10 (|x| + 1e-10) after a
 //     first accepted one, a gradient of max norm <= 1e-10, max_iterations, or mu <= 1e-32.
 // The rotation moves on the left by Ceres' quaternion increment (cos |d|, sin |d| d / |d|).
@@ -174,6 +175,7 @@ class Evaluator {
         for (int col = 0; col <= a; ++col) out->h[a][col] += w0 * jac[0][col] + w1 * jac[1][col];
       }
     }
+    if (problem_.gravity.has_value()) AddGravity(m, linearize, out);
     for (int a = 0; a < n; ++a) {
       if (!std::isfinite(out->g[a])) return false;
       for (int col = 0; col <= a; ++col) {
@@ -185,6 +187,32 @@ class Evaluator {
   }
 
  private:
+  // The gravity block w (R g_w - g_c) with R = I + 2 M: no loss (weight 1), and only the rotation
+  // increment moves it, R g_w by -2 [R g_w]x d as every point.
+  void AddGravity(const double (&m)[3][3], bool linearize, Normal* out) const {
+    const GravityConstraint& gravity = *problem_.gravity;
+    const Eigen::Vector3d& p = gravity.in_world;
+    const double w = gravity.weight;
+    double y[3], r[3];
+    for (int row = 0; row < 3; ++row) {
+      y[row] = 2.0 * (m[row][0] * p(0) + m[row][1] * p(1) + m[row][2] * p(2)) + p(row);
+      r[row] = w * (y[row] - gravity.in_camera(row));
+    }
+    out->cost += 0.5 * (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+    if (!linearize) return;
+    // Row k of -2 w [y]x, as the points' rows with d(residual) / dz = w e_k.
+    const double jac[3][3] = {{0.0, 2.0 * w * y[2], -2.0 * w * y[1]},
+                              {-2.0 * w * y[2], 0.0, 2.0 * w * y[0]},
+                              {2.0 * w * y[1], -2.0 * w * y[0], 0.0}};
+    for (int a = 0; a < 3; ++a) {
+      out->g[a] += jac[0][a] * r[0] + jac[1][a] * r[1] + jac[2][a] * r[2];
+      for (int col = 0; col <= a; ++col) {
+        out->h[a][col] +=
+            jac[0][a] * jac[0][col] + jac[1][a] * jac[1][col] + jac[2][a] * jac[2][col];
+      }
+    }
+  }
+
   const RefinementProblem& problem_;
   const int num_params_;
 };

@@ -54,6 +54,23 @@ struct RadialReprojectionCost {
   Eigen::Vector3d point_;
 };
 
+// A gravity prior: weight * (R(q) in_world - in_camera), on the rotation only.
+struct GravityCost {
+  explicit GravityCost(const GravityConstraint& gravity) : gravity_(gravity) {}
+
+  template <typename T>
+  bool operator()(const T* q_wxyz, T* residuals) const {
+    const T p[3] = {T(gravity_.in_world(0)), T(gravity_.in_world(1)), T(gravity_.in_world(2))};
+    T y[3];
+    ceres::UnitQuaternionRotatePoint(q_wxyz, p, y);
+    for (int i = 0; i < 3; ++i)
+      residuals[i] = T(gravity_.weight) * (y[i] - T(gravity_.in_camera(i)));
+    return true;
+  }
+
+  GravityConstraint gravity_;
+};
+
 ceres::Solver::Options SolverOptions(int max_iterations) {
   ceres::Solver::Options solver_options;
   solver_options.linear_solver_type = ceres::DENSE_QR;
@@ -86,6 +103,11 @@ bool RefineWithCeres(const RefinementProblem& problem, RefinementParameters* par
           new ReprojectionCost(problem.pixels[i], problem.points3D[i]));
       ceres_problem.AddResidualBlock(cost, loss_ptr, x.q_wxyz, x.t, &x.focal);
     }
+  }
+  if (problem.gravity.has_value()) {
+    ceres_problem.AddResidualBlock(
+        new ceres::AutoDiffCostFunction<GravityCost, 3, 4>(new GravityCost(*problem.gravity)),
+        nullptr, x.q_wxyz);
   }
   ceres_problem.SetManifold(x.q_wxyz, new ceres::QuaternionManifold);
   if (!problem.refine_focal_length) ceres_problem.SetParameterBlockConstant(&x.focal);

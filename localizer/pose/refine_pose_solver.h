@@ -2,8 +2,10 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <optional>
 #include <span>
 
+#include "localizer/pose/gravity_prior.h"
 #include "localizer/pose/refine_pose.h"
 
 namespace cwloc {
@@ -21,6 +23,9 @@ struct RefinementProblem {
   bool refine_radial_distortion = false;  // radial only
   double loss_scale_px = 0.0;             // Cauchy scale a; <= 0: plain least squares
   int max_iterations = 50;
+  // One more residual block, on the rotation only and without the loss:
+  // weight * (R in_world - in_camera), pixels.
+  std::optional<GravityConstraint> gravity;
 };
 
 struct RefinementParameters {

@@ -2,6 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <iostream>
+#include <limits>
+#include <numbers>
+
 #include "tests/localizer/pose/synthetic_pose.h"
 #include "tests/test_util.h"
 
@@ -278,6 +282,171 @@ TEST(AbsolutePose, WorksWithoutFinalRefinement) {
   ASSERT_TRUE(result.success);
   EXPECT_FALSE(result.refined);
   EXPECT_LT(test::RotationErrorDeg(result.pose, problem.pose), 0.1);
+}
+
+}  // namespace
+}  // namespace cwloc
+
+namespace cwloc {
+namespace {
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+Eigen::Vector3d RandomUnitVector(SplitMix64& rng) {
+  return Eigen::Vector3d(test::Gaussian(rng), test::Gaussian(rng), test::Gaussian(rng))
+      .normalized();
+}
+
+// A prior for the problem's camera: a random world gravity, the camera's error_deg off.
+GravityPrior PriorFor(const test::SyntheticPoseProblem& problem, double error_deg, double sigma_deg,
+                      SplitMix64& rng) {
+  GravityPrior prior;
+  prior.in_world = RandomUnitVector(rng);
+  const Eigen::Vector3d in_camera = problem.pose.rotation * prior.in_world;
+  const Eigen::Vector3d axis = in_camera.cross(RandomUnitVector(rng)).normalized();
+  prior.in_camera = Eigen::AngleAxisd(error_deg * kDeg, axis) * in_camera;
+  prior.sigma_deg = sigma_deg;
+  return prior;
+}
+
+void ExpectAccurate(const AbsolutePoseResult& result, const test::SyntheticPoseProblem& problem) {
+  ASSERT_TRUE(result.success) << result.failure_reason;
+  EXPECT_LT(test::RotationErrorDeg(result.pose, problem.pose), 0.1);
+  EXPECT_LT((result.pose.Center() - problem.pose.Center()).norm(), 0.01 * problem.mean_depth);
+  ExpectInlierSet(result, problem);
+}
+
+TEST(GravityPrior, KnownFocalSamplesTwoPoints) {
+  SplitMix64 rng = test::SplitMixFrom(test::Rng());
+  test::SyntheticPoseOptions synth;
+  synth.outlier_ratio = 0.8;
+  for (int trial = 0; trial < 5; ++trial) {
+    const auto problem = test::MakeSyntheticProblem(synth, rng);
+    AbsolutePoseOptions options;
+    const AbsolutePoseResult without =
+        EstimateAbsolutePose(problem.normalized, problem.points3D, problem.focal_px, options);
+    options.gravity = PriorFor(problem, 0.5, 1.0, rng);
+    const AbsolutePoseResult with =
+        EstimateAbsolutePose(problem.normalized, problem.points3D, problem.focal_px, options);
+    ExpectAccurate(without, problem);
+    ExpectAccurate(with, problem);
+    EXPECT_FALSE(with.gravity_fallback);
+    EXPECT_TRUE(with.refined);
+    // 20% inliers: log(1e-4) / log(1 - 0.2^s) is 226 for s = 2, 1147 for s = 3.
+    EXPECT_LE(with.stats.iterations, 300u);
+    EXPECT_GE(without.stats.iterations, 1000u);
+    // The pose follows the points, not the prior 0.5 degrees off.
+    EXPECT_NEAR(with.gravity_angle_deg, 0.5, 0.1);
+    EXPECT_EQ(without.gravity_angle_deg, 0.0);
+  }
+}
+
+TEST(GravityPrior, KnownFocalSurvivesAPriorFarOffItsSigma) {
+  SplitMix64 rng = test::SplitMixFrom(test::Rng());
+  test::SyntheticPoseOptions synth;
+  synth.num_points = 150;
+  synth.outlier_ratio = 0.8;
+  int fallbacks[2] = {0, 0};
+  for (int trial = 0; trial < 10; ++trial) {
+    const auto problem = test::MakeSyntheticProblem(synth, rng);
+    AbsolutePoseOptions options;
+    // 3 sigma: GravityP2P's hypotheses keep few inliers, its local optimisation mostly
+    // recovers; 20 sigma: mostly P3P after it finds the pose.
+    for (int k = 0; k < 2; ++k) {
+      const double error_deg = k == 0 ? 3.0 : 20.0;
+      SCOPED_TRACE(error_deg);
+      options.gravity = PriorFor(problem, error_deg, 1.0, rng);
+      const AbsolutePoseResult result =
+          EstimateAbsolutePose(problem.normalized, problem.points3D, problem.focal_px, options);
+      ExpectAccurate(result, problem);
+      EXPECT_NEAR(result.gravity_angle_deg, error_deg, 0.2);
+      fallbacks[k] += result.gravity_fallback;
+    }
+  }
+  std::cout << "P3P after GravityP2P: " << fallbacks[0] << "/10 with the prior 3 sigma off, "
+            << fallbacks[1] << "/10 20 sigma off\n";
+  EXPECT_LE(fallbacks[0], 3);
+  EXPECT_GE(fallbacks[1], 5);
+}
+
+TEST(GravityPrior, VaguePriorChecksP3PHypotheses) {
+  SplitMix64 rng = test::SplitMixFrom(test::Rng());
+  test::SyntheticPoseOptions synth;
+  synth.outlier_ratio = 0.7;
+  const auto problem = test::MakeSyntheticProblem(synth, rng);
+  AbsolutePoseOptions options;
+  options.gravity = PriorFor(problem, 5.0, 2.0 * kGravityP2PMaxSigmaDeg, rng);
+  const AbsolutePoseResult result =
+      EstimateAbsolutePose(problem.normalized, problem.points3D, problem.focal_px, options);
+  ExpectAccurate(result, problem);
+  EXPECT_FALSE(result.gravity_fallback);
+  EXPECT_GE(result.stats.iterations, 300u);  // P3P: 337 for 30% inliers
+}
+
+TEST(GravityPrior, UncalibratedDropsHypothesesThatDisagree) {
+  SplitMix64 rng = test::SplitMixFrom(test::Rng());
+  test::SyntheticPoseOptions synth;
+  synth.outlier_ratio = 0.6;
+  synth.noise_px = 0.5;
+  for (int trial = 0; trial < 3; ++trial) {
+    const auto problem = test::MakeSyntheticProblem(synth, rng);
+    AbsolutePoseOptions options;
+    options.gravity = PriorFor(problem, 1.0, 1.0, rng);
+    AbsolutePoseResult result =
+        EstimateAbsolutePoseUnknownFocal(problem.pixels, problem.points3D, options);
+    ExpectAccurate(result, problem);
+    EXPECT_NEAR(result.focal_length_px, problem.focal_px, 0.01 * problem.focal_px);
+    result = EstimateAbsolutePoseFocalPrior(problem.pixels, problem.points3D,
+                                            0.95 * problem.focal_px, options);
+    ExpectAccurate(result, problem);
+    // A prior 30 degrees off, far beyond 4.29 sigma + 3 degrees: every hypothesis near the
+    // true pose is dropped.
+    options.gravity = PriorFor(problem, 30.0, 1.0, rng);
+    result = EstimateAbsolutePoseUnknownFocal(problem.pixels, problem.points3D, options);
+    EXPECT_FALSE(result.success);
+    if (result.num_inliers > 0) {
+      EXPECT_LE(result.gravity_angle_deg, 30.0);
+    }
+  }
+}
+
+TEST(GravityPrior, RejectionAngleFollowsSigmaAndConfidence) {
+  // sqrt(-2 ln(1e-4)) = 4.292 sigma, plus the 3 degree allowance.
+  EXPECT_NEAR(GravityRejectionAngle(1.0 * kDeg, 0.9999) / kDeg, 4.292 + 3.0, 1e-3);
+  EXPECT_NEAR(GravityErrorBound(2.0 * kDeg, 0.99) / kDeg, 2.0 * 3.035, 1e-3);
+  EXPECT_NEAR(CauchyScaleNoise(2.0), 0.8386, 1e-4);
+  EXPECT_EQ(CauchyScaleNoise(0.0), 1.0);
+}
+
+TEST(GravityPrior, ReportsAnInvalidPrior) {
+  SplitMix64 rng = test::SplitMixFrom(test::Rng());
+  const auto problem = test::MakeSyntheticProblem(test::SyntheticPoseOptions{}, rng);
+  AbsolutePoseOptions options;
+  GravityPrior prior = PriorFor(problem, 0.0, 1.0, rng);
+  prior.in_camera.setZero();
+  options.gravity = prior;
+  AbsolutePoseResult result =
+      EstimateAbsolutePose(problem.normalized, problem.points3D, problem.focal_px, options);
+  EXPECT_FALSE(result.success);
+  EXPECT_EQ(result.failure_reason, "invalid gravity prior: in_camera is zero");
+  prior = PriorFor(problem, 0.0, 1.0, rng);
+  prior.in_world.x() = std::numeric_limits<double>::quiet_NaN();
+  options.gravity = prior;
+  result = EstimateAbsolutePoseUnknownFocal(problem.pixels, problem.points3D, options);
+  EXPECT_EQ(result.failure_reason, "invalid gravity prior: in_world is not finite");
+  prior = PriorFor(problem, 0.0, 0.0, rng);
+  options.gravity = prior;
+  result =
+      EstimateAbsolutePoseFocalPrior(problem.pixels, problem.points3D, problem.focal_px, options);
+  EXPECT_EQ(result.failure_reason, "invalid gravity prior: sigma_deg 0 is not positive and finite");
+  // Directions need not be unit vectors.
+  prior = PriorFor(problem, 0.0, 1.0, rng);
+  prior.in_camera *= 9.81;
+  prior.in_world *= 0.5;
+  options.gravity = prior;
+  result = EstimateAbsolutePose(problem.normalized, problem.points3D, problem.focal_px, options);
+  ExpectAccurate(result, problem);
+  EXPECT_LT(result.gravity_angle_deg, 0.1);
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include <iostream>
 #include <numbers>
 #include <numeric>
+#include <optional>
 
 #include "localizer/pose/local_optimization.h"
 #include "tests/localizer/pose/synthetic_pose.h"
@@ -29,6 +30,31 @@ CameraPose Perturb(const CameraPose& pose, double angle_rad, double shift, std::
                                   .normalized();
   return CameraPose(Eigen::Quaterniond(Eigen::AngleAxisd(angle_rad, axis)) * pose.rotation,
                     pose.translation + shift * dir);
+}
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+Eigen::Vector3d RandomUnitVector(SplitMix64& rng) {
+  return Eigen::Vector3d(test::Gaussian(rng), test::Gaussian(rng), test::Gaussian(rng))
+      .normalized();
+}
+
+// A gravity constraint for a camera with rotation `truth`: a random world gravity, the camera's
+// off by error_deg in a random direction, the weight of sigma_deg for the pixel noise that the
+// Cauchy scale assumes.
+GravityConstraint RandomGravity(const CameraPose& truth, double error_deg, double sigma_deg,
+                                double loss_scale_px, SplitMix64& rng) {
+  GravityPrior prior;
+  prior.in_world = RandomUnitVector(rng);
+  const Eigen::Vector3d in_camera = truth.rotation * prior.in_world;
+  const Eigen::Vector3d axis = in_camera.cross(RandomUnitVector(rng)).normalized();
+  prior.in_camera = Eigen::AngleAxisd(error_deg * kDeg, axis) * in_camera;
+  prior.sigma_deg = sigma_deg;
+  return GravityWeight(prior, CauchyScaleNoise(loss_scale_px));
+}
+
+double GravityAngleDeg(const CameraPose& pose, const GravityConstraint& gravity) {
+  return GravityAngle(pose.RotationMatrix(), gravity.in_world, gravity.in_camera) / kDeg;
 }
 
 test::SyntheticPoseOptions Clean() {
@@ -202,6 +228,37 @@ TEST_P(RefinerTest, CauchyLossResistsOutliersAmongIndices) {
   EXPECT_LT(robust_error, 0.75 * plain_error);
 }
 
+TEST_P(RefinerTest, GravityPriorWeighsAgainstThePoints) {
+  auto& rng = test::Rng();
+  SplitMix64 gravity_rng = test::SplitMixFrom(rng);
+  for (int trial = 0; trial < 10; ++trial) {
+    const auto problem = test::MakeSyntheticProblem(Clean(), rng);
+    const CameraPose start = Perturb(problem.pose, 0.02, 0.3, rng);
+    const auto all = AllIndices(problem.pixels.size());
+    PoseRefinementOptions options = Options();
+    options.loss_scale_px = 2.0;
+    double f = problem.focal_px;
+    // An exact prior: the same minimum.
+    options.gravity = RandomGravity(problem.pose, 0.0, 1.0, 2.0, gravity_rng);
+    CameraPose pose = start;
+    ASSERT_TRUE(RefinePose(problem.pixels, problem.points3D, all, options, &pose, &f));
+    EXPECT_LT(test::RotationErrorDeg(pose, problem.pose), 1e-6);
+    EXPECT_LT((pose.Center() - problem.pose.Center()).norm(), 1e-6);
+    // A prior 2 degrees off: with sigma 1 degree, 100 exact points outweigh it (their
+    // information on the tilt is ~1e8 px^2 / rad^2, the prior's (0.84 / 0.0175)^2 = 2300).
+    options.gravity = RandomGravity(problem.pose, 2.0, 1.0, 2.0, gravity_rng);
+    pose = start;
+    ASSERT_TRUE(RefinePose(problem.pixels, problem.points3D, all, options, &pose, &f));
+    EXPECT_LT(test::RotationErrorDeg(pose, problem.pose), 0.01);
+    // With sigma 1e-4 degrees (weight^2 = 2.3e11) the prior wins.
+    options.gravity = RandomGravity(problem.pose, 2.0, 1e-4, 2.0, gravity_rng);
+    pose = start;
+    ASSERT_TRUE(RefinePose(problem.pixels, problem.points3D, all, options, &pose, &f));
+    EXPECT_LT(GravityAngleDeg(pose, *options.gravity), 0.01);
+    EXPECT_GT(test::RotationErrorDeg(pose, problem.pose), 1.9);
+  }
+}
+
 TEST_P(RefinerTest, TooFewPoints) {
   CameraPose pose;
   double f = 1000.0;
@@ -217,11 +274,11 @@ TEST_P(RefinerTest, TooFewPoints) {
 // depths, focal length relative), k within 1.1e-13 (telephoto, where k is weakly observed).
 struct AgreementCase {
   const char* name;
-  bool radial;  // RefinePoseAndCamera, else RefinePose
-  bool refine_focal;
-  bool refine_k;
-  double true_k;
-  double loss_scale_px;  // 0: plain least squares
+  bool radial = false;  // RefinePoseAndCamera, else RefinePose
+  bool refine_focal = false;
+  bool refine_k = false;
+  double true_k = 0.0;
+  double loss_scale_px = 0.0;  // 0: plain least squares
   double start_angle_rad = 0.02;
   double start_shift = 0.02;  // times the mean depth
   int max_iterations = 50;
@@ -229,6 +286,9 @@ struct AgreementCase {
   double max_depth = 50.0;
   double focal_px = 1000.0;
   double outlier_ratio = 0.0;  // random matches at least 20 px off
+  // > 0: a gravity prior with this sigma, the camera's gravity gravity_error_deg off.
+  double gravity_sigma_deg = 0.0;
+  double gravity_error_deg = 0.0;
 };
 
 struct Refined {
@@ -240,8 +300,10 @@ struct Refined {
 
 Refined RefineWith(PoseRefiner refiner, const AgreementCase& c,
                    const test::SyntheticPoseProblem& problem, const CameraPose& start,
-                   const RadialCamera& start_camera) {
+                   const RadialCamera& start_camera,
+                   const std::optional<GravityConstraint>& gravity) {
   PoseRefinementOptions options;
+  options.gravity = gravity;
   options.refiner = refiner;
   options.loss_scale_px = c.loss_scale_px;
   options.refine_focal_length = c.refine_focal;
@@ -278,6 +340,9 @@ TEST_P(RefinerAgreementTest, BuiltinStopsWhereCeresStops) {
   double max_rotation = 0, max_center = 0, max_focal = 0, max_k = 0;
   int refined = 0;
   constexpr int kTrials = 40;
+  // Drawn only for the gravity cases, so that the others keep their problems.
+  std::optional<SplitMix64> gravity_rng;
+  if (c.gravity_sigma_deg > 0.0) gravity_rng = test::SplitMixFrom(rng);
   for (int trial = 0; trial < kTrials; ++trial) {
     SCOPED_TRACE(trial);
     auto problem = test::MakeSyntheticProblem(synth, rng);
@@ -291,8 +356,14 @@ TEST_P(RefinerAgreementTest, BuiltinStopsWhereCeresStops) {
         Perturb(problem.pose, c.start_angle_rad, c.start_shift * problem.mean_depth, rng);
     const RadialCamera start_camera{
         c.refine_focal ? test::Uniform(rng, 0.93, 1.07) * problem.focal_px : problem.focal_px, 0.0};
-    const Refined ceres = RefineWith(PoseRefiner::kCeres, c, problem, start, start_camera);
-    const Refined builtin = RefineWith(PoseRefiner::kBuiltin, c, problem, start, start_camera);
+    std::optional<GravityConstraint> gravity;
+    if (gravity_rng.has_value()) {
+      gravity = RandomGravity(problem.pose, c.gravity_error_deg, c.gravity_sigma_deg,
+                              c.loss_scale_px, *gravity_rng);
+    }
+    const Refined ceres = RefineWith(PoseRefiner::kCeres, c, problem, start, start_camera, gravity);
+    const Refined builtin =
+        RefineWith(PoseRefiner::kBuiltin, c, problem, start, start_camera, gravity);
     ASSERT_EQ(ceres.ok, builtin.ok);
     EXPECT_EQ(ceres.summary.iterations, builtin.summary.iterations);
     if (!ceres.ok) continue;  // a start with points behind the camera
@@ -350,7 +421,44 @@ INSTANTIATE_TEST_SUITE_P(
                       8000.0},
         AgreementCase{"focal_k_3_iterations", true, true, true, -0.05, 2.0, 0.02, 0.02, 3},
         AgreementCase{"radial_focal_only", true, true, false, -0.05, 2.0},
-        AgreementCase{"radial_k_only", true, false, true, -0.05, 2.0}),
+        AgreementCase{"radial_k_only", true, false, true, -0.05, 2.0},
+        // A gravity prior: consistent with the points (sigma 1 degree, 0.5 off), and so strong
+        // (sigma 0.01 degree, 2 off) that it fights them.
+        AgreementCase{.name = "pose_gravity",
+                      .loss_scale_px = 2.0,
+                      .gravity_sigma_deg = 1.0,
+                      .gravity_error_deg = 0.5},
+        AgreementCase{.name = "pose_gravity_strong",
+                      .loss_scale_px = 2.0,
+                      .gravity_sigma_deg = 0.01,
+                      .gravity_error_deg = 2.0},
+        AgreementCase{.name = "pose_squared_gravity_strong",
+                      .loss_scale_px = 0.0,
+                      .gravity_sigma_deg = 0.01,
+                      .gravity_error_deg = 2.0},
+        AgreementCase{.name = "pose_focal_gravity_strong",
+                      .refine_focal = true,
+                      .loss_scale_px = 2.0,
+                      .gravity_sigma_deg = 0.01,
+                      .gravity_error_deg = 2.0},
+        AgreementCase{.name = "focal_k_gravity",
+                      .radial = true,
+                      .refine_focal = true,
+                      .refine_k = true,
+                      .true_k = -0.1,
+                      .loss_scale_px = 2.0,
+                      .gravity_sigma_deg = 1.0,
+                      .gravity_error_deg = 1.0},
+        AgreementCase{.name = "focal_k_gravity_strong_far_start",
+                      .radial = true,
+                      .refine_focal = true,
+                      .refine_k = true,
+                      .true_k = -0.1,
+                      .loss_scale_px = 2.0,
+                      .start_angle_rad = 0.2,
+                      .start_shift = 0.2,
+                      .gravity_sigma_deg = 0.01,
+                      .gravity_error_deg = 2.0}),
     CaseName);
 #endif  // CWLOC_WITH_CERES
 
@@ -365,6 +473,38 @@ TEST(LocalOptimization, PoseConvergesWithFewIterations) {
                  &pose);
     EXPECT_LT(test::RotationErrorDeg(pose, problem.pose), 1e-7);
     EXPECT_LT((pose.Center() - problem.pose.Center()).norm(), 1e-7);
+  }
+}
+
+TEST(LocalOptimization, GravityConstraint) {
+  auto& rng = test::Rng();
+  SplitMix64 gravity_rng = test::SplitMixFrom(rng);
+  for (int trial = 0; trial < 10; ++trial) {
+    const auto problem = test::MakeSyntheticProblem(Clean(), rng);
+    const auto all = AllIndices(problem.pixels.size());
+    const CameraPose start = Perturb(problem.pose, 0.02, 0.3, rng);
+    LocalOptimizationOptions options;
+    options.max_iterations = 20;
+    // Normalised coordinates: sigma_px / f. An exact prior keeps the minimum.
+    GravityConstraint gravity = RandomGravity(problem.pose, 0.0, 1.0, 2.0, gravity_rng);
+    gravity.weight /= problem.focal_px;
+    options.gravity = gravity;
+    CameraPose pose = start;
+    OptimizePose(problem.normalized, problem.points3D, all, options, &pose);
+    EXPECT_LT(test::RotationErrorDeg(pose, problem.pose), 1e-7);
+    // A prior 2 degrees off with sigma 1e-4 degrees wins over the points; so it does with the
+    // focal length free.
+    gravity = RandomGravity(problem.pose, 2.0, 1e-4, 2.0, gravity_rng);
+    gravity.weight /= problem.focal_px;
+    options.gravity = gravity;
+    pose = start;
+    OptimizePose(problem.normalized, problem.points3D, all, options, &pose);
+    EXPECT_LT(GravityAngleDeg(pose, gravity), 0.01);
+    options.gravity = RandomGravity(problem.pose, 2.0, 1e-4, 2.0, gravity_rng);
+    pose = start;
+    double f = problem.focal_px;
+    OptimizePoseAndFocal(problem.pixels, problem.points3D, all, options, &pose, &f);
+    EXPECT_LT(GravityAngleDeg(pose, *options.gravity), 0.01);
   }
 }
 

@@ -6,14 +6,74 @@
 #include <cmath>
 #include <numbers>
 #include <random>
+#include <span>
 #include <vector>
 
+#include "format/base/split_mix64.h"
 #include "localizer/pose/camera_pose.h"
 
 namespace cwloc::test {
 
-inline Eigen::Quaterniond RandomRotation(std::mt19937_64& rng) {
-  std::normal_distribution<double> normal;
+// Every helper takes either generator: std::mt19937_64 (test::Rng(), the sequences the older
+// tests were tuned with) or the project's SplitMix64 (format/base/split_mix64.h), which newer
+// tests use, seeded from test::Rng() so that CWLOC_TEST_SEED still reseeds them.
+
+// Uniform in [0, 1) from the top 53 bits.
+inline double UnitUniform(SplitMix64& rng) {
+  return static_cast<double>(rng.Next() >> 11) * 0x1.0p-53;
+}
+
+inline double Uniform(SplitMix64& rng, double lo, double hi) {
+  return lo + (hi - lo) * UnitUniform(rng);
+}
+
+// A standard normal draw (Box-Muller; 1 - u lies in (0, 1], so the logarithm is finite).
+inline double Gaussian(SplitMix64& rng) {
+  const double u = 1.0 - UnitUniform(rng);
+  const double v = UnitUniform(rng);
+  return std::sqrt(-2.0 * std::log(u)) * std::cos(2.0 * std::numbers::pi * v);
+}
+
+// N(mean, sigma^2) draws from either generator (std::normal_distribution for std::mt19937_64).
+template <typename Rng>
+class NormalSampler;
+
+template <>
+class NormalSampler<std::mt19937_64> {
+ public:
+  NormalSampler(double mean, double sigma) : distribution_(mean, sigma) {}
+  double operator()(std::mt19937_64& rng) { return distribution_(rng); }
+
+ private:
+  std::normal_distribution<double> distribution_;
+};
+
+template <>
+class NormalSampler<SplitMix64> {
+ public:
+  NormalSampler(double mean, double sigma) : mean_(mean), sigma_(sigma) {}
+  double operator()(SplitMix64& rng) { return mean_ + sigma_ * Gaussian(rng); }
+
+ private:
+  double mean_, sigma_;
+};
+
+template <typename T>
+void Shuffle(std::mt19937_64& rng, std::vector<T>* items) {
+  std::shuffle(items->begin(), items->end(), rng);
+}
+
+template <typename T>
+void Shuffle(SplitMix64& rng, std::vector<T>* items) {
+  rng.Shuffle(std::span<T>(*items));
+}
+
+// A SplitMix64 seeded from the shared test generator.
+inline SplitMix64 SplitMixFrom(std::mt19937_64& rng) { return SplitMix64(rng()); }
+
+template <typename Rng>
+Eigen::Quaterniond RandomRotation(Rng& rng) {
+  NormalSampler<Rng> normal(0.0, 1.0);
   Eigen::Quaterniond q(normal(rng), normal(rng), normal(rng), normal(rng));
   return q.normalized();
 }
@@ -23,7 +83,8 @@ inline double Uniform(std::mt19937_64& rng, double lo, double hi) {
 }
 
 // A random cam_from_world with the camera centre in [-10, 10]^3.
-inline CameraPose RandomPose(std::mt19937_64& rng) {
+template <typename Rng>
+CameraPose RandomPose(Rng& rng) {
   const Eigen::Quaterniond q = RandomRotation(rng);
   const Eigen::Vector3d center(Uniform(rng, -10, 10), Uniform(rng, -10, 10), Uniform(rng, -10, 10));
   return CameraPose(q, -(q * center));
@@ -62,12 +123,12 @@ struct SyntheticPoseProblem {
 
 // Points seen at uniformly random pixels and depths; an outlier keeps its 3D point but is
 // observed at an unrelated random pixel (a wrong match).
-inline SyntheticPoseProblem MakeSyntheticProblem(const SyntheticPoseOptions& options,
-                                                 std::mt19937_64& rng) {
+template <typename Rng>
+SyntheticPoseProblem MakeSyntheticProblem(const SyntheticPoseOptions& options, Rng& rng) {
   SyntheticPoseProblem problem;
   problem.pose = RandomPose(rng);
   problem.focal_px = options.focal_px;
-  std::normal_distribution<double> noise(0.0, options.noise_px);
+  NormalSampler<Rng> noise(0.0, options.noise_px);
   const int num_outliers =
       static_cast<int>(std::lround(options.outlier_ratio * options.num_points));
   const double hw = 0.5 * options.width_px, hh = 0.5 * options.height_px;
@@ -95,7 +156,7 @@ inline SyntheticPoseProblem MakeSyntheticProblem(const SyntheticPoseOptions& opt
   // Outliers first would be a too friendly order for any sequential bug: shuffle.
   std::vector<size_t> order(problem.pixels.size());
   for (size_t i = 0; i < order.size(); ++i) order[i] = i;
-  std::shuffle(order.begin(), order.end(), rng);
+  Shuffle(rng, &order);
   SyntheticPoseProblem shuffled = problem;
   for (size_t i = 0; i < order.size(); ++i) {
     shuffled.pixels[i] = problem.pixels[order[i]];
