@@ -229,13 +229,10 @@ LocalizationResult Localizer::Localize(const Query& query, const LocalizerOption
 
   // The gravity prior: the model's down direction where the query is thought to be.
   LocalizerOptions pose_options = options;
-  Eigen::Vector3d gravity_in_model = Eigen::Vector3d::Zero();
   if (query.gravity) {
-    gravity_in_model = geo_->GravityInModel(query.position_prior);
     GravityPrior prior;
-    prior.in_camera =
-        Eigen::Vector3d((*query.gravity)[0], (*query.gravity)[1], (*query.gravity)[2]).normalized();
-    prior.in_world = gravity_in_model;
+    prior.in_camera = {(*query.gravity)[0], (*query.gravity)[1], (*query.gravity)[2]};
+    prior.in_world = geo_->GravityInModel(query.position_prior);
     prior.sigma_deg = options.prior_gravity_sigma_deg;
     pose_options.pose.gravity = prior;
     priors.gravity = query.gravity;
@@ -272,12 +269,7 @@ LocalizationResult Localizer::Localize(const Query& query, const LocalizerOption
     const Eigen::Vector3d center = p.Center();
     result.center = {center.x(), center.y(), center.z()};
     if (geo_) result.geo = geo_->PoseOnGlobe(p.rotation, center);
-    if (query.gravity) {
-      const Eigen::Vector3d predicted = p.rotation * gravity_in_model;
-      const Eigen::Vector3d given = pose_options.pose.gravity->in_camera;
-      priors.gravity_error_deg =
-          std::atan2(predicted.cross(given).norm(), predicted.dot(given)) * 180.0 / M_PI;
-    }
+    if (query.gravity) priors.gravity_error_deg = pose.gravity_angle_deg;
     for (size_t i = 0; i < pose.inliers.size(); ++i) {
       if (!pose.inliers[i]) continue;
       const FeatureMatch& match = matched.correspondences[fit.used[i]];

@@ -66,15 +66,7 @@ enum class FocalPriorSolver {
   kP4Pf,  // ignore the prior in RANSAC and estimate the focal length as if it were unknown
 };
 
-// TEMPORARY until the pose branch lands.
-struct GravityPrior {
-  Eigen::Vector3d in_camera = Eigen::Vector3d::UnitY();
-  Eigen::Vector3d in_world = -Eigen::Vector3d::UnitZ();
-  double sigma_deg = 1.0;
-};
-
 struct AbsolutePoseOptions {
-  std::optional<GravityPrior> gravity;
   // Inlier threshold on the reprojection error, pixels (paper: 6).
   double max_error_px = 6.0;
   // Success needs at least this many inliers (paper: 12).
