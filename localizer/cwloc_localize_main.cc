@@ -455,6 +455,9 @@ int main(int argc, char** argv) {
   app.add_option("--max-error", options.pose.max_error_px,
                  "Inlier reprojection error threshold, pixels")
       ->capture_default_str();
+  app.add_option("--min-ransac-iterations", options.pose.ransac.min_iterations,
+                 "RANSAC samples at least this many hypotheses (COLMAP's min_num_trials)")
+      ->capture_default_str();
   app.add_option("--max-ransac-iterations", options.pose.ransac.max_iterations,
                  "RANSAC iteration cap")
       ->capture_default_str();

@@ -170,6 +170,8 @@ void ValidateLocalizerOptions(const LocalizerOptions& o) {
   require(o.pose.max_error_px > 0 && std::isfinite(o.pose.max_error_px),
           "--max-error must be a positive number of pixels");
   require(o.pose.ransac.max_iterations >= 1, "--max-ransac-iterations must be at least 1");
+  require(o.pose.ransac.min_iterations <= o.pose.ransac.max_iterations,
+          "--min-ransac-iterations must not exceed --max-ransac-iterations");
   require(o.pose.ransac.confidence > 0 && o.pose.ransac.confidence < 1,
           "--ransac-confidence: expected a value in (0, 1)");
   require(o.prior_gravity_sigma_deg > 0 && o.prior_gravity_sigma_deg <= 90,

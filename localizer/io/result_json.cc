@@ -18,6 +18,7 @@ nlohmann::ordered_json OptionsToJson(const LocalizerOptions& options) {
           {"query_tree_checks", options.query_tree_checks},
           {"min_inliers", options.pose.min_inliers},
           {"max_error_px", options.pose.max_error_px},
+          {"min_ransac_iterations", options.pose.ransac.min_iterations},
           {"max_ransac_iterations", options.pose.ransac.max_iterations},
           {"ransac_confidence", options.pose.ransac.confidence},
           {"refine", options.pose.refine},
