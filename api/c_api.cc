@@ -7,12 +7,14 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <utility>
 
 #include "cwloc/cwloc.h"
 #include "cwloc/cwloc.hpp"
 
 struct cwloc_localizer {
   cwloc::api::Localizer localizer;
+  cwloc::api::IndexInfo info;  // owns the strings cwloc_localizer_info returns
 };
 
 struct cwloc_options {
@@ -21,6 +23,7 @@ struct cwloc_options {
 
 struct cwloc_result {
   cwloc::api::Result result;
+  bool georeferenced = false;  // the index's: why a result has no geo pose
 };
 
 namespace {
@@ -73,7 +76,7 @@ cwloc_status RunQuery(const cwloc_localizer* localizer, cwloc_result** out,
   if (out == nullptr) return Fail(CWLOC_ERROR_INVALID_ARGUMENT, "out is NULL");
   *out = nullptr;
   if (localizer == nullptr) return Fail(CWLOC_ERROR_INVALID_ARGUMENT, "localizer is NULL");
-  return Guarded([&] { *out = new cwloc_result{query()}; });
+  return Guarded([&] { *out = new cwloc_result{query(), localizer->info.georeferenced}; });
 }
 
 // A whole number in [0, 2^digits) fits T exactly.
@@ -116,7 +119,22 @@ const std::map<std::string, OptionSetter> kOptionSetters = {
      [](double v, cwloc::api::Options* o) { return SetWhole(v, &o->max_features); }},
     {"max-image-pixels",
      [](double v, cwloc::api::Options* o) { return SetWhole(v, &o->max_image_pixels); }},
+    {"prior-gravity-sigma",
+     [](double v, cwloc::api::Options* o) { return o->prior_gravity_sigma_deg = v, true; }},
+    {"use-exif-gps",
+     [](double v, cwloc::api::Options* o) {
+       if (v != 0 && v != 1) return false;
+       o->use_exif_gps = v == 1;
+       return true;
+     }},
+    {"exif-gps-radius",
+     [](double v, cwloc::api::Options* o) { return o->exif_gps_radius_m = v, true; }},
 };
+
+// A result accessor's value that does not exist: NOT_AVAILABLE and why.
+cwloc_status NotAvailable(const std::string& what, const std::string& why) {
+  return Fail(CWLOC_ERROR_NOT_AVAILABLE, what + ": " + why);
+}
 
 }  // namespace
 
@@ -130,11 +148,26 @@ cwloc_status cwloc_localizer_open(const char* index_path, int verify, cwloc_loca
   if (out == nullptr) return Fail(CWLOC_ERROR_INVALID_ARGUMENT, "out is NULL");
   *out = nullptr;
   if (index_path == nullptr) return Fail(CWLOC_ERROR_INVALID_ARGUMENT, "index_path is NULL");
-  return Guarded(
-      [&] { *out = new cwloc_localizer{cwloc::api::Localizer::Open(index_path, verify != 0)}; });
+  return Guarded([&] {
+    cwloc::api::Localizer localizer = cwloc::api::Localizer::Open(index_path, verify != 0);
+    cwloc::api::IndexInfo info = localizer.Info();
+    *out = new cwloc_localizer{std::move(localizer), std::move(info)};
+  });
 }
 
 void cwloc_localizer_close(cwloc_localizer* localizer) { delete localizer; }
+
+cwloc_status cwloc_localizer_info(const cwloc_localizer* localizer, cwloc_index_info* info) {
+  if (localizer == nullptr) return Fail(CWLOC_ERROR_INVALID_ARGUMENT, "localizer is NULL");
+  if (info == nullptr) return Fail(CWLOC_ERROR_INVALID_ARGUMENT, "info is NULL");
+  const cwloc::api::IndexInfo& i = localizer->info;
+  *info = {
+      i.path.c_str(),   i.format_version.c_str(), i.num_images,          i.num_points,
+      i.num_views,      i.georeferenced ? 1 : 0,  i.origin_latitude_deg, i.origin_longitude_deg,
+      i.origin_height_m};
+  last_error.clear();
+  return CWLOC_OK;
+}
 
 cwloc_status cwloc_options_create(cwloc_options** out) {
   if (out == nullptr) return Fail(CWLOC_ERROR_INVALID_ARGUMENT, "out is NULL");
@@ -162,6 +195,33 @@ cwloc_status cwloc_options_set_matcher(cwloc_options* options, const char* match
   if (options == nullptr || matcher == nullptr)
     return Fail(CWLOC_ERROR_INVALID_ARGUMENT, "options or matcher is NULL");
   options->options.matcher = matcher;
+  last_error.clear();
+  return CWLOC_OK;
+}
+
+cwloc_status cwloc_options_set_position_prior(cwloc_options* options,
+                                              const cwloc_position_prior* prior) {
+  if (options == nullptr) return Fail(CWLOC_ERROR_INVALID_ARGUMENT, "options is NULL");
+  if (prior == nullptr) {
+    options->options.position_prior.reset();
+  } else {
+    options->options.position_prior = cwloc::api::PositionPrior{
+        prior->latitude_deg, prior->longitude_deg,
+        std::isnan(prior->height_m) ? std::nullopt : std::optional<double>(prior->height_m),
+        prior->radius_m};
+  }
+  last_error.clear();
+  return CWLOC_OK;
+}
+
+cwloc_status cwloc_options_set_gravity(cwloc_options* options, const double gravity_xyz[3]) {
+  if (options == nullptr) return Fail(CWLOC_ERROR_INVALID_ARGUMENT, "options is NULL");
+  if (gravity_xyz == nullptr) {
+    options->options.gravity.reset();
+  } else {
+    options->options.gravity =
+        std::array<double, 3>{gravity_xyz[0], gravity_xyz[1], gravity_xyz[2]};
+  }
   last_error.clear();
   return CWLOC_OK;
 }
@@ -297,6 +357,45 @@ void cwloc_result_times(const cwloc_result* result, cwloc_stage_times* times) {
   const cwloc::api::StageTimes& t = result->result.times;
   *times = {t.extraction,    t.forward_knn, t.ratio_test, t.query_tree,
             t.back_matching, t.pose,        t.total};
+}
+
+cwloc_status cwloc_result_geo_pose(const cwloc_result* result, cwloc_geo_pose* pose) {
+  if (result == nullptr) return Fail(CWLOC_ERROR_INVALID_ARGUMENT, "result is NULL");
+  if (pose == nullptr) return Fail(CWLOC_ERROR_INVALID_ARGUMENT, "pose is NULL");
+  if (!result->georeferenced) return NotAvailable("geo pose", "the index is not georeferenced");
+  const auto& geo = result->result.geo;
+  if (!geo) return NotAvailable("geo pose", "the query was not localized");
+  *pose = {
+      geo->latitude_deg, geo->longitude_deg, geo->height_m, {geo->enu[0], geo->enu[1], geo->enu[2]},
+      geo->heading_deg,  geo->pitch_deg,     geo->roll_deg};
+  last_error.clear();
+  return CWLOC_OK;
+}
+
+cwloc_status cwloc_result_position_prior(const cwloc_result* result, cwloc_position_prior* prior,
+                                         uint32_t* clusters_in_radius) {
+  if (result == nullptr) return Fail(CWLOC_ERROR_INVALID_ARGUMENT, "result is NULL");
+  if (prior == nullptr || clusters_in_radius == nullptr)
+    return Fail(CWLOC_ERROR_INVALID_ARGUMENT, "prior or clusters_in_radius is NULL");
+  const auto& used = result->result.position_prior;
+  if (!used) return NotAvailable("position prior", "the query had none");
+  *prior = {used->latitude_deg, used->longitude_deg,
+            used->height_m.value_or(std::numeric_limits<double>::quiet_NaN()), used->radius_m};
+  *clusters_in_radius = result->result.clusters_in_radius;
+  last_error.clear();
+  return CWLOC_OK;
+}
+
+cwloc_status cwloc_result_gravity_error(const cwloc_result* result, double* degrees) {
+  if (result == nullptr) return Fail(CWLOC_ERROR_INVALID_ARGUMENT, "result is NULL");
+  if (degrees == nullptr) return Fail(CWLOC_ERROR_INVALID_ARGUMENT, "degrees is NULL");
+  if (!result->result.gravity)
+    return NotAvailable("gravity error", "the query had no gravity prior");
+  if (!result->result.gravity_error_deg)
+    return NotAvailable("gravity error", "the query was not localized");
+  *degrees = *result->result.gravity_error_deg;
+  last_error.clear();
+  return CWLOC_OK;
 }
 
 }  // extern "C"

@@ -11,6 +11,7 @@
 #include "localizer/io/camera_spec.h"
 #include "localizer/io/feature_file.h"
 #include "localizer/io/photo_query.h"
+#include "localizer/io/query_priors.h"
 #include "localizer/localizer.h"
 
 namespace cwloc::api {
@@ -63,7 +64,11 @@ LocalizerOptions ToLocalizerOptions(const Options& o) {
   options.pose.refine = o.refine;
   options.ranked_images = o.ranked_images;
   options.seed = o.seed;
-  ValidateOrThrowInvalidArgument([&] { ValidateLocalizerOptions(options); });
+  options.prior_gravity_sigma_deg = o.prior_gravity_sigma_deg;
+  ValidateOrThrowInvalidArgument([&] {
+    ValidateLocalizerOptions(options);
+    ValidateExifGpsRadius(o.exif_gps_radius_m);
+  });
   return options;
 }
 
@@ -107,6 +112,18 @@ Camera ToCamera(const QueryCamera& query_camera) {
   return camera;
 }
 
+// The options' priors, with cwloc-localize's precedence: the given position, else the photo's
+// EXIF GPS when asked for.
+void AddPriors(const Options& options, Query* query) {
+  if (const auto& p = options.position_prior) {
+    query->position_prior =
+        cwloc::PositionPrior{p->latitude_deg, p->longitude_deg, p->height_m, p->radius_m};
+  } else if (options.use_exif_gps) {
+    query->position_prior = ExifPositionPrior(*query, options.exif_gps_radius_m);
+  }
+  query->gravity = options.gravity;
+}
+
 Result ToResult(const LocalizationResult& r, const Query& query, const Index& index) {
   Result result;
   result.success = r.success;
@@ -134,6 +151,16 @@ Result ToResult(const LocalizationResult& r, const Query& query, const Index& in
   result.times = {r.times.extraction, r.times.forward_knn,   r.times.ratio_test,
                   r.times.query_tree, r.times.back_matching, r.times.pose,
                   r.times.total};
+  if (const auto& g = r.geo) {
+    result.geo = GeoPose{g->latitude_deg, g->longitude_deg, g->height_m, g->enu,
+                         g->heading_deg,  g->pitch_deg,     g->roll_deg};
+  }
+  if (const auto& p = r.priors.position)
+    result.position_prior =
+        PositionPrior{p->latitude_deg, p->longitude_deg, p->height_m, p->radius_m};
+  result.clusters_in_radius = r.priors.clusters_in_radius;
+  result.gravity = r.priors.gravity;
+  result.gravity_error_deg = r.priors.gravity_error_deg;
   return result;
 }
 
@@ -178,6 +205,9 @@ Options::Options() {
   max_image_size = photo.max_image_size;
   max_features = photo.sift.max_num_features;
   max_image_pixels = photo.max_image_pixels;
+  prior_gravity_sigma_deg = localizer.prior_gravity_sigma_deg;
+  use_exif_gps = false;  // cwloc-localize's --use-exif-gps is off unless given
+  exif_gps_radius_m = kDefaultExifGpsRadiusM;
 }
 
 struct Localizer::Impl {
@@ -185,6 +215,8 @@ struct Localizer::Impl {
 
   Result Run(Query query, const Options& options) const {
     const LocalizerOptions localizer_options = ToLocalizerOptions(options);
+    AddPriors(options, &query);
+    ValidateOrThrowInvalidArgument([&] { localizer.ValidatePriors(query); });
     return ToResult(localizer.Localize(query, localizer_options), query, index);
   }
 
@@ -219,6 +251,12 @@ IndexInfo Localizer::Info() const {
   info.num_images = static_cast<uint32_t>(index.images().size());
   info.num_points = static_cast<uint32_t>(index.points().size());
   info.num_views = static_cast<uint32_t>(index.num_views());
+  if (const IndexGeoreference* georeference = index.georeference()) {
+    info.georeferenced = true;
+    info.origin_latitude_deg = georeference->origin_latitude_deg;
+    info.origin_longitude_deg = georeference->origin_longitude_deg;
+    info.origin_height_m = georeference->origin_height_m;
+  }
   return info;
 }
 

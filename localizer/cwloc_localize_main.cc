@@ -135,8 +135,7 @@ class QueryLoader {
     if (!cli.prior_gravity.empty())
       gravity_option_ = ParseGravityPrior(cli.prior_gravity, "--prior-gravity");
     if (!cli.priors_path.empty()) priors_ = ReadPriorsFile(cli.priors_path);
-    if (!(cli.exif_gps_radius_m > 0) || !std::isfinite(cli.exif_gps_radius_m))
-      throw InputError("--exif-gps-radius must be a positive number of metres");
+    ValidateExifGpsRadius(cli.exif_gps_radius_m);
 #ifdef CWLOC_WITH_COLMAP_DB
     if (!cli.database_path.empty())
       database_ = std::make_unique<DatabaseQueries>(cli.database_path);

@@ -118,21 +118,6 @@ void ValidateQuery(const Query& query) {
   if (query.NumFeatures() == 0) throw InputError(source + ": the query has no features");
   if (query.camera.width == 0 || query.camera.height == 0)
     throw InputError(source + ": camera has no image size");
-  if (const auto& prior = query.position_prior) {
-    if (!(std::abs(prior->latitude_deg) <= 90) || !std::isfinite(prior->longitude_deg) ||
-        !std::isfinite(prior->height_m.value_or(0.0))) {
-      throw InputError(source + ": position prior " + std::to_string(prior->latitude_deg) + ", " +
-                       std::to_string(prior->longitude_deg) +
-                       " is not a latitude in [-90, 90] and a longitude");
-    }
-    if (!(prior->radius_m > 0) || !std::isfinite(prior->radius_m))
-      throw InputError(source + ": position prior radius must be a positive number of metres");
-  }
-  if (const auto& g = query.gravity) {
-    const double norm = std::sqrt(g->at(0) * g->at(0) + g->at(1) * g->at(1) + g->at(2) * g->at(2));
-    if (!std::isfinite(norm) || norm < 1e-9)
-      throw InputError(source + ": gravity prior must be a finite, non-zero vector");
-  }
   // An unknown camera has only its size; a focal prior's model gives the focal length.
   if (query.camera.calibration == Calibration::kUnknown) return;
   const auto model = FindCameraModel(static_cast<int32_t>(query.camera.model_id));
@@ -185,14 +170,33 @@ void ValidateLocalizerOptions(const LocalizerOptions& o) {
 Localizer::Localizer(const Index& index)
     : index_(index), clusters_(index), geo_(IndexGeo::Of(index)) {}
 
+void Localizer::ValidatePriors(const Query& query) const {
+  const std::string source = query.Source();
+  if (const auto& prior = query.position_prior) {
+    if (!(std::abs(prior->latitude_deg) <= 90) || !std::isfinite(prior->longitude_deg) ||
+        !std::isfinite(prior->height_m.value_or(0.0))) {
+      throw InputError(source + ": position prior " + std::to_string(prior->latitude_deg) + ", " +
+                       std::to_string(prior->longitude_deg) +
+                       " is not a latitude in [-90, 90] and a longitude");
+    }
+    if (!(prior->radius_m > 0) || !std::isfinite(prior->radius_m))
+      throw InputError(source + ": position prior radius must be a positive number of metres");
+  }
+  if (const auto& g = query.gravity) {
+    const double norm = std::sqrt(g->at(0) * g->at(0) + g->at(1) * g->at(1) + g->at(2) * g->at(2));
+    if (!std::isfinite(norm) || norm < 1e-9)
+      throw InputError(source + ": gravity prior must be a finite, non-zero vector");
+  }
+  if ((query.position_prior || query.gravity) && !geo_) {
+    throw InputError(source + ": a position or gravity prior needs a georeferenced index (" +
+                     index_.file().path().string() + " is not; see cwloc-index build --georef)");
+  }
+}
+
 LocalizationResult Localizer::Localize(const Query& query, const LocalizerOptions& options) const {
   const Stopwatch total;
   ValidateQuery(query);
-  if ((query.position_prior || query.gravity) && !geo_) {
-    throw InputError(query.Source() +
-                     ": a position or gravity prior needs a georeferenced index (" +
-                     index_.file().path().string() + " is not; see cwloc-index build --georef)");
-  }
+  ValidatePriors(query);
 
   // The position prior's region: only clusters with a camera within its radius.
   PriorUse priors;

@@ -23,6 +23,12 @@ class Localizer {
   // success = false with the reason.
   LocalizationResult Localize(const Query& query, const LocalizerOptions& options) const;
 
+  // The part of Localize's check that concerns the query's priors: a latitude in [-90, 90], a
+  // finite longitude and height, a positive radius, a non-zero gravity, and a georeferenced
+  // index for either. Throws InputError naming the query. (The API calls it first, so that a
+  // bad prior is the caller's argument rather than a bad query.)
+  void ValidatePriors(const Query& query) const;
+
   const Index& index() const { return index_; }
   // Set when the index is georeferenced.
   const std::optional<IndexGeo>& geo() const { return geo_; }

@@ -14,6 +14,9 @@ namespace cwloc {
 inline std::filesystem::path GoldenDir() { return test::SourceDir() / "tests" / "data" / "golden"; }
 inline std::filesystem::path GoldenIndex() { return GoldenDir() / "index-1.0.cwl"; }
 inline std::filesystem::path QueryDir() { return GoldenDir() / "index-1.0-queries"; }
+// The same city on the globe (format 1.1, tests/data/README.md): results have geo poses.
+inline std::filesystem::path GeoIndex() { return GoldenDir() / "index-1.1.cwl"; }
+inline std::filesystem::path GeoQueryDir() { return GoldenDir() / "index-1.1-queries"; }
 
 // "MODEL W H P1 P2 ..." as the ground-truth file writes it.
 inline api::Camera ParseCamera(const std::string& spec) {
@@ -22,6 +25,11 @@ inline api::Camera ParseCamera(const std::string& spec) {
   in >> camera.model >> camera.width >> camera.height;
   for (double p; in >> p;) camera.params.push_back(p);
   return camera;
+}
+
+// Features in COLMAP's text format from `dir`: NAME.txt.
+inline api::Features ReadQueryFeatures(const std::filesystem::path& dir, const std::string& name) {
+  return api::ReadFeatureFile((dir / (name + ".txt")).string());
 }
 
 // Checks that fn throws api::Error with this code and message.

@@ -3,6 +3,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <fstream>
 #include <thread>
 
@@ -193,6 +194,242 @@ TEST_F(CApiTest, TheLastErrorIsPerThread) {
   std::thread([&] { other_thread = cwloc_last_error(); }).join();
   EXPECT_EQ(other_thread, "");
   EXPECT_THAT(cwloc_last_error(), HasSubstr("/no/such/index.cwl"));
+}
+
+// The georeferenced golden index through C: the same geo poses, priors and index information
+// as C++, bit for bit; a value a result does not have is CWLOC_ERROR_NOT_AVAILABLE and why.
+class CApiGeoTest : public testing::Test {
+ protected:
+  void SetUp() override {
+    ASSERT_EQ(cwloc_localizer_open(GeoIndex().string().c_str(), 0, &localizer_), CWLOC_OK)
+        << cwloc_last_error();
+    features_ = ReadQueryFeatures(GeoQueryDir(), "query_00001.jpg");
+    ASSERT_EQ(cwloc_options_create(&options_), CWLOC_OK);
+  }
+  void TearDown() override {
+    cwloc_options_destroy(options_);
+    cwloc_localizer_close(localizer_);
+  }
+
+  cwloc_status Localize(const cwloc_localizer* localizer, const cwloc_options* options,
+                        cwloc_result** result) const {
+    const cwloc_camera camera = KnownCamera();
+    return cwloc_localize_features(
+        localizer, features_.keypoints.data(), features_.descriptors.data(),
+        static_cast<uint32_t>(features_.keypoints.size() / 2), &camera, options, result);
+  }
+
+  api::Result LocalizeCpp(const api::Options& options) const {
+    return api::Localizer::Open(GeoIndex().string())
+        .Localize(features_, {"SIMPLE_RADIAL", 1024, 768, {900, 512, 384, -0.01}}, options);
+  }
+
+  cwloc_localizer* localizer_ = nullptr;
+  cwloc_options* options_ = nullptr;
+  api::Features features_;
+};
+
+// The true position of query_00001.jpg (queries_geo.txt) and a gravity near its camera's down.
+constexpr double kLatitude = 47.377881256397, kLongitude = 8.541045729524;
+constexpr double kGravity[3] = {0.0, 1.0, 0.06};
+
+TEST_F(CApiGeoTest, IndexInfoIsTheCppApis) {
+  const api::IndexInfo want = api::Localizer::Open(GeoIndex().string()).Info();
+  cwloc_index_info info{};
+  ASSERT_EQ(cwloc_localizer_info(localizer_, &info), CWLOC_OK);
+  EXPECT_EQ(info.path, want.path);
+  EXPECT_STREQ(info.format_version, "1.1");
+  EXPECT_EQ(info.num_images, want.num_images);
+  EXPECT_EQ(info.num_points, want.num_points);
+  EXPECT_EQ(info.num_views, want.num_views);
+  EXPECT_EQ(info.georeferenced, 1);
+  EXPECT_EQ(info.origin_latitude_deg, want.origin_latitude_deg);
+  EXPECT_EQ(info.origin_longitude_deg, want.origin_longitude_deg);
+  EXPECT_EQ(info.origin_height_m, want.origin_height_m);
+
+  cwloc_localizer* plain = nullptr;
+  ASSERT_EQ(cwloc_localizer_open(kIndex.c_str(), 0, &plain), CWLOC_OK);
+  ASSERT_EQ(cwloc_localizer_info(plain, &info), CWLOC_OK);
+  EXPECT_STREQ(info.format_version, "1.0");
+  EXPECT_EQ(info.num_images, 26u);
+  EXPECT_EQ(info.georeferenced, 0);
+  EXPECT_EQ(info.origin_latitude_deg, 0.0);
+  cwloc_localizer_close(plain);
+
+  EXPECT_EQ(cwloc_localizer_info(nullptr, &info), CWLOC_ERROR_INVALID_ARGUMENT);
+  EXPECT_STREQ(cwloc_last_error(), "localizer is NULL");
+  EXPECT_EQ(cwloc_localizer_info(localizer_, nullptr), CWLOC_ERROR_INVALID_ARGUMENT);
+  EXPECT_STREQ(cwloc_last_error(), "info is NULL");
+}
+
+TEST_F(CApiGeoTest, GeoPoseAndPriorsAreTheCppApis) {
+  // No height (NaN) is a horizontal prior, as std::nullopt is in C++.
+  const cwloc_position_prior prior = {kLatitude, kLongitude, NAN, 50.0};
+  ASSERT_EQ(cwloc_options_set_position_prior(options_, &prior), CWLOC_OK);
+  ASSERT_EQ(cwloc_options_set_gravity(options_, kGravity), CWLOC_OK);
+  ASSERT_EQ(cwloc_options_set(options_, "prior-gravity-sigma", 2.5), CWLOC_OK);
+  cwloc_result* result = nullptr;
+  ASSERT_EQ(Localize(localizer_, options_, &result), CWLOC_OK) << cwloc_last_error();
+  ASSERT_EQ(cwloc_result_success(result), 1) << cwloc_result_failure_reason(result);
+
+  api::Options options;
+  options.position_prior = api::PositionPrior{kLatitude, kLongitude, std::nullopt, 50.0};
+  options.gravity = std::array<double, 3>{kGravity[0], kGravity[1], kGravity[2]};
+  options.prior_gravity_sigma_deg = 2.5;
+  const api::Result want = LocalizeCpp(options);
+  ASSERT_TRUE(want.geo);
+  cwloc_geo_pose geo{};
+  ASSERT_EQ(cwloc_result_geo_pose(result, &geo), CWLOC_OK) << cwloc_last_error();
+  EXPECT_EQ(geo.latitude_deg, want.geo->latitude_deg);
+  EXPECT_EQ(geo.longitude_deg, want.geo->longitude_deg);
+  EXPECT_EQ(geo.height_m, want.geo->height_m);
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(geo.enu[i], want.geo->enu[i]);
+  EXPECT_EQ(geo.heading_deg, want.geo->heading_deg);
+  EXPECT_EQ(geo.pitch_deg, want.geo->pitch_deg);
+  EXPECT_EQ(geo.roll_deg, want.geo->roll_deg);
+  EXPECT_NEAR(geo.latitude_deg, kLatitude, 2e-5);  // 2 m
+
+  cwloc_position_prior used{};
+  uint32_t clusters = 0;
+  ASSERT_EQ(cwloc_result_position_prior(result, &used, &clusters), CWLOC_OK);
+  EXPECT_EQ(used.latitude_deg, kLatitude);
+  EXPECT_EQ(used.longitude_deg, kLongitude);
+  EXPECT_TRUE(std::isnan(used.height_m));
+  EXPECT_EQ(used.radius_m, 50.0);
+  EXPECT_EQ(clusters, want.clusters_in_radius);
+  EXPECT_EQ(clusters, 3u);
+  double error_deg = -1;
+  ASSERT_EQ(cwloc_result_gravity_error(result, &error_deg), CWLOC_OK);
+  ASSERT_TRUE(want.gravity_error_deg);
+  EXPECT_EQ(error_deg, *want.gravity_error_deg);
+  EXPECT_GT(error_deg, 0.0);
+  cwloc_result_destroy(result);
+
+  // A height is kept; NULL removes a prior again.
+  const cwloc_position_prior with_height = {kLatitude, kLongitude, 456.6, 50.0};
+  ASSERT_EQ(cwloc_options_set_position_prior(options_, &with_height), CWLOC_OK);
+  ASSERT_EQ(cwloc_options_set_gravity(options_, nullptr), CWLOC_OK);
+  ASSERT_EQ(Localize(localizer_, options_, &result), CWLOC_OK) << cwloc_last_error();
+  ASSERT_EQ(cwloc_result_position_prior(result, &used, &clusters), CWLOC_OK);
+  EXPECT_EQ(used.height_m, 456.6);
+  EXPECT_EQ(cwloc_result_gravity_error(result, &error_deg), CWLOC_ERROR_NOT_AVAILABLE);
+  EXPECT_STREQ(cwloc_last_error(), "gravity error: the query had no gravity prior");
+  cwloc_result_destroy(result);
+  ASSERT_EQ(cwloc_options_set_position_prior(options_, nullptr), CWLOC_OK);
+  ASSERT_EQ(Localize(localizer_, options_, &result), CWLOC_OK) << cwloc_last_error();
+  EXPECT_EQ(cwloc_result_position_prior(result, &used, &clusters), CWLOC_ERROR_NOT_AVAILABLE);
+  EXPECT_STREQ(cwloc_last_error(), "position prior: the query had none");
+  EXPECT_EQ(cwloc_result_geo_pose(result, &geo), CWLOC_OK);  // no priors, still on the globe
+  cwloc_result_destroy(result);
+}
+
+TEST_F(CApiGeoTest, MissingValuesAreNotAvailableSayingWhy) {
+  // Not localized: a position prior 7.5 km east of the city.
+  const cwloc_position_prior far = {47.3779, 8.6403, NAN, 100.0};
+  ASSERT_EQ(cwloc_options_set_position_prior(options_, &far), CWLOC_OK);
+  ASSERT_EQ(cwloc_options_set_gravity(options_, kGravity), CWLOC_OK);
+  cwloc_result* result = nullptr;
+  ASSERT_EQ(Localize(localizer_, options_, &result), CWLOC_OK) << cwloc_last_error();
+  EXPECT_EQ(cwloc_result_success(result), 0);
+  EXPECT_STREQ(cwloc_result_failure_reason(result),
+               "no model camera within 100 m of the position prior");
+  cwloc_geo_pose geo{};
+  EXPECT_EQ(cwloc_result_geo_pose(result, &geo), CWLOC_ERROR_NOT_AVAILABLE);
+  EXPECT_STREQ(cwloc_last_error(), "geo pose: the query was not localized");
+  double error_deg = 0;
+  EXPECT_EQ(cwloc_result_gravity_error(result, &error_deg), CWLOC_ERROR_NOT_AVAILABLE);
+  EXPECT_STREQ(cwloc_last_error(), "gravity error: the query was not localized");
+  cwloc_position_prior used{};
+  uint32_t clusters = 99;
+  ASSERT_EQ(cwloc_result_position_prior(result, &used, &clusters), CWLOC_OK);
+  EXPECT_EQ(used.longitude_deg, 8.6403);
+  EXPECT_EQ(clusters, 0u);
+  cwloc_result_destroy(result);
+
+  // Not georeferenced: the golden 1.0 index localizes, but not on the globe.
+  cwloc_localizer* plain = nullptr;
+  ASSERT_EQ(cwloc_localizer_open(kIndex.c_str(), 0, &plain), CWLOC_OK);
+  ASSERT_EQ(Localize(plain, nullptr, &result), CWLOC_OK) << cwloc_last_error();
+  EXPECT_EQ(cwloc_result_success(result), 1);
+  EXPECT_EQ(cwloc_result_geo_pose(result, &geo), CWLOC_ERROR_NOT_AVAILABLE);
+  EXPECT_STREQ(cwloc_last_error(), "geo pose: the index is not georeferenced");
+  EXPECT_EQ(cwloc_result_gravity_error(result, &error_deg), CWLOC_ERROR_NOT_AVAILABLE);
+  EXPECT_EQ(cwloc_result_position_prior(result, &used, &clusters), CWLOC_ERROR_NOT_AVAILABLE);
+  cwloc_result_destroy(result);
+
+  // ... and priors there are the caller's mistake, with the pipeline's message.
+  EXPECT_EQ(Localize(plain, options_, &result), CWLOC_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(result, nullptr);
+  EXPECT_EQ(cwloc_last_error(),
+            "features: a position or gravity prior needs a georeferenced index (" + kIndex +
+                " is not; see cwloc-index build --georef)");
+  cwloc_localizer_close(plain);
+}
+
+TEST_F(CApiGeoTest, BadPriorsAndKnobsAreRefused) {
+  cwloc_result* result = nullptr;
+  const auto expect_refused = [&](const std::string& message) {
+    EXPECT_EQ(Localize(localizer_, options_, &result), CWLOC_ERROR_INVALID_ARGUMENT);
+    EXPECT_EQ(result, nullptr);
+    EXPECT_EQ(cwloc_last_error(), message);
+  };
+  // Out of range: refused when the query runs, with the pipeline's message.
+  const cwloc_position_prior north_of_the_pole = {91.0, kLongitude, NAN, 50.0};
+  ASSERT_EQ(cwloc_options_set_position_prior(options_, &north_of_the_pole), CWLOC_OK);
+  expect_refused(
+      "features: position prior 91.000000, 8.541046 is not a latitude in [-90, 90] and a "
+      "longitude");
+  const cwloc_position_prior no_radius = {kLatitude, kLongitude, NAN, 0.0};
+  ASSERT_EQ(cwloc_options_set_position_prior(options_, &no_radius), CWLOC_OK);
+  expect_refused("features: position prior radius must be a positive number of metres");
+  ASSERT_EQ(cwloc_options_set_position_prior(options_, nullptr), CWLOC_OK);
+  const double zero[3] = {0, 0, 0};
+  ASSERT_EQ(cwloc_options_set_gravity(options_, zero), CWLOC_OK);
+  expect_refused("features: gravity prior must be a finite, non-zero vector");
+  ASSERT_EQ(cwloc_options_set_gravity(options_, nullptr), CWLOC_OK);
+  ASSERT_EQ(cwloc_options_set(options_, "prior-gravity-sigma", 0), CWLOC_OK);
+  expect_refused("--prior-gravity-sigma: expected degrees in (0, 90]");
+  ASSERT_EQ(cwloc_options_set(options_, "prior-gravity-sigma", 90), CWLOC_OK);
+  ASSERT_EQ(cwloc_options_set(options_, "exif-gps-radius", -1), CWLOC_OK);
+  expect_refused("--exif-gps-radius must be a positive number of metres");
+  ASSERT_EQ(cwloc_options_set(options_, "exif-gps-radius", 30), CWLOC_OK);
+  // A flag is 0 or 1.
+  EXPECT_EQ(cwloc_options_set(options_, "use-exif-gps", 2), CWLOC_ERROR_INVALID_ARGUMENT);
+  EXPECT_STREQ(cwloc_last_error(), "option 'use-exif-gps': 2.000000 is not a valid value");
+  EXPECT_EQ(cwloc_options_set(options_, "use-exif-gps", 1), CWLOC_OK);
+  ASSERT_EQ(Localize(localizer_, options_, &result), CWLOC_OK) << cwloc_last_error();
+  EXPECT_EQ(cwloc_result_success(result), 1);  // features have no EXIF: no prior
+  cwloc_result_destroy(result);
+
+  // NULL handles and outputs.
+  const cwloc_position_prior prior = {kLatitude, kLongitude, NAN, 50.0};
+  EXPECT_EQ(cwloc_options_set_position_prior(nullptr, &prior), CWLOC_ERROR_INVALID_ARGUMENT);
+  EXPECT_STREQ(cwloc_last_error(), "options is NULL");
+  EXPECT_EQ(cwloc_options_set_gravity(nullptr, kGravity), CWLOC_ERROR_INVALID_ARGUMENT);
+  EXPECT_STREQ(cwloc_last_error(), "options is NULL");
+  EXPECT_EQ(cwloc_options_set(nullptr, "use-exif-gps", 1), CWLOC_ERROR_INVALID_ARGUMENT);
+  ASSERT_EQ(Localize(localizer_, nullptr, &result), CWLOC_OK);
+  cwloc_geo_pose geo{};
+  cwloc_position_prior used{};
+  uint32_t clusters = 0;
+  double error_deg = 0;
+  EXPECT_EQ(cwloc_result_geo_pose(nullptr, &geo), CWLOC_ERROR_INVALID_ARGUMENT);
+  EXPECT_STREQ(cwloc_last_error(), "result is NULL");
+  EXPECT_EQ(cwloc_result_geo_pose(result, nullptr), CWLOC_ERROR_INVALID_ARGUMENT);
+  EXPECT_STREQ(cwloc_last_error(), "pose is NULL");
+  EXPECT_EQ(cwloc_result_position_prior(nullptr, &used, &clusters), CWLOC_ERROR_INVALID_ARGUMENT);
+  EXPECT_STREQ(cwloc_last_error(), "result is NULL");
+  EXPECT_EQ(cwloc_result_position_prior(result, nullptr, &clusters), CWLOC_ERROR_INVALID_ARGUMENT);
+  EXPECT_STREQ(cwloc_last_error(), "prior or clusters_in_radius is NULL");
+  EXPECT_EQ(cwloc_result_position_prior(result, &used, nullptr), CWLOC_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(cwloc_result_gravity_error(nullptr, &error_deg), CWLOC_ERROR_INVALID_ARGUMENT);
+  EXPECT_STREQ(cwloc_last_error(), "result is NULL");
+  EXPECT_EQ(cwloc_result_gravity_error(result, nullptr), CWLOC_ERROR_INVALID_ARGUMENT);
+  EXPECT_STREQ(cwloc_last_error(), "degrees is NULL");
+  // A success clears the last error.
+  EXPECT_EQ(cwloc_result_geo_pose(result, &geo), CWLOC_OK);
+  EXPECT_STREQ(cwloc_last_error(), "");
+  cwloc_result_destroy(result);
 }
 
 TEST(CApiVersion, IsTheProjectVersion) { EXPECT_STREQ(cwloc_version(), "0.1.0"); }

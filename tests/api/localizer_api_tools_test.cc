@@ -1,13 +1,19 @@
 // The C++ API against the tools and real photos (full builds: it needs cwloc-localize and the
 // indexer): the same poses as cwloc-localize; a photo file, its bytes and its grey pixels give
-// one pose near COLMAP's on ../shared/data/herz_jesu_p25.
+// one pose near COLMAP's on ../shared/data/herz_jesu_p25; on a georeferenced generated city the
+// same geo poses and priors as cwloc-localize, bit for bit.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <cstdlib>
+#include <fstream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 
+#include "cwloc/cwloc.h"
 #include "cwloc/cwloc.hpp"
+#include "format/colmap/database.h"
 #include "photo/image_decode.h"
 #include "tests/api/api_test_util.h"
 #include "tests/localization_check.h"
@@ -111,6 +117,284 @@ TEST_F(LocalizerApiPhotoTest, FileBytesAndGreyPixelsGiveOnePoseNearColmaps) {
               photo.string() + ": the camera is 640 x " + std::to_string(grey.height) +
                   " but the image is " + std::to_string(grey.width) + " x " +
                   std::to_string(grey.height));
+}
+
+// A generated city on the globe (as tests/localizer/geo_localization_test.cc makes it): the
+// mapping images' GPS, 3 m noise and 10 % wildly wrong, georeferences the index; each query has
+// a position prior 10 m off and a gravity prior 1° off in city/query_priors.txt.
+class LocalizerApiGeoToolsTest : public testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    if (!std::filesystem::exists(test::ToolPath("cwloc-synth"))) return;
+    dir_ = new test::TempDir();
+    std::string output;
+    ASSERT_EQ(test::RunCommand(test::Quote(test::ToolPath("cwloc-synth")) +
+                                   " --preset demo --seed 3 --threads 2 --geo '47.3779 8.5403 455'"
+                                   " --gps-noise 3 --gps-outliers 0.1 --prior-position-error 10"
+                                   " --prior-gravity-error 1 -o " +
+                                   test::Quote(City()),
+                               &output),
+              0)
+        << output;
+    ASSERT_EQ(
+        test::RunCommand(test::Quote(test::ToolPath("cwloc-index")) + " build --model " +
+                             test::Quote(City() / "mapping_model" / "bin") + " --database " +
+                             test::Quote(City() / "database.db") + " --georef " +
+                             test::Quote(City() / "georef.txt") + " -o " + test::Quote(IndexPath()),
+                         &output),
+        0)
+        << output;
+    localizer_ = new api::Localizer(api::Localizer::Open(IndexPath().string()));
+  }
+  static void TearDownTestSuite() {
+    delete localizer_;
+    localizer_ = nullptr;
+    delete dir_;
+    dir_ = nullptr;
+  }
+  void SetUp() override {
+    if (localizer_ == nullptr) GTEST_SKIP() << "cwloc-synth is not built (CWLOC_BUILD_TOOLS=OFF)";
+  }
+
+  static std::filesystem::path City() { return *dir_ / "city"; }
+  static std::filesystem::path IndexPath() { return *dir_ / "city.cwl"; }
+
+  // queries_with_intrinsics.txt: "NAME MODEL W H PARAMS...", in query order.
+  static std::vector<std::pair<std::string, api::Camera>> Queries() {
+    std::vector<std::pair<std::string, api::Camera>> queries;
+    std::ifstream in(City() / "queries_with_intrinsics.txt");
+    for (std::string line; std::getline(in, line);) {
+      std::istringstream fields(line);
+      std::string name, camera;
+      if (!(fields >> name)) continue;
+      std::getline(fields >> std::ws, camera);
+      queries.emplace_back(name, ParseCamera(camera));
+    }
+    return queries;
+  }
+
+  // A query's features as cwloc-localize --database reads them: the stored keypoints and
+  // descriptors, unchanged.
+  static api::Features DatabaseFeatures(const colmap::DatabaseReader& db, const std::string& name) {
+    const auto image = db.FindImage(name);
+    if (!image) throw std::runtime_error(name + ": not in the database");
+    colmap::ImageFeatures stored = db.ReadFeatures(image->image_id);
+    api::Features features;
+    for (const colmap::Keypoint& keypoint : stored.keypoints) {
+      features.keypoints.push_back(keypoint.x);
+      features.keypoints.push_back(keypoint.y);
+    }
+    features.descriptors = std::move(stored.descriptors.data);
+    return features;
+  }
+
+  // query_priors.txt as the API's options: "NAME position LAT LON HEIGHT|- RADIUS_M" and
+  // "NAME gravity GX GY GZ", numbers read with strtod as cwloc-localize reads them.
+  static std::map<std::string, api::Options> PriorOptions() {
+    std::map<std::string, api::Options> options;
+    std::ifstream in(City() / "query_priors.txt");
+    const auto number = [](const std::string& text) { return std::strtod(text.c_str(), nullptr); };
+    for (std::string line; std::getline(in, line);) {
+      std::istringstream fields(line);
+      std::string name, kind;
+      if (!(fields >> name >> kind) || name[0] == '#') continue;
+      std::vector<std::string> v;
+      for (std::string value; fields >> value;) v.push_back(value);
+      if (kind == "position") {
+        options[name].position_prior = api::PositionPrior{
+            number(v.at(0)), number(v.at(1)),
+            v.at(2) == "-" ? std::nullopt : std::optional<double>(number(v.at(2))),
+            number(v.at(3))};
+      } else {
+        options[name].gravity =
+            std::array<double, 3>{number(v.at(0)), number(v.at(1)), number(v.at(2))};
+      }
+    }
+    return options;
+  }
+
+  // cwloc-localize on every query with `extra` options; its JSON lines by query name.
+  static std::map<std::string, nlohmann::json> LocalizeWithTheTool(const std::string& extra) {
+    const auto results = *dir_ / "results.jsonl";
+    std::string output;
+    EXPECT_EQ(test::RunCommand(test::Quote(test::ToolPath("cwloc-localize")) + " --index " +
+                                   test::Quote(IndexPath()) + " --database " +
+                                   test::Quote(City() / "database.db") + " --query-list " +
+                                   test::Quote(City() / "queries_with_intrinsics.txt") +
+                                   " --threads 2 -q " + extra + " -o " + test::Quote(results),
+                               &output),
+              0)
+        << output;
+    std::map<std::string, nlohmann::json> by_name;
+    for (nlohmann::json& line : test::ReadJsonLines(results)) by_name[line["name"]] = line;
+    return by_name;
+  }
+
+  static inline test::TempDir* dir_ = nullptr;
+  static inline api::Localizer* localizer_ = nullptr;
+};
+
+// The same query, camera and priors: the library's pose on the globe and what its priors did
+// are cwloc-localize's JSON, bit for bit; the C API's are the C++ API's.
+TEST_F(LocalizerApiGeoToolsTest, GeoPosesAndPriorsAreCwlocLocalizesBitForBit) {
+  const auto cli = LocalizeWithTheTool("--priors " + test::Quote(City() / "query_priors.txt"));
+  const auto priors = PriorOptions();
+  const colmap::DatabaseReader db(City() / "database.db");
+  cwloc_localizer* c_localizer = nullptr;
+  ASSERT_EQ(cwloc_localizer_open(IndexPath().string().c_str(), 0, &c_localizer), CWLOC_OK);
+  const auto queries = Queries();
+  ASSERT_EQ(queries.size(), 20u);
+  ASSERT_EQ(cli.size(), queries.size());
+  for (const auto& [name, camera] : queries) {
+    SCOPED_TRACE(name);
+    const api::Options& options = priors.at(name);
+    ASSERT_TRUE(options.position_prior && options.gravity);
+    const api::Features features = DatabaseFeatures(db, name);
+    const api::Result result = localizer_->Localize(features, camera, options);
+    const nlohmann::json& json = cli.at(name);
+    ASSERT_TRUE(json["success"].get<bool>()) << json.dump();
+    ASSERT_TRUE(result.success) << result.failure_reason;
+    EXPECT_EQ(result.rotation, (json["pose"]["qvec"].get<std::array<double, 4>>()));
+    EXPECT_EQ(result.translation, (json["pose"]["tvec"].get<std::array<double, 3>>()));
+
+    ASSERT_TRUE(result.geo);
+    const nlohmann::json& geo = json.at("geo");
+    EXPECT_EQ(result.geo->latitude_deg, geo["latitude_deg"].get<double>());
+    EXPECT_EQ(result.geo->longitude_deg, geo["longitude_deg"].get<double>());
+    EXPECT_EQ(result.geo->height_m, geo["height_m"].get<double>());
+    EXPECT_EQ(result.geo->enu, (geo["enu"].get<std::array<double, 3>>()));
+    EXPECT_EQ(result.geo->heading_deg, geo["heading_deg"].get<double>());
+    EXPECT_EQ(result.geo->pitch_deg, geo["pitch_deg"].get<double>());
+    EXPECT_EQ(result.geo->roll_deg, geo["roll_deg"].get<double>());
+
+    const nlohmann::json& position = json.at("priors").at("position");
+    ASSERT_TRUE(result.position_prior);
+    EXPECT_EQ(result.position_prior->latitude_deg, position["latitude_deg"].get<double>());
+    EXPECT_EQ(result.position_prior->longitude_deg, position["longitude_deg"].get<double>());
+    EXPECT_EQ(result.position_prior->height_m, position["height_m"].get<double>());
+    EXPECT_EQ(result.position_prior->radius_m, 50.0);
+    EXPECT_EQ(result.clusters_in_radius, position["clusters_in_radius"].get<uint32_t>());
+    EXPECT_GE(result.clusters_in_radius, 1u);
+    const nlohmann::json& gravity = json.at("priors").at("gravity");
+    EXPECT_EQ(result.gravity, (gravity["direction"].get<std::array<double, 3>>()));
+    ASSERT_TRUE(result.gravity_error_deg);
+    EXPECT_EQ(*result.gravity_error_deg, gravity["error_deg"].get<double>());
+
+    // The C API on the same query and priors.
+    cwloc_options* c_options = nullptr;
+    ASSERT_EQ(cwloc_options_create(&c_options), CWLOC_OK);
+    const api::PositionPrior& p = *options.position_prior;
+    const cwloc_position_prior c_prior = {p.latitude_deg, p.longitude_deg, *p.height_m, p.radius_m};
+    ASSERT_EQ(cwloc_options_set_position_prior(c_options, &c_prior), CWLOC_OK);
+    ASSERT_EQ(cwloc_options_set_gravity(c_options, options.gravity->data()), CWLOC_OK);
+    const cwloc_camera c_camera = {camera.model.c_str(), camera.width,
+                                   camera.height,        camera.params.data(),
+                                   camera.params.size(), CWLOC_CALIBRATION_KNOWN};
+    cwloc_result* c_result = nullptr;
+    ASSERT_EQ(
+        cwloc_localize_features(c_localizer, features.keypoints.data(), features.descriptors.data(),
+                                static_cast<uint32_t>(features.keypoints.size() / 2), &c_camera,
+                                c_options, &c_result),
+        CWLOC_OK)
+        << cwloc_last_error();
+    cwloc_geo_pose c_geo{};
+    ASSERT_EQ(cwloc_result_geo_pose(c_result, &c_geo), CWLOC_OK) << cwloc_last_error();
+    EXPECT_EQ(c_geo.latitude_deg, result.geo->latitude_deg);
+    EXPECT_EQ(c_geo.longitude_deg, result.geo->longitude_deg);
+    EXPECT_EQ(c_geo.height_m, result.geo->height_m);
+    EXPECT_EQ(c_geo.heading_deg, result.geo->heading_deg);
+    double c_error = 0;
+    ASSERT_EQ(cwloc_result_gravity_error(c_result, &c_error), CWLOC_OK);
+    EXPECT_EQ(c_error, *result.gravity_error_deg);
+    cwloc_result_destroy(c_result);
+    cwloc_options_destroy(c_options);
+  }
+  cwloc_localizer_close(c_localizer);
+}
+
+// Without priors too: the geo pose is the tool's.
+TEST_F(LocalizerApiGeoToolsTest, GeoPosesWithoutPriorsAreCwlocLocalizes) {
+  const auto cli = LocalizeWithTheTool("");
+  const colmap::DatabaseReader db(City() / "database.db");
+  for (const auto& [name, camera] : Queries()) {
+    SCOPED_TRACE(name);
+    const api::Result result = localizer_->Localize(DatabaseFeatures(db, name), camera);
+    const nlohmann::json& json = cli.at(name);
+    ASSERT_TRUE(result.success) << result.failure_reason;
+    ASSERT_TRUE(result.geo);
+    EXPECT_EQ(result.geo->latitude_deg, json["geo"]["latitude_deg"].get<double>());
+    EXPECT_EQ(result.geo->longitude_deg, json["geo"]["longitude_deg"].get<double>());
+    EXPECT_EQ(result.geo->height_m, json["geo"]["height_m"].get<double>());
+    EXPECT_EQ(result.geo->heading_deg, json["geo"]["heading_deg"].get<double>());
+    EXPECT_FALSE(json.contains("priors"));
+    EXPECT_FALSE(result.position_prior);
+    EXPECT_FALSE(result.gravity_error_deg);
+  }
+}
+
+TEST_F(LocalizerApiGeoToolsTest, APositionPriorFarFromTheModelFailsSayingSo) {
+  const colmap::DatabaseReader db(City() / "database.db");
+  api::Options options;
+  options.position_prior = api::PositionPrior{47.3779, 8.6403, std::nullopt, 100.0};  // 7.5 km E
+  for (const auto& [name, camera] : Queries()) {
+    SCOPED_TRACE(name);
+    const api::Result result = localizer_->Localize(DatabaseFeatures(db, name), camera, options);
+    EXPECT_FALSE(result.success);
+    EXPECT_EQ(result.failure_reason, "no model camera within 100 m of the position prior");
+    EXPECT_EQ(result.clusters_in_radius, 0u);
+    EXPECT_FALSE(result.geo);
+  }
+}
+
+// A phone photo's EXIF GPS (Berlin, ../shared/data/exif_samples) against the Zurich city: with
+// use_exif_gps it is the position prior and nothing is that near; a given position prior wins
+// over it. The same precedence and numbers as cwloc-localize --use-exif-gps.
+TEST_F(LocalizerApiGeoToolsTest, ExifGpsIsThePositionPriorUnlessOneIsGiven) {
+  CWLOC_REQUIRE_SHARED_DATA(samples, "exif_samples");
+  const std::filesystem::path photo = samples / "berlin_iphone4s" / "01.jpg";
+  api::Options options;
+  options.max_image_size = 320;  // SIFT on a small copy: the test is about the prior
+  options.use_exif_gps = true;
+  const api::Result from_exif = localizer_->LocalizePhoto(photo.string(), std::nullopt, options);
+  EXPECT_FALSE(from_exif.success);
+  EXPECT_EQ(from_exif.failure_reason, "no model camera within 50 m of the position prior");
+  ASSERT_TRUE(from_exif.position_prior);
+  EXPECT_NEAR(from_exif.position_prior->latitude_deg, 52.518916667, 1e-9);   // N 52° 31' 8.10"
+  EXPECT_NEAR(from_exif.position_prior->longitude_deg, 13.400294444, 1e-9);  // E 13° 24' 1.06"
+  EXPECT_FALSE(from_exif.position_prior->height_m);                          // EXIF altitude: MSL
+  EXPECT_EQ(from_exif.position_prior->radius_m, 50.0);
+
+  const auto run_tool = [&](const std::string& extra) {
+    const auto results = *dir_ / "photo.jsonl";
+    std::string output;
+    test::RunCommand(test::Quote(test::ToolPath("cwloc-localize")) + " --index " +
+                         test::Quote(IndexPath()) + " --image " + test::Quote(photo) +
+                         " --max-image-size 320 --use-exif-gps -q " + extra + " -o " +
+                         test::Quote(results),
+                     &output);
+    const auto lines = test::ReadJsonLines(results);
+    EXPECT_EQ(lines.size(), 1u) << output;
+    return lines.empty() ? nlohmann::json() : lines[0];
+  };
+  const nlohmann::json cli = run_tool("");
+  EXPECT_EQ(cli["failure_reason"], from_exif.failure_reason);
+  EXPECT_EQ(cli["priors"]["position"]["source"], "exif");
+  EXPECT_EQ(cli["priors"]["position"]["latitude_deg"].get<double>(),
+            from_exif.position_prior->latitude_deg);
+  EXPECT_EQ(cli["priors"]["position"]["longitude_deg"].get<double>(),
+            from_exif.position_prior->longitude_deg);
+
+  // A given prior (around the whole city) wins over the EXIF GPS, as --prior-position does.
+  options.position_prior = api::PositionPrior{47.3779, 8.5403, std::nullopt, 1000.0};
+  const api::Result given = localizer_->LocalizePhoto(photo.string(), std::nullopt, options);
+  ASSERT_TRUE(given.position_prior);
+  EXPECT_EQ(given.position_prior->latitude_deg, 47.3779);
+  EXPECT_GT(given.clusters_in_radius, 100u);
+  const nlohmann::json cli_given = run_tool("--prior-position '47.3779 8.5403 1000'");
+  EXPECT_EQ(cli_given["priors"]["position"]["source"], "option");
+  EXPECT_EQ(cli_given["priors"]["position"]["clusters_in_radius"].get<uint32_t>(),
+            given.clusters_in_radius);
+  EXPECT_EQ(cli_given["success"].get<bool>(), given.success);
 }
 
 }  // namespace

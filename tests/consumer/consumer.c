@@ -61,6 +61,13 @@ int main(int argc, char** argv) {
     cwloc_result_pose(result, rotation, translation, center);
     printf("center %.17g %.17g %.17g inliers %u\n", center[0], center[1], center[2],
            cwloc_result_num_inliers(result));
+    cwloc_index_info info;
+    cwloc_geo_pose geo;
+    if (cwloc_localizer_info(localizer, &info) == CWLOC_OK && info.georeferenced &&
+        cwloc_result_geo_pose(result, &geo) == CWLOC_OK) {
+      printf("geo %.17g %.17g %.17g heading %.17g pitch %.17g roll %.17g\n", geo.latitude_deg,
+             geo.longitude_deg, geo.height_m, geo.heading_deg, geo.pitch_deg, geo.roll_deg);
+    }
   } else {
     printf("not localized: %s\n", cwloc_result_failure_reason(result));
     status = 1;

@@ -1,4 +1,5 @@
-// A tiny C++ app: localize one COLMAP feature file with a known camera and print the pose.
+// A tiny C++ app: localize one COLMAP feature file with a known camera and print the pose, and
+// the camera on the globe when the index is georeferenced.
 // Usage: consumer_cpp INDEX FEATURES MODEL WIDTH HEIGHT PARAMS...
 #include <cwloc/cwloc.hpp>
 #include <cstdio>
@@ -24,6 +25,11 @@ int main(int argc, char** argv) {
     }
     std::printf("center %.17g %.17g %.17g inliers %u\n", result.center[0], result.center[1],
                 result.center[2], result.num_inliers);
+    if (localizer.Info().georeferenced && result.geo) {
+      const cwloc::api::GeoPose& geo = *result.geo;
+      std::printf("geo %.17g %.17g %.17g heading %.17g pitch %.17g roll %.17g\n", geo.latitude_deg,
+                  geo.longitude_deg, geo.height_m, geo.heading_deg, geo.pitch_deg, geo.roll_deg);
+    }
     return 0;
   } catch (const cwloc::api::Error& e) {
     std::fprintf(stderr, "error %d: %s\n", static_cast<int>(e.code()), e.what());

@@ -26,7 +26,10 @@ typedef enum cwloc_status {
   CWLOC_ERROR_INVALID_ARGUMENT = 1, /* a bad argument, option or camera */
   CWLOC_ERROR_BAD_INPUT = 2,        /* a file or buffer that cannot be used */
   CWLOC_ERROR_OUT_OF_MEMORY = 3,
-  CWLOC_ERROR_INTERNAL = 4 /* a bug: please report it */
+  CWLOC_ERROR_INTERNAL = 4, /* a bug: please report it */
+  /* C only (C++ has std::optional): a result has no such value, e.g. no geo pose because the
+   * index is not georeferenced or the query was not localized; cwloc_last_error() says which */
+  CWLOC_ERROR_NOT_AVAILABLE = 5
 } cwloc_status;
 
 typedef enum cwloc_calibration {
@@ -50,6 +53,29 @@ typedef struct cwloc_stage_times {
   double extraction, forward_knn, ratio_test, query_tree, back_matching, pose, total;
 } cwloc_stage_times;
 
+/* A GPS fix (see cwloc.hpp's PositionPrior): the query was taken within radius_m of this WGS84
+ * position; height_m above the ellipsoid, NaN when unknown (then the radius is horizontal). */
+typedef struct cwloc_position_prior {
+  double latitude_deg, longitude_deg, height_m, radius_m;
+} cwloc_position_prior;
+
+/* A localized camera on the globe (see cwloc.hpp's GeoPose; docs/geo.md defines the angles). */
+typedef struct cwloc_geo_pose {
+  double latitude_deg, longitude_deg, height_m; /* WGS84, height above the ellipsoid */
+  double enu[3];                                /* metres east, north, up of the index's origin */
+  double heading_deg, pitch_deg, roll_deg;
+} cwloc_geo_pose;
+
+/* What an index holds (see cwloc.hpp's IndexInfo). The strings live as long as the localizer.
+ * The origin is that of the ENU frame of cwloc_geo_pose.enu; 0 unless georeferenced. */
+typedef struct cwloc_index_info {
+  const char* path;
+  const char* format_version; /* "MAJOR.MINOR" */
+  uint32_t num_images, num_points, num_views;
+  int georeferenced; /* 1: results have geo poses and queries may have priors */
+  double origin_latitude_deg, origin_longitude_deg, origin_height_m;
+} cwloc_index_info;
+
 typedef struct cwloc_localizer cwloc_localizer;
 typedef struct cwloc_options cwloc_options;
 typedef struct cwloc_result cwloc_result;
@@ -61,6 +87,8 @@ CWLOC_C_API const char* cwloc_last_error(void);
 CWLOC_C_API cwloc_status cwloc_localizer_open(const char* index_path, int verify,
                                               cwloc_localizer** out);
 CWLOC_C_API void cwloc_localizer_close(cwloc_localizer* localizer);
+CWLOC_C_API cwloc_status cwloc_localizer_info(const cwloc_localizer* localizer,
+                                              cwloc_index_info* info);
 
 /* Options with cwloc-localize's defaults; NULL options anywhere below means the defaults. */
 CWLOC_C_API cwloc_status cwloc_options_create(cwloc_options** out);
@@ -68,10 +96,19 @@ CWLOC_C_API void cwloc_options_destroy(cwloc_options* options);
 /* Sets a numeric knob by its cwloc-localize flag name without dashes: "k", "checks", "ratio",
  * "nf", "nb", "max-back-images", "max-error", "min-inliers", "max-ransac-iterations",
  * "refine" (0 or 1), "ranked-images", "seed", "max-image-size", "max-features",
- * "max-image-pixels". Values are checked when a query runs. */
+ * "max-image-pixels", "prior-gravity-sigma", "use-exif-gps" (0 or 1), "exif-gps-radius".
+ * Values are checked when a query runs. */
 CWLOC_C_API cwloc_status cwloc_options_set(cwloc_options* options, const char* name, double value);
 /* "cluster-wise" (default), "global-ratio" or "cluster-exhaustive". */
 CWLOC_C_API cwloc_status cwloc_options_set_matcher(cwloc_options* options, const char* matcher);
+/* Priors for every query (a georeferenced index only; docs/geo.md); NULL removes one. The
+ * position prior wins over a photo's EXIF GPS ("use-exif-gps"). gravity_xyz is the direction
+ * gravity pulls in the camera frame (x right, y down, z forward): at rest, the accelerometer's
+ * reading negated. Values are checked when a query runs. */
+CWLOC_C_API cwloc_status cwloc_options_set_position_prior(cwloc_options* options,
+                                                          const cwloc_position_prior* prior);
+CWLOC_C_API cwloc_status cwloc_options_set_gravity(cwloc_options* options,
+                                                   const double gravity_xyz[3]);
 
 /* Queries. camera may be NULL for photos (EXIF focal prior, else estimated). Keypoints are
  * x, y pairs in COLMAP's pixel convention; descriptors num_features x 128 bytes. */
@@ -114,6 +151,17 @@ CWLOC_C_API cwloc_status cwloc_result_ranked_image(const cwloc_result* result, u
                                                    uint32_t* image_id, const char** name,
                                                    uint32_t* votes);
 CWLOC_C_API void cwloc_result_times(const cwloc_result* result, cwloc_stage_times* times);
+/* The camera on the globe; CWLOC_ERROR_NOT_AVAILABLE when the index is not georeferenced or
+ * the query was not localized. */
+CWLOC_C_API cwloc_status cwloc_result_geo_pose(const cwloc_result* result, cwloc_geo_pose* pose);
+/* The position prior the query used (the options' or the photo's EXIF GPS) and how many
+ * clusters had a model camera within it; CWLOC_ERROR_NOT_AVAILABLE without one. */
+CWLOC_C_API cwloc_status cwloc_result_position_prior(const cwloc_result* result,
+                                                     cwloc_position_prior* prior,
+                                                     uint32_t* clusters_in_radius);
+/* Degrees between the gravity prior and the localized pose's gravity; CWLOC_ERROR_NOT_AVAILABLE
+ * without a gravity prior or when the query was not localized. */
+CWLOC_C_API cwloc_status cwloc_result_gravity_error(const cwloc_result* result, double* degrees);
 
 #ifdef __cplusplus
 }

@@ -67,6 +67,16 @@ struct Features {
   std::vector<uint8_t> descriptors;  // N * 128
 };
 
+// A GPS fix: the query was taken within radius_m of this WGS84 position (horizontally when the
+// height is unknown). Only clusters with a model camera that near are matched. Needs a
+// georeferenced index (IndexInfo::georeferenced).
+struct PositionPrior {
+  double latitude_deg = 0;         // [-90, 90]
+  double longitude_deg = 0;        // east
+  std::optional<double> height_m;  // above the WGS84 ellipsoid (not above sea level)
+  double radius_m = 0;             // > 0
+};
+
 // The knobs of cwloc-localize, with its defaults (set by the constructor). docs/cli.md
 // explains each under the flag named in its comment.
 struct CWLOC_API Options {
@@ -88,6 +98,15 @@ struct CWLOC_API Options {
   uint32_t max_image_size;    // --max-image-size
   uint32_t max_features;      // --max-features
   uint64_t max_image_pixels;  // --max-image-pixels
+  // Priors (docs/geo.md); each needs a georeferenced index. gravity is the direction gravity
+  // pulls in the camera frame (x right, y down, z forward), of any non-zero length.
+  std::optional<PositionPrior> position_prior;   // --prior-position
+  std::optional<std::array<double, 3>> gravity;  // --prior-gravity
+  double prior_gravity_sigma_deg;                // --prior-gravity-sigma
+  // Photos only: the EXIF GPS becomes a horizontal position prior of exif_gps_radius_m, unless
+  // position_prior is set.
+  bool use_exif_gps;         // --use-exif-gps
+  double exif_gps_radius_m;  // --exif-gps-radius
 };
 
 struct RankedImage {
@@ -115,6 +134,17 @@ struct StageTimes {
   double total = 0;
 };
 
+// A localized camera on the globe (docs/geo.md defines the angles).
+struct GeoPose {
+  double latitude_deg = 0;  // WGS84
+  double longitude_deg = 0;
+  double height_m = 0;          // above the ellipsoid
+  std::array<double, 3> enu{};  // metres east, north, up of the index's origin (IndexInfo)
+  double heading_deg = 0;       // of the optical axis, clockwise from true north, [0, 360)
+  double pitch_deg = 0;         // of the optical axis above the horizon, [-90, 90]
+  double roll_deg = 0;          // about the optical axis, (-180, 180]
+};
+
 struct Result {
   bool success = false;
   std::string failure_reason;  // why not, when success is false
@@ -131,6 +161,14 @@ struct Result {
   std::vector<Inlier> inliers;  // on success
   std::vector<RankedImage> ranked_images;
   StageTimes times;
+  std::optional<GeoPose> geo;  // on success with a georeferenced index
+  // What the priors did. The position prior used: Options::position_prior, else the photo's
+  // EXIF GPS (Options::use_exif_gps).
+  std::optional<PositionPrior> position_prior;
+  uint32_t clusters_in_radius = 0;  // clusters with a model camera within the position prior
+  std::optional<std::array<double, 3>> gravity;  // the gravity prior used (Options::gravity)
+  // The angle between the gravity prior and the localized pose's gravity; on success with one.
+  std::optional<double> gravity_error_deg;
 };
 
 struct IndexInfo {
@@ -139,6 +177,13 @@ struct IndexInfo {
   uint32_t num_images = 0;
   uint32_t num_points = 0;
   uint32_t num_views = 0;  // 3D point observations, one descriptor each
+  // Whether the index lies on the globe (cwloc-index build --georef): then results have a
+  // GeoPose and queries may have priors. The origin of its ENU frame (GeoPose::enu), WGS84;
+  // zero when not georeferenced.
+  bool georeferenced = false;
+  double origin_latitude_deg = 0;
+  double origin_longitude_deg = 0;
+  double origin_height_m = 0;  // above the ellipsoid
 };
 
 // An opened index. Open maps the file read-only; every Localize* is const and thread-safe, so
