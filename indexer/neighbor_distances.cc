@@ -56,10 +56,11 @@ std::vector<uint32_t> ApproximateNearestOtherPoint(const ModelViews& views,
   std::vector<KdForestSearcher> searchers(num_threads, KdForestSearcher(view));
   std::vector<std::vector<KdNeighbor>> neighbors(num_threads,
                                                  std::vector<KdNeighbor>(kApproxNeighborCount));
+  KdSearchOptions search_options;
+  search_options.max_checks = kApproxNeighborChecks;
   ParallelFor(members.size(), num_threads, [&](size_t m, int worker) {
-    const KdSearchResult found =
-        searchers[worker].Search(descriptors.data() + m * kDescriptorBytes,
-                                 KdSearchOptions{kApproxNeighborChecks}, neighbors[worker]);
+    const KdSearchResult found = searchers[worker].Search(descriptors.data() + m * kDescriptorBytes,
+                                                          search_options, neighbors[worker]);
     const uint32_t point = views.view_points[members[m]];
     for (uint32_t i = 0; i < found.num_neighbors; ++i) {
       const KdNeighbor& neighbor = neighbors[worker][i];

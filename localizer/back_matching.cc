@@ -33,7 +33,8 @@ BackMatchingResult MatchBack(const Index& index, const ClusterMembers& clusters,
   result.seconds_query_tree = stopwatch.Seconds();
 
   stopwatch.Restart();
-  const KdSearchOptions search_options{options.query_tree_checks};
+  KdSearchOptions search_options;
+  search_options.max_checks = options.query_tree_checks;
   std::vector<bool> visited(clusters.num_clusters(), false);
   std::vector<KdNeighbor> neighbors(2);
   std::vector<uint32_t> track_clusters;

@@ -29,13 +29,15 @@ std::vector<FeatureMatch> MatchForward(const Index& index, const Query& query,
   SplitMix64(options.seed).Shuffle(std::span<uint32_t>(order));
 
   std::vector<KdNeighbor> neighbors(options.k + 1);
-  const KdSearchOptions search_options{options.checks};
+  // A position prior's region: the searches compare only its views (the ratio tests then
+  // judge distinctiveness within the region), walking the leaves they would walk anyway.
+  const std::vector<uint64_t> region = AllowedViews(index, allowed);
+  KdSearchOptions search_options;
+  search_options.max_checks = options.checks;
+  search_options.allowed_rows = region;
   std::vector<FeatureMatch> matches;
-  // N_F counts every match that passed both tests, kept or not: a position prior then costs no
-  // extra searches, and only its region's matches vote.
-  size_t passed = 0;
   for (const uint32_t feature : order) {
-    if (passed >= options.forward_matches) break;
+    if (matches.size() >= options.forward_matches) break;
     const Stopwatch knn;
     const KdSearchResult result =
         searcher.Search(query.Descriptor(feature), search_options, neighbors);
@@ -48,17 +50,7 @@ std::vector<FeatureMatch> MatchForward(const Index& index, const Query& query,
       continue;
     ++stats->passed_k_ratio;
     const Stopwatch ratio_test;
-    const size_t before = matches.size();
     ClusterWiseRatioTest(index, feature, neighbors, options.ratio, &matches, stats);
-    passed += matches.size() - before;
-    if (!allowed.empty()) {
-      matches.erase(
-          std::remove_if(matches.begin() + static_cast<std::ptrdiff_t>(before), matches.end(),
-                         [&](const FeatureMatch& match) {
-                           return !ClusterAllowed(allowed, ClusterOfView(index, match.view));
-                         }),
-          matches.end());
-    }
     stats->seconds_ratio_test += ratio_test.Seconds();
   }
   return matches;
@@ -69,7 +61,10 @@ std::vector<FeatureMatch> MatchGlobalRatio(const Index& index, const Query& quer
                                            KdForestSearcher& searcher, ForwardMatchingStats* stats,
                                            ClusterMask allowed) {
   std::vector<KdNeighbor> neighbors(2);
-  const KdSearchOptions search_options{options.checks};
+  const std::vector<uint64_t> region = AllowedViews(index, allowed);
+  KdSearchOptions search_options;
+  search_options.max_checks = options.checks;
+  search_options.allowed_rows = region;
   std::vector<FeatureMatch> matches;
   const Stopwatch knn;
   for (uint32_t feature = 0; feature < query.NumFeatures(); ++feature) {
@@ -80,7 +75,6 @@ std::vector<FeatureMatch> MatchGlobalRatio(const Index& index, const Query& quer
     if (result.num_neighbors < 2) continue;
     if (!PassesRatioTest(neighbors[0].distance, neighbors[1].distance, options.ratio)) continue;
     ++stats->passed_k_ratio;
-    if (!ClusterAllowed(allowed, ClusterOfView(index, neighbors[0].index))) continue;
     matches.push_back(
         {feature, neighbors[0].index, std::sqrt(static_cast<float>(neighbors[0].distance))});
   }

@@ -14,13 +14,13 @@ namespace cwloc {
 // Algorithms 1 and 2 of the paper, interleaved: query features in a random order drawn from
 // options.seed, (k+1)-NN in the global kd-forest, the k-ratio test, then the cluster-wise ratio
 // test on the k neighbours; stops once options.forward_matches matches have passed both.
-// Matches into clusters outside `allowed` count towards N_F and are then dropped.
+// With `allowed` (a position prior), the searches compare only the views of those clusters.
 std::vector<FeatureMatch> MatchForward(const Index& index, const Query& query,
                                        const LocalizerOptions& options, KdForestSearcher& searcher,
                                        ForwardMatchingStats* stats, ClusterMask allowed = {});
 
 // The diagnostic baseline: every query feature's 2-NN in the global forest, the plain 1-ratio
-// test; matches into clusters outside `allowed` are dropped.
+// test; with `allowed`, among the views of those clusters only.
 std::vector<FeatureMatch> MatchGlobalRatio(const Index& index, const Query& query,
                                            const LocalizerOptions& options,
                                            KdForestSearcher& searcher, ForwardMatchingStats* stats,

@@ -43,6 +43,10 @@ inline bool ClusterAllowed(ClusterMask allowed, uint32_t cluster) {
   return allowed.empty() || (cluster < allowed.size() && allowed[cluster] != 0);
 }
 
+// The views of the allowed clusters as the kd-forest's row filter (KdSearchOptions::
+// allowed_rows); empty when every cluster is allowed.
+std::vector<uint64_t> AllowedViews(const Index& index, ClusterMask allowed);
+
 // The clusters of an index as lists of image rows, computed once per index.
 struct ClusterMembers {
   explicit ClusterMembers(const Index& index);

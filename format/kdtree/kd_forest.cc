@@ -299,6 +299,11 @@ bool KdForestSearcher::StepBucket(Cursor& c, uint32_t* rows) {
       if (row >= num_descriptors_) return false;
     }
     if (!InsertVisited(row)) continue;
+    if (!allowed_.empty() &&
+        (size_t{row} / 64 >= allowed_.size() || ((allowed_[row / 64] >> (row % 64)) & 1) == 0)) {
+      ++checks_;  // walked past, not compared
+      continue;
+    }
     const uint8_t* p = descriptors + size_t(row) * kDescriptorDim;
     Prefetch(p);
     Prefetch(p + 64);
@@ -329,6 +334,7 @@ KdSearchResult KdForestSearcher::SearchImpl(const uint8_t* query, const KdSearch
   num_results_ = 0;
   checks_ = 0;
   max_checks_ = options.max_checks;
+  allowed_ = options.allowed_rows;
   if (k_ == 0 || forest_.roots.empty()) return result;
   prune_ = max_checks_ < num_descriptors_;
   steps_left_ = forest_.nodes.size();

@@ -94,6 +94,11 @@ struct KdSearchOptions {
   // Measurement only: skips the per-read range checks. Safe only for a forest that passed
   // ValidateKdForest.
   bool skip_range_checks = false;
+  // Empty: every row may be returned. Else bit (r % 64) of word r / 64 set means row r may be;
+  // the search walks the leaves it would walk unfiltered, and a row it skips is not compared
+  // but counts against max_checks, so filtering never makes a search slower. It then stops
+  // when the budget is spent even with fewer than the neighbours asked for.
+  std::span<const uint64_t> allowed_rows;
 };
 
 // Searches one forest. Holds reusable scratch (the branch heap and the visited set), so
@@ -129,7 +134,9 @@ class KdForestSearcher {
   template <bool kChecked>
   bool StepBucket(Cursor& c, uint32_t* rows);
   void StepRows(Cursor& c, const uint32_t* rows);
-  bool BudgetSpent() const { return checks_ >= max_checks_ && num_results_ == k_; }
+  bool BudgetSpent() const {
+    return checks_ >= max_checks_ && (num_results_ == k_ || !allowed_.empty());
+  }
   void ResetVisited(size_t expected);
   bool InsertVisited(uint32_t index);
   void AddCandidate(uint32_t index, uint32_t distance);
@@ -148,6 +155,7 @@ class KdForestSearcher {
   uint32_t max_checks_ = 0;
   bool prune_ = true;
   uint64_t steps_left_ = 0;
+  std::span<const uint64_t> allowed_;
 
   // Min-heap of (bound << 32 | node).
   std::vector<uint64_t> heap_;

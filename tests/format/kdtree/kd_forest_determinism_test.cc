@@ -27,8 +27,10 @@ TEST(KdForestDeterminism, ResultsDoNotDependOnTheArraysAddresses) {
     KdForestSearcher searcher(view);
     std::vector<KdNeighbor> all;
     std::vector<KdNeighbor> neighbors(6);
+    KdSearchOptions options;
+    options.max_checks = 48;
     for (size_t q = 0; q < 300; ++q) {
-      searcher.Search(descriptors.data() + q * 7 % n * 128, KdSearchOptions{48}, neighbors);
+      searcher.Search(descriptors.data() + q * 7 % n * 128, options, neighbors);
       all.insert(all.end(), neighbors.begin(), neighbors.end());
     }
     results.push_back(all);

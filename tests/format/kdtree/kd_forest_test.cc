@@ -196,6 +196,42 @@ TEST(KdForest, ExhaustiveBudgetEqualsBruteForce) {
             BruteForce(small, queries.data(), 5));
 }
 
+// A position prior's row filter: only allowed rows come back, exactly the brute-force nearest
+// among them with an exhaustive budget, and a small budget is never exceeded by skipped rows.
+TEST(KdForest, AllowedRowsFilterTheResultsWithinTheSameBudget) {
+  const std::vector<uint8_t> data = ClusteredDescriptors(3000, 40, 20);
+  const KdForest forest = Build(data);
+  KdForestSearcher searcher(forest.View(data));
+  std::vector<uint64_t> allowed(3000 / 64 + 1, 0);
+  std::vector<uint8_t> allowed_data;  // the allowed rows alone, for the brute force
+  std::vector<uint32_t> allowed_rows;
+  for (uint32_t row = 0; row < 3000; ++row) {
+    if (row % 7 != 3) continue;  // one row in seven
+    allowed[row / 64] |= uint64_t{1} << (row % 64);
+    allowed_rows.push_back(row);
+    allowed_data.insert(allowed_data.end(), data.begin() + row * kDescriptorDim,
+                        data.begin() + (row + 1) * kDescriptorDim);
+  }
+  const std::vector<uint8_t> queries = NearbyQueries(data, 30, 10);
+  KdSearchOptions options;
+  options.allowed_rows = allowed;
+  std::vector<KdNeighbor> out(6);
+  for (size_t q = 0; q < queries.size() / kDescriptorDim; ++q) {
+    const uint8_t* query = queries.data() + q * kDescriptorDim;
+    options.max_checks = 3000;
+    KdSearchResult r = searcher.Search(query, options, out);
+    ASSERT_EQ(r.num_neighbors, 6u);
+    std::vector<KdNeighbor> expected = BruteForce(allowed_data, query, 6);
+    for (KdNeighbor& n : expected) n.index = allowed_rows[n.index];
+    EXPECT_EQ(std::vector<KdNeighbor>(out.begin(), out.end()), expected) << "query " << q;
+
+    options.max_checks = 64;
+    r = searcher.Search(query, options, out);
+    EXPECT_LE(r.checks, 64u + 255u);  // at most one bucket past the budget
+    for (uint32_t i = 0; i < r.num_neighbors; ++i) EXPECT_EQ(out[i].index % 7, 3u);
+  }
+}
+
 TEST(KdForest, EveryKernelGivesTheSameExactResults) {
   const std::vector<uint8_t> data = ClusteredDescriptors(1500, 20, 30);
   const KdForest forest = Build(data);
