@@ -1,6 +1,8 @@
 // cwloc-index build --georef / --model-frame: the GEOR section and the manifest's georeference.
 #include <gtest/gtest.h>
 
+#include <array>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -8,6 +10,7 @@
 #include "format/geo/index_georeference.h"
 #include "format/index/index.h"
 #include "tests/indexer/indexer_fixture.h"
+#include "tests/photo/exif_builder.h"
 
 namespace cwloc {
 namespace {
@@ -97,6 +100,59 @@ TEST_F(GeoreferencingTest, AGeorefFileIsFitExactlyAndStoredInSectionAndManifest)
   EXPECT_EQ(georeference["fit"]["inliers"], model_.images.size());
   EXPECT_TRUE(georeference["fit"]["outliers"].empty());
   EXPECT_DOUBLE_EQ(georeference["scale"].get<double>(), section.scale);
+}
+
+// EXIF stores degrees, minutes and hundredths of seconds (0.3 m of latitude) and altitude in
+// centimetres; the first photo has no fix and is counted, not used.
+TEST_F(GeoreferencingTest, TheExifGpsOfThePhotosIsFit) {
+  const GeoFrame truth(Truth());
+  const auto photos = dir_ / "photos";
+  std::filesystem::create_directories(photos);
+  auto dms = [](double degrees) {
+    const double a = std::abs(degrees);
+    const uint32_t d = static_cast<uint32_t>(a);
+    const uint32_t m = static_cast<uint32_t>((a - d) * 60);
+    const uint32_t centi = static_cast<uint32_t>(std::lround(((a - d) * 60 - m) * 6000));
+    return std::array<uint32_t, 3>{d, m, centi};
+  };
+  size_t written = 0;
+  for (const auto& [id, image] : model_.images) {
+    test::ExifBuilder exif;
+    if (written++ > 0) {
+      const Geodetic g = truth.ModelToGeodetic(Center(image));
+      const auto lat = dms(g.latitude_deg), lon = dms(g.longitude_deg);
+      exif.GpsPosition(g.latitude_deg >= 0 ? "N" : "S", lat[0], lat[1], lat[2],
+                       g.longitude_deg >= 0 ? "E" : "W", lon[0], lon[1], lon[2])
+          .GpsRationals(EXIF_TAG_GPS_ALTITUDE,
+                        {{static_cast<uint32_t>(std::lround(std::abs(g.height_m) * 100)), 100}})
+          .GpsByte(EXIF_TAG_GPS_ALTITUDE_REF, g.height_m >= 0 ? 0 : 1);
+    }
+    const std::vector<uint8_t> jpeg = exif.Jpeg();
+    std::filesystem::create_directories((photos / image.name).parent_path());  // "cam1/img_1.jpg"
+    std::ofstream(photos / image.name, std::ios::binary)
+        .write(reinterpret_cast<const char*>(jpeg.data()),
+               static_cast<std::streamsize>(jpeg.size()));
+  }
+  GeoreferencingOptions options;
+  options.images_dir = photos;
+  Build(options);
+  const Index index = Index::Open(index_path_);
+  ASSERT_NE(index.georeference(), nullptr);
+  const IndexGeoreference& section = *index.georeference();
+  EXPECT_EQ(section.source, static_cast<uint32_t>(GeoreferenceSource::kExifGps));
+  EXPECT_EQ(section.num_observations, model_.images.size() - 1);
+  EXPECT_EQ(section.num_inliers, model_.images.size() - 1);
+  EXPECT_LT(section.rms_residual_m, 0.3);
+  EXPECT_NEAR(section.scale, Truth().scale, 0.01 * Truth().scale);
+  const auto manifest = nlohmann::json::parse(index.manifest_json())["georeference"];
+  EXPECT_EQ(manifest["source"], "exif-gps");
+  EXPECT_EQ(manifest["fit"]["images_without_gps"], 1);
+
+  // A model image without its photo is an error naming the file.
+  std::filesystem::remove(photos / model_.images.begin()->second.name);
+  const std::string error = BuildError(options);
+  EXPECT_NE(error.find((photos / model_.images.begin()->second.name).string()), std::string::npos)
+      << error;
 }
 
 TEST_F(GeoreferencingTest, WithoutAGeoreferenceThereIsNoSectionAndTheManifestSaysNull) {

@@ -16,7 +16,6 @@ namespace {
 
 using test::ExifBuilder;
 
-
 TEST(ExifFocal, ThirtyFiveMillimetreEquivalentScalesTheLongerSide) {
   const auto jpeg = ExifBuilder().Short(EXIF_TAG_FOCAL_LENGTH_IN_35MM_FILM, 28).Jpeg();
   const auto focal = ReadExifFocal(jpeg, 4000, 3000);
