@@ -91,6 +91,19 @@ class GeoLocalizationTest : public testing::Test {
     return test::ReadJsonLines(results);
   }
 
+  // tools/validate_json.py's verdict on a file (JSON lines with `lines`).
+  static void ExpectValid(const std::string& schema, const std::filesystem::path& file,
+                          bool lines) {
+    std::string output;
+    EXPECT_EQ(test::RunCommand("/usr/bin/python3 " +
+                                   (test::SourceDir() / "tools" / "validate_json.py").string() +
+                                   " " + (test::SourceDir() / "schemas" / schema).string() + " " +
+                                   file.string() + (lines ? " --lines" : ""),
+                               &output),
+              0)
+        << output;
+  }
+
   static inline test::TempDir* dir_ = nullptr;
 };
 
@@ -100,6 +113,8 @@ TEST_F(GeoLocalizationTest, TheFitFlagsEveryWildGpsPositionAndItsResidualIsTheNo
       test::RunCommand(
           test::ToolPath("cwloc-index").string() + " info --json " + IndexPath().string(), &output),
       0);
+  std::ofstream(*dir_ / "info.json") << output;
+  ExpectValid("index-info.schema.json", *dir_ / "info.json", false);
   const auto georeference = nlohmann::json::parse(output)["manifest"]["georeference"];
   ASSERT_TRUE(georeference.is_object()) << output;
   const auto& fit = georeference["fit"];
@@ -143,6 +158,7 @@ TEST_F(GeoLocalizationTest, PriorsFromAFileAreUsedAndEchoed) {
   int code = -1;
   const auto lines = Localize("--priors " + (City() / "query_priors.txt").string(), &code);
   EXPECT_EQ(code, 0);
+  ExpectValid("localization-result.schema.json", *dir_ / "results.jsonl", true);
   const auto truth = ReadQueriesGeo(City() / "queries_geo.txt");
   ASSERT_EQ(lines.size(), truth.size());
   for (const auto& result : lines) {
