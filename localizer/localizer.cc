@@ -201,14 +201,12 @@ LocalizationResult Localizer::Localize(const Query& query, const LocalizerOption
   // The position prior's region: only clusters with a camera within its radius.
   PriorUse priors;
   std::vector<char> allowed;
+  std::string prior_region;
   if (query.position_prior) {
     allowed = geo_->ClustersNear(*query.position_prior, clusters_);
     priors.position = query.position_prior;
     priors.clusters_in_radius =
         static_cast<uint32_t>(std::count(allowed.begin(), allowed.end(), char{1}));
-  }
-  std::string prior_region;
-  if (query.position_prior) {
     char radius[32];
     std::snprintf(radius, sizeof(radius), "%g", query.position_prior->radius_m);
     prior_region = std::string(radius) + " m of the position prior";
