@@ -1,11 +1,13 @@
 #include "format/base/atomic_file.h"
 
 #include <fcntl.h>
+#include <signal.h>
 #include <unistd.h>
 
 #include <atomic>
 #include <cerrno>
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <string>
 #include <system_error>
@@ -16,12 +18,15 @@
 namespace cwloc {
 namespace {
 
+std::string TempPrefix(const std::filesystem::path& path) {
+  return path.filename().string() + ".tmp-";
+}
+
 // O_EXCL on a name no other writer picks: the process id tells processes apart, the counter
 // the files of this one; a name left behind by a crash is skipped. Returns -1 with errno set.
 int CreateTempFile(const std::filesystem::path& path, std::filesystem::path* temp_path) {
   static std::atomic<uint64_t> counter{0};
-  std::string prefix = path.filename().string();
-  prefix += ".tmp-" + std::to_string(::getpid()) + "-";
+  const std::string prefix = TempPrefix(path) + std::to_string(::getpid()) + "-";
   for (int attempt = 0; attempt < 100; ++attempt) {
     *temp_path = path.parent_path() / (prefix + std::to_string(counter++));
     const int fd = ::open(temp_path->c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
@@ -30,9 +35,52 @@ int CreateTempFile(const std::filesystem::path& path, std::filesystem::path* tem
   return -1;
 }
 
+// Removes `<name>.tmp-<pid>-<n>` files of writers that no longer run: a kill between the link
+// and the rename, or a killed named writer, leaves one. A pid that runs (perhaps reused) keeps
+// its files; what cannot be proven dead is left alone.
+void RemoveDeadWritersFiles(const std::filesystem::path& path) {
+  const std::string prefix = TempPrefix(path);
+  const std::filesystem::path dir = path.has_parent_path() ? path.parent_path() : ".";
+  std::error_code error;
+  for (const auto& entry : std::filesystem::directory_iterator(dir, error)) {
+    const std::string name = entry.path().filename().string();
+    if (name.rfind(prefix, 0) != 0) continue;
+    char* end = nullptr;
+    const long pid = std::strtol(name.c_str() + prefix.size(), &end, 10);
+    if (pid <= 0 || *end != '-' || pid == ::getpid()) continue;
+    if (::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH) ::unlink(entry.path().c_str());
+  }
+}
+
+// An unnamed file in `dir`, or -1 with errno set (EOPNOTSUPP etc. where O_TMPFILE is missing).
+int CreateUnnamedFile(const std::filesystem::path& path) {
+  const std::filesystem::path dir = path.has_parent_path() ? path.parent_path() : ".";
+#ifdef O_TMPFILE
+  return ::open(dir.c_str(), O_TMPFILE | O_WRONLY | O_CLOEXEC, 0644);
+#else
+  errno = EOPNOTSUPP;
+  return -1;
+#endif
+}
+
+// Gives the unnamed file behind `fd` the name `target`; fails with EEXIST when it exists.
+int LinkUnnamedFile(int fd, const std::filesystem::path& target) {
+  const std::string self = "/proc/self/fd/" + std::to_string(fd);
+  return ::linkat(AT_FDCWD, self.c_str(), AT_FDCWD, target.c_str(), AT_SYMLINK_FOLLOW);
+}
+
 }  // namespace
 
-AtomicFile::AtomicFile(std::filesystem::path path) : path_(std::move(path)) {
+AtomicFile::AtomicFile(std::filesystem::path path, Temporary temporary) : path_(std::move(path)) {
+  RemoveDeadWritersFiles(path_);
+  if (temporary == Temporary::kUnnamed) {
+    fd_ = CreateUnnamedFile(path_);
+    // Only a missing directory or permission is final; other errors mean no O_TMPFILE here.
+    if (fd_ < 0 && (errno == ENOENT || errno == EACCES || errno == ENOTDIR || errno == EROFS)) {
+      Fail("cannot create a temporary file next to it", errno);
+    }
+    if (fd_ >= 0) return;
+  }
   fd_ = CreateTempFile(path_, &temp_path_);
   if (fd_ < 0) {
     const int error_number = errno;
@@ -60,8 +108,25 @@ void AtomicFile::Write(const void* data, size_t size) {
 void AtomicFile::Commit() {
   // fsync also reports write errors the kernel deferred (a full disk on NFS, EIO).
   if (::fsync(fd_) != 0) Fail("cannot sync to disk", errno);
+  if (temp_path_.empty()) {
+    // Unnamed: a new destination gets the file directly; an existing one is replaced through a
+    // name that exists only between the link and the rename.
+    if (LinkUnnamedFile(fd_, path_) != 0) {
+      if (errno != EEXIST) Fail("cannot link the temporary file into place", errno);
+      std::filesystem::path named;
+      for (int attempt = 0;; ++attempt) {
+        static std::atomic<uint64_t> counter{0};
+        named = path_.parent_path() /
+                (TempPrefix(path_) + std::to_string(::getpid()) + "-u" + std::to_string(counter++));
+        if (LinkUnnamedFile(fd_, named) == 0) break;
+        if (errno != EEXIST || attempt >= 100)
+          Fail("cannot link the temporary file into place", errno);
+      }
+      temp_path_ = named;
+    }
+  }
   if (::close(std::exchange(fd_, -1)) != 0) Fail("cannot write", errno);
-  if (::rename(temp_path_.c_str(), path_.c_str()) != 0) {
+  if (!temp_path_.empty() && ::rename(temp_path_.c_str(), path_.c_str()) != 0) {
     const int error_number = errno;
     Fail("cannot rename " + temp_path_.filename().string() + " into place", error_number);
   }

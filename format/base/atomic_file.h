@@ -8,20 +8,29 @@
 namespace cwloc {
 
 // Replaces a file so that readers, even after a crash, see the old content or the new one,
-// never a part: the content goes to a temporary file with a unique name in the destination's
-// directory (a rename is atomic only within one file system), and Commit() fsyncs it, renames
-// it over the destination and fsyncs the directory so that the rename survives a power loss.
-// Destroyed without Commit() (an exception), it removes the temporary file. Every failure
-// throws InputError naming the destination.
+// never a part: the content goes to a temporary file in the destination's directory (a rename
+// is atomic only within one file system), and Commit() fsyncs it, puts it in place and fsyncs
+// the directory so that this survives a power loss.
+//
+// The temporary file has no name (Linux's O_TMPFILE), so a writer killed before Commit() leaves
+// nothing behind; Commit() links it to the destination, or, when that exists, to a unique
+// `<name>.tmp-<pid>-<n>` renamed over it at once. Where the file system has no O_TMPFILE, and
+// for writers that must open the file by name (SQLite: Temporary::kNamed), the temporary file
+// has that name from the start. A writer first removes the temporary files of dead writers of
+// the same destination (their pid no longer runs), so a kill leaves nothing for long.
+// Destroyed without Commit() (an exception), it removes its temporary file. Every failure throws
+// InputError naming the destination.
 class AtomicFile {
  public:
-  explicit AtomicFile(std::filesystem::path path);
+  enum class Temporary { kUnnamed, kNamed };
+  explicit AtomicFile(std::filesystem::path path, Temporary temporary = Temporary::kUnnamed);
   ~AtomicFile();
   AtomicFile(const AtomicFile&) = delete;
   AtomicFile& operator=(const AtomicFile&) = delete;
 
   const std::filesystem::path& path() const { return path_; }
-  // For writers that open the file by name themselves (SQLite): the file is created empty.
+  // Temporary::kNamed: the file writers open by name themselves (SQLite), created empty. Empty
+  // while the temporary file has no name.
   const std::filesystem::path& temp_path() const { return temp_path_; }
 
   void Write(const void* data, size_t size);
@@ -31,7 +40,7 @@ class AtomicFile {
   [[noreturn]] void Fail(std::string_view what, int error_number) const;
 
   std::filesystem::path path_;
-  std::filesystem::path temp_path_;  // empty once renamed into place
+  std::filesystem::path temp_path_;  // empty when unnamed or once renamed into place
   int fd_ = -1;
 };
 

@@ -76,7 +76,8 @@ struct DatabaseWriter::Statements {
   std::vector<float> keypoint_buffer;  // reused so that writing does not allocate per image
 };
 
-DatabaseWriter::DatabaseWriter(const std::filesystem::path& path) : file_(path) {
+DatabaseWriter::DatabaseWriter(const std::filesystem::path& path)
+    : file_(path, AtomicFile::Temporary::kNamed) {
   const std::string file = path.string();
   const std::filesystem::path& temp_path = file_.temp_path();
   const int flags = SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_NOMUTEX;

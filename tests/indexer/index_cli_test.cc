@@ -1,10 +1,15 @@
 // cwloc-index as a user runs it: build, info (--json against its schema), verify, and the
 // exit code and message for each kind of damaged file.
 #include <gmock/gmock.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
 
+#include <chrono>
 #include <fstream>
 #include <iterator>
 #include <nlohmann/json.hpp>
+#include <thread>
 
 #include "format/index/index_file.h"
 #include "tests/indexer/indexer_fixture.h"
@@ -131,6 +136,78 @@ TEST_F(IndexCliTest, BuildFromAMissingModelIsABadInputError) {
   EXPECT_THAT(output, HasSubstr("cwloc-index: error: "));
   EXPECT_THAT(output, HasSubstr("nope"));
   EXPECT_FALSE(std::filesystem::exists(index_path_));
+}
+
+}  // namespace
+}  // namespace cwloc
+
+namespace cwloc {
+namespace {
+
+// A writer killed at any moment leaves the previous index or the new one at the destination,
+// and nothing else in its folder (docs/format.md: the temporary file has no name until it is
+// in place). The kill moments are spread over a whole build's duration.
+TEST_F(IndexCliTest, KilledBuildsLeaveTheOldOrTheNewIndexAndNothingElse) {
+  const auto out_dir = dir_ / "out";
+  std::filesystem::create_directories(out_dir);
+  const auto output = out_dir / "model.cwl";
+  const std::string tool = test::ToolPath("cwloc-index").string();
+  const std::vector<std::string> args = {
+      tool,        "build", "--model", model_dir_.string(), "--database", database_path_.string(),
+      "--threads", "1",     "-o",      output.string()};
+  std::vector<char*> argv;
+  for (const std::string& arg : args) argv.push_back(const_cast<char*>(arg.c_str()));
+  argv.push_back(nullptr);
+  auto spawn = [&] {
+    pid_t pid = 0;
+    EXPECT_EQ(posix_spawn(&pid, tool.c_str(), nullptr, nullptr, argv.data(), environ), 0);
+    return pid;
+  };
+  // One whole build: its duration and its bytes (builds are deterministic).
+  const auto start = std::chrono::steady_clock::now();
+  int status = 0;
+  ASSERT_EQ(waitpid(spawn(), &status, 0) > 0 && WIFEXITED(status) && WEXITSTATUS(status) == 0,
+            true);
+  const auto duration = std::chrono::steady_clock::now() - start;
+  std::ifstream in(output, std::ios::binary);
+  const std::vector<char> complete{std::istreambuf_iterator<char>(in), {}};
+  ASSERT_FALSE(complete.empty());
+
+  auto& rng = test::Rng();
+  for (int kill_number = 0; kill_number < 24; ++kill_number) {
+    // Half the kills with no previous index, half replacing one.
+    const bool replacing = kill_number % 2 == 1;
+    std::filesystem::remove(output);
+    if (replacing) std::ofstream(output, std::ios::binary).write(complete.data(), complete.size());
+    const pid_t pid = spawn();
+    std::this_thread::sleep_for(duration * (rng() % 1000) / 1000);
+    kill(pid, SIGKILL);
+    waitpid(pid, &status, 0);
+    // A kill between the link and the rename of a replacement leaves the killed writer's
+    // named file, which the next writer removes (the window is microseconds wide).
+    const std::string own = output.filename().string() + ".tmp-" + std::to_string(pid) + "-u";
+    bool has_output = false;
+    for (const auto& entry : std::filesystem::directory_iterator(out_dir)) {
+      const std::string name = entry.path().filename().string();
+      if (entry.path() == output) {
+        has_output = true;
+      } else {
+        EXPECT_EQ(name.rfind(own, 0), 0u) << name << " after kill " << kill_number;
+      }
+    }
+    if (!has_output) {
+      EXPECT_FALSE(replacing) << "the previous index vanished";
+      continue;
+    }
+    std::ifstream file(output, std::ios::binary);
+    EXPECT_EQ(std::vector<char>(std::istreambuf_iterator<char>(file), {}), complete)
+        << "a partial index after kill " << kill_number;
+  }
+  // A last complete build cleans up after every killed writer.
+  ASSERT_EQ(waitpid(spawn(), &status, 0) > 0 && WIFEXITED(status) && WEXITSTATUS(status) == 0,
+            true);
+  EXPECT_EQ(std::vector<std::filesystem::path>(std::filesystem::directory_iterator(out_dir), {}),
+            std::vector<std::filesystem::path>{output});
 }
 
 }  // namespace

@@ -1,6 +1,8 @@
 #include "format/base/atomic_file.h"
 
 #include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <fstream>
 #include <iterator>
@@ -29,19 +31,49 @@ TEST(AtomicFileTest, CommitReplacesTheFileAndLeavesNoTemporaryFile) {
   const fs::path path = dir / "a.bin";
   std::ofstream(path) << "old content";
   AtomicFile file(path);
-  EXPECT_EQ(file.temp_path().parent_path(), dir.path());
-  EXPECT_TRUE(fs::exists(file.temp_path()));
+  EXPECT_TRUE(file.temp_path().empty());  // unnamed: a kill now would leave nothing
   file.Write("new", 3);
   EXPECT_EQ(ReadFile(path), "old content");  // untouched until Commit()
+  EXPECT_EQ(ListDir(dir.path()), std::vector<fs::path>{path});
   file.Commit();
   EXPECT_EQ(ReadFile(path), "new");
   EXPECT_EQ(ListDir(dir.path()), std::vector<fs::path>{path});
   EXPECT_EQ(fs::status(path).permissions() & fs::perms::owner_read, fs::perms::owner_read);
 }
 
+TEST(AtomicFileTest, ANewDestinationGetsTheUnnamedFileDirectly) {
+  test::TempDir dir;
+  AtomicFile file(dir / "new.bin");
+  file.Write("x", 1);
+  EXPECT_TRUE(ListDir(dir.path()).empty());
+  file.Commit();
+  EXPECT_EQ(ReadFile(dir / "new.bin"), "x");
+  EXPECT_EQ(ListDir(dir.path()), std::vector<fs::path>{dir / "new.bin"});
+}
+
+// What a writer killed between its link and its rename, or a killed named writer, leaves.
+TEST(AtomicFileTest, TemporaryFilesOfDeadWritersAreRemovedOthersKept) {
+  test::TempDir dir;
+  // A pid that no longer runs: a child that has exited and been reaped.
+  const pid_t dead = fork();
+  if (dead == 0) _exit(0);
+  ASSERT_GT(dead, 0);
+  ASSERT_EQ(waitpid(dead, nullptr, 0), dead);
+  const fs::path stale = dir / ("a.bin.tmp-" + std::to_string(dead) + "-3");
+  const fs::path live = dir / "a.bin.tmp-1-0";  // init runs: not provably dead
+  const fs::path other = dir / ("b.bin.tmp-" + std::to_string(dead) + "-0");  // another file's
+  for (const fs::path& p : {stale, live, other}) std::ofstream(p) << "left";
+  AtomicFile file(dir / "a.bin");
+  EXPECT_FALSE(fs::exists(stale));
+  EXPECT_TRUE(fs::exists(live));
+  EXPECT_TRUE(fs::exists(other));
+}
+
 TEST(AtomicFileTest, TemporaryNamesAreUnique) {
   test::TempDir dir;
-  AtomicFile a(dir / "a.bin"), b(dir / "a.bin");
+  AtomicFile a(dir / "a.bin", AtomicFile::Temporary::kNamed),
+      b(dir / "a.bin", AtomicFile::Temporary::kNamed);
+  EXPECT_TRUE(fs::exists(a.temp_path()));
   EXPECT_NE(a.temp_path(), b.temp_path());
   b.Write("b", 1);
   b.Commit();
