@@ -141,6 +141,72 @@ TEST_F(LocalizeCliTest, CorruptOrMissingIndexIsAClearError) {
   EXPECT_THAT(output, HasSubstr("checksum mismatch"));
 }
 
+// A batch from a query list with bad queries mixed in: each bad one gets its error record
+// naming it, every good one finishes, and the exit code says some query failed (#13).
+TEST_F(LocalizeCliTest, BadQueriesInABatchAreEachReportedAndTheGoodOnesFinish) {
+  // The first model image's own features: it localizes against the model.
+  const auto& [id, image] = *model_.images.begin();
+  const colmap::Camera& camera = model_.cameras.at(image.camera_id);
+  std::string camera_spec = std::string(CameraModelName(camera.model_id)) + " " +
+                            std::to_string(camera.width) + " " + std::to_string(camera.height);
+  for (const double param : camera.params) {
+    camera_spec += ' ';
+    camera_spec += std::to_string(param);
+  }
+  {
+    std::ofstream out(dir_ / "good.txt");
+    out << image.points2D.size() << " 128\n";
+    for (size_t i = 0; i < image.points2D.size(); ++i) {
+      out << image.points2D[i].x << " " << image.points2D[i].y << " 1 0";
+      for (int d = 0; d < 128; ++d) out << " " << int(descriptors_.at(id).data[i * 128 + d]);
+      out << "\n";
+    }
+  }
+  std::ofstream(dir_ / "empty.txt") << "0 128\n";
+  std::ofstream(dir_ / "garbled.txt") << "3 128\n1 2 3\n";
+  const auto list = dir_ / "queries.txt";
+  std::ofstream(list) << "good.txt " << camera_spec << "\n"
+                      << "missing.txt " << camera_spec << "\n"
+                      << "empty.txt " << camera_spec << "\n"
+                      << "garbled.txt " << camera_spec << "\n"
+                      << "good.txt SIMPLE_PINHOLE 0 480 500 320 240\n"
+                      << "good.txt FISH 640 480 500\n";
+  const auto jsonl = dir_ / "batch.jsonl";
+  std::string output;
+  EXPECT_EQ(Run("--query-list " + list.string() + " --threads 2 -o " + jsonl.string(), &output), 2)
+      << output;
+  std::vector<std::string> errors;
+  int localized = 0;
+  for (const auto& record : test::ReadJsonLines(jsonl)) {
+    if (record.contains("error")) {
+      errors.push_back(record["error"]);
+    } else {
+      EXPECT_EQ(record["name"], "good.txt");
+      localized += record["success"].get<bool>();
+    }
+  }
+  std::sort(errors.begin(), errors.end());
+  std::string in_list = list.string();
+  in_list += " (good.txt): ";
+  std::vector<std::string> expected = {
+      (dir_ / "missing.txt").string() + ": cannot open",
+      (dir_ / "empty.txt").string() + ": the query has no features",
+      (dir_ / "garbled.txt").string() +
+          ":2: expected X Y SCALE ORIENTATION then 128 descriptor values",
+      in_list + "expected a positive image width (at most 1000000)",
+      in_list + "unknown camera model 'FISH'",
+  };
+  ASSERT_EQ(errors.size(), expected.size()) << output;
+  for (const std::string& want : expected) {
+    EXPECT_EQ(std::count_if(errors.begin(), errors.end(),
+                            [&](const std::string& e) { return e.rfind(want, 0) == 0; }),
+              1)
+        << want << "\n"
+        << output;
+  }
+  EXPECT_EQ(localized, 1) << output;
+}
+
 TEST_F(LocalizeCliTest, QueryWithNoFeaturesIsAnError) {
   const auto features = dir_ / "empty.txt";
   std::ofstream(features) << "0 128\n";
