@@ -261,8 +261,7 @@ class ResultSink {
       }
       std::fflush(stdout);
     }
-    if (poses_file_.is_open() && result.success)
-      poses_file_ << PoseLine(result) << "\n" << std::flush;
+    if (poses_file_.is_open() && result.success) WriteLine(poses_file_, PoseLine(result));
   }
 
   void WriteError(const std::string& name, const std::string& error) {
@@ -274,8 +273,15 @@ class ResultSink {
  private:
   // One record per line to --output, or stdout without it; the caller holds mutex_.
   void EmitJsonLine(const std::string& json) {
-    std::ostream& out = json_file_.is_open() ? static_cast<std::ostream&>(json_file_) : std::cout;
-    out << json << "\n" << std::flush;
+    WriteLine(json_file_.is_open() ? static_cast<std::ostream&>(json_file_) : std::cout, json);
+  }
+
+  // A record and its newline in one write, flushed at once: a kill between records leaves
+  // whole lines (the stream's buffer holds nothing between them).
+  static void WriteLine(std::ostream& out, std::string line) {
+    line += '\n';
+    out.write(line.data(), static_cast<std::streamsize>(line.size()));
+    out.flush();
   }
 
   static void OpenOrThrow(std::ofstream* file, const std::string& path) {
