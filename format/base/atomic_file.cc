@@ -35,23 +35,6 @@ int CreateTempFile(const std::filesystem::path& path, std::filesystem::path* tem
   return -1;
 }
 
-// Removes `<name>.tmp-<pid>-<n>` files of writers that no longer run: a kill between the link
-// and the rename, or a killed named writer, leaves one. A pid that runs (perhaps reused) keeps
-// its files; what cannot be proven dead is left alone.
-void RemoveDeadWritersFiles(const std::filesystem::path& path) {
-  const std::string prefix = TempPrefix(path);
-  const std::filesystem::path dir = path.has_parent_path() ? path.parent_path() : ".";
-  std::error_code error;
-  for (const auto& entry : std::filesystem::directory_iterator(dir, error)) {
-    const std::string name = entry.path().filename().string();
-    if (name.rfind(prefix, 0) != 0) continue;
-    char* end = nullptr;
-    const long pid = std::strtol(name.c_str() + prefix.size(), &end, 10);
-    if (pid <= 0 || *end != '-' || pid == ::getpid()) continue;
-    if (::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH) ::unlink(entry.path().c_str());
-  }
-}
-
 // An unnamed file in `dir`, or -1 with errno set (EOPNOTSUPP etc. where O_TMPFILE is missing).
 int CreateUnnamedFile(const std::filesystem::path& path) {
   const std::filesystem::path dir = path.has_parent_path() ? path.parent_path() : ".";
@@ -71,8 +54,24 @@ int LinkUnnamedFile(int fd, const std::filesystem::path& target) {
 
 }  // namespace
 
+void RemoveDeadWritersTemporaries(const std::filesystem::path& destination) {
+  const std::string prefix = TempPrefix(destination);
+  const std::filesystem::path dir = destination.has_parent_path() ? destination.parent_path() : ".";
+  std::error_code error;
+  for (const auto& entry : std::filesystem::directory_iterator(dir, error)) {
+    const std::string name = entry.path().filename().string();
+    if (name.rfind(prefix, 0) != 0) continue;
+    char* end = nullptr;
+    const long pid = std::strtol(name.c_str() + prefix.size(), &end, 10);
+    if (pid <= 0 || *end != '-' || pid == ::getpid()) continue;
+    if (::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH) {
+      std::filesystem::remove_all(entry.path(), error);
+    }
+  }
+}
+
 AtomicFile::AtomicFile(std::filesystem::path path, Temporary temporary) : path_(std::move(path)) {
-  RemoveDeadWritersFiles(path_);
+  RemoveDeadWritersTemporaries(path_);
   if (temporary == Temporary::kUnnamed) {
     fd_ = CreateUnnamedFile(path_);
     // Only a missing directory or permission is final; other errors mean no O_TMPFILE here.

@@ -44,6 +44,11 @@ class AtomicFile {
   int fd_ = -1;
 };
 
+// Removes `<destination name>.tmp-<pid>-...` files and folders next to `destination` whose
+// writer no longer runs (no process has that pid): what a killed writer left. A pid that runs,
+// perhaps reused, keeps its temporaries; so does this process.
+void RemoveDeadWritersTemporaries(const std::filesystem::path& destination);
+
 // An AtomicFile behind a large buffer, for writers of many small pieces (COLMAP models).
 class AtomicFileWriter {
  public:

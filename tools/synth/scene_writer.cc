@@ -1,7 +1,10 @@
 #include "tools/synth/scene_writer.h"
 
+#include <fcntl.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <condition_variable>
@@ -11,6 +14,7 @@
 #include <mutex>
 #include <thread>
 
+#include "format/base/atomic_file.h"
 #include "format/base/error.h"
 #include "format/base/parallel_for.h"
 #include "format/base/stopwatch.h"
@@ -411,7 +415,11 @@ SceneWriter::SceneWriter(const fs::path& output_dir, bool overwrite)
   if (ec) {
     throw InputError("cannot create output directory '" + parent.string() + "': " + ec.message());
   }
-  std::string pattern = (parent / (absolute.filename().string() + ".tmp-XXXXXX")).string();
+  // A killed writer's folder carries its pid: the next writer of this output removes it.
+  RemoveDeadWritersTemporaries(absolute);
+  std::string pattern =
+      (parent / (absolute.filename().string() + ".tmp-" + std::to_string(::getpid()) + "-XXXXXX"))
+          .string();
   if (::mkdtemp(pattern.data()) == nullptr) {
     throw InputError("cannot create output directory '" + output_dir.string() +
                      "': " + std::strerror(errno));
@@ -475,6 +483,15 @@ void SceneWriter::Commit(const std::string& stats_json) {
       throw InputError("output directory '" + output_dir_.string() +
                        "' appeared while generating and is not empty");
     }
+    // One atomic swap: the destination holds the old scene or the new one at every moment; the
+    // old one, now under the temporary name, is removed next (or by the next writer after a kill).
+    if (::renameat2(AT_FDCWD, temp_dir_.c_str(), AT_FDCWD, output_dir_.c_str(), RENAME_EXCHANGE) ==
+        0) {
+      committed_ = true;
+      fs::remove_all(temp_dir_, ec);
+      return;
+    }
+    // File systems without RENAME_EXCHANGE: move the old scene aside first.
     std::string pattern = output_dir_.string() + ".old-XXXXXX";
     if (::mkdtemp(pattern.data()) == nullptr) {
       throw InputError("cannot replace '" + output_dir_.string() + "': " + std::strerror(errno));
