@@ -37,7 +37,7 @@ Clustering ReadClusteringFile(const std::filesystem::path& path, const ModelView
   std::vector<int64_t> raw(views.images.size());
   for (size_t i = 0; i < views.images.size(); ++i) {
     const IndexImage& image = views.images[i];
-    const std::string name = views.strings.substr(image.name_offset, image.name_size);
+    const std::string name(views.ImageName(image));
     const auto it = cluster_by_name.find(name);
     if (it == cluster_by_name.end()) {
       throw InputError(path.string() + ": model image '" + name + "' has no cluster");

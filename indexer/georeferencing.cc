@@ -13,18 +13,6 @@
 namespace cwloc {
 namespace {
 
-std::string_view ImageName(const ModelViews& views, const IndexImage& image) {
-  return std::string_view(views.strings).substr(image.name_offset, image.name_size);
-}
-
-Eigen::Vector3d CameraCenter(const IndexImage& image) {
-  const Eigen::Quaterniond q(image.cam_from_world_rotation[0], image.cam_from_world_rotation[1],
-                             image.cam_from_world_rotation[2], image.cam_from_world_rotation[3]);
-  const Eigen::Vector3d t(image.cam_from_world_translation[0], image.cam_from_world_translation[1],
-                          image.cam_from_world_translation[2]);
-  return -(q.normalized().conjugate() * t);
-}
-
 nlohmann::ordered_json GeodeticJson(const Geodetic& g) {
   return {{"latitude_deg", g.latitude_deg},
           {"longitude_deg", g.longitude_deg},
@@ -61,7 +49,7 @@ ModelGeoreference GivenModelFrame(const ModelViews& views, const std::string& sp
     // The ENU origin at the cameras' centroid: any origin converts exactly, a near one keeps
     // the stored ENU coordinates small.
     Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-    for (const IndexImage& image : views.images) centroid += CameraCenter(image);
+    for (const IndexImage& image : views.images) centroid += CameraCenterOf(image);
     centroid /= static_cast<double>(std::max<size_t>(1, views.images.size()));
     if (centroid.norm() < 6.0e6 || centroid.norm() > 7.0e6) {
       throw InputError("--model-frame ecef: the cameras' centroid is " +
@@ -91,14 +79,14 @@ std::vector<Eigen::Vector3d> CentersOf(const ModelViews& views,
                                        std::span<const GeoObservation> observations,
                                        const std::string& source) {
   std::unordered_map<std::string_view, const IndexImage*> by_name;
-  for (const IndexImage& image : views.images) by_name[ImageName(views, image)] = &image;
+  for (const IndexImage& image : views.images) by_name[views.ImageName(image)] = &image;
   std::vector<Eigen::Vector3d> centers;
   for (const GeoObservation& observation : observations) {
     const auto it = by_name.find(observation.image_name);
     if (it == by_name.end()) {
       throw InputError(source + ": image '" + observation.image_name + "' is not in the model");
     }
-    centers.push_back(CameraCenter(*it->second));
+    centers.push_back(CameraCenterOf(*it->second));
   }
   return centers;
 }
@@ -108,7 +96,7 @@ std::vector<GeoObservation> ExifObservations(const ModelViews& views,
                                              const std::filesystem::path& dir, size_t* without) {
   std::vector<GeoObservation> observations;
   for (const IndexImage& image : views.images) {
-    const std::string name(ImageName(views, image));
+    const std::string name(views.ImageName(image));
     const std::optional<ExifGps> gps = ReadExifGps(ReadFileBytes(dir / name));
     if (!gps || !gps->altitude_m) {
       ++*without;

@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "format/colmap/database.h"
@@ -25,6 +26,9 @@ struct ModelViews {
   std::vector<ViewKeypoint> view_keypoints;
 
   size_t num_views() const { return view_points.size(); }
+  std::string_view ImageName(const IndexImage& image) const {
+    return std::string_view(strings).substr(image.name_offset, image.name_size);
+  }
 };
 
 // Reads each model image's descriptors from the database. Images of the database that are not

@@ -9,14 +9,8 @@ std::optional<IndexGeo> IndexGeo::Of(const Index& index) {
   GeoFrame frame(GeoreferenceOfSection(*index.georeference()));
   std::vector<Eigen::Vector3d> centers;
   centers.reserve(index.images().size());
-  for (const IndexImage& image : index.images()) {
-    const Eigen::Quaterniond q(image.cam_from_world_rotation[0], image.cam_from_world_rotation[1],
-                               image.cam_from_world_rotation[2], image.cam_from_world_rotation[3]);
-    const Eigen::Vector3d t(image.cam_from_world_translation[0],
-                            image.cam_from_world_translation[1],
-                            image.cam_from_world_translation[2]);
-    centers.push_back(frame.georeference().ModelToEnu(-(q.normalized().conjugate() * t)));
-  }
+  for (const IndexImage& image : index.images())
+    centers.push_back(frame.georeference().ModelToEnu(CameraCenterOf(image)));
   return IndexGeo(std::move(frame), std::move(centers));
 }
 

@@ -17,6 +17,14 @@ Georeference GeoreferenceOfSection(const IndexGeoreference& section) {
   return georeference;
 }
 
+Eigen::Vector3d CameraCenterOf(const IndexImage& image) {
+  const Eigen::Quaterniond q(image.cam_from_world_rotation[0], image.cam_from_world_rotation[1],
+                             image.cam_from_world_rotation[2], image.cam_from_world_rotation[3]);
+  const Eigen::Vector3d t(image.cam_from_world_translation[0], image.cam_from_world_translation[1],
+                          image.cam_from_world_translation[2]);
+  return -(q.normalized().conjugate() * t);
+}
+
 IndexGeoreference SectionOfGeoreference(const Georeference& georeference) {
   IndexGeoreference section;
   std::memset(&section, 0, sizeof(section));

@@ -9,6 +9,9 @@ namespace cwloc {
 
 Georeference GeoreferenceOfSection(const IndexGeoreference& section);
 
+// The camera centre of a model image (IMGS), in model coordinates.
+Eigen::Vector3d CameraCenterOf(const IndexImage& image);
+
 // The fit statistics and source are left for the caller.
 IndexGeoreference SectionOfGeoreference(const Georeference& georeference);
 
