@@ -20,6 +20,7 @@
 #include "localizer/io/camera_spec.h"
 #include "localizer/io/feature_file.h"
 #include "localizer/io/photo_query.h"
+#include "localizer/io/query_list.h"
 #include "localizer/io/query_priors.h"
 #include "localizer/io/result_json.h"
 #include "localizer/localizer.h"
@@ -67,24 +68,6 @@ struct CliOptions {
   bool quiet = false;
 };
 
-// Calls add(name, camera) for each "NAME [MODEL W H PARAMS]" line of a list file.
-template <typename AddLine>
-void ReadListFile(const std::string& list, AddLine add) {
-  std::ifstream in(list);
-  if (!in) throw InputError(list + ": cannot open the list");
-  std::string line;
-  while (std::getline(in, line)) {
-    std::istringstream fields(line);
-    std::string name;
-    if (!(fields >> name) || name[0] == '#') continue;
-    std::string camera;
-    std::getline(fields, camera);
-    camera.erase(0, camera.find_first_not_of(" \t\r"));
-    camera.erase(camera.find_last_not_of(" \t\r") + 1);
-    add(name, camera);
-  }
-}
-
 std::vector<QuerySource> CollectQueries(const CliOptions& cli) {
   using Kind = QuerySource::Kind;
   std::vector<QuerySource> sources;
@@ -101,19 +84,18 @@ std::vector<QuerySource> CollectQueries(const CliOptions& cli) {
   if (!cli.query_list.empty()) {
     const std::filesystem::path base = std::filesystem::path(cli.query_list).parent_path();
     const Kind kind = cli.database_path.empty() ? Kind::kFeatureFile : Kind::kDatabase;
-    ReadListFile(cli.query_list, [&](const std::string& name, const std::string& camera) {
+    for (const auto& [name, camera] : ReadQueryList(cli.query_list)) {
       sources.push_back(
           {name, kind, kind == Kind::kFeatureFile ? base / name : "", camera, cli.query_list});
-    });
+    }
   }
   if (!cli.image_list.empty()) {
     // hloc's lists name images relative to an image folder: --image-dir, else the list's own.
     const std::filesystem::path base = cli.image_dir.empty()
                                            ? std::filesystem::path(cli.image_list).parent_path()
                                            : std::filesystem::path(cli.image_dir);
-    ReadListFile(cli.image_list, [&](const std::string& name, const std::string& camera) {
+    for (const auto& [name, camera] : ReadQueryList(cli.image_list))
       sources.push_back({name, Kind::kPhoto, base / name, camera, cli.image_list});
-    });
   }
   if (sources.empty()) {
     throw InputError("no queries: give --image, --image-list, --query, --query-list or --features");

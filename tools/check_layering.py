@@ -103,8 +103,8 @@ def main():
     def check(path, target_name, include_private):
         for include in INCLUDE.findall(path.read_text(errors="replace")):
             header = (root / include).resolve()
-            if not header.exists() or include.startswith("tests/"):
-                continue  # generated, system-like or test-support headers
+            if not header.exists() or include.startswith(("tests/", "fuzz/")):
+                continue  # generated, system-like or test and fuzz harness headers
             lib = owner(header)
             if lib and lib not in allowed(target_name, include_private):
                 violations.append(f"{path.relative_to(root)} ({target_name}) includes {include} "
@@ -116,7 +116,7 @@ def main():
                 check(src, name, include_private=True)
     for header in sorted(root.rglob("*.h")):
         rel = header.relative_to(root)
-        if rel.parts[0] in ("tests", ".git") or rel.parts[0].startswith("build"):
+        if rel.parts[0] in ("tests", "fuzz", ".git") or rel.parts[0].startswith("build"):
             continue
         lib = owner(header.resolve())
         if lib:

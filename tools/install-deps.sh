@@ -10,6 +10,9 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev libvlfeat-dev libstb-dev
   libjpeg62-turbo-dev libpng-dev libexif-dev
   colmap hyperfine valgrind time python3 python3-jsonschema python3-matplotlib clang-format
+  # The sanitizer and fuzz builds (docs/reliability.md): clang, its sanitizer and libFuzzer
+  # runtimes, and llvm-symbolizer for readable reports.
+  clang libclang-rt-14-dev llvm
 )
 
 missing=()

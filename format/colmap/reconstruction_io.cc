@@ -56,7 +56,8 @@ void CheckRigsAndFrames(const detail::ModelFiles& files, Reconstruction* rec,
   const std::string prefix_rigs = files.rigs.string() + ": rig ";
   for (const auto& [rig_id, rig] : rec->rigs) {
     std::vector<SensorId> seen;
-    auto check = [&](const SensorId& sensor) {
+    // clang 14 cannot capture a structured binding by reference.
+    auto check = [&, rig_id = rig_id](const SensorId& sensor) {
       if (sensor.type == SensorType::kCamera && !rec->cameras.count(sensor.id)) {
         throw InputError(prefix_rigs + std::to_string(rig_id) + ": sensor " + SensorName(sensor) +
                          " is not in " + FileName(files.cameras));
@@ -149,9 +150,10 @@ void SetImagePoseFromFrame(const detail::ModelFiles& files, const Reconstruction
         throw InputError(where + ", which is not in " + FileName(files.points3D));
       }
       const auto& track = it->second.track;
-      const bool listed = std::any_of(track.begin(), track.end(), [&](const TrackElement& el) {
-        return el.image_id == image_id && el.point2D_idx == idx;
-      });
+      const bool listed =
+          std::any_of(track.begin(), track.end(), [&, image_id = image_id](const TrackElement& el) {
+            return el.image_id == image_id && el.point2D_idx == idx;
+          });
       if (!listed) throw InputError(where + ", whose track does not list it");
     }
   }

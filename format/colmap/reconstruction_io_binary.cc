@@ -55,8 +55,7 @@ class BinaryReader {
  public:
   static constexpr size_t kWindow = size_t{1} << 20;
 
-  explicit BinaryReader(fs::path path)
-      : path_(std::move(path)), buffer_(std::make_unique_for_overwrite<uint8_t[]>(kWindow)) {
+  explicit BinaryReader(fs::path path) : path_(std::move(path)) {
     fd_ = ::open(path_.c_str(), O_RDONLY | O_CLOEXEC);
     if (fd_ < 0) Fail("cannot open: " + std::generic_category().message(errno), false);
     struct stat st {};
@@ -65,6 +64,9 @@ class BinaryReader {
       Fail("not a regular file", false);
     }
     file_size_ = static_cast<uint64_t>(st.st_size);
+    // A small file gets a small buffer: a take longer than the file fails anyway.
+    window_ = static_cast<size_t>(std::clamp<uint64_t>(file_size_, 64, kWindow));
+    buffer_ = std::make_unique_for_overwrite<uint8_t[]>(window_);
     pos_ = end_ = buffer_.get();
   }
   ~BinaryReader() { ::close(fd_); }
@@ -163,7 +165,7 @@ class BinaryReader {
     end_ = pos_ + have;
     while (static_cast<size_t>(end_ - pos_) < n) {
       const ssize_t got =
-          ::read(fd_, const_cast<uint8_t*>(end_), kWindow - static_cast<size_t>(end_ - pos_));
+          ::read(fd_, const_cast<uint8_t*>(end_), window_ - static_cast<size_t>(end_ - pos_));
       if (got < 0) {
         if (errno == EINTR) continue;
         Fail(std::string("read error in ") + field + ": " + std::generic_category().message(errno));
@@ -179,6 +181,7 @@ class BinaryReader {
   fs::path path_;
   int fd_ = -1;
   uint64_t file_size_ = 0;
+  size_t window_ = 0;  // buffer_'s size
   std::unique_ptr<uint8_t[]> buffer_;
   const uint8_t* pos_ = nullptr;
   const uint8_t* end_ = nullptr;

@@ -28,12 +28,11 @@ std::string_view Trim(std::string_view s) {
   return s;
 }
 
-// Reads lines through a growing buffer (4 MiB to start; one images.txt line holds all
-// points2D of an image and may be longer).
+// Reads lines through a growing buffer (up to 1 MiB to start, the file's size when smaller; one
+// images.txt line holds all points2D of an image and may be longer).
 class LineReader {
  public:
-  explicit LineReader(fs::path path)
-      : path_(std::move(path)), buffer_(std::make_unique_for_overwrite<char[]>(capacity_)) {
+  explicit LineReader(fs::path path) : path_(std::move(path)) {
     fd_ = ::open(path_.c_str(), O_RDONLY | O_CLOEXEC);
     if (fd_ < 0) {
       throw InputError(path_.string() + ": cannot open: " + std::generic_category().message(errno));
@@ -43,6 +42,8 @@ class LineReader {
       ::close(fd_);
       throw InputError(path_.string() + ": not a regular file");
     }
+    capacity_ = static_cast<size_t>(std::clamp<off_t>(st.st_size + 1, 64, off_t{1} << 20));
+    buffer_ = std::make_unique_for_overwrite<char[]>(capacity_);
   }
   ~LineReader() { ::close(fd_); }
   LineReader(const LineReader&) = delete;
@@ -98,7 +99,7 @@ class LineReader {
  private:
   fs::path path_;
   int fd_ = -1;
-  size_t capacity_ = size_t{1} << 20;
+  size_t capacity_ = 0;
   std::unique_ptr<char[]> buffer_;
   size_t begin_ = 0, end_ = 0;
   bool eof_ = false;

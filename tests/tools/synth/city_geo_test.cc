@@ -322,8 +322,9 @@ TEST_F(GeoCityTest, QueryPriorsAreExactlyAsFarOffAsRequested) {
     const Eigen::Vector3d true_gravity = pose.rotation * globe.GravityInModel(pose.Centre());
     EXPECT_NEAR(AngleDeg(g, true_gravity), 1.0, 1e-7) << name;
     // Which is the world's down (0, 0, -1) up to the turn of the vertical across the city.
-    const SceneImage& image = *std::find_if(scene.images().begin(), scene.images().end(),
-                                            [&](const SceneImage& i) { return i.name == name; });
+    const SceneImage& image =
+        *std::find_if(scene.images().begin(), scene.images().end(),
+                      [&, name = name](const SceneImage& i) { return i.name == name; });
     const double distance = (image.pose.centre - EnuOrigin(scene)).head<2>().norm();
     const Eigen::Vector3d world_down =
         image.pose.cam_from_world_rotation * -Eigen::Vector3d::UnitZ();
@@ -343,8 +344,9 @@ TEST_F(GeoCityTest, ZeroPriorErrorsGiveTheTruth) {
   const auto truth = ReadPositions(files.queries_geo);
   for (const auto& fields : Records(files.query_priors)) {
     const std::string& name = fields[0];
-    const SceneImage& image = *std::find_if(scene.images().begin(), scene.images().end(),
-                                            [&](const SceneImage& i) { return i.name == name; });
+    const SceneImage& image =
+        *std::find_if(scene.images().begin(), scene.images().end(),
+                      [&, name = name](const SceneImage& i) { return i.name == name; });
     if (fields[1] == "position") {
       const Eigen::Vector3d enu = globe.GeodeticToEnu(GeodeticOf(fields, 2));
       EXPECT_LT((enu - globe.GeodeticToEnu(truth.at(name))).norm(), 1e-5) << name;

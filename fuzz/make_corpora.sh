@@ -1,0 +1,59 @@
+#!/usr/bin/env bash
+# Remakes the seed corpora in fuzz/corpus/ from a generated scene and the small real files in
+# the repository (tests/data) and ../shared/data. They are kept small: libFuzzer's inputs never
+# grow past its largest seed, and small inputs run fast.
+#   fuzz/make_corpora.sh BUILD_DIR    (a build with the tools and cwloc-fuzz-make-model-seeds)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+build="${1:?usage: fuzz/make_corpora.sh BUILD_DIR}"
+bin="$build/bin"
+corpus=fuzz/corpus
+work="$(mktemp -d)"
+trap 'rm -rf "$work"' EXIT
+
+rm -rf "$corpus"
+mkdir -p "$corpus"/{index,colmap_model,colmap_database,feature_file,query_list,photo,georef}
+
+# A scene of 4 registered images and ~70 points, placed on the globe.
+"$bin/cwloc-synth" --blocks 1 --queries 2 --camera-spacing 15 --features-per-image 100 \
+  --geo "47.3769 8.5417 408" -o "$work/scene" >/dev/null
+scene="$work/scene"
+"$bin/cwloc-index" build --model "$scene/mapping_model/bin" --database "$scene/database.db" \
+  --georef "$scene/georef.txt" -o "$corpus/index/georeferenced.cwl" >/dev/null
+"$bin/cwloc-index" build --model "$scene/mapping_model/bin" --database "$scene/database.db" \
+  --keypoints -o "$corpus/index/with-keypoints.cwl" >/dev/null
+
+"$bin/cwloc-fuzz-make-model-seeds" "$scene/mapping_model/bin" "$corpus/colmap_model"
+
+# The database with 20 features per image, without matches, in 512-byte pages.
+"$bin/cwloc-synth" --blocks 1 --queries 2 --camera-spacing 15 --features-per-image 20 \
+  -o "$work/small" >/dev/null
+sqlite3 "$work/small/database.db" \
+  "DELETE FROM matches; DELETE FROM two_view_geometries; PRAGMA page_size=512; VACUUM;"
+cp "$work/small/database.db" "$corpus/colmap_database/synth.db"
+
+# A query's features cut to 6 (the header's count with them), and an empty file of features.
+features=tests/data/golden/index-1.1-queries/query_00001.jpg.txt
+{ echo "6 128"; sed -n 2,7p "$features"; } >"$corpus/feature_file/six.txt"
+echo "0 128" >"$corpus/feature_file/none.txt"
+
+cp "$scene/queries_with_intrinsics.txt" "$corpus/query_list/with-cameras.txt"
+cp "$scene/query_list.txt" "$corpus/query_list/names.txt"
+cp "$scene/query_priors.txt" "$corpus/query_list/priors.txt"
+
+cp tests/data/photos/* "$corpus/photo/"
+# A real iPhone photo's EXIF (focal length and GPS) in front of a small JPEG.
+python3 - ../shared/data/exif_samples/berlin_iphone4s/01.jpg tests/data/photos/grey.jpg \
+  "$corpus/photo/iphone-exif.jpg" <<'PY'
+import sys
+exif_photo, small, out = (open(p, "rb").read() if i < 2 else p for i, p in enumerate(sys.argv[1:]))
+at = 2
+while exif_photo[at + 1] != 0xE1:  # walk the segments to APP1
+    at += 2 + int.from_bytes(exif_photo[at + 2:at + 4], "big")
+app1 = exif_photo[at:at + 2 + int.from_bytes(exif_photo[at + 2:at + 4], "big")]
+open(out, "wb").write(small[:2] + app1 + small[2:])
+PY
+
+cp "$scene/georef.txt" "$corpus/georef/scene.txt"
+head -3 "$scene/georef.txt" | awk '{print $0, 2.5}' >"$corpus/georef/with-sigmas.txt"
+du -sh "$corpus"/*

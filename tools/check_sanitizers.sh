@@ -1,0 +1,59 @@
+#!/usr/bin/env bash
+# The sanitizer jobs of CI (docs/reliability.md), each in its own build folder:
+#   tools/check_sanitizers.sh asan   clang with ASan + UBSan (and libFuzzer's coverage) in
+#                                    build-asan: builds everything, runs the whole test suite
+#   tools/check_sanitizers.sh fuzz   each libFuzzer target of build-asan for FUZZ_SECONDS
+#                                    (default 60), two at a time, from fuzz/corpus
+#   tools/check_sanitizers.sh tsan   ThreadSanitizer in build-tsan (the device configuration):
+#                                    a batch of queries on one index with 4 threads through
+#                                    cwloc-localize, and the library's concurrent-use tests
+set -euo pipefail
+cd "$(dirname "$0")/.."
+mode="${1:-}"
+jobs="$(nproc)"
+clang=(-DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=Release)
+
+case "$mode" in
+  asan)
+    cmake -S . -B build-asan -G Ninja "${clang[@]}" -DCWLOC_SANITIZE=address,undefined \
+      -DCWLOC_BUILD_FUZZERS=ON -DCWLOC_BUILD_BENCHMARKS=OFF >/dev/null
+    cmake --build build-asan -j "$jobs" >build-asan/build.log 2>&1 || { tail -50 build-asan/build.log; exit 1; }
+    # A test that spawns our tools runs them sanitized too; any report fails the test.
+    if ! ASAN_OPTIONS=abort_on_error=1:detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
+      ctest --test-dir build-asan --output-on-failure -j "$jobs" >build-asan/ctest.log 2>&1; then
+      cat build-asan/ctest.log
+      exit 1
+    fi
+    grep 'tests passed' build-asan/ctest.log | sed 's/^/ASan + UBSan: /'
+    ;;
+  fuzz)
+    [ -x build-asan/bin/cwloc-fuzz-index ] || { echo "run tools/check_sanitizers.sh asan first" >&2; exit 2; }
+    fuzz/run.sh build-asan --seconds "${FUZZ_SECONDS:-60}" --jobs "$jobs"
+    ;;
+  tsan)
+    cmake -S . -B build-tsan -G Ninja "${clang[@]}" -DCWLOC_SANITIZE=thread \
+      -DCWLOC_WITH_COLMAP_DB=OFF -DCWLOC_BUILD_TOOLS=OFF -DCWLOC_WITH_VLFEAT=OFF \
+      -DCWLOC_WITH_CERES=OFF -DCWLOC_BUILD_BENCHMARKS=OFF >/dev/null
+    cmake --build build-tsan -j "$jobs" --target cwloc_localize_exe api_tests \
+      >build-tsan/build.log 2>&1 || { tail -50 build-tsan/build.log; exit 1; }
+    export TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1"
+    # The golden index's queries, each 8 times, with their cameras from the ground truth.
+    golden=tests/data/golden/index-1.1-queries
+    list=build-tsan/tsan-queries.txt
+    for round in 1 2 3 4 5 6 7 8; do
+      awk -v dir="$PWD/$golden" '!/^#/ && NF > 9 {
+        line = dir "/" $1 ".txt"; for (i = 9; i <= NF; ++i) line = line " " $i; print line }' \
+        "$golden/queries_gt.txt"
+    done >"$list"
+    build-tsan/bin/cwloc-localize --index tests/data/golden/index-1.1.cwl --query-list "$list" \
+      --threads 4 -q -o build-tsan/tsan-results.jsonl
+    localized=$(grep -c '"success":true' build-tsan/tsan-results.jsonl || true)
+    echo "ThreadSanitizer: $(wc -l <"$list") queries on 4 threads, $localized localized, no report"
+    build-tsan/tests/api_tests >build-tsan/api_tests.log 2>&1 || { cat build-tsan/api_tests.log; exit 1; }
+    grep -E '^\[  PASSED  \]' build-tsan/api_tests.log | sed 's/^/ThreadSanitizer: api_tests /'
+    ;;
+  *)
+    echo "usage: tools/check_sanitizers.sh asan|fuzz|tsan" >&2
+    exit 2
+    ;;
+esac
