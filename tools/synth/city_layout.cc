@@ -12,6 +12,9 @@ namespace {
 
 constexpr double kDegree = std::numbers::pi / 180;
 
+// Random draws each in their own statement, in the order GCC made them (arguments right to
+// left): the order of arguments and of operands is unspecified, and clang's differs.
+
 // Stream tags so that different uses of the same id never share random numbers.
 enum Stream : uint64_t { kGridStream = 1, kFacadeStream, kMappingStream, kQueryStream };
 
@@ -165,9 +168,11 @@ std::vector<CameraPose> CityLayout::PlaceMappingCameras(uint64_t seed) const {
         const double offset = std::max(2.0, f.street_width - rng.Uniform(1.5, 3.0));
         const Eigen::Vector2d g =
             f.origin + (u + 0.3 * rng.Gaussian()) * f.direction + offset * f.normal;
-        CameraPose pose = MakeCameraPose(
-            {g.x(), g.y(), rng.Uniform(1.5, 1.8)}, facing + rng.Uniform(-30, 30) * kDegree,
-            rng.Uniform(5, 20) * kDegree, 1.5 * kDegree * rng.Gaussian());
+        const double roll = 1.5 * kDegree * rng.Gaussian();
+        const double pitch = rng.Uniform(5, 20) * kDegree;
+        const double yaw = facing + rng.Uniform(-30, 30) * kDegree;
+        const double height = rng.Uniform(1.5, 1.8);
+        CameraPose pose = MakeCameraPose({g.x(), g.y(), height}, yaw, pitch, roll);
         pose.facade = id;
         cameras.push_back(pose);
       }
@@ -175,10 +180,12 @@ std::vector<CameraPose> CityLayout::PlaceMappingCameras(uint64_t seed) const {
       if (station % 2 == 1) {
         const double offset = rng.Uniform(3.0, std::min(6.0, f.street_width - 1.0));
         const Eigen::Vector2d g = f.origin + u * f.direction + offset * f.normal;
-        const double turn = rng.Uniform(30, 55) * kDegree * (rng.Uniform() < 0.5 ? -1 : 1);
-        CameraPose pose =
-            MakeCameraPose({g.x(), g.y(), rng.Uniform(1.5, 1.8)}, facing + turn,
-                           rng.Uniform(5, 25) * kDegree, 1.5 * kDegree * rng.Gaussian());
+        const double turn_size = rng.Uniform(30, 55) * kDegree;
+        const double turn = turn_size * (rng.Uniform() < 0.5 ? -1 : 1);
+        const double roll = 1.5 * kDegree * rng.Gaussian();
+        const double pitch = rng.Uniform(5, 25) * kDegree;
+        const double height = rng.Uniform(1.5, 1.8);
+        CameraPose pose = MakeCameraPose({g.x(), g.y(), height}, facing + turn, pitch, roll);
         pose.facade = id;
         cameras.push_back(pose);
       }
@@ -197,9 +204,11 @@ CameraPose CityLayout::DrawQueryCamera(uint64_t seed, uint64_t draw) const {
   const double u = rng.Uniform(0, f.width);
   const double offset = rng.Uniform(2.0, f.street_width - 1.5);
   const Eigen::Vector2d g = f.origin + u * f.direction + offset * f.normal;
-  CameraPose pose = MakeCameraPose({g.x(), g.y(), rng.Uniform(1.4, 1.9)},
-                                   Heading(-f.normal) + rng.Uniform(-60, 60) * kDegree,
-                                   rng.Uniform(-5, 25) * kDegree, 3 * kDegree * rng.Gaussian());
+  const double roll = 3 * kDegree * rng.Gaussian();
+  const double pitch = rng.Uniform(-5, 25) * kDegree;
+  const double yaw = Heading(-f.normal) + rng.Uniform(-60, 60) * kDegree;
+  const double height = rng.Uniform(1.4, 1.9);
+  CameraPose pose = MakeCameraPose({g.x(), g.y(), height}, yaw, pitch, roll);
   pose.facade = std::min<uint32_t>(id, uint32_t(facades_.size() - 1));
   return pose;
 }

@@ -39,13 +39,17 @@ constexpr double kKeypointScaleError = 0.13;  // log2, sigma; the descriptor see
 constexpr double kMinDepth = 0.3;
 constexpr int kMaxQueryDraws = 64;
 
+// Random draws each in their own statement, in the order GCC made them (arguments right to
+// left): the order of arguments and of operands is unspecified, and clang's differs.
+
 // Feature sizes: a Pareto tail (alpha = 2) above 1.9 cm, as SIFT scales on facades look.
 double DrawFeatureSize(Rng& rng) { return std::min(0.5, 0.019 / std::sqrt(1 - rng.Uniform())); }
 
 // Facade features are mostly aligned with horizontal and vertical edges.
 double DrawFeatureAngle(Rng& rng) {
   if (rng.Uniform() < 0.5) return rng.Uniform(-std::numbers::pi, std::numbers::pi);
-  return double(rng.Below(4)) * std::numbers::pi / 2 + 0.15 * rng.Gaussian();
+  const double edge = double(rng.Below(4)) * std::numbers::pi / 2;
+  return edge + 0.15 * rng.Gaussian();
 }
 
 double TruncatedGaussian(Rng& rng, double sigma) {
@@ -277,7 +281,9 @@ void CityScene::MakePoints() {
       const double u0 = rng.Uniform(0, f.width);
       for (size_t k = 0; k < count; ++k) {
         const double u = std::fmod(u0 + double(k) * step, f.width);
-        add(u, v, motif, size * std::exp(0.05 * rng.Gaussian()), angle + 0.03 * rng.Gaussian());
+        const double instance_angle = angle + 0.03 * rng.Gaussian();
+        const double instance_size = size * std::exp(0.05 * rng.Gaussian());
+        add(u, v, motif, instance_size, instance_angle);
       }
     }
     while (out.size() < n) {

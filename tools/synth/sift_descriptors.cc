@@ -14,6 +14,9 @@ constexpr int kMaxStructures = 16;
 constexpr int kMaxTexture = 192;
 constexpr double kTwoPi = 2 * std::numbers::pi;
 
+// Random draws each in their own statement, in the order GCC made them: the order of operands
+// is unspecified.
+
 // One edge or blob in the patch, in canonical (fronto-parallel) patch coordinates: cells,
 // centred on the keypoint, so the descriptor grid spans [-2, 2]^2.
 struct Structure {
@@ -43,7 +46,8 @@ int DrawStructures(const PatchModel& model, Rng& rng, Structure* out) {
   dominant.amplitude = model.dominant_amplitude * rng.Uniform(0.6, 1.4);
   out[n++] = dominant;
   const double bar = rng.Uniform();
-  const double bar_offset = rng.Uniform(0.6, 2.0) * (rng.Uniform() < 0.5 ? -1 : 1);
+  const double bar_distance = rng.Uniform(0.6, 2.0);
+  const double bar_offset = bar_distance * (rng.Uniform() < 0.5 ? -1 : 1);
   const double bar_amplitude = rng.Uniform(0.5, 1.0);
   if (bar < model.opposite_probability) {
     // A bar: the other side of a thin line, gradient the other way.
