@@ -9,6 +9,9 @@
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
+#include <fstream>
+#include <iterator>
+#include <stdexcept>
 #include <vector>
 
 namespace cwloc::test {
@@ -22,6 +25,8 @@ std::filesystem::path SourceDir() {
   const char* env = std::getenv("CWLOC_SOURCE_DIR");
   return env ? env : CWLOC_TEST_SOURCE_DIR;
 }
+
+std::filesystem::path GoldenDir() { return SourceDir() / "tests" / "data" / "golden"; }
 
 std::optional<std::filesystem::path> SharedDataDir(const std::string& name) {
   std::vector<std::filesystem::path> roots;
@@ -46,6 +51,21 @@ TempDir::TempDir() {
 TempDir::~TempDir() {
   std::error_code ec;
   std::filesystem::remove_all(path_, ec);
+}
+
+std::vector<uint8_t> ReadBytes(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), {}};
+}
+
+void WriteBytes(const std::filesystem::path& path, std::span<const uint8_t> bytes) {
+  // A new file rather than the old one truncated: ext4 flushes a file truncated and rewritten
+  // (auto_da_alloc), which makes loops that rewrite one file many times slow.
+  std::filesystem::remove(path);
+  std::ofstream out(path, std::ios::binary);
+  out.write(reinterpret_cast<const char*>(bytes.data()),
+            static_cast<std::streamsize>(bytes.size()));
+  if (!out.flush()) throw std::runtime_error(path.string() + ": cannot write");
 }
 
 std::filesystem::path ToolPath(const std::string& name) {

@@ -4,7 +4,11 @@
 #include <filesystem>
 #include <optional>
 #include <random>
+#include <span>
 #include <string>
+#include <vector>
+
+#include "format/base/error.h"
 
 namespace cwloc::test {
 
@@ -14,6 +18,9 @@ std::mt19937_64& Rng();
 
 // The source tree ($CWLOC_SOURCE_DIR or the configured one): schemas, tools.
 std::filesystem::path SourceDir();
+
+// tests/data/golden: the committed index files of every format version (tests/data/README.md).
+std::filesystem::path GoldenDir();
 
 // ../shared/data/<name> next to the source tree (or $CWLOC_SHARED_DATA/<name>), if present.
 std::optional<std::filesystem::path> SharedDataDir(const std::string& name);
@@ -31,6 +38,22 @@ class TempDir {
  private:
   std::filesystem::path path_;
 };
+
+// A whole file's bytes (empty when it cannot be read), and a file replaced by `bytes` (throws
+// std::runtime_error when it cannot be written).
+std::vector<uint8_t> ReadBytes(const std::filesystem::path& path);
+void WriteBytes(const std::filesystem::path& path, std::span<const uint8_t> bytes);
+
+// The InputError message `body` throws, "" when it returns.
+template <typename Body>
+std::string InputErrorOf(Body&& body) {
+  try {
+    body();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
 
 // Path of an executable of ours in build/bin ($CWLOC_BIN_DIR or the configured one).
 std::filesystem::path ToolPath(const std::string& name);

@@ -11,12 +11,11 @@
 
 namespace cwloc {
 
-inline std::filesystem::path GoldenDir() { return test::SourceDir() / "tests" / "data" / "golden"; }
-inline std::filesystem::path GoldenIndex() { return GoldenDir() / "index-1.0.cwl"; }
-inline std::filesystem::path QueryDir() { return GoldenDir() / "index-1.0-queries"; }
+inline std::filesystem::path GoldenIndex() { return test::GoldenDir() / "index-1.0.cwl"; }
+inline std::filesystem::path QueryDir() { return test::GoldenDir() / "index-1.0-queries"; }
 // The same city on the globe (format 1.1, tests/data/README.md): results have geo poses.
-inline std::filesystem::path GeoIndex() { return GoldenDir() / "index-1.1.cwl"; }
-inline std::filesystem::path GeoQueryDir() { return GoldenDir() / "index-1.1-queries"; }
+inline std::filesystem::path GeoIndex() { return test::GoldenDir() / "index-1.1.cwl"; }
+inline std::filesystem::path GeoQueryDir() { return test::GoldenDir() / "index-1.1-queries"; }
 
 // "MODEL W H P1 P2 ..." as the ground-truth file writes it.
 inline api::Camera ParseCamera(const std::string& spec) {

@@ -4,7 +4,6 @@
 
 #include <cmath>
 #include <fstream>
-#include <iterator>
 #include <set>
 
 #include "format/index/index.h"
@@ -14,11 +13,6 @@ namespace cwloc {
 namespace {
 
 using testing::HasSubstr;
-
-std::vector<char> ReadAll(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), {}};
-}
 
 class IndexBuilderTest : public test::IndexerFixture {
  protected:
@@ -142,11 +136,11 @@ TEST_F(IndexBuilderTest, OutputIsByteIdenticalForTheSameInputAndAnyThreadCount) 
   IndexBuildOptions options = Options();
   options.threads = 1;
   BuildIndex(options);
-  const auto first = ReadAll(index_path_);
+  const auto first = test::ReadBytes(index_path_);
   options.threads = 2;
   options.output_path = dir_ / "second.cwl";
   BuildIndex(options);
-  EXPECT_EQ(first, ReadAll(options.output_path));
+  EXPECT_EQ(first, test::ReadBytes(options.output_path));
 }
 
 TEST_F(IndexBuilderTest, ClusteringFromAFileGroupsImages) {

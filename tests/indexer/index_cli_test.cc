@@ -7,7 +7,6 @@
 
 #include <chrono>
 #include <fstream>
-#include <iterator>
 #include <nlohmann/json.hpp>
 #include <thread>
 
@@ -34,15 +33,10 @@ class IndexCliTest : public test::IndexerFixture {
         << output;
   }
 
-  std::vector<uint8_t> Bytes() const {
-    std::ifstream in(index_path_, std::ios::binary);
-    return {std::istreambuf_iterator<char>(in), {}};
-  }
+  std::vector<uint8_t> Bytes() const { return test::ReadBytes(index_path_); }
 
   void WriteCorrupt(const std::vector<uint8_t>& bytes) const {
-    std::ofstream(dir_ / "corrupt.cwl", std::ios::binary)
-        .write(reinterpret_cast<const char*>(bytes.data()),
-               static_cast<std::streamsize>(bytes.size()));
+    test::WriteBytes(dir_ / "corrupt.cwl", bytes);
   }
 };
 
@@ -169,8 +163,7 @@ TEST_F(IndexCliTest, KilledBuildsLeaveTheOldOrTheNewIndexAndNothingElse) {
   ASSERT_EQ(waitpid(spawn(), &status, 0) > 0 && WIFEXITED(status) && WEXITSTATUS(status) == 0,
             true);
   const auto duration = std::chrono::steady_clock::now() - start;
-  std::ifstream in(output, std::ios::binary);
-  const std::vector<char> complete{std::istreambuf_iterator<char>(in), {}};
+  const std::vector<uint8_t> complete = test::ReadBytes(output);
   ASSERT_FALSE(complete.empty());
 
   auto& rng = test::Rng();
@@ -178,7 +171,7 @@ TEST_F(IndexCliTest, KilledBuildsLeaveTheOldOrTheNewIndexAndNothingElse) {
     // Half the kills with no previous index, half replacing one.
     const bool replacing = kill_number % 2 == 1;
     std::filesystem::remove(output);
-    if (replacing) std::ofstream(output, std::ios::binary).write(complete.data(), complete.size());
+    if (replacing) test::WriteBytes(output, complete);
     const pid_t pid = spawn();
     std::this_thread::sleep_for(duration * (rng() % 1000) / 1000);
     kill(pid, SIGKILL);
@@ -199,9 +192,7 @@ TEST_F(IndexCliTest, KilledBuildsLeaveTheOldOrTheNewIndexAndNothingElse) {
       EXPECT_FALSE(replacing) << "the previous index vanished";
       continue;
     }
-    std::ifstream file(output, std::ios::binary);
-    EXPECT_EQ(std::vector<char>(std::istreambuf_iterator<char>(file), {}), complete)
-        << "a partial index after kill " << kill_number;
+    EXPECT_EQ(test::ReadBytes(output), complete) << "a partial index after kill " << kill_number;
   }
   // A last complete build cleans up after every killed writer.
   ASSERT_EQ(waitpid(spawn(), &status, 0) > 0 && WIFEXITED(status) && WEXITSTATUS(status) == 0,

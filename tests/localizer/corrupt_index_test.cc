@@ -4,7 +4,6 @@
 
 #include <cstring>
 #include <fstream>
-#include <iterator>
 
 #include "format/index/index.h"
 #include "localizer/io/database/database_queries.h"
@@ -13,11 +12,6 @@
 
 namespace cwloc {
 namespace {
-
-std::vector<char> ReadAll(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), {}};
-}
 
 TEST(CorruptIndex, RandomWordsInAnySectionNeverCrashTheLocalizer) {
   test::TempDir dir;
@@ -40,7 +34,7 @@ TEST(CorruptIndex, RandomWordsInAnySectionNeverCrashTheLocalizer) {
   for (std::string name; std::getline(list, name);) queries.push_back(database.Load(name));
   ASSERT_EQ(queries.size(), 3u);
 
-  const std::vector<char> original = ReadAll(dir / "city.cwl");
+  const std::vector<uint8_t> original = test::ReadBytes(dir / "city.cwl");
   std::vector<SectionEntry> sections;
   {
     const Index index = Index::Open(dir / "city.cwl");
@@ -51,7 +45,7 @@ TEST(CorruptIndex, RandomWordsInAnySectionNeverCrashTheLocalizer) {
   for (const SectionEntry& section : sections) {
     if (section.tag == section::kManifest || section.size < 4) continue;
     for (int trial = 0; trial < 3; ++trial) {
-      std::vector<char> bytes = original;
+      std::vector<uint8_t> bytes = original;
       // Overwrite a few 32-bit words with large or random values: out-of-range indices.
       for (int word = 0; word < 8; ++word) {
         const uint64_t at = section.offset + (rng() % (section.size / 4)) * 4;
@@ -60,9 +54,7 @@ TEST(CorruptIndex, RandomWordsInAnySectionNeverCrashTheLocalizer) {
         std::memcpy(bytes.data() + at, &value, 4);
       }
       const auto path = dir / "corrupt.cwl";
-      std::filesystem::remove(path);
-      std::ofstream(path, std::ios::binary)
-          .write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+      test::WriteBytes(path, bytes);
       try {
         const Index index = Index::Open(path);
         const Localizer localizer(index);

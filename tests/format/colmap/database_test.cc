@@ -160,16 +160,7 @@ std::set<std::string> ListDir(const std::filesystem::path& dir) {
   return names;
 }
 
-// Runs `body` and returns the InputError message it throws ("" when it does not throw).
-template <typename Body>
-std::string InputErrorOf(Body&& body) {
-  try {
-    body();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
-}
+using test::InputErrorOf;
 
 TEST(DatabaseTest, RoundTrip) {
   test::TempDir dir;

@@ -21,6 +21,7 @@ namespace cwloc::colmap {
 namespace {
 
 namespace fs = std::filesystem;
+using test::InputErrorOf;
 using ::testing::HasSubstr;
 
 std::string ReadFile(const fs::path& path) {
@@ -36,18 +37,8 @@ void WriteFile(const fs::path& path, const std::string& bytes) {
   out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
 }
 
-// The InputError message of `read`, or "" when it does not throw.
-std::string ErrorOf(const std::function<void()>& read) {
-  try {
-    read();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
-}
-
 std::string ReadError(const fs::path& dir) {
-  return ErrorOf([&] { ReadReconstruction(dir); });
+  return InputErrorOf([&] { ReadReconstruction(dir); });
 }
 
 // Everything but rigs and frames.
@@ -265,7 +256,7 @@ TEST(ReconstructionIoTest, TextNamesWithSpacesAndCrlfLines) {
   test::TempDir other;
   for (const char* name : {"two\nlines.jpg", "trailing.jpg ", " leading.jpg"}) {
     model.images.begin()->second.name = name;
-    EXPECT_THAT(ErrorOf([&] { WriteReconstruction(model, other.path(), ModelFormat::kText); }),
+    EXPECT_THAT(InputErrorOf([&] { WriteReconstruction(model, other.path(), ModelFormat::kText); }),
                 HasSubstr("images.txt: image " + std::to_string(model.images.begin()->first) +
                           ": name '" + name + "' cannot be stored in a text model"));
     WriteReconstruction(model, other.path(), ModelFormat::kBinary);
@@ -659,17 +650,18 @@ TEST(ReconstructionIoTextTest, BrokenTextFiles) {
 
 TEST(ReconstructionIoWriteTest, UnwritableTargets) {
   test::TempDir dir;
-  EXPECT_EQ(
-      ErrorOf([&] { WriteReconstruction(TinyModel(), dir / "missing", ModelFormat::kBinary); }),
-      (dir / "missing").string() + ": not a directory (create it before writing a model)");
+  EXPECT_EQ(InputErrorOf(
+                [&] { WriteReconstruction(TinyModel(), dir / "missing", ModelFormat::kBinary); }),
+            (dir / "missing").string() + ": not a directory (create it before writing a model)");
 
   // A full disk: the file being replaced is kept and no temporary file is left behind.
   WriteReconstruction(TinyModel(), dir.path(), ModelFormat::kText);
   const std::string cameras = ReadFile(dir / "cameras.txt");
   {
     const test::FileSizeLimit limit(16);
-    EXPECT_EQ(ErrorOf([&] { WriteReconstruction(TinyModel(), dir.path(), ModelFormat::kText); }),
-              (dir / "cameras.txt").string() + ": cannot write: File too large");
+    EXPECT_EQ(
+        InputErrorOf([&] { WriteReconstruction(TinyModel(), dir.path(), ModelFormat::kText); }),
+        (dir / "cameras.txt").string() + ": cannot write: File too large");
   }
   EXPECT_EQ(ReadFile(dir / "cameras.txt"), cameras);
   EXPECT_EQ(std::distance(fs::directory_iterator(dir.path()), fs::directory_iterator()), 3);

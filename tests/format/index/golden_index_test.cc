@@ -75,13 +75,11 @@ const GoldenIndex kGoldenIndexes[] = {
 // Failure messages name the file instead of dumping the struct's bytes.
 void PrintTo(const GoldenIndex& golden, std::ostream* os) { *os << golden.file; }
 
-std::filesystem::path GoldenDir() { return test::SourceDir() / "tests" / "data" / "golden"; }
-
 class GoldenIndexTest : public testing::TestWithParam<GoldenIndex> {};
 
 TEST_P(GoldenIndexTest, OpensValidatesAndHasTheExactVersionAndCounts) {
   const GoldenIndex& golden = GetParam();
-  const Index index = Index::Open(GoldenDir() / golden.file);
+  const Index index = Index::Open(test::GoldenDir() / golden.file);
   const FileHeader& header = index.file().header();
   EXPECT_EQ(header.format_major, golden.format_major);
   EXPECT_EQ(header.format_minor, golden.format_minor);
@@ -116,7 +114,7 @@ TEST_P(GoldenIndexTest, OpensValidatesAndHasTheExactVersionAndCounts) {
 
 TEST_P(GoldenIndexTest, LocalizesItsStoredQueriesNearTheirGroundTruth) {
   const GoldenIndex& golden = GetParam();
-  const auto queries = GoldenDir() / golden.queries;
+  const auto queries = test::GoldenDir() / golden.queries;
   const auto truth = test::ReadGroundTruth(queries / "queries_gt.txt");
   const double metres_per_unit = test::ReadMetresPerUnit(queries / "scale_to_metres.txt");
   ASSERT_EQ(truth.size(), golden.num_queries);
@@ -127,7 +125,7 @@ TEST_P(GoldenIndexTest, LocalizesItsStoredQueriesNearTheirGroundTruth) {
     std::string output;
     // Exit 0: localized. One run per query, each with its own camera.
     EXPECT_EQ(test::RunCommand(test::ToolPath("cwloc-localize").string() + " --index " +
-                                   (GoldenDir() / golden.file).string() + " --features " +
+                                   (test::GoldenDir() / golden.file).string() + " --features " +
                                    (queries / (name + ".txt")).string() + " --camera \"" +
                                    query.camera + "\" -o " + results.string(),
                                &output),

@@ -4,8 +4,6 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
-#include <fstream>
-#include <iterator>
 #include <numeric>
 
 #include "format/index/xxhash64.h"
@@ -16,24 +14,11 @@ namespace {
 
 using testing::HasSubstr;
 
-std::vector<uint8_t> ReadBytes(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), {}};
-}
-
-void WriteBytes(const std::filesystem::path& path, const std::vector<uint8_t>& bytes) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out.write(reinterpret_cast<const char*>(bytes.data()),
-            static_cast<std::streamsize>(bytes.size()));
-}
+using test::ReadBytes;
+using test::WriteBytes;
 
 std::string OpenError(const std::filesystem::path& path) {
-  try {
-    IndexFile::Open(path);
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
+  return test::InputErrorOf([&] { IndexFile::Open(path); });
 }
 
 class IndexFileTest : public testing::Test {

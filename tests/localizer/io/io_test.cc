@@ -15,16 +15,8 @@
 namespace cwloc {
 namespace {
 
+using test::InputErrorOf;
 using testing::HasSubstr;
-
-std::string ErrorOf(const std::function<void()>& body) {
-  try {
-    body();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
-}
 
 TEST(CameraSpec, ParsesEveryFieldOfAColmapCameraLine) {
   const QueryCamera camera =
@@ -37,15 +29,15 @@ TEST(CameraSpec, ParsesEveryFieldOfAColmapCameraLine) {
 }
 
 TEST(CameraSpec, BadSpecsNameTheProblem) {
-  EXPECT_EQ(ErrorOf([] { ParseCameraSpec("PINHOLE 640 480 500 500 320", "--camera"); }),
+  EXPECT_EQ(InputErrorOf([] { ParseCameraSpec("PINHOLE 640 480 500 500 320", "--camera"); }),
             "--camera: PINHOLE takes 4 parameters, got 3");
-  EXPECT_EQ(ErrorOf([] { ParseCameraSpec("PINHOLE -640 480 500 500 320 240", "--camera"); }),
+  EXPECT_EQ(InputErrorOf([] { ParseCameraSpec("PINHOLE -640 480 500 500 320 240", "--camera"); }),
             "--camera: expected a positive image width (at most 1000000)");
-  EXPECT_EQ(ErrorOf([] { ParseCameraSpec("PINHOLE 640 480 500 abc 320 240", "--camera"); }),
+  EXPECT_EQ(InputErrorOf([] { ParseCameraSpec("PINHOLE 640 480 500 abc 320 240", "--camera"); }),
             "--camera: camera parameters must be numbers");
-  EXPECT_EQ(ErrorOf([] { ParseCameraSpec("SIMPLE_PINHOLE 640 480 -5 320 240", "--camera"); }),
+  EXPECT_EQ(InputErrorOf([] { ParseCameraSpec("SIMPLE_PINHOLE 640 480 -5 320 240", "--camera"); }),
             "--camera: the focal length must be positive");
-  EXPECT_THAT(ErrorOf([] { ParseCameraSpec("", "--camera"); }), HasSubstr("empty camera"));
+  EXPECT_THAT(InputErrorOf([] { ParseCameraSpec("", "--camera"); }), HasSubstr("empty camera"));
 }
 
 TEST(CameraSpec, ImageSizeMeansUnknownFocalWithCentredPrincipalPoint) {
@@ -53,7 +45,7 @@ TEST(CameraSpec, ImageSizeMeansUnknownFocalWithCentredPrincipalPoint) {
   EXPECT_EQ(camera.calibration, Calibration::kUnknown);
   EXPECT_EQ(camera.width, 1536u);
   EXPECT_EQ(camera.params[1], 768.0);
-  EXPECT_EQ(ErrorOf([] { ParseImageSize("1536 1024 7", "--image-size"); }),
+  EXPECT_EQ(InputErrorOf([] { ParseImageSize("1536 1024 7", "--image-size"); }),
             "--image-size: expected 'WIDTH HEIGHT', got extra '7'");
 }
 
@@ -82,7 +74,7 @@ TEST(PhotoOptions, VlfeatOnlySiftOptionsNeedVlfeat) {
   if (SiftVlfeatAvailable()) {
     EXPECT_NO_THROW(ValidatePhotoOptions(options));
   } else {
-    EXPECT_THAT(ErrorOf([&] { ValidatePhotoOptions(options); }),
+    EXPECT_THAT(InputErrorOf([&] { ValidatePhotoOptions(options); }),
                 HasSubstr("first_octave must be >= -1"));
   }
 }
@@ -101,18 +93,18 @@ TEST_F(FeatureFileTest, ReadsKeypointsAndDescriptors) {
 TEST_F(FeatureFileTest, MalformedFilesNameTheLine) {
   Query query;
   std::string path = Write("2 64\n");
-  EXPECT_EQ(ErrorOf([&] { ReadFeatureFile(path, &query); }),
+  EXPECT_EQ(InputErrorOf([&] { ReadFeatureFile(path, &query); }),
             path + ":1: descriptors have 64 dimensions, expected 128");
   path = Write("2 128\n1 2 3 4" + Descriptor(0) + "\n");
-  EXPECT_EQ(ErrorOf([&] { ReadFeatureFile(path, &query); }),
+  EXPECT_EQ(InputErrorOf([&] { ReadFeatureFile(path, &query); }),
             path + ":3: file ends after 1 of 2 features");
   path = Write("1 128\n1 2 3 4 256" + Descriptor(0).substr(3) + "\n");
-  EXPECT_EQ(ErrorOf([&] { ReadFeatureFile(path, &query); }),
+  EXPECT_EQ(InputErrorOf([&] { ReadFeatureFile(path, &query); }),
             path + ":2: descriptor value 1 is not an integer in 0..255");
   path = Write("1 128\n1 2 x 4" + Descriptor(0) + "\n");
-  EXPECT_EQ(ErrorOf([&] { ReadFeatureFile(path, &query); }),
+  EXPECT_EQ(InputErrorOf([&] { ReadFeatureFile(path, &query); }),
             path + ":2: expected X Y SCALE ORIENTATION then 128 descriptor values");
-  EXPECT_THAT(ErrorOf([&] { ReadFeatureFile(dir_ / "none.txt", &query); }),
+  EXPECT_THAT(InputErrorOf([&] { ReadFeatureFile(dir_ / "none.txt", &query); }),
               HasSubstr("cannot open feature file"));
 }
 
