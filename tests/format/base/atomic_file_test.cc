@@ -5,7 +5,6 @@
 #include <unistd.h>
 
 #include <fstream>
-#include <iterator>
 #include <string>
 #include <vector>
 
@@ -17,14 +16,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string ReadFile(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
-
-std::vector<fs::path> ListDir(const fs::path& dir) {
-  return {fs::directory_iterator(dir), fs::directory_iterator()};
-}
+using test::ListDir;
+using test::ReadFile;
 
 TEST(AtomicFileTest, CommitReplacesTheFileAndLeavesNoTemporaryFile) {
   test::TempDir dir;
