@@ -13,6 +13,7 @@
 #include <thread>
 
 #include "cwloc/version.h"
+#include "format/base/checkpointed_file.h"
 #include "format/base/error.h"
 #include "format/base/progress.h"
 #include "format/base/tool_main.h"
@@ -220,20 +221,22 @@ class QueryLoader {
 };
 
 // Writes each finished query's record: JSON lines to --output (stdout by default), a pose line
-// to --poses, a readable line to stdout when the JSON goes to a file.
+// to --poses, a readable line to stdout when the JSON goes to a file. Files get whole records
+// only and keep their previous content until the first checkpoint (CheckpointedFile). The first
+// error writing them stops the run: failed() tells the workers, Close() throws it.
 class ResultSink {
  public:
   explicit ResultSink(const CliOptions& cli) : cli_(cli) {
     if (!cli.output_path.empty() && cli.output_path != "-")
-      OpenOrThrow(&json_file_, cli.output_path);
-    if (!cli.poses_path.empty()) OpenOrThrow(&poses_file_, cli.poses_path);
+      json_file_ = std::make_unique<CheckpointedFile>(cli.output_path);
+    if (!cli.poses_path.empty()) poses_file_ = std::make_unique<CheckpointedFile>(cli.poses_path);
   }
 
   void Write(const LocalizationResult& result, const LocalizerOptions& options) {
     std::lock_guard lock(mutex_);
     EmitJsonLine(ResultToJson(result, options).dump());
     // With the JSON in a file, stdout gets a readable line per query.
-    if (json_file_.is_open() && !cli_.quiet) {
+    if (json_file_ && !cli_.quiet) {
       if (result.success) {
         std::printf("%s: localized, %u inliers / %u correspondences, %.1f ms\n",
                     result.name.c_str(), result.num_inliers, result.correspondences,
@@ -243,7 +246,7 @@ class ResultSink {
       }
       std::fflush(stdout);
     }
-    if (poses_file_.is_open() && result.success) WriteLine(poses_file_, PoseLine(result));
+    if (poses_file_ && result.success) Append(*poses_file_, PoseLine(result));
   }
 
   void WriteError(const std::string& name, const std::string& error) {
@@ -252,29 +255,54 @@ class ResultSink {
     std::fprintf(stderr, "cwloc-localize: error: %s\n", error.c_str());
   }
 
+  bool failed() const { return failed_; }
+
+  // Puts every record in place; throws the first write error.
+  void Close() {
+    std::lock_guard lock(mutex_);
+    for (CheckpointedFile* file : {json_file_.get(), poses_file_.get()}) {
+      if (file && !failed_) Guard([&] { file->Close(); });
+    }
+    if (failed_) throw InputError(error_);
+  }
+
  private:
   // One record per line to --output, or stdout without it; the caller holds mutex_.
   void EmitJsonLine(const std::string& json) {
-    WriteLine(json_file_.is_open() ? static_cast<std::ostream&>(json_file_) : std::cout, json);
+    if (json_file_) {
+      Append(*json_file_, json);
+      return;
+    }
+    // A record and its newline in one write, flushed at once: a reader of the pipe sees each
+    // query as it finishes.
+    const std::string line = json + '\n';
+    std::cout.write(line.data(), static_cast<std::streamsize>(line.size()));
+    std::cout.flush();
   }
 
-  // A record and its newline in one write, flushed at once: a kill between records leaves
-  // whole lines (the stream's buffer holds nothing between them).
-  static void WriteLine(std::ostream& out, std::string line) {
+  void Append(CheckpointedFile& file, std::string line) {
     line += '\n';
-    out.write(line.data(), static_cast<std::streamsize>(line.size()));
-    out.flush();
+    Guard([&] { file.Append(line); });
   }
 
-  static void OpenOrThrow(std::ofstream* file, const std::string& path) {
-    file->open(path, std::ios::trunc);
-    if (!*file) throw InputError(path + ": cannot write");
+  // Runs a file operation unless one failed already, keeping the first error.
+  template <typename Operation>
+  void Guard(Operation operation) {
+    if (failed_) return;
+    try {
+      operation();
+    } catch (const InputError& e) {
+      error_ = e.what();
+      failed_ = true;
+    }
   }
 
   const CliOptions& cli_;
-  std::ofstream json_file_;
-  std::ofstream poses_file_;
+  std::unique_ptr<CheckpointedFile> json_file_;
+  std::unique_ptr<CheckpointedFile> poses_file_;
   std::mutex mutex_;
+  std::atomic<bool> failed_{false};
+  std::string error_;
 };
 
 int Run(const CliOptions& cli, const LocalizerOptions& options) {
@@ -296,7 +324,7 @@ int Run(const CliOptions& cli, const LocalizerOptions& options) {
   std::vector<double> times(sources.size(), -1);
   Progress progress("localizing", sources.size());
   auto worker = [&] {
-    for (size_t i = next++; i < sources.size(); i = next++) {
+    for (size_t i = next++; i < sources.size() && !sink.failed(); i = next++) {
       try {
         const Query query = loader.Load(sources[i]);
         const LocalizationResult result = localizer.Localize(query, options);
@@ -316,6 +344,7 @@ int Run(const CliOptions& cli, const LocalizerOptions& options) {
   worker();
   for (auto& thread : pool) thread.join();
   progress.Finish();
+  sink.Close();
 
   std::vector<double> finished;
   for (double t : times) {
@@ -404,9 +433,13 @@ int main(int argc, char** argv) {
                "Use a photo's EXIF GPS as a position prior (horizontal, --exif-gps-radius)");
   app.add_option("--exif-gps-radius", cli.exif_gps_radius_m, "Radius of the EXIF GPS prior, metres")
       ->capture_default_str();
-  app.add_option("-o,--output", cli.output_path, "JSON lines output (default: stdout)");
+  app.add_option("-o,--output", cli.output_path,
+                 "JSON lines output (default: stdout). A file keeps its previous content until "
+                 "this run's first records replace it, about a second in, and only ever holds "
+                 "whole lines, saved about once a second");
   app.add_option("--poses", cli.poses_path,
-                 "Also write 'NAME QW QX QY QZ TX TY TZ' lines of localized queries");
+                 "Also write 'NAME QW QX QY QZ TX TY TZ' lines of localized queries (saved as -o "
+                 "is)");
   app.add_option("--threads", cli.threads, "Queries localized in parallel")->capture_default_str();
   app.add_flag("--verify", cli.verify,
                "Verify the index's checksums and stored indices before localizing");

@@ -1,5 +1,8 @@
 #include "tests/test_util.h"
 
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <spawn.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -12,6 +15,7 @@
 #include <fstream>
 #include <iterator>
 #include <stdexcept>
+#include <thread>
 #include <vector>
 
 namespace cwloc::test {
@@ -91,6 +95,36 @@ int RunCommand(const std::string& command, std::string* output) {
     output->append(buffer.data(), n);
   const int status = ::pclose(pipe);
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+std::string ReadFile(const std::filesystem::path& path) {
+  const std::vector<uint8_t> bytes = ReadBytes(path);
+  return {bytes.begin(), bytes.end()};
+}
+
+std::vector<std::filesystem::path> ListDir(const std::filesystem::path& dir) {
+  return {std::filesystem::directory_iterator(dir), std::filesystem::directory_iterator()};
+}
+
+pid_t Spawn(const std::vector<std::string>& args) {
+  std::vector<char*> argv;
+  for (const std::string& arg : args) argv.push_back(const_cast<char*>(arg.c_str()));
+  argv.push_back(nullptr);
+  pid_t pid = 0;
+  EXPECT_EQ(posix_spawn(&pid, argv[0], nullptr, nullptr, argv.data(), environ), 0) << args[0];
+  return pid;
+}
+
+int Wait(pid_t pid) {
+  int status = 0;
+  if (::waitpid(pid, &status, 0) != pid) return -1;
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+bool KillAfter(pid_t pid, std::chrono::steady_clock::duration delay) {
+  std::this_thread::sleep_for(delay);
+  ::kill(pid, SIGKILL);
+  return Wait(pid) >= 0;
 }
 
 FileSizeLimit::FileSizeLimit(uint64_t bytes) {

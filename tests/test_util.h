@@ -1,5 +1,8 @@
 #pragma once
 
+#include <sys/types.h>
+
+#include <chrono>
 #include <cstdint>
 #include <filesystem>
 #include <optional>
@@ -63,6 +66,18 @@ std::string Quote(const std::filesystem::path& path);
 
 // Runs a shell command, captures stdout+stderr, returns the exit code.
 int RunCommand(const std::string& command, std::string* output);
+
+// A file's bytes as text ("" when it cannot be read) and a folder's entries.
+std::string ReadFile(const std::filesystem::path& path);
+std::vector<std::filesystem::path> ListDir(const std::filesystem::path& dir);
+
+// Tools killed at random moments (docs/reliability.md, "Interrupted writers"): a child process
+// running `args` (args[0] the executable; no shell), waited for or killed.
+pid_t Spawn(const std::vector<std::string>& args);
+// Its exit code, or -1 when a signal ended it.
+int Wait(pid_t pid);
+// Sleeps for `delay`, kills it with SIGKILL and reaps it; true when it had exited before.
+bool KillAfter(pid_t pid, std::chrono::steady_clock::duration delay);
 
 // While alive, writes that grow a file past `bytes` fail with EFBIG ("File too large"), the
 // way a full disk fails them; unlike /dev/full this reaches files of any name, even as root.

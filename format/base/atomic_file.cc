@@ -4,6 +4,7 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <cstdint>
@@ -12,6 +13,7 @@
 #include <string>
 #include <system_error>
 #include <utility>
+#include <vector>
 
 #include "format/base/error.h"
 
@@ -102,6 +104,39 @@ void AtomicFile::Write(const void* data, size_t size) {
     bytes += n;
     size -= static_cast<size_t>(n);
   }
+}
+
+void AtomicFile::CopyFrom(int source_fd, uint64_t size) {
+  loff_t offset = 0;
+  while (static_cast<uint64_t>(offset) < size) {
+    const size_t chunk = static_cast<size_t>(std::min<uint64_t>(size - offset, size_t{1} << 30));
+    const ssize_t n = ::copy_file_range(source_fd, &offset, fd_, nullptr, chunk, 0);
+    if (n > 0) continue;
+    if (n < 0 && errno == EINTR) continue;
+    // Not between these files (EXDEV across file systems, EINVAL, ENOSYS, EOPNOTSUPP), or the
+    // source ended early: copy the rest through a buffer, which reports the real error.
+    break;
+  }
+  std::vector<char> buffer;
+  while (static_cast<uint64_t>(offset) < size) {
+    if (buffer.empty()) buffer.resize(size_t{1} << 20);
+    const size_t chunk = static_cast<size_t>(std::min<uint64_t>(size - offset, buffer.size()));
+    const ssize_t n = ::pread(source_fd, buffer.data(), chunk, offset);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) Fail("cannot read the content to copy", errno);
+    if (n == 0) Fail("cannot copy the previous content", EIO);  // the source shrank
+    Write(buffer.data(), static_cast<size_t>(n));
+    offset += n;
+  }
+}
+
+int AtomicFile::OpenForReading() const {
+  // An unnamed file opens again through its /proc link, as Commit() links it.
+  const std::string name =
+      temp_path_.empty() ? "/proc/self/fd/" + std::to_string(fd_) : temp_path_.string();
+  const int fd = ::open(name.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) Fail("cannot open the temporary file again", errno);
+  return fd;
 }
 
 void AtomicFile::Commit() {

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <memory>
 #include <string_view>
@@ -34,6 +35,12 @@ class AtomicFile {
   const std::filesystem::path& temp_path() const { return temp_path_; }
 
   void Write(const void* data, size_t size);
+  // Appends the first `size` bytes of the open file `source_fd` (read from offset 0, its own
+  // offset untouched), kernel-side where the file systems allow (copy_file_range).
+  void CopyFrom(int source_fd, uint64_t size);
+  // A new read-only descriptor of the content written so far, which stays valid after Commit()
+  // (CheckpointedFile copies the committed content on from it); the caller closes it.
+  int OpenForReading() const;
   void Commit();
 
  private:

@@ -1,14 +1,10 @@
 // cwloc-index as a user runs it: build, info (--json against its schema), verify, and the
 // exit code and message for each kind of damaged file.
 #include <gmock/gmock.h>
-#include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
 
 #include <chrono>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <thread>
 
 #include "format/index/index_file.h"
 #include "tests/indexer/indexer_fixture.h"
@@ -145,23 +141,19 @@ TEST_F(IndexCliTest, KilledBuildsLeaveTheOldOrTheNewIndexAndNothingElse) {
   const auto out_dir = dir_ / "out";
   std::filesystem::create_directories(out_dir);
   const auto output = out_dir / "model.cwl";
-  const std::string tool = test::ToolPath("cwloc-index").string();
-  const std::vector<std::string> args = {
-      tool,        "build", "--model", model_dir_.string(), "--database", database_path_.string(),
-      "--threads", "1",     "-o",      output.string()};
-  std::vector<char*> argv;
-  for (const std::string& arg : args) argv.push_back(const_cast<char*>(arg.c_str()));
-  argv.push_back(nullptr);
-  auto spawn = [&] {
-    pid_t pid = 0;
-    EXPECT_EQ(posix_spawn(&pid, tool.c_str(), nullptr, nullptr, argv.data(), environ), 0);
-    return pid;
-  };
+  const std::vector<std::string> args = {test::ToolPath("cwloc-index").string(),
+                                         "build",
+                                         "--model",
+                                         model_dir_.string(),
+                                         "--database",
+                                         database_path_.string(),
+                                         "--threads",
+                                         "1",
+                                         "-o",
+                                         output.string()};
   // One whole build: its duration and its bytes (builds are deterministic).
   const auto start = std::chrono::steady_clock::now();
-  int status = 0;
-  ASSERT_EQ(waitpid(spawn(), &status, 0) > 0 && WIFEXITED(status) && WEXITSTATUS(status) == 0,
-            true);
+  ASSERT_EQ(test::Wait(test::Spawn(args)), 0);
   const auto duration = std::chrono::steady_clock::now() - start;
   const std::vector<uint8_t> complete = test::ReadBytes(output);
   ASSERT_FALSE(complete.empty());
@@ -172,10 +164,8 @@ TEST_F(IndexCliTest, KilledBuildsLeaveTheOldOrTheNewIndexAndNothingElse) {
     const bool replacing = kill_number % 2 == 1;
     std::filesystem::remove(output);
     if (replacing) test::WriteBytes(output, complete);
-    const pid_t pid = spawn();
-    std::this_thread::sleep_for(duration * (rng() % 1000) / 1000);
-    kill(pid, SIGKILL);
-    waitpid(pid, &status, 0);
+    const pid_t pid = test::Spawn(args);
+    test::KillAfter(pid, duration * (rng() % 1000) / 1000);
     // A kill between the link and the rename of a replacement leaves the killed writer's
     // named file, which the next writer removes (the window is microseconds wide).
     const std::string own = output.filename().string() + ".tmp-" + std::to_string(pid) + "-u";
@@ -192,13 +182,11 @@ TEST_F(IndexCliTest, KilledBuildsLeaveTheOldOrTheNewIndexAndNothingElse) {
       EXPECT_FALSE(replacing) << "the previous index vanished";
       continue;
     }
-    EXPECT_EQ(test::ReadBytes(output), complete) << "a partial index after kill " << kill_number;
+    EXPECT_TRUE(test::ReadBytes(output) == complete) << "a partial index after kill " << kill_number;
   }
   // A last complete build cleans up after every killed writer.
-  ASSERT_EQ(waitpid(spawn(), &status, 0) > 0 && WIFEXITED(status) && WEXITSTATUS(status) == 0,
-            true);
-  EXPECT_EQ(std::vector<std::filesystem::path>(std::filesystem::directory_iterator(out_dir), {}),
-            std::vector<std::filesystem::path>{output});
+  ASSERT_EQ(test::Wait(test::Spawn(args)), 0);
+  EXPECT_EQ(test::ListDir(out_dir), std::vector<std::filesystem::path>{output});
 }
 
 }  // namespace

@@ -3,8 +3,10 @@
 #include <gmock/gmock.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <fstream>
+#include <iostream>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -382,6 +384,135 @@ TEST(LocalizeCliHerzJesu, LocalizesEveryQueryWithValidJsonAndPoses) {
     for (double& value : values) ASSERT_TRUE(fields >> value) << line;
   }
   EXPECT_EQ(lines, 5);
+}
+
+// -o and --poses in a folder that does not exist fail before any query, naming the file.
+TEST(LocalizeOutputTest, AnOutputThatCannotBeWrittenFailsAtStart) {
+  const std::filesystem::path golden = test::SourceDir() / "tests" / "data" / "golden";
+  test::TempDir dir;
+  const std::filesystem::path missing = dir / "missing" / "out.txt";
+  for (const std::string option : {"-o", "--poses"}) {
+    std::string output;
+    EXPECT_EQ(test::RunCommand(test::ToolPath("cwloc-localize").string() + " --index " +
+                                   (golden / "index-1.1.cwl").string() + " --features " +
+                                   (golden / "index-1.1-queries" / "query_00001.jpg.txt").string() +
+                                   " --camera 'SIMPLE_RADIAL 1024 768 900 512 384 -0.01' " +
+                                   option + " " + missing.string(),
+                               &output),
+              2)
+        << option;
+    EXPECT_EQ(output, "cwloc-localize: error: " + missing.string() +
+                          ": cannot create a temporary file next to it: No such file or "
+                          "directory\n");
+  }
+}
+
+// The records of a JSON lines text without their timings, which differ from run to run; false
+// when a line is not a whole record.
+bool ParseRecords(const std::string& text, std::vector<nlohmann::json>* records) {
+  records->clear();
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) {
+    nlohmann::json record = nlohmann::json::parse(line, nullptr, /*allow_exceptions=*/false);
+    if (!record.is_object() || !record.contains("name")) return false;
+    record.erase("times_ms");
+    records->push_back(std::move(record));
+  }
+  return text.empty() || text.back() == '\n';
+}
+
+// cwloc-localize killed at random moments while it writes -o and --poses (docs/reliability.md,
+// "Interrupted writers"): each holds its previous file byte for byte, or whole records that an
+// uninterrupted run begins with, never an empty or a partial file; the next complete run leaves
+// nothing beside them.
+TEST(LocalizeKillTest, KilledRunsLeaveThePreviousOutputsOrWholeRecords) {
+  namespace fs = std::filesystem;
+  const fs::path golden = test::SourceDir() / "tests" / "data" / "golden";
+  test::TempDir dir;
+  // The golden index's 4 queries 40 times over, about 2 s; one thread keeps their order.
+  {
+    std::ofstream list(dir / "queries.txt");
+    for (int round = 0; round < 40; ++round) {
+      for (int query = 1; query <= 4; ++query) {
+        list << (golden / "index-1.1-queries" / ("query_0000" + std::to_string(query) + ".jpg.txt"))
+                    .string()
+             << " SIMPLE_RADIAL 1024 768 900 512 384 -0.01\n";  // their camera (queries_gt.txt)
+      }
+    }
+  }
+  const fs::path json = dir / "out.jsonl", poses = dir / "poses.txt";
+  const std::vector<std::string> args = {test::ToolPath("cwloc-localize").string(),
+                                         "--index",
+                                         (golden / "index-1.1.cwl").string(),
+                                         "--query-list",
+                                         (dir / "queries.txt").string(),
+                                         "--threads",
+                                         "1",
+                                         "-q",
+                                         "-o",
+                                         json.string(),
+                                         "--poses",
+                                         poses.string()};
+  const auto start = std::chrono::steady_clock::now();
+  ASSERT_EQ(test::Wait(test::Spawn(args)), 0);
+  const auto duration = std::chrono::steady_clock::now() - start;
+  std::vector<nlohmann::json> complete;
+  ASSERT_TRUE(ParseRecords(test::ReadFile(json), &complete));
+  ASSERT_EQ(complete.size(), 160u);
+  const std::string complete_poses = test::ReadFile(poses);
+  ASSERT_EQ(std::count(complete_poses.begin(), complete_poses.end(), '\n'), 160);
+
+  const std::string previous_json = "{\"name\": \"a previous run\"}\n";
+  const std::string previous_poses = "previous.jpg 1 0 0 0 0 0 0\n";
+  auto& rng = test::Rng();
+  int kept_previous = 0;
+  for (int kill_number = 0; kill_number < 16; ++kill_number) {
+    SCOPED_TRACE("kill " + std::to_string(kill_number));
+    std::ofstream(json) << previous_json;
+    std::ofstream(poses) << previous_poses;
+    const pid_t pid = test::Spawn(args);
+    // Every other kill lands in the run's first 5%, where it opens its outputs and writes the
+    // first records; the others anywhere.
+    const int per_mille = static_cast<int>(rng() % 1000) / (kill_number % 2 == 0 ? 20 : 1);
+    test::KillAfter(pid, duration * per_mille / 1000);
+
+    const std::string text = test::ReadFile(json);
+    std::vector<nlohmann::json> records;
+    if (text == previous_json) {
+      ++kept_previous;
+    } else {
+      EXPECT_TRUE(ParseRecords(text, &records) && !records.empty()) << "not whole records:\n"
+                                                                    << text;
+      EXPECT_TRUE(records.size() <= complete.size() &&
+                  std::equal(records.begin(), records.end(), complete.begin()))
+          << "not the records a complete run begins with";
+    }
+    const std::string pose_text = test::ReadFile(poses);
+    if (pose_text != previous_poses) {
+      EXPECT_TRUE(!pose_text.empty() && pose_text.back() == '\n' &&
+                  complete_poses.compare(0, pose_text.size(), pose_text) == 0)
+          << "not the pose lines a complete run begins with:\n"
+          << pose_text;
+    }
+    // A kill between a checkpoint's link and rename leaves `<name>.tmp-<pid>-u<n>`.
+    const std::string own = ".tmp-" + std::to_string(pid) + "-u";
+    for (const fs::path& entry : test::ListDir(dir.path())) {
+      const std::string name = entry.filename().string();
+      if (entry == json || entry == poses || name == "queries.txt") continue;
+      EXPECT_TRUE(name.rfind(json.filename().string() + own, 0) == 0 ||
+                  name.rfind(poses.filename().string() + own, 0) == 0)
+          << name;
+    }
+  }
+  std::cout << kept_previous << " of 16 kills found the previous outputs, the others records\n";
+  // A complete run writes every record and removes what killed runs left.
+  ASSERT_EQ(test::Wait(test::Spawn(args)), 0);
+  std::vector<fs::path> entries = test::ListDir(dir.path());
+  std::sort(entries.begin(), entries.end());
+  EXPECT_EQ(entries, (std::vector<fs::path>{json, poses, dir / "queries.txt"}));
+  std::vector<nlohmann::json> records;
+  EXPECT_TRUE(ParseRecords(test::ReadFile(json), &records) && records == complete);
+  EXPECT_EQ(test::ReadFile(poses), complete_poses);
 }
 
 }  // namespace

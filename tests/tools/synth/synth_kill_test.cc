@@ -2,17 +2,11 @@
 // scene or the new one, never a mix or nothing, and the next run removes what the killed one
 // left beside it.
 #include <gtest/gtest.h>
-#include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
 
 #include <algorithm>
 #include <chrono>
 #include <filesystem>
-#include <fstream>
-#include <iterator>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include "tests/test_util.h"
@@ -21,11 +15,6 @@ namespace cwloc {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::string ReadBytes(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), {}};
-}
 
 TEST(SynthKillTest, KilledRunsLeaveTheOldOrTheNewSceneAndTheNextRunCleansUp) {
   test::TempDir dir;
@@ -39,43 +28,27 @@ TEST(SynthKillTest, KilledRunsLeaveTheOldOrTheNewSceneAndTheNextRunCleansUp) {
                                     "1",   "--seed",           seed, "--overwrite",
                                     "-o",  city.string()};
   };
-  auto spawn = [&](const std::vector<std::string>& args) {
-    std::vector<char*> argv;
-    for (const std::string& arg : args) argv.push_back(const_cast<char*>(arg.c_str()));
-    argv.push_back(nullptr);
-    pid_t pid = 0;
-    EXPECT_EQ(posix_spawn(&pid, tool.c_str(), nullptr, nullptr, argv.data(), environ), 0);
-    return pid;
-  };
-  auto run = [&](const char* seed) {
-    int status = 0;
-    const pid_t pid = spawn(args_for(seed));
-    return waitpid(pid, &status, 0) == pid && WIFEXITED(status) && WEXITSTATUS(status) == 0;
-  };
+  auto run = [&](const char* seed) { return test::Wait(test::Spawn(args_for(seed))) == 0; };
   // Scene 2 measured for its duration and bytes, then scene 1 as the previous one.
   const auto start = std::chrono::steady_clock::now();
   ASSERT_TRUE(run("2"));
   const auto duration = std::chrono::steady_clock::now() - start;
-  const std::string new_gt = ReadBytes(city / "queries_gt.txt");
-  const std::string new_db = ReadBytes(city / "database.db");
+  const std::string new_gt = test::ReadFile(city / "queries_gt.txt");
+  const std::string new_db = test::ReadFile(city / "database.db");
   ASSERT_TRUE(run("1"));
-  const std::string old_gt = ReadBytes(city / "queries_gt.txt");
-  const std::string old_db = ReadBytes(city / "database.db");
+  const std::string old_gt = test::ReadFile(city / "queries_gt.txt");
+  const std::string old_db = test::ReadFile(city / "database.db");
   ASSERT_NE(old_gt, new_gt);
 
   auto& rng = test::Rng();
   std::vector<std::string> killed;  // "city.tmp-<pid>-": the killed runs' folder prefixes
   for (int kill_number = 0; kill_number < 12; ++kill_number) {
-    const pid_t pid = spawn(args_for("2"));
+    const pid_t pid = test::Spawn(args_for("2"));
     killed.push_back("city.tmp-" + std::to_string(pid) + "-");
-    std::this_thread::sleep_for(duration * (rng() % 1000) / 1000);
-    kill(pid, SIGKILL);
-    int status = 0;
-    waitpid(pid, &status, 0);
-    const bool finished = WIFEXITED(status);
+    const bool finished = test::KillAfter(pid, duration * (rng() % 1000) / 1000);
     // The destination is a whole scene: the old one, or the new one if the run finished.
-    const std::string gt = ReadBytes(city / "queries_gt.txt");
-    const std::string db = ReadBytes(city / "database.db");
+    const std::string gt = test::ReadFile(city / "queries_gt.txt");
+    const std::string db = test::ReadFile(city / "database.db");
     const bool is_old = gt == old_gt && db == old_db;
     const bool is_new = gt == new_gt && db == new_db;
     EXPECT_TRUE(is_old || is_new) << "a mixed or missing scene after kill " << kill_number;
@@ -96,8 +69,7 @@ TEST(SynthKillTest, KilledRunsLeaveTheOldOrTheNewSceneAndTheNextRunCleansUp) {
   }
   // A complete run removes every killed run's folder.
   ASSERT_TRUE(run("1"));
-  EXPECT_EQ(std::vector<fs::path>(fs::directory_iterator(dir.path()), {}),
-            std::vector<fs::path>{city});
+  EXPECT_EQ(test::ListDir(dir.path()), std::vector<fs::path>{city});
 }
 
 }  // namespace
