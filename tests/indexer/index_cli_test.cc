@@ -182,7 +182,8 @@ TEST_F(IndexCliTest, KilledBuildsLeaveTheOldOrTheNewIndexAndNothingElse) {
       EXPECT_FALSE(replacing) << "the previous index vanished";
       continue;
     }
-    EXPECT_TRUE(test::ReadBytes(output) == complete) << "a partial index after kill " << kill_number;
+    EXPECT_TRUE(test::ReadBytes(output) == complete)
+        << "a partial index after kill " << kill_number;
   }
   // A last complete build cleans up after every killed writer.
   ASSERT_EQ(test::Wait(test::Spawn(args)), 0);
