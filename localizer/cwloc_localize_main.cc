@@ -1,4 +1,6 @@
 // cwloc-localize: opens a cwloc index read-only and estimates query camera poses.
+#include <signal.h>
+
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <atomic>
@@ -8,6 +10,7 @@
 #include <iostream>
 #include <memory>
 #include <mutex>
+#include <new>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <thread>
@@ -42,6 +45,11 @@ struct QuerySource {
   std::string camera_spec;     // "MODEL W H PARAMS" from a list line, if any
   std::string list;            // the list file that line came from
 };
+
+// How an error names the query: its file, or its name in the database.
+std::string SourceLabel(const QuerySource& source) {
+  return source.path.empty() ? "query '" + source.name + "'" : source.path.string();
+}
 
 struct CliOptions {
   std::string index_path;
@@ -305,6 +313,23 @@ class ResultSink {
   std::string error_;
 };
 
+// The signal that asked the batch to stop (SIGINT or SIGTERM), else 0; lock-free, so a signal
+// handler may set it.
+std::atomic<int> stop_signal{0};
+static_assert(std::atomic<int>::is_always_lock_free);
+
+void RequestStop(int signal_number) { stop_signal = signal_number; }
+
+// Ctrl-C or a plain kill lets the running queries finish and puts every finished record in
+// place; a second one ends the process at once (SA_RESETHAND).
+void StopOnInterrupt() {
+  struct sigaction action {};
+  action.sa_handler = RequestStop;
+  sigemptyset(&action.sa_mask);
+  action.sa_flags = SA_RESETHAND;
+  for (const int signal_number : {SIGINT, SIGTERM}) sigaction(signal_number, &action, nullptr);
+}
+
 int Run(const CliOptions& cli, const LocalizerOptions& options) {
   ValidateLocalizerOptions(options);
   if (cli.threads < 1 || cli.threads > 1024)
@@ -320,11 +345,11 @@ int Run(const CliOptions& cli, const LocalizerOptions& options) {
   const Localizer localizer(index);
 
   std::atomic<size_t> next{0};
-  std::atomic<int> localized{0}, failed{0}, errors{0};
+  std::atomic<int> localized{0}, failed{0}, errors{0}, internal_errors{0};
   std::vector<double> times(sources.size(), -1);
   Progress progress("localizing", sources.size());
   auto worker = [&] {
-    for (size_t i = next++; i < sources.size() && !sink.failed(); i = next++) {
+    for (size_t i = next++; i < sources.size() && !sink.failed() && stop_signal == 0; i = next++) {
       try {
         const Query query = loader.Load(sources[i]);
         const LocalizationResult result = localizer.Localize(query, options);
@@ -334,10 +359,19 @@ int Run(const CliOptions& cli, const LocalizerOptions& options) {
       } catch (const InputError& e) {
         ++errors;
         sink.WriteError(sources[i].name, e.what());
+      } catch (const std::bad_alloc&) {
+        // A query too big for the memory left (a huge photo on a small device) must not end
+        // the batch: its buffers are freed by now.
+        ++internal_errors;
+        sink.WriteError(sources[i].name, SourceLabel(sources[i]) + ": out of memory");
+      } catch (const std::exception& e) {
+        ++internal_errors;
+        sink.WriteError(sources[i].name, SourceLabel(sources[i]) + ": internal error: " + e.what());
       }
       progress.Advance();
     }
   };
+  StopOnInterrupt();
   std::vector<std::thread> pool;
   const int threads = std::min<int>(cli.threads, static_cast<int>(sources.size()));
   for (int t = 1; t < threads; ++t) pool.emplace_back(worker);
@@ -345,6 +379,12 @@ int Run(const CliOptions& cli, const LocalizerOptions& options) {
   for (auto& thread : pool) thread.join();
   progress.Finish();
   sink.Close();
+  if (const int signal_number = stop_signal) {
+    std::fprintf(stderr, "cwloc-localize: interrupted by %s after %d of %zu queries\n",
+                 signal_number == SIGINT ? "SIGINT" : "SIGTERM",
+                 localized + failed + errors + internal_errors, sources.size());
+    return 128 + signal_number;  // the shell's code for a process a signal ended
+  }
 
   std::vector<double> finished;
   for (double t : times) {
@@ -355,10 +395,13 @@ int Run(const CliOptions& cli, const LocalizerOptions& options) {
     std::fprintf(stderr, "cwloc-localize: localized %d of %zu queries", localized.load(),
                  sources.size());
     if (errors > 0) std::fprintf(stderr, " (%d bad input)", errors.load());
+    if (internal_errors > 0)
+      std::fprintf(stderr, " (%d out of memory or internal error)", internal_errors.load());
     if (!finished.empty())
       std::fprintf(stderr, ", median %.1f ms per query", finished[finished.size() / 2] * 1e3);
     std::fprintf(stderr, "\n");
   }
+  if (internal_errors > 0) return kExitInternalError;
   if (errors > 0) return kExitBadInput;
   return failed > 0 ? kExitNotLocalized : kExitOk;
 }

@@ -1,12 +1,15 @@
 #include "photo/image_decode.h"
 
+#include <jerror.h>
 #include <jpeglib.h>
 #include <png.h>
+#include <strings.h>
 
 #include <csetjmp>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <new>
 #include <string>
 
 #include "format/base/error.h"
@@ -66,7 +69,9 @@ GreyImage DecodeJpeg(std::span<const uint8_t> bytes, const std::filesystem::path
   // Filled before any longjmp can happen and only read after the jump: no volatile needed
   // for the objects above, whose addresses do not change.
   if (setjmp(errors.jump)) {
+    const bool out_of_memory = errors.base.msg_code == JERR_OUT_OF_MEMORY;
     jpeg_destroy_decompress(&info);
+    if (out_of_memory) throw std::bad_alloc();
     throw InputError(path.string() + ": corrupt JPEG: " + errors.message);
   }
   jpeg_create_decompress(&info);
@@ -90,8 +95,13 @@ GreyImage DecodeJpeg(std::span<const uint8_t> bytes, const std::filesystem::path
   jpeg_start_decompress(&info);
   image.width = info.output_width;
   image.height = info.output_height;
-  image.pixels.resize(size_t{image.width} * image.height);
-  row.resize(size_t{image.width} * info.output_components);
+  try {
+    image.pixels.resize(size_t{image.width} * image.height);
+    row.resize(size_t{image.width} * info.output_components);
+  } catch (...) {
+    jpeg_destroy_decompress(&info);
+    throw;
+  }
   while (info.output_scanline < info.output_height) {
     uint8_t* out = image.pixels.data() + size_t{info.output_scanline} * image.width;
     JSAMPROW rows[1] = {grey ? out : row.data()};
@@ -142,6 +152,8 @@ GreyImage DecodePng(std::span<const uint8_t> bytes, const std::filesystem::path&
   std::vector<png_bytep> rows;
   if (setjmp(png_jmpbuf(png))) {
     png_destroy_read_struct(&png, &info, nullptr);
+    // png_malloc's failure, in the words of libpng 1.6 ("memory") and older ("Memory").
+    if (strcasecmp(reader.message, "Out of memory") == 0) throw std::bad_alloc();
     throw InputError(path.string() + ": corrupt PNG: " + reader.message);
   }
   png_set_read_fn(png, &reader, PngRead);
@@ -168,10 +180,15 @@ GreyImage DecodePng(std::span<const uint8_t> bytes, const std::filesystem::path&
   const int channels = png_get_channels(png, info);
   image.width = width;
   image.height = height;
-  image.pixels.resize(size_t{width} * height);
   // Whole rows of the expanded image (interlaced files need them all), then grey.
-  expanded.resize(size_t{width} * height * channels);
-  rows.resize(height);
+  try {
+    image.pixels.resize(size_t{width} * height);
+    expanded.resize(size_t{width} * height * channels);
+    rows.resize(height);
+  } catch (...) {
+    png_destroy_read_struct(&png, &info, nullptr);
+    throw;
+  }
   for (png_uint_32 y = 0; y < height; ++y) rows[y] = expanded.data() + size_t{y} * width * channels;
   png_read_image(png, rows.data());
   for (size_t i = 0; i < image.pixels.size(); ++i) {

@@ -72,8 +72,9 @@ std::string ReadFile(const std::filesystem::path& path);
 std::vector<std::filesystem::path> ListDir(const std::filesystem::path& dir);
 
 // Tools killed at random moments (docs/reliability.md, "Interrupted writers"): a child process
-// running `args` (args[0] the executable; no shell), waited for or killed.
-pid_t Spawn(const std::vector<std::string>& args);
+// running `args` (args[0] the executable; no shell), its stdout and stderr into `output` when
+// one is given, waited for or killed.
+pid_t Spawn(const std::vector<std::string>& args, const std::filesystem::path& output = {});
 // Its exit code, or -1 when a signal ended it.
 int Wait(pid_t pid);
 // Sleeps for `delay`, kills it with SIGKILL and reaps it; true when it had exited before.

@@ -1,6 +1,7 @@
 // cwloc-localize as a user runs it: JSON lines against the schema, the poses file, exit codes,
 // and an error record per bad query while the others finish.
 #include <gmock/gmock.h>
+#include <signal.h>
 
 #include <algorithm>
 #include <chrono>
@@ -9,7 +10,9 @@
 #include <iostream>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <regex>
 #include <sstream>
+#include <thread>
 
 #include "indexer/index_builder.h"
 #include "localizer/pose/refine_pose.h"
@@ -425,94 +428,146 @@ bool ParseRecords(const std::string& text, std::vector<nlohmann::json>* records)
 // "Interrupted writers"): each holds its previous file byte for byte, or whole records that an
 // uninterrupted run begins with, never an empty or a partial file; the next complete run leaves
 // nothing beside them.
-TEST(LocalizeKillTest, KilledRunsLeaveThePreviousOutputsOrWholeRecords) {
-  namespace fs = std::filesystem;
-  const fs::path golden = test::SourceDir() / "tests" / "data" / "golden";
-  test::TempDir dir;
-  // The golden index's 4 queries 40 times over, about 2 s; one thread keeps their order.
-  {
-    std::ofstream list(dir / "queries.txt");
-    for (int round = 0; round < 40; ++round) {
-      for (int query = 1; query <= 4; ++query) {
-        list << (golden / "index-1.1-queries" / ("query_0000" + std::to_string(query) + ".jpg.txt"))
-                    .string()
-             << " SIMPLE_RADIAL 1024 768 900 512 384 -0.01\n";  // their camera (queries_gt.txt)
+// The golden index's 4 queries 40 times over (about 2 s; one thread keeps their order) run by
+// cwloc-localize into -o json_ and --poses poses_, once to the end: the records, pose lines and
+// duration that interrupted runs are compared with.
+class GoldenBatchTest : public testing::Test {
+ protected:
+  void SetUp() override {
+    const std::filesystem::path golden = test::SourceDir() / "tests" / "data" / "golden";
+    {
+      std::ofstream list(dir_ / "queries.txt");
+      for (int round = 0; round < 40; ++round) {
+        for (int query = 1; query <= 4; ++query) {
+          list << (golden / "index-1.1-queries" /
+                   ("query_0000" + std::to_string(query) + ".jpg.txt"))
+                      .string()
+               << " SIMPLE_RADIAL 1024 768 900 512 384 -0.01\n";  // their camera (queries_gt.txt)
+        }
       }
     }
+    args_ = {test::ToolPath("cwloc-localize").string(),
+             "--index",
+             (golden / "index-1.1.cwl").string(),
+             "--query-list",
+             (dir_ / "queries.txt").string(),
+             "--threads",
+             "1",
+             "-q",
+             "-o",
+             json_.string(),
+             "--poses",
+             poses_.string()};
+    const auto start = std::chrono::steady_clock::now();
+    ASSERT_EQ(test::Wait(test::Spawn(args_)), 0);
+    duration_ = std::chrono::steady_clock::now() - start;
+    ASSERT_TRUE(ParseRecords(test::ReadFile(json_), &complete_));
+    ASSERT_EQ(complete_.size(), 160u);
+    complete_poses_ = test::ReadFile(poses_);
+    ASSERT_EQ(std::count(complete_poses_.begin(), complete_poses_.end(), '\n'), 160);
   }
-  const fs::path json = dir / "out.jsonl", poses = dir / "poses.txt";
-  const std::vector<std::string> args = {test::ToolPath("cwloc-localize").string(),
-                                         "--index",
-                                         (golden / "index-1.1.cwl").string(),
-                                         "--query-list",
-                                         (dir / "queries.txt").string(),
-                                         "--threads",
-                                         "1",
-                                         "-q",
-                                         "-o",
-                                         json.string(),
-                                         "--poses",
-                                         poses.string()};
-  const auto start = std::chrono::steady_clock::now();
-  ASSERT_EQ(test::Wait(test::Spawn(args)), 0);
-  const auto duration = std::chrono::steady_clock::now() - start;
-  std::vector<nlohmann::json> complete;
-  ASSERT_TRUE(ParseRecords(test::ReadFile(json), &complete));
-  ASSERT_EQ(complete.size(), 160u);
-  const std::string complete_poses = test::ReadFile(poses);
-  ASSERT_EQ(std::count(complete_poses.begin(), complete_poses.end(), '\n'), 160);
 
+  test::TempDir dir_;
+  const std::filesystem::path json_ = dir_ / "out.jsonl", poses_ = dir_ / "poses.txt";
+  std::vector<std::string> args_;
+  std::chrono::steady_clock::duration duration_{};
+  std::vector<nlohmann::json> complete_;
+  std::string complete_poses_;
+};
+
+class LocalizeKillTest : public GoldenBatchTest {};
+class LocalizeInterruptTest : public GoldenBatchTest {};
+
+TEST_F(LocalizeKillTest, KilledRunsLeaveThePreviousOutputsOrWholeRecords) {
+  namespace fs = std::filesystem;
   const std::string previous_json = "{\"name\": \"a previous run\"}\n";
   const std::string previous_poses = "previous.jpg 1 0 0 0 0 0 0\n";
   auto& rng = test::Rng();
   int kept_previous = 0;
   for (int kill_number = 0; kill_number < 16; ++kill_number) {
     SCOPED_TRACE("kill " + std::to_string(kill_number));
-    std::ofstream(json) << previous_json;
-    std::ofstream(poses) << previous_poses;
-    const pid_t pid = test::Spawn(args);
+    std::ofstream(json_) << previous_json;
+    std::ofstream(poses_) << previous_poses;
+    const pid_t pid = test::Spawn(args_);
     // Every other kill lands in the run's first 5%, where it opens its outputs and writes the
     // first records; the others anywhere.
     const int per_mille = static_cast<int>(rng() % 1000) / (kill_number % 2 == 0 ? 20 : 1);
-    test::KillAfter(pid, duration * per_mille / 1000);
+    test::KillAfter(pid, duration_ * per_mille / 1000);
 
-    const std::string text = test::ReadFile(json);
+    const std::string text = test::ReadFile(json_);
     std::vector<nlohmann::json> records;
     if (text == previous_json) {
       ++kept_previous;
     } else {
       EXPECT_TRUE(ParseRecords(text, &records) && !records.empty()) << "not whole records:\n"
                                                                     << text;
-      EXPECT_TRUE(records.size() <= complete.size() &&
-                  std::equal(records.begin(), records.end(), complete.begin()))
+      EXPECT_TRUE(records.size() <= complete_.size() &&
+                  std::equal(records.begin(), records.end(), complete_.begin()))
           << "not the records a complete run begins with";
     }
-    const std::string pose_text = test::ReadFile(poses);
+    const std::string pose_text = test::ReadFile(poses_);
     if (pose_text != previous_poses) {
       EXPECT_TRUE(!pose_text.empty() && pose_text.back() == '\n' &&
-                  complete_poses.compare(0, pose_text.size(), pose_text) == 0)
+                  complete_poses_.compare(0, pose_text.size(), pose_text) == 0)
           << "not the pose lines a complete run begins with:\n"
           << pose_text;
     }
     // A kill between a checkpoint's link and rename leaves `<name>.tmp-<pid>-u<n>`.
     const std::string own = ".tmp-" + std::to_string(pid) + "-u";
-    for (const fs::path& entry : test::ListDir(dir.path())) {
+    for (const fs::path& entry : test::ListDir(dir_.path())) {
       const std::string name = entry.filename().string();
-      if (entry == json || entry == poses || name == "queries.txt") continue;
-      EXPECT_TRUE(name.rfind(json.filename().string() + own, 0) == 0 ||
-                  name.rfind(poses.filename().string() + own, 0) == 0)
+      if (entry == json_ || entry == poses_ || name == "queries.txt") continue;
+      EXPECT_TRUE(name.rfind(json_.filename().string() + own, 0) == 0 ||
+                  name.rfind(poses_.filename().string() + own, 0) == 0)
           << name;
     }
   }
   std::cout << kept_previous << " of 16 kills found the previous outputs, the others records\n";
   // A complete run writes every record and removes what killed runs left.
-  ASSERT_EQ(test::Wait(test::Spawn(args)), 0);
-  std::vector<fs::path> entries = test::ListDir(dir.path());
+  ASSERT_EQ(test::Wait(test::Spawn(args_)), 0);
+  std::vector<fs::path> entries = test::ListDir(dir_.path());
   std::sort(entries.begin(), entries.end());
-  EXPECT_EQ(entries, (std::vector<fs::path>{json, poses, dir / "queries.txt"}));
+  EXPECT_EQ(entries, (std::vector<fs::path>{json_, poses_, dir_ / "queries.txt"}));
   std::vector<nlohmann::json> records;
-  EXPECT_TRUE(ParseRecords(test::ReadFile(json), &records) && records == complete);
-  EXPECT_EQ(test::ReadFile(poses), complete_poses);
+  EXPECT_TRUE(ParseRecords(test::ReadFile(json_), &records) && records == complete_);
+  EXPECT_EQ(test::ReadFile(poses_), complete_poses_);
+}
+
+// SIGINT or SIGTERM (Ctrl-C, a plain kill) at a random moment stops the batch after the running
+// query and loses nothing: every finished query's record and pose line is in place, in order,
+// the message says how many, and the exit code is 128 + the signal, as the shell reports it.
+TEST_F(LocalizeInterruptTest, AnInterruptedRunKeepsEveryFinishedRecord) {
+  const std::filesystem::path log = dir_ / "log.txt";
+  auto& rng = test::Rng();
+  for (int interrupt = 0; interrupt < 6; ++interrupt) {
+    SCOPED_TRACE("interrupt " + std::to_string(interrupt));
+    const int signal_number = interrupt % 2 == 0 ? SIGINT : SIGTERM;
+    std::ofstream(json_) << "{\"name\": \"a previous run\"}\n";
+    const pid_t pid = test::Spawn(args_, log);
+    std::this_thread::sleep_for(duration_ * (100 + static_cast<int>(rng() % 600)) / 1000);
+    ::kill(pid, signal_number);
+    EXPECT_EQ(test::Wait(pid), 128 + signal_number);
+
+    const std::string message = test::ReadFile(log);
+    std::smatch match;
+    ASSERT_TRUE(
+        std::regex_match(message, match,
+                         std::regex("cwloc-localize: interrupted by " +
+                                    std::string(signal_number == SIGINT ? "SIGINT" : "SIGTERM") +
+                                    " after ([0-9]+) of 160 queries\n")))
+        << message;
+    const size_t finished = std::stoul(match[1]);
+    EXPECT_LT(finished, 160u);
+    std::vector<nlohmann::json> records;
+    ASSERT_TRUE(ParseRecords(test::ReadFile(json_), &records));
+    ASSERT_EQ(records.size(), finished);
+    EXPECT_TRUE(std::equal(records.begin(), records.end(), complete_.begin()));
+    // Every golden query localizes, so each finished one has its pose line.
+    size_t pose_bytes = 0;
+    for (size_t line = 0; line < finished; ++line)
+      pose_bytes = complete_poses_.find('\n', pose_bytes) + 1;
+    EXPECT_EQ(test::ReadFile(poses_), complete_poses_.substr(0, pose_bytes));
+  }
 }
 
 }  // namespace

@@ -91,6 +91,43 @@ TEST_F(PhotoCliTest, APhotoCameraMustMatchThePhotosSize) {
                                          ": the camera is 640 x 480 but the photo is 40 x 30"));
 }
 
+// A photo too big for the memory left, as on a small device (ulimit -v), fails alone with
+// "out of memory" and exit code 3; the batch goes on. Sanitizers reserve terabytes of address
+// space, so ulimit -v cannot apply to their builds.
+TEST_F(PhotoCliTest, APhotoTooBigForTheMemoryLeftFailsAloneAndTheBatchGoesOn) {
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+  GTEST_SKIP() << "ulimit -v does not apply to sanitizer builds";
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
+  GTEST_SKIP() << "ulimit -v does not apply to sanitizer builds";
+#endif
+#endif
+  // 3.6 gigapixels at one bit per pixel: 4 MB of PNG, 3.6 GB once decoded.
+  const auto huge = dir_ / "huge.png";
+  test::WriteGreyPng(huge, 60000, 60000, 0, 1);
+  // A database query listed after the photo: one thread runs it once the photo failed.
+  const std::string good = model_.images.begin()->second.name;
+  const auto list = dir_ / "queries.txt";
+  WriteBytes(list, good + "\n");
+  const auto jsonl = dir_ / "out.jsonl";
+  std::string output;
+  const int code = test::RunCommand(
+      "ulimit -v 2000000 && " + test::ToolPath("cwloc-localize").string() + " --index " +
+          Quote(index_path_) + " --database " + Quote(database_path_) + " --image " + Quote(huge) +
+          " --query-list " + Quote(list) + " --threads 1 --max-image-pixels 4000000000 -o " +
+          Quote(jsonl),
+      &output);
+  EXPECT_EQ(code, 3) << output;
+  EXPECT_THAT(output,
+              testing::HasSubstr("cwloc-localize: error: " + huge.string() + ": out of memory"));
+  EXPECT_THAT(output, testing::HasSubstr("(1 out of memory or internal error)"));
+  std::map<std::string, nlohmann::json> records;
+  for (const auto& record : test::ReadJsonLines(jsonl)) records[record["name"]] = record;
+  ASSERT_EQ(records.size(), 2u) << output;
+  EXPECT_EQ(records["huge.png"]["error"], huge.string() + ": out of memory");
+  EXPECT_TRUE(records[good]["success"].get<bool>()) << records[good].dump();
+}
+
 // Real photos held out of a shared data set's model, localized from the JPEG alone with the
 // extraction settings the set's database was made with (--SiftExtraction.max_image_size 1600
 // --SiftExtraction.max_num_features 6000, its README).
