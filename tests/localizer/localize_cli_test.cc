@@ -539,7 +539,7 @@ TEST_F(LocalizeKillTest, KilledRunsLeaveThePreviousOutputsOrWholeRecords) {
 TEST_F(LocalizeInterruptTest, AnInterruptedRunKeepsEveryFinishedRecord) {
   const std::filesystem::path log = dir_ / "log.txt";
   auto& rng = test::Rng();
-  for (int interrupt = 0; interrupt < 6; ++interrupt) {
+  for (int interrupt = 0; interrupt < 4; ++interrupt) {
     SCOPED_TRACE("interrupt " + std::to_string(interrupt));
     const int signal_number = interrupt % 2 == 0 ? SIGINT : SIGTERM;
     std::ofstream(json_) << "{\"name\": \"a previous run\"}\n";
