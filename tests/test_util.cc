@@ -8,6 +8,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <csignal>
@@ -134,6 +135,13 @@ bool KillAfter(pid_t pid, std::chrono::steady_clock::duration delay) {
   std::this_thread::sleep_for(delay);
   ::kill(pid, SIGKILL);
   return Wait(pid) >= 0;
+}
+
+bool IsKilledWritersTemporary(const std::string& name, const std::string& destination,
+                              const std::vector<pid_t>& killed) {
+  return std::any_of(killed.begin(), killed.end(), [&](pid_t pid) {
+    return name.rfind(destination + ".tmp-" + std::to_string(pid) + "-", 0) == 0;
+  });
 }
 
 FileSizeLimit::FileSizeLimit(uint64_t bytes) {

@@ -79,6 +79,10 @@ pid_t Spawn(const std::vector<std::string>& args, const std::filesystem::path& o
 int Wait(pid_t pid);
 // Sleeps for `delay`, kills it with SIGKILL and reaps it; true when it had exited before.
 bool KillAfter(pid_t pid, std::chrono::steady_clock::duration delay);
+// True when `name` is a temporary `<destination>.tmp-<pid>-...` of one of the `killed` writers.
+// A writer killed before its own clean-up ran keeps every earlier killed writer's temporaries.
+bool IsKilledWritersTemporary(const std::string& name, const std::string& destination,
+                              const std::vector<pid_t>& killed);
 
 // While alive, writes that grow a file past `bytes` fail with EFBIG ("File too large"), the
 // way a full disk fails them; unlike /dev/full this reaches files of any name, even as root.

@@ -159,23 +159,25 @@ TEST_F(IndexCliTest, KilledBuildsLeaveTheOldOrTheNewIndexAndNothingElse) {
   ASSERT_FALSE(complete.empty());
 
   auto& rng = test::Rng();
+  std::vector<pid_t> killed;
   for (int kill_number = 0; kill_number < 24; ++kill_number) {
     // Half the kills with no previous index, half replacing one.
     const bool replacing = kill_number % 2 == 1;
     std::filesystem::remove(output);
     if (replacing) test::WriteBytes(output, complete);
     const pid_t pid = test::Spawn(args);
+    killed.push_back(pid);
     test::KillAfter(pid, duration * (rng() % 1000) / 1000);
     // A kill between the link and the rename of a replacement leaves the killed writer's
     // named file, which the next writer removes (the window is microseconds wide).
-    const std::string own = output.filename().string() + ".tmp-" + std::to_string(pid) + "-u";
     bool has_output = false;
     for (const auto& entry : std::filesystem::directory_iterator(out_dir)) {
       const std::string name = entry.path().filename().string();
       if (entry.path() == output) {
         has_output = true;
       } else {
-        EXPECT_EQ(name.rfind(own, 0), 0u) << name << " after kill " << kill_number;
+        EXPECT_TRUE(test::IsKilledWritersTemporary(name, output.filename().string(), killed))
+            << name << " after kill " << kill_number;
       }
     }
     if (!has_output) {

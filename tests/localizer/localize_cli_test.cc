@@ -484,11 +484,13 @@ TEST_F(LocalizeKillTest, KilledRunsLeaveThePreviousOutputsOrWholeRecords) {
   const std::string previous_poses = "previous.jpg 1 0 0 0 0 0 0\n";
   auto& rng = test::Rng();
   int kept_previous = 0;
+  std::vector<pid_t> killed;
   for (int kill_number = 0; kill_number < 16; ++kill_number) {
     SCOPED_TRACE("kill " + std::to_string(kill_number));
     std::ofstream(json_) << previous_json;
     std::ofstream(poses_) << previous_poses;
     const pid_t pid = test::Spawn(args_);
+    killed.push_back(pid);
     // Every other kill lands in the run's first 5%, where it opens its outputs and writes the
     // first records; the others anywhere.
     const int per_mille = static_cast<int>(rng() % 1000) / (kill_number % 2 == 0 ? 20 : 1);
@@ -513,12 +515,11 @@ TEST_F(LocalizeKillTest, KilledRunsLeaveThePreviousOutputsOrWholeRecords) {
           << pose_text;
     }
     // A kill between a checkpoint's link and rename leaves `<name>.tmp-<pid>-u<n>`.
-    const std::string own = ".tmp-" + std::to_string(pid) + "-u";
     for (const fs::path& entry : test::ListDir(dir_.path())) {
       const std::string name = entry.filename().string();
       if (entry == json_ || entry == poses_ || name == "queries.txt") continue;
-      EXPECT_TRUE(name.rfind(json_.filename().string() + own, 0) == 0 ||
-                  name.rfind(poses_.filename().string() + own, 0) == 0)
+      EXPECT_TRUE(test::IsKilledWritersTemporary(name, json_.filename().string(), killed) ||
+                  test::IsKilledWritersTemporary(name, poses_.filename().string(), killed))
           << name;
     }
   }

@@ -3,7 +3,6 @@
 // left beside it.
 #include <gtest/gtest.h>
 
-#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <string>
@@ -41,10 +40,10 @@ TEST(SynthKillTest, KilledRunsLeaveTheOldOrTheNewSceneAndTheNextRunCleansUp) {
   ASSERT_NE(old_gt, new_gt);
 
   auto& rng = test::Rng();
-  std::vector<std::string> killed;  // "city.tmp-<pid>-": the killed runs' folder prefixes
+  std::vector<pid_t> killed;
   for (int kill_number = 0; kill_number < 12; ++kill_number) {
     const pid_t pid = test::Spawn(args_for("2"));
-    killed.push_back("city.tmp-" + std::to_string(pid) + "-");
+    killed.push_back(pid);
     const bool finished = test::KillAfter(pid, duration * (rng() % 1000) / 1000);
     // The destination is a whole scene: the old one, or the new one if the run finished.
     const std::string gt = test::ReadFile(city / "queries_gt.txt");
@@ -55,11 +54,8 @@ TEST(SynthKillTest, KilledRunsLeaveTheOldOrTheNewSceneAndTheNextRunCleansUp) {
     for (const auto& entry : fs::directory_iterator(dir.path())) {
       const std::string name = entry.path().filename().string();
       if (entry.path() == city) continue;
-      // Only killed runs' temporary folders may remain (one killed before it cleaned up keeps
-      // the earlier ones).
-      EXPECT_TRUE(
-          std::any_of(killed.begin(), killed.end(),
-                      [&](const std::string& prefix) { return name.rfind(prefix, 0) == 0; }))
+      // Only killed runs' temporary folders may remain.
+      EXPECT_TRUE(test::IsKilledWritersTemporary(name, city.filename().string(), killed))
           << name << " after kill " << kill_number;
     }
     // Back to the old scene for the next kill.
