@@ -144,7 +144,7 @@ class QueryLoader {
         query = LoadFeatureFile(source);
         break;
       case QuerySource::Kind::kDatabase:
-        query = LoadFromDatabase(source.name);
+        query = LoadFromDatabase(source);
         break;
     }
     query.camera = ChooseCamera(source, query);
@@ -207,13 +207,13 @@ class QueryLoader {
     return query;
   }
 
-  Query LoadFromDatabase(const std::string& name) const {
+  Query LoadFromDatabase(const QuerySource& source) const {
 #ifdef CWLOC_WITH_COLMAP_DB
-    if (!database_) throw InputError("query '" + name + "': give --database to read it from");
-    return database_->Load(name);
+    if (!database_) throw InputError(SourceLabel(source) + ": give --database to read it from");
+    return database_->Load(source.name);
 #else
-    throw InputError("query '" + name +
-                     "': this cwloc-localize was built without COLMAP database input");
+    throw InputError(SourceLabel(source) +
+                     ": this cwloc-localize was built without COLMAP database input");
 #endif
   }
 

@@ -87,6 +87,18 @@ TEST_F(LocalizeCliTest, BadQueryGetsAnErrorRecordAndTheOthersFinish) {
   EXPECT_EQ(ValidateAgainstSchema(jsonl, &validation), 0) << validation;
 }
 
+// A query named for the database needs --database; the error names the query.
+TEST_F(LocalizeCliTest, ADatabaseQueryWithoutADatabaseIsNamedInItsError) {
+  std::string output;
+  const auto jsonl = dir_ / "out.jsonl";
+  EXPECT_EQ(Run("--query " + FirstImageName() + " -o " + jsonl.string(), &output), 2) << output;
+  const std::string error = "query '" + FirstImageName() + "': give --database to read it from";
+  EXPECT_THAT(output, HasSubstr("cwloc-localize: error: " + error));
+  const auto records = test::ReadJsonLines(jsonl);
+  ASSERT_EQ(records.size(), 1u);
+  EXPECT_EQ(records[0]["error"], error);
+}
+
 TEST_F(LocalizeCliTest, EveryMatcherNameRunsAndIsReported) {
   for (const std::string matcher : {"cluster-wise", "global-ratio", "cluster-exhaustive"}) {
     std::string output;
