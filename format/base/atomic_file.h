@@ -15,12 +15,12 @@ namespace cwloc {
 //
 // The temporary file has no name (Linux's O_TMPFILE), so a writer killed before Commit() leaves
 // nothing behind; Commit() links it to the destination, or, when that exists, to a unique
-// `<name>.tmp-<pid>-<n>` renamed over it at once. Where the file system has no O_TMPFILE, and
+// `<name>.tmp-<pid>-u<n>` renamed over it at once. Where the file system has no O_TMPFILE, and
 // for writers that must open the file by name (SQLite: Temporary::kNamed), the temporary file
-// has that name from the start. A writer first removes the temporary files of dead writers of
-// the same destination (their pid no longer runs), so a kill leaves nothing for long.
-// Destroyed without Commit() (an exception), it removes its temporary file. Every failure throws
-// InputError naming the destination.
+// is named `<name>.tmp-<pid>-<n>` from the start. A writer first removes the temporary files of
+// dead writers of the same destination (their pid no longer runs), so a kill leaves nothing for
+// long. Destroyed without Commit() (an exception), it removes its temporary file. Every failure
+// throws InputError naming the destination.
 class AtomicFile {
  public:
   enum class Temporary { kUnnamed, kNamed };

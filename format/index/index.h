@@ -15,8 +15,8 @@ namespace cwloc {
 // The typed, read-only view of an index file that the localizer and the tools use.
 // Open() is O(number of sections): it checks that every section is present with the right
 // element size and that the counts agree, and never walks the big arrays. Indices stored in
-// those arrays are checked where they are used (the accessors below return nullopt / empty on
-// a bad one) and all of them by Validate().
+// those arrays are checked where they are used (the accessors below return an empty name or
+// span, or UINT32_MAX, on a bad one) and all of them by Validate().
 class Index {
  public:
   static Index Open(const std::filesystem::path& path);

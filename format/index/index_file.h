@@ -61,8 +61,9 @@ struct SectionData {
   std::span<const uint8_t> bytes;  // count * element_size bytes
 };
 
-// Writes an index atomically: a temporary file in the target directory, fsync, rename. The
-// output depends only on the sections given (padding is zero), so equal input gives equal bytes.
+// Writes an index atomically through an AtomicFile (format/base/atomic_file.h: an unnamed
+// temporary file in the target directory, fsync, put in place). The output depends only on the
+// sections given (padding is zero), so equal input gives equal bytes.
 void WriteIndexFile(const std::filesystem::path& path, std::span<const SectionData> sections);
 
 template <typename T>

@@ -24,9 +24,10 @@ namespace cwloc {
 // Quadrics and Applications in Computer Vision", CVPR 2016; cf. the general P4Pf of
 // Bujnak, Kukelova and Pajdla, "A general solution to the P4P problem for camera with unknown
 // focal length", CVPR 2008, which the cluster-wise ratio test paper uses). The quadrics are
-// solved with our own action-matrix solver (three_quadrics.h). With exact data the true solution
-// has fx = fy; solutions whose aspect ratio fx/fy is off by more than a factor 2, or that put a
-// point behind the camera, are dropped, and f = (fx + fy) / 2 for the rest.
+// solved with our own hidden-variable resultant (three_quadrics.h: a degree-8 polynomial in one
+// unknown, its real roots, the other two unknowns from a null vector). With exact data the true
+// solution has fx = fy; solutions whose aspect ratio fx/fy is off by more than a factor 2, or that
+// put a point behind the camera, are dropped, and f = (fx + fy) / 2 for the rest.
 //
 // Four exactly coplanar points make that elimination singular (the null space then holds the
 // homography plus the free third column of P); nearly coplanar ones are still solved
