@@ -40,8 +40,10 @@ void ScalarBatch(const uint8_t* query, const uint8_t* base, const uint32_t* rows
 
 #ifdef CWLOC_X86_64
 
-// Both x86 kernels widen to 16 bits, subtract (|d| <= 255) and let vpmaddwd square and add
-// pairs into 32-bit lanes (<= 2 * 255^2 each), so nothing can overflow.
+// The three x86 kernels widen to 16 bits and subtract (|d| <= 255); vpmaddwd squares and adds
+// pairs into 32-bit lanes (<= 2 * 255^2 each), which AVX2 and AVX-512BW then add to their
+// accumulators; VNNI's vpdpwssd squares, adds pairs and accumulates in one instruction. A whole
+// descriptor sums to at most 128 * 255^2 < 2^31, so nothing can overflow.
 
 __attribute__((target("avx2"))) inline uint32_t Avx2Reduce(__m256i acc) {
   __m128i s = _mm_add_epi32(_mm256_castsi256_si128(acc), _mm256_extracti128_si256(acc, 1));
@@ -98,66 +100,64 @@ __attribute__((target(CWLOC_AVX512))) inline __m512i Avx512Load32(const uint8_t*
   return _mm512_cvtepu8_epi16(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(p)));
 }
 
-__attribute__((target(CWLOC_AVX512))) uint32_t Avx512One(const uint8_t* a, const uint8_t* b) {
-  __m512i acc0 = _mm512_setzero_si512();
-  __m512i acc1 = _mm512_setzero_si512();
-  for (size_t i = 0; i < kDescriptorDim; i += 64) {
-    const __m512i d0 = _mm512_sub_epi16(Avx512Load32(a + i), Avx512Load32(b + i));
-    const __m512i d1 = _mm512_sub_epi16(Avx512Load32(a + i + 32), Avx512Load32(b + i + 32));
-    acc0 = _mm512_add_epi32(acc0, _mm512_madd_epi16(d0, d0));
-    acc1 = _mm512_add_epi32(acc1, _mm512_madd_epi16(d1, d1));
+// The AVX-512 kernels differ only in how they add the squares of 32 differences to 16 lanes.
+// AVX-512BW: vpmaddwd, then vpaddd.
+struct Avx512Squares {
+  __attribute__((target(CWLOC_AVX512))) __m512i operator()(__m512i acc, __m512i d) const {
+    return _mm512_add_epi32(acc, _mm512_madd_epi16(d, d));
   }
-  return Avx512Reduce(_mm512_add_epi32(acc0, acc1));
+};
+
+// VNNI: vpdpwssd multiplies, adds pairs and accumulates in one instruction.
+struct Avx512VnniSquares {
+  __attribute__((target(CWLOC_AVX512_VNNI))) __m512i operator()(__m512i acc, __m512i d) const {
+    return _mm512_dpwssd_epi32(acc, d, d);
+  }
+};
+
+// Inlined into each kernel, so the VNNI kernels get their target's instructions (the VNNI
+// Squares inlines only there).
+template <typename Squares>
+__attribute__((target(CWLOC_AVX512), always_inline)) inline void Avx512BatchWith(
+    const uint8_t* query, const uint8_t* base, const uint32_t* rows, size_t n, uint32_t* out) {
+  __m512i q[4];
+  for (int j = 0; j < 4; ++j) q[j] = Avx512Load32(query + 32 * j);
+  for (size_t i = 0; i < n; ++i) {
+    const uint8_t* v = base + size_t(rows[i]) * kDescriptorDim;
+    __m512i acc0 = Squares()(_mm512_setzero_si512(), _mm512_sub_epi16(q[0], Avx512Load32(v)));
+    __m512i acc1 = Squares()(_mm512_setzero_si512(), _mm512_sub_epi16(q[1], Avx512Load32(v + 32)));
+    acc0 = Squares()(acc0, _mm512_sub_epi16(q[2], Avx512Load32(v + 64)));
+    acc1 = Squares()(acc1, _mm512_sub_epi16(q[3], Avx512Load32(v + 96)));
+    out[i] = Avx512Reduce(_mm512_add_epi32(acc0, acc1));
+  }
 }
 
 __attribute__((target(CWLOC_AVX512))) void Avx512Batch(const uint8_t* query, const uint8_t* base,
                                                        const uint32_t* rows, size_t n,
                                                        uint32_t* out) {
-  __m512i q[4];
-  for (int j = 0; j < 4; ++j) q[j] = Avx512Load32(query + 32 * j);
-  for (size_t i = 0; i < n; ++i) {
-    const uint8_t* v = base + size_t(rows[i]) * kDescriptorDim;
-    const __m512i d0 = _mm512_sub_epi16(q[0], Avx512Load32(v));
-    const __m512i d1 = _mm512_sub_epi16(q[1], Avx512Load32(v + 32));
-    const __m512i d2 = _mm512_sub_epi16(q[2], Avx512Load32(v + 64));
-    const __m512i d3 = _mm512_sub_epi16(q[3], Avx512Load32(v + 96));
-    const __m512i s01 = _mm512_add_epi32(_mm512_madd_epi16(d0, d0), _mm512_madd_epi16(d1, d1));
-    const __m512i s23 = _mm512_add_epi32(_mm512_madd_epi16(d2, d2), _mm512_madd_epi16(d3, d3));
-    out[i] = Avx512Reduce(_mm512_add_epi32(s01, s23));
-  }
+  Avx512BatchWith<Avx512Squares>(query, base, rows, n, out);
 }
 
-__attribute__((target(CWLOC_AVX512_VNNI))) uint32_t Avx512VnniOne(const uint8_t* a,
-                                                                  const uint8_t* b) {
-  __m512i acc0 = _mm512_setzero_si512();
-  __m512i acc1 = _mm512_setzero_si512();
-  for (size_t i = 0; i < kDescriptorDim; i += 64) {
-    const __m512i d0 = _mm512_sub_epi16(Avx512Load32(a + i), Avx512Load32(b + i));
-    const __m512i d1 = _mm512_sub_epi16(Avx512Load32(a + i + 32), Avx512Load32(b + i + 32));
-    acc0 = _mm512_dpwssd_epi32(acc0, d0, d0);
-    acc1 = _mm512_dpwssd_epi32(acc1, d1, d1);
-  }
-  return Avx512Reduce(_mm512_add_epi32(acc0, acc1));
+__attribute__((target(CWLOC_AVX512))) uint32_t Avx512One(const uint8_t* a, const uint8_t* b) {
+  const uint32_t row = 0;
+  uint32_t out;
+  Avx512BatchWith<Avx512Squares>(a, b, &row, 1, &out);
+  return out;
 }
 
 __attribute__((target(CWLOC_AVX512_VNNI))) void Avx512VnniBatch(const uint8_t* query,
                                                                 const uint8_t* base,
                                                                 const uint32_t* rows, size_t n,
                                                                 uint32_t* out) {
-  __m512i q[4];
-  for (int j = 0; j < 4; ++j) q[j] = Avx512Load32(query + 32 * j);
-  for (size_t i = 0; i < n; ++i) {
-    const uint8_t* v = base + size_t(rows[i]) * kDescriptorDim;
-    const __m512i d0 = _mm512_sub_epi16(q[0], Avx512Load32(v));
-    const __m512i d1 = _mm512_sub_epi16(q[1], Avx512Load32(v + 32));
-    const __m512i d2 = _mm512_sub_epi16(q[2], Avx512Load32(v + 64));
-    const __m512i d3 = _mm512_sub_epi16(q[3], Avx512Load32(v + 96));
-    __m512i acc0 = _mm512_dpwssd_epi32(_mm512_setzero_si512(), d0, d0);
-    __m512i acc1 = _mm512_dpwssd_epi32(_mm512_setzero_si512(), d1, d1);
-    acc0 = _mm512_dpwssd_epi32(acc0, d2, d2);
-    acc1 = _mm512_dpwssd_epi32(acc1, d3, d3);
-    out[i] = Avx512Reduce(_mm512_add_epi32(acc0, acc1));
-  }
+  Avx512BatchWith<Avx512VnniSquares>(query, base, rows, n, out);
+}
+
+__attribute__((target(CWLOC_AVX512_VNNI))) uint32_t Avx512VnniOne(const uint8_t* a,
+                                                                  const uint8_t* b) {
+  const uint32_t row = 0;
+  uint32_t out;
+  Avx512BatchWith<Avx512VnniSquares>(a, b, &row, 1, &out);
+  return out;
 }
 
 #endif  // CWLOC_X86_64
