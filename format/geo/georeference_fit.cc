@@ -8,14 +8,13 @@
 #include <charconv>
 #include <cmath>
 #include <fstream>
-#include <limits>
 #include <optional>
 #include <stdexcept>
 #include <string_view>
 #include <unordered_map>
 
 #include "format/base/error.h"
-#include "format/base/split_mix64.h"
+#include "format/base/ransac.h"
 
 namespace cwloc {
 namespace {
@@ -183,13 +182,72 @@ Geodetic GeodeticCentroid(std::span<const GeoObservation> observations,
   return centroid;
 }
 
-// RANSAC iterations for `confidence` of drawing one all-inlier 3-sample at inlier ratio w.
-double IterationsNeeded(double w, double confidence) {
-  const double all_inliers = w * w * w;
-  if (all_inliers >= 1) return 0;
-  if (all_inliers <= 0) return std::numeric_limits<double>::infinity();
-  return std::ceil(std::log(1 - confidence) / std::log1p(-all_inliers));
+bool Plausible(const Similarity& model) {
+  return std::isfinite(model.scale) && model.scale > 0 && model.rotation.allFinite() &&
+         model.translation.allFinite();
 }
+
+// The fit as a RANSAC problem (format/base/ransac.h): a similarity from each non-degenerate
+// 3-sample of camera centres and positions, scored by the MSAC cost of the residuals in sigmas.
+// No local optimisation inside RANSAC: the weighted least squares on the inliers follows it.
+class SimilarityEstimator {
+ public:
+  using Model = Similarity;
+  static constexpr size_t kSampleSize = 3;
+
+  SimilarityEstimator(std::span<const Eigen::Vector3d> centres,
+                      std::span<const Eigen::Vector3d> positions, std::span<const double> weight,
+                      std::span<const double> sigma, double threshold)
+      : centres_(centres),
+        positions_(positions),
+        weight_(weight),
+        sigma_(sigma),
+        threshold_(threshold) {}
+
+  size_t NumData() const { return centres_.size(); }
+
+  void GenerateModels(std::span<const uint32_t> sample, std::vector<Similarity>* models) const {
+    const std::array<size_t, 3> indices = {sample[0], sample[1], sample[2]};
+    if (Classify(centres_, indices, CoincidentCentresSpread(centres_, indices)) !=
+            Degeneracy::kNone ||
+        Classify(positions_, indices, kCoincidentPositionsM) != Degeneracy::kNone) {
+      return;
+    }
+    const Similarity model = WeightedUmeyama(centres_, positions_, weight_, indices);
+    if (Plausible(model)) models->push_back(model);
+  }
+
+  // The MSAC cost: residuals in sigmas, squared and truncated at the threshold; inliers are the
+  // residuals within it.
+  double Score(const Similarity& model, uint32_t* num_inliers) const {
+    double cost = 0;
+    *num_inliers = 0;
+    for (size_t i = 0; i < centres_.size(); ++i) {
+      const double r = Residual(model, i);
+      if (r <= threshold_) ++*num_inliers;
+      cost += std::min(r * r, threshold_ * threshold_);
+    }
+    return cost;
+  }
+
+  // Per observation: whether it is an inlier of `model`.
+  void FlagInliers(const Similarity& model, std::vector<char>* inliers) const {
+    for (size_t i = 0; i < centres_.size(); ++i) (*inliers)[i] = Residual(model, i) <= threshold_;
+  }
+
+  void Refine(Similarity*) const {}  // never called: RansacOptions::max_refinements = 0
+
+ private:
+  double Residual(const Similarity& model, size_t i) const {
+    return (model(centres_[i]) - positions_[i]).norm() / sigma_[i];
+  }
+
+  std::span<const Eigen::Vector3d> centres_, positions_;
+  std::span<const double> weight_, sigma_;
+  double threshold_;
+};
+
+static_assert(RansacEstimator<SimilarityEstimator>);
 
 }  // namespace
 
@@ -308,57 +366,22 @@ GeoFitResult FitGeoreference(std::span<const Eigen::Vector3d> model_centers,
   CheckNotDegenerate(model_centers, positions, all, count + " camera centres",
                      count + " observed positions");
 
-  const double threshold = options.inlier_sigmas;
-  // Inlier flags and the MSAC cost (truncated squared normalized residuals) of a similarity.
-  const auto score = [&](const Similarity& model, std::vector<char>* inliers) {
-    double cost = 0;
-    for (size_t i = 0; i < n; ++i) {
-      const double r = (model(model_centers[i]) - positions[i]).norm() / sigma[i];
-      (*inliers)[i] = r <= threshold;
-      cost += std::min(r * r, threshold * threshold);
-    }
-    return cost;
-  };
-  const auto plausible = [](const Similarity& model) {
-    return std::isfinite(model.scale) && model.scale > 0 && model.rotation.allFinite() &&
-           model.translation.allFinite();
-  };
-
   // RANSAC over 3-point samples, adaptive in the number of iterations.
-  SplitMix64 rng(options.seed);
-  const uint32_t n32 = static_cast<uint32_t>(std::min<size_t>(n, UINT32_MAX));
-  std::vector<char> best_inliers(n, 0), inliers(n, 0);
-  double best_cost = std::numeric_limits<double>::infinity();
-  int best_count = 0;
-  double needed = options.max_iterations;
-  for (int iteration = 0; iteration < options.max_iterations && iteration < needed; ++iteration) {
-    std::array<size_t, 3> sample{};
-    sample[0] = rng.Uniform(n32);
-    do sample[1] = rng.Uniform(n32);
-    while (sample[1] == sample[0]);
-    do sample[2] = rng.Uniform(n32);
-    while (sample[2] == sample[0] || sample[2] == sample[1]);
-    if (Classify(model_centers, sample, CoincidentCentresSpread(model_centers, sample)) !=
-            Degeneracy::kNone ||
-        Classify(positions, sample, kCoincidentPositionsM) != Degeneracy::kNone) {
-      continue;
-    }
-    const Similarity model = WeightedUmeyama(model_centers, positions, weight, sample);
-    if (!plausible(model)) continue;
-    const double cost = score(model, &inliers);
-    if (cost < best_cost) {
-      best_cost = cost;
-      best_inliers = inliers;
-      best_count = static_cast<int>(std::count(inliers.begin(), inliers.end(), 1));
-      needed = IterationsNeeded(static_cast<double>(best_count) / static_cast<double>(n),
-                                options.confidence);
-    }
-  }
+  const SimilarityEstimator estimator(model_centers, positions, weight, sigma,
+                                      options.inlier_sigmas);
+  RansacOptions ransac;
+  ransac.min_iterations = 0;
+  ransac.max_iterations = static_cast<uint32_t>(options.max_iterations);
+  ransac.confidence = options.confidence;
+  ransac.seed = options.seed;
+  ransac.max_refinements = 0;
+  Similarity best;
+  std::vector<char> inliers(n, 0);
+  if (std::isfinite(Ransac(estimator, ransac, &best).score)) estimator.FlagInliers(best, &inliers);
 
   // Weighted least squares on the inliers, re-scored, until the inlier set is stable.
   std::vector<char> fitted;
   Similarity model;
-  inliers = best_inliers;
   for (int round = 0; round < kMaxRefinementRounds; ++round) {
     fitted = inliers;
     std::vector<size_t> indices;
@@ -378,7 +401,7 @@ GeoFitResult FitGeoreference(std::span<const Eigen::Vector3d> model_centers,
       throw InputError("georeference fit: the fitted scale " + Number(model.scale) +
                        " is not a positive number");
     }
-    score(model, &inliers);
+    estimator.FlagInliers(model, &inliers);
     if (inliers == fitted) break;
   }
 

@@ -12,8 +12,8 @@
 
 namespace cwloc {
 
-// RANSAC estimators (the RansacEstimator concept of ransac.h) for absolute pose from 2D-3D
-// correspondences. All keep views of the caller's arrays, which must outlive them, and a
+// RANSAC estimators (the RansacEstimator concept of format/base/ransac.h) for absolute pose from
+// 2D-3D correspondences. All keep views of the caller's arrays, which must outlive them, and a
 // scratch buffer, so one estimator must not be used from several threads at once.
 
 // A gravity prior's test of hypotheses (GravityRejectionAngle, gravity_prior.h): GenerateModels

@@ -1,15 +1,22 @@
-#include "localizer/pose/ransac.h"
+#include "format/base/ransac.h"
 
 #include <gtest/gtest.h>
 
 #include <Eigen/Core>
+#include <Eigen/LU>
+#include <algorithm>
+#include <random>
 #include <set>
+#include <vector>
 
-#include "tests/localizer/pose/synthetic_pose.h"
 #include "tests/test_util.h"
 
 namespace cwloc {
 namespace {
+
+double Uniform(std::mt19937_64& rng, double lo, double hi) {
+  return std::uniform_real_distribution<double>(lo, hi)(rng);
+}
 
 // y = a x + b from two points; the residual is the vertical distance.
 class LineEstimator {
@@ -77,11 +84,11 @@ std::vector<Eigen::Vector2d> LineData(std::mt19937_64& rng, int num_inliers, int
   std::vector<Eigen::Vector2d> points;
   std::normal_distribution<double> n(0.0, noise);
   for (int i = 0; i < num_inliers; ++i) {
-    const double x = test::Uniform(rng, -10, 10);
+    const double x = Uniform(rng, -10, 10);
     points.emplace_back(x, a * x + b + n(rng));
   }
   for (int i = 0; i < num_outliers; ++i) {
-    points.emplace_back(test::Uniform(rng, -10, 10), test::Uniform(rng, -100, 100));
+    points.emplace_back(Uniform(rng, -10, 10), Uniform(rng, -100, 100));
   }
   std::shuffle(points.begin(), points.end(), rng);
   return points;

@@ -20,6 +20,10 @@ namespace cwloc {
 // every new best hypothesis is locally optimised (Estimator::Refine) for as long as that
 // improves its score. The number of iterations adapts to the best inlier ratio w found so
 // far: k = log(1 - confidence) / log(1 - w^sample_size).
+//
+// Header-only and problem-agnostic, so that every layer above format/base uses this one
+// sampler: the pose stage (localizer/pose/pose_estimators.h) and the georeference fit
+// (format/geo/georeference_fit.cc, plain RANSAC with max_refinements = 0).
 
 struct RansacOptions {
   uint32_t min_iterations = 100;    // sampled hypotheses at least (unless data < sample size)
@@ -37,12 +41,13 @@ struct RansacStats {
   double score = std::numeric_limits<double>::infinity();  // MSAC score of the best model
 };
 
-// What Ransac needs from a problem; see localizer/pose/pose_estimators.h for the pose ones.
+// What Ransac needs from a problem.
 //   kSampleSize                  size of a minimal sample
 //   NumData()                    number of data points (correspondences)
-//   GenerateModels(sample, &ms)  clears ms and appends the models a minimal sample gives
+//   GenerateModels(sample, &ms)  appends the models a minimal sample gives to ms, which Ransac
+//                                empties first; none for a degenerate sample
 //   Score(model, &n)             MSAC score sum_i min(r_i^2, threshold^2) (lower is better);
-//                                n = number of points with r_i^2 < threshold^2
+//                                n = number of inliers (r_i below the threshold)
 //   Refine(&model)               local optimisation on the model's inliers (e.g. non-linear
 //                                least squares); Ransac keeps the result only if it scores better
 template <typename E>
