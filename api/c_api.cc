@@ -4,7 +4,6 @@
 #include <cmath>
 #include <functional>
 #include <limits>
-#include <map>
 #include <optional>
 #include <string>
 #include <utility>
@@ -79,58 +78,6 @@ cwloc_status RunQuery(const cwloc_localizer* localizer, cwloc_result** out,
   return Guarded([&] { *out = new cwloc_result{query(), localizer->info.georeferenced}; });
 }
 
-// A whole number in [0, 2^digits) fits T exactly.
-template <typename T>
-bool SetWhole(double value, T* field) {
-  if (!(value >= 0 && value < std::ldexp(1.0, std::numeric_limits<T>::digits) &&
-        value == std::floor(value)))
-    return false;
-  *field = static_cast<T>(value);
-  return true;
-}
-
-// cwloc_options_set's names: cwloc-localize's flags. Whole-number knobs refuse fractions and
-// negatives here; every range is checked by the query, as the CLI's are.
-using OptionSetter = bool (*)(double value, cwloc::api::Options* options);
-const std::map<std::string, OptionSetter> kOptionSetters = {
-    {"k", [](double v, cwloc::api::Options* o) { return SetWhole(v, &o->k); }},
-    {"checks", [](double v, cwloc::api::Options* o) { return SetWhole(v, &o->checks); }},
-    {"ratio", [](double v, cwloc::api::Options* o) { return o->ratio = v, true; }},
-    {"nf", [](double v, cwloc::api::Options* o) { return SetWhole(v, &o->forward_matches); }},
-    {"nb", [](double v, cwloc::api::Options* o) { return SetWhole(v, &o->back_matches); }},
-    {"max-back-images",
-     [](double v, cwloc::api::Options* o) { return SetWhole(v, &o->max_back_images); }},
-    {"max-error", [](double v, cwloc::api::Options* o) { return o->max_error_px = v, true; }},
-    {"min-inliers", [](double v, cwloc::api::Options* o) { return SetWhole(v, &o->min_inliers); }},
-    {"max-ransac-iterations",
-     [](double v, cwloc::api::Options* o) { return SetWhole(v, &o->max_ransac_iterations); }},
-    {"refine",
-     [](double v, cwloc::api::Options* o) {
-       if (v != 0 && v != 1) return false;
-       o->refine = v == 1;
-       return true;
-     }},
-    {"ranked-images",
-     [](double v, cwloc::api::Options* o) { return SetWhole(v, &o->ranked_images); }},
-    {"seed", [](double v, cwloc::api::Options* o) { return SetWhole(v, &o->seed); }},
-    {"max-image-size",
-     [](double v, cwloc::api::Options* o) { return SetWhole(v, &o->max_image_size); }},
-    {"max-features",
-     [](double v, cwloc::api::Options* o) { return SetWhole(v, &o->max_features); }},
-    {"max-image-pixels",
-     [](double v, cwloc::api::Options* o) { return SetWhole(v, &o->max_image_pixels); }},
-    {"prior-gravity-sigma",
-     [](double v, cwloc::api::Options* o) { return o->prior_gravity_sigma_deg = v, true; }},
-    {"use-exif-gps",
-     [](double v, cwloc::api::Options* o) {
-       if (v != 0 && v != 1) return false;
-       o->use_exif_gps = v == 1;
-       return true;
-     }},
-    {"exif-gps-radius",
-     [](double v, cwloc::api::Options* o) { return o->exif_gps_radius_m = v, true; }},
-};
-
 // A result accessor's value that does not exist: NOT_AVAILABLE and why.
 cwloc_status NotAvailable(const std::string& what, const std::string& why) {
   return Fail(CWLOC_ERROR_NOT_AVAILABLE, what + ": " + why);
@@ -179,24 +126,19 @@ void cwloc_options_destroy(cwloc_options* options) { delete options; }
 cwloc_status cwloc_options_set(cwloc_options* options, const char* name, double value) {
   if (options == nullptr || name == nullptr)
     return Fail(CWLOC_ERROR_INVALID_ARGUMENT, "options or name is NULL");
-  const std::string key = name;
-  const auto setter = kOptionSetters.find(key);
-  if (setter == kOptionSetters.end())
-    return Fail(CWLOC_ERROR_INVALID_ARGUMENT, "unknown option '" + key + "'");
-  if (!setter->second(value, &options->options)) {
-    return Fail(CWLOC_ERROR_INVALID_ARGUMENT,
-                "option '" + key + "': " + std::to_string(value) + " is not a valid value");
-  }
-  last_error.clear();
-  return CWLOC_OK;
+  return Guarded([&] { options->options.Set(name, value); });
+}
+
+cwloc_status cwloc_options_set_text(cwloc_options* options, const char* name, const char* value) {
+  if (options == nullptr || name == nullptr || value == nullptr)
+    return Fail(CWLOC_ERROR_INVALID_ARGUMENT, "options, name or value is NULL");
+  return Guarded([&] { options->options.Set(name, std::string(value)); });
 }
 
 cwloc_status cwloc_options_set_matcher(cwloc_options* options, const char* matcher) {
   if (options == nullptr || matcher == nullptr)
     return Fail(CWLOC_ERROR_INVALID_ARGUMENT, "options or matcher is NULL");
-  options->options.matcher = matcher;
-  last_error.clear();
-  return CWLOC_OK;
+  return cwloc_options_set_text(options, "matcher", matcher);
 }
 
 cwloc_status cwloc_options_set_position_prior(cwloc_options* options,

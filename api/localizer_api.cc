@@ -10,8 +10,9 @@
 #include "format/index/index.h"
 #include "localizer/io/camera_spec.h"
 #include "localizer/io/feature_file.h"
+#include "localizer/io/option_table.h"
 #include "localizer/io/photo_query.h"
-#include "localizer/io/query_priors.h"
+#include "localizer/io/query_assembly.h"
 #include "localizer/localizer.h"
 
 namespace cwloc::api {
@@ -47,38 +48,28 @@ auto Translated(Fn fn) -> decltype(fn()) {
   }
 }
 
-LocalizerOptions ToLocalizerOptions(const Options& o) {
-  LocalizerOptions options;
-  const auto matcher = ParseMatcher(o.matcher);
-  if (!matcher) throw InvalidArgument("unknown matcher '" + o.matcher + "'");
-  options.matcher = *matcher;
-  options.k = o.k;
-  options.checks = o.checks;
-  options.ratio = o.ratio;
-  options.forward_matches = o.forward_matches;
-  options.back_matches = o.back_matches;
-  options.max_back_images = o.max_back_images;
-  options.pose.max_error_px = o.max_error_px;
-  options.pose.min_inliers = o.min_inliers;
-  options.pose.ransac.max_iterations = o.max_ransac_iterations;
-  options.pose.refine = o.refine;
-  options.ranked_images = o.ranked_images;
-  options.seed = o.seed;
-  options.prior_gravity_sigma_deg = o.prior_gravity_sigma_deg;
+// The options through the table, as cwloc-localize takes them: the same checks and messages.
+QueryOptions ToQueryOptions(const Options& o) {
+  QueryOptions options;
   ValidateOrThrowInvalidArgument([&] {
-    ValidateLocalizerOptions(options);
-    ValidateExifGpsRadius(o.exif_gps_radius_m);
+#define CWLOC_OPTION(field, type, flag, ...) \
+  SetOption(&options, flag, OptionValue(std::in_place_type<type>, o.field));
+#include "localizer/io/option_table.inc"
+#undef CWLOC_OPTION
+    ValidateQueryOptions(options);
   });
   return options;
 }
 
-PhotoOptions ToPhotoOptions(const Options& o) {
-  PhotoOptions options;
-  options.max_image_size = o.max_image_size;
-  options.sift.max_num_features = o.max_features;
-  options.max_image_pixels = o.max_image_pixels;
-  ValidateOrThrowInvalidArgument([&] { ValidatePhotoOptions(options); });
-  return options;
+// Sets the field of a checked value of the table's option `flag`.
+void AssignField(std::string_view flag, const OptionValue& value, Options* o) {
+#define CWLOC_OPTION(field, type, flag_name, ...) \
+  if (flag == flag_name) {                        \
+    o->field = std::get<type>(value);             \
+    return;                                       \
+  }
+#include "localizer/io/option_table.inc"
+#undef CWLOC_OPTION
 }
 
 QueryCamera ToQueryCamera(const Camera& camera) {
@@ -112,16 +103,14 @@ Camera ToCamera(const QueryCamera& query_camera) {
   return camera;
 }
 
-// The options' priors, with cwloc-localize's precedence: the given position, else the photo's
-// EXIF GPS when asked for.
-void AddPriors(const Options& options, Query* query) {
+PriorInputs ToPriorInputs(const Options& options) {
+  PriorInputs priors;
   if (const auto& p = options.position_prior) {
-    query->position_prior =
+    priors.position =
         cwloc::PositionPrior{p->latitude_deg, p->longitude_deg, p->height_m, p->radius_m};
-  } else if (options.use_exif_gps) {
-    query->position_prior = ExifPositionPrior(*query, options.exif_gps_radius_m);
   }
-  query->gravity = options.gravity;
+  priors.gravity = options.gravity;
+  return priors;
 }
 
 Result ToResult(const LocalizationResult& r, const Query& query, const Index& index) {
@@ -164,22 +153,27 @@ Result ToResult(const LocalizationResult& r, const Query& query, const Index& in
   return result;
 }
 
-// A given camera must describe the image it comes with.
-void CheckImageSize(const std::string& source, const Camera& camera, uint32_t width,
-                    uint32_t height) {
-  if (camera.width != width || camera.height != height) {
-    throw InvalidArgument(source + ": the camera is " + std::to_string(camera.width) + " x " +
-                          std::to_string(camera.height) + " but the image is " +
-                          std::to_string(width) + " x " + std::to_string(height));
-  }
-}
+// One call's options, made internal once, and the assembly of its query (camera and priors)
+// by cwloc-localize's rules (QueryAssembler).
+struct CallOptions {
+  CallOptions(const Options& o, const std::optional<Camera>& camera)
+      : options(ToQueryOptions(o)), assembler(options, Cameras(camera), ToPriorInputs(o)) {}
 
-// A photo's own camera (EXIF or none) unless the caller gives one.
-void UseCamera(const std::optional<Camera>& camera, Query* query) {
-  if (!camera) return;
-  CheckImageSize(query->Source(), *camera, query->camera.width, query->camera.height);
-  query->camera = ToQueryCamera(*camera);
-}
+  static CameraInputs Cameras(const std::optional<Camera>& camera) {
+    CameraInputs cameras;
+    if (camera) cameras.camera = ToQueryCamera(*camera);
+    return cameras;
+  }
+
+  // The given camera and the options' priors; a camera that does not fit the image is the
+  // caller's argument.
+  void Complete(const QuerySource& source, Query* query) const {
+    ValidateOrThrowInvalidArgument([&] { assembler.Complete(source, query); });
+  }
+
+  const QueryOptions options;
+  const QueryAssembler assembler;  // refers to options
+};
 
 }  // namespace
 
@@ -187,37 +181,42 @@ Error::Error(ErrorCode code, const std::string& message)
     : std::runtime_error(message), code_(code) {}
 
 Options::Options() {
-  const LocalizerOptions localizer;
-  const PhotoOptions photo;
-  matcher = std::string(MatcherName(localizer.matcher));
-  k = localizer.k;
-  checks = localizer.checks;
-  ratio = localizer.ratio;
-  forward_matches = localizer.forward_matches;
-  back_matches = localizer.back_matches;
-  max_back_images = localizer.max_back_images;
-  max_error_px = localizer.pose.max_error_px;
-  min_inliers = localizer.pose.min_inliers;
-  max_ransac_iterations = localizer.pose.ransac.max_iterations;
-  refine = localizer.pose.refine;
-  ranked_images = localizer.ranked_images;
-  seed = localizer.seed;
-  max_image_size = photo.max_image_size;
-  max_features = photo.sift.max_num_features;
-  max_image_pixels = photo.max_image_pixels;
-  prior_gravity_sigma_deg = localizer.prior_gravity_sigma_deg;
-  use_exif_gps = false;  // cwloc-localize's --use-exif-gps is off unless given
-  exif_gps_radius_m = kDefaultExifGpsRadiusM;
+  const QueryOptions defaults;
+#define CWLOC_OPTION(field, type, flag, ...) field = std::get<type>(FindOption(flag).get(defaults));
+#include "localizer/io/option_table.inc"
+#undef CWLOC_OPTION
+}
+
+void Options::Set(const std::string& name, const std::string& value) {
+  Translated([&] {
+    ValidateOrThrowInvalidArgument([&] {
+      const OptionSpec& spec = FindOption(name);
+      AssignField(spec.flag, ParseOption(spec, value), this);
+    });
+  });
+}
+
+void Options::Set(const std::string& name, double value) {
+  Translated([&] {
+    ValidateOrThrowInvalidArgument([&] {
+      const OptionSpec& spec = FindOption(name);
+      AssignField(spec.flag, OptionFromNumber(spec, value), this);
+    });
+  });
 }
 
 struct Localizer::Impl {
   explicit Impl(Index opened) : index(std::move(opened)), localizer(index) {}
 
-  Result Run(Query query, const Options& options) const {
-    const LocalizerOptions localizer_options = ToLocalizerOptions(options);
-    AddPriors(options, &query);
+  Result Run(Query query, const QuerySource& source, const CallOptions& call) const {
+    call.Complete(source, &query);
+    return Localize(query, call);
+  }
+
+  // A complete query.
+  Result Localize(const Query& query, const CallOptions& call) const {
     ValidateOrThrowInvalidArgument([&] { localizer.ValidatePriors(query); });
-    return ToResult(localizer.Localize(query, localizer_options), query, index);
+    return ToResult(localizer.Localize(query, call.options.localizer), query, index);
   }
 
   std::string path;
@@ -263,22 +262,22 @@ IndexInfo Localizer::Info() const {
 Result Localizer::Localize(const Features& features, const Camera& camera,
                            const Options& options) const {
   return Translated([&] {
+    const CallOptions call(options, camera);
     Query query;
     query.name = "query";
     query.source = "features";
-    query.camera = ToQueryCamera(camera);
     query.keypoints = features.keypoints;
     query.descriptors = features.descriptors;
-    return impl_->Run(std::move(query), options);
+    return impl_->Run(std::move(query), {"query", QuerySource::Kind::kFeatures}, call);
   });
 }
 
 Result Localizer::LocalizePhoto(const std::string& path, const std::optional<Camera>& camera,
                                 const Options& options) const {
   return Translated([&] {
-    Query query = LoadPhotoQuery(path, path, ToPhotoOptions(options));
-    UseCamera(camera, &query);
-    return impl_->Run(std::move(query), options);
+    const CallOptions call(options, camera);
+    const QuerySource source{path, QuerySource::Kind::kPhoto, path};
+    return impl_->Run(call.assembler.Read(source), source, call);
   });
 }
 
@@ -287,10 +286,10 @@ Result Localizer::LocalizeEncodedPhoto(const uint8_t* bytes, size_t size,
                                        const Options& options) const {
   return Translated([&] {
     if (bytes == nullptr && size > 0) throw InvalidArgument("photo bytes: null pointer");
+    const CallOptions call(options, camera);
     Query query = PhotoQueryFromBytes(std::span<const uint8_t>(bytes, size), "photo bytes", "photo",
-                                      ToPhotoOptions(options));
-    UseCamera(camera, &query);
-    return impl_->Run(std::move(query), options);
+                                      call.options.photo);
+    return impl_->Run(std::move(query), {"photo", QuerySource::Kind::kImage}, call);
   });
 }
 
@@ -304,17 +303,20 @@ Result Localizer::LocalizeGreyImage(const uint8_t* pixels, uint32_t width, uint3
                             std::to_string(height) + " with stride " + std::to_string(stride) +
                             ": expected a positive size and stride >= width");
     }
+    const CallOptions call(options, camera);
+    const PhotoOptions& photo_options = call.options.photo;
+    if (uint64_t{width} * height > photo_options.max_image_pixels) {
+      throw InvalidArgument("grey image: " + std::to_string(uint64_t{width} * height) +
+                            " pixels, more than --max-image-pixels " +
+                            std::to_string(photo_options.max_image_pixels));
+    }
     Query query;
     query.name = "image";
     query.source = "grey image";
-    CheckImageSize(query.source, camera, width, height);
-    query.camera = ToQueryCamera(camera);
-    const PhotoOptions photo_options = ToPhotoOptions(options);
-    if (uint64_t{width} * height > photo_options.max_image_pixels) {
-      throw InvalidArgument("grey image: " + std::to_string(uint64_t{width} * height) +
-                            " pixels, more than max_image_pixels " +
-                            std::to_string(photo_options.max_image_pixels));
-    }
+    query.camera.width = width;  // the image's own size, which the camera must have
+    query.camera.height = height;
+    const QuerySource source{query.name, QuerySource::Kind::kImage};
+    call.Complete(source, &query);  // before the extraction it would waste
     GreyImage image;
     image.width = width;
     image.height = height;
@@ -323,7 +325,7 @@ Result Localizer::LocalizeGreyImage(const uint8_t* pixels, uint32_t width, uint3
       std::copy_n(pixels + y * stride, width, image.pixels.data() + size_t{y} * width);
     }
     ExtractPhotoFeatures(std::move(image), photo_options, &query);
-    return impl_->Run(std::move(query), options);
+    return impl_->Localize(query, call);
   });
 }
 

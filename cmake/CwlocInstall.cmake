@@ -6,6 +6,7 @@ install(TARGETS cwloc_api EXPORT cwlocTargets
   LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
   RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 install(FILES api/include/cwloc/cwloc.hpp api/include/cwloc/cwloc.h
+  ${PROJECT_BINARY_DIR}/generated/cwloc/options.inc
   DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/cwloc)
 
 foreach(tool cwloc_localize_exe cwloc_index_exe cwloc_synth_exe cwloc_eval_exe)

@@ -12,8 +12,10 @@
 #include <mutex>
 #include <new>
 #include <nlohmann/json.hpp>
+#include <span>
 #include <sstream>
 #include <thread>
+#include <variant>
 
 #include "cwloc/version.h"
 #include "format/base/checkpointed_file.h"
@@ -22,8 +24,8 @@
 #include "format/base/tool_main.h"
 #include "format/index/index.h"
 #include "localizer/io/camera_spec.h"
-#include "localizer/io/feature_file.h"
-#include "localizer/io/photo_query.h"
+#include "localizer/io/option_table.h"
+#include "localizer/io/query_assembly.h"
 #include "localizer/io/query_list.h"
 #include "localizer/io/query_priors.h"
 #include "localizer/io/result_json.h"
@@ -34,22 +36,6 @@
 
 namespace cwloc {
 namespace {
-
-// One query to run: a database image name, a feature file or a photo, with an optional camera
-// from its list line.
-struct QuerySource {
-  enum class Kind { kDatabase, kFeatureFile, kPhoto };
-  std::string name;
-  Kind kind = Kind::kDatabase;
-  std::filesystem::path path;  // the feature file or photo
-  std::string camera_spec;     // "MODEL W H PARAMS" from a list line, if any
-  std::string list;            // the list file that line came from
-};
-
-// How an error names the query: its file, or its name in the database.
-std::string SourceLabel(const QuerySource& source) {
-  return source.path.empty() ? "query '" + source.name + "'" : source.path.string();
-}
 
 struct CliOptions {
   std::string index_path;
@@ -67,9 +53,7 @@ struct CliOptions {
   std::string prior_position;  // --prior-position, for every query
   std::string prior_gravity;   // --prior-gravity, for every query
   std::string priors_path;     // --priors: per query
-  bool use_exif_gps = false;
-  double exif_gps_radius_m = kDefaultExifGpsRadiusM;
-  PhotoOptions photo;
+  QueryOptions options;        // the option table's
   std::string output_path;
   std::string poses_path;
   int threads = 1;
@@ -112,117 +96,55 @@ std::vector<QuerySource> CollectQueries(const CliOptions& cli) {
   return sources;
 }
 
+// Reads each query from its source and assembles it as libcwloc does (QueryAssembler).
 class QueryLoader {
  public:
-  explicit QueryLoader(const CliOptions& cli) : cli_(cli) {
-    if (!cli.camera_spec.empty()) camera_option_ = ParseCameraSpec(cli.camera_spec, "--camera");
-    if (!cli.image_size.empty())
-      image_size_option_ = ParseImageSize(cli.image_size, "--image-size");
-    if (cli.focal != 0.0 && !(std::isfinite(cli.focal) && cli.focal > 0.0))
-      throw InputError("--focal must be a positive number of pixels");
-    ValidatePhotoOptions(cli.photo);
-    if (!cli.prior_position.empty())
-      position_option_ = ParsePositionPrior(cli.prior_position, "--prior-position");
-    if (!cli.prior_gravity.empty())
-      gravity_option_ = ParseGravityPrior(cli.prior_gravity, "--prior-gravity");
-    if (!cli.priors_path.empty()) priors_ = ReadPriorsFile(cli.priors_path);
-    ValidateExifGpsRadius(cli.exif_gps_radius_m);
+  explicit QueryLoader(const CliOptions& cli) : assembler_(cli.options, Cameras(cli), Priors(cli)) {
 #ifdef CWLOC_WITH_COLMAP_DB
     if (!cli.database_path.empty())
       database_ = std::make_unique<DatabaseQueries>(cli.database_path);
 #endif
   }
 
-  // Reads the query's features, then picks its camera once. The Localizer checks the query.
   Query Load(const QuerySource& source) const {
-    Query query;
-    switch (source.kind) {
-      case QuerySource::Kind::kPhoto:
-        query = LoadPhotoQuery(source.path, source.name, cli_.photo);
-        break;
-      case QuerySource::Kind::kFeatureFile:
-        query = LoadFeatureFile(source);
-        break;
-      case QuerySource::Kind::kDatabase:
-        query = LoadFromDatabase(source);
-        break;
-    }
-    query.camera = ChooseCamera(source, query);
-    if (cli_.unknown_focal) query.camera = WithUnknownFocal(query.camera);
-    AddPriors(&query);
+    Query query = source.kind == QuerySource::Kind::kDatabase ? LoadFromDatabase(source)
+                                                              : assembler_.Read(source);
+    assembler_.Complete(source, &query);
     return query;
   }
 
  private:
-  // A list line's camera wins, then --camera, then --focal, then --image-size; a query's own
-  // camera (a photo's EXIF or size, the database's camera) comes last.
-  QueryCamera ChooseCamera(const QuerySource& source, const Query& query) const {
-    const QueryCamera& own = query.camera;  // width 0 for feature files
-    const bool photo = source.kind == QuerySource::Kind::kPhoto;
-    QueryCamera camera = own;
-    if (!source.camera_spec.empty()) {
-      camera = ParseCameraSpec(source.camera_spec, source.list + " (" + source.name + ")");
-      camera.source = IntrinsicsSource::kQueryList;
-    } else if (camera_option_) {
-      camera = *camera_option_;
-    } else if (cli_.focal > 0.0) {
-      const QueryCamera& sized = own.width > 0 || !image_size_option_ ? own : *image_size_option_;
-      if (sized.width == 0) {
-        throw InputError(query.Source() +
-                         ": --focal needs the image size: give --image-size \"W H\"");
-      }
-      camera =
-          FocalPriorCamera(cli_.focal, sized.width, sized.height, IntrinsicsSource::kFocalOption);
-    } else if (image_size_option_ && !photo) {
-      camera = *image_size_option_;
-    }
-    if (camera.width == 0) {
-      throw InputError(query.Source() +
-                       ": no camera: give --camera \"MODEL W H PARAMS\", --image-size \"W H\", or "
-                       "a camera in the query list");
-    }
-    if (photo && (camera.width != own.width || camera.height != own.height)) {
-      throw InputError(query.Source() + ": the camera is " + std::to_string(camera.width) + " x " +
-                       std::to_string(camera.height) + " but the photo is " +
-                       std::to_string(own.width) + " x " + std::to_string(own.height));
-    }
-    return camera;
+  static CameraInputs Cameras(const CliOptions& cli) {
+    CameraInputs cameras;
+    if (!cli.camera_spec.empty()) cameras.camera = ParseCameraSpec(cli.camera_spec, "--camera");
+    if (!cli.image_size.empty())
+      cameras.image_size = ParseImageSize(cli.image_size, "--image-size");
+    cameras.focal_px = cli.focal;
+    cameras.unknown_focal = cli.unknown_focal;
+    return cameras;
   }
 
-  // The priors file's line for this query wins, then --prior-*, then the photo's EXIF GPS.
-  void AddPriors(Query* query) const {
-    const auto listed = priors_.find(query->name);
-    const QueryPriors* own = listed == priors_.end() ? nullptr : &listed->second;
-    query->position_prior = own && own->position ? own->position : position_option_;
-    if (!query->position_prior && cli_.use_exif_gps)
-      query->position_prior = ExifPositionPrior(*query, cli_.exif_gps_radius_m);
-    query->gravity = own && own->gravity ? own->gravity : gravity_option_;
-  }
-
-  static Query LoadFeatureFile(const QuerySource& source) {
-    Query query;
-    ReadFeatureFile(source.path, &query);
-    query.name = source.name;
-    query.source = source.path.string();
-    return query;
+  static PriorInputs Priors(const CliOptions& cli) {
+    PriorInputs priors;
+    if (!cli.prior_position.empty())
+      priors.position = ParsePositionPrior(cli.prior_position, "--prior-position");
+    if (!cli.prior_gravity.empty())
+      priors.gravity = ParseGravityPrior(cli.prior_gravity, "--prior-gravity");
+    if (!cli.priors_path.empty()) priors.per_query = ReadPriorsFile(cli.priors_path);
+    return priors;
   }
 
   Query LoadFromDatabase(const QuerySource& source) const {
 #ifdef CWLOC_WITH_COLMAP_DB
-    if (!database_) throw InputError(SourceLabel(source) + ": give --database to read it from");
+    if (!database_) throw InputError(source.Label() + ": give --database to read it from");
     return database_->Load(source.name);
 #else
-    throw InputError(SourceLabel(source) +
+    throw InputError(source.Label() +
                      ": this cwloc-localize was built without COLMAP database input");
 #endif
   }
 
-  const CliOptions& cli_;
-  std::optional<QueryCamera> camera_option_;
-  std::optional<QueryCamera> image_size_option_;
-  std::optional<PositionPrior> position_option_;
-  std::optional<std::array<double, 3>> gravity_option_;
-  std::unordered_map<std::string, QueryPriors> priors_;
+  QueryAssembler assembler_;
 #ifdef CWLOC_WITH_COLMAP_DB
   std::unique_ptr<DatabaseQueries> database_;
 #endif
@@ -330,8 +252,8 @@ void StopOnInterrupt() {
   for (const int signal_number : {SIGINT, SIGTERM}) sigaction(signal_number, &action, nullptr);
 }
 
-int Run(const CliOptions& cli, const LocalizerOptions& options) {
-  ValidateLocalizerOptions(options);
+int Run(const CliOptions& cli) {
+  const LocalizerOptions& options = cli.options.localizer;
   if (cli.threads < 1 || cli.threads > 1024)
     throw InputError("--threads must be between 1 and 1024");
   const Index index = Index::Open(cli.index_path);
@@ -363,10 +285,10 @@ int Run(const CliOptions& cli, const LocalizerOptions& options) {
         // A query too big for the memory left (a huge photo on a small device) must not end
         // the batch: its buffers are freed by now.
         ++internal_errors;
-        sink.WriteError(sources[i].name, SourceLabel(sources[i]) + ": out of memory");
+        sink.WriteError(sources[i].name, sources[i].Label() + ": out of memory");
       } catch (const std::exception& e) {
         ++internal_errors;
-        sink.WriteError(sources[i].name, SourceLabel(sources[i]) + ": internal error: " + e.what());
+        sink.WriteError(sources[i].name, sources[i].Label() + ": internal error: " + e.what());
       }
       progress.Advance();
     }
@@ -409,141 +331,162 @@ int Run(const CliOptions& cli, const LocalizerOptions& options) {
 }  // namespace
 }  // namespace cwloc
 
+namespace cwloc {
+namespace {
+
+// The option table's flags. Each value is kept as given and goes through the table once
+// parsing is done, so cwloc-localize refuses what libcwloc refuses, with the same message.
+class TableFlags {
+ public:
+  void AddTo(CLI::App* app) {
+    const QueryOptions defaults;
+    const std::span<const OptionSpec> table = OptionTable();
+    texts_.resize(table.size());
+    switches_ = std::make_unique<bool[]>(table.size());
+    for (size_t i = 0; i < table.size(); ++i) {
+      const OptionSpec& spec = table[i];
+      const OptionValue value = spec.get(defaults);
+      const std::string flag = "--" + std::string(spec.flag);
+      CLI::Option* option = nullptr;
+      is_switch_.push_back(std::holds_alternative<bool>(value));
+      if (const bool* on = std::get_if<bool>(&value)) {
+        switches_[i] = *on;
+        // A switch that is on by default is turned off by --no-NAME.
+        const std::string names = *on ? flag + ",!--no-" + std::string(spec.flag) : flag;
+        option = app->add_flag(names, switches_[i], std::string(spec.help));
+      } else {
+        option = app->add_option(flag, texts_[i], std::string(spec.help))
+                     ->default_str(FormatOption(value))
+                     ->type_name(TypeName(spec, value));
+      }
+      option->group(kGroup);
+      options_.push_back(option);
+    }
+  }
+
+  // Every flag given, through the table.
+  void Apply(QueryOptions* options) const {
+    const std::span<const OptionSpec> table = OptionTable();
+    for (size_t i = 0; i < table.size(); ++i) {
+      if (options_[i]->count() == 0) continue;
+      const OptionSpec& spec = table[i];
+      SetOption(options, spec.flag,
+                is_switch_[i] ? OptionValue(switches_[i]) : ParseOption(spec, texts_[i]));
+    }
+    ValidateQueryOptions(*options);
+  }
+
+  static constexpr const char* kGroup =
+      "Localization (also cwloc::api::Options, cwloc_options_set)";
+
+ private:
+  static std::string TypeName(const OptionSpec& spec, const OptionValue& value) {
+    if (!spec.range.names.empty()) {
+      std::string names;
+      for (std::string_view name : spec.range.names)
+        names += (names.empty() ? "" : "|") + std::string(name);
+      return "{" + names + "}";
+    }
+    if (std::holds_alternative<double>(value)) return "FLOAT";
+    return std::holds_alternative<int32_t>(value) ? "INT" : "UINT";
+  }
+
+  std::vector<std::string> texts_;
+  std::unique_ptr<bool[]> switches_;  // CLI11 sets bools, and vector<bool> has none to point at
+  std::vector<bool> is_switch_;
+  std::vector<CLI::Option*> options_;
+};
+
+}  // namespace
+}  // namespace cwloc
+
 int main(int argc, char** argv) {
   CLI::App app{"cwloc-localize: 6-DoF camera poses of query images against a cwloc index"};
   app.set_version_flag("--version", std::string("cwloc-localize ") + cwloc::kToolVersion);
   cwloc::CliOptions cli;
-  cwloc::LocalizerOptions options;
+  constexpr const char* kQueries = "Queries";
+  constexpr const char* kOutput = "Output";
 
   app.add_option("--index", cli.index_path, "Index file built by cwloc-index")->required();
 #ifdef CWLOC_WITH_COLMAP_DB
   app.add_option("--database", cli.database_path,
-                 "COLMAP database holding the queries' keypoints and descriptors");
+                 "COLMAP database holding the queries' keypoints and descriptors")
+      ->group(kQueries);
 #endif
   app.add_option("--image", cli.images,
                  "Query photo, JPEG or PNG (repeatable): SIFT is extracted as colmap "
-                 "feature_extractor does");
+                 "feature_extractor does")
+      ->group(kQueries);
   app.add_option("--image-list", cli.image_list,
                  "File of query photos, one per line, optionally followed by 'MODEL W H PARAMS' "
-                 "(hloc's queries_with_intrinsics.txt)");
+                 "(hloc's queries_with_intrinsics.txt)")
+      ->group(kQueries);
   app.add_option("--image-dir", cli.image_dir,
-                 "Folder the --image-list names are relative to (default: the list's folder)");
-  app.add_option("--max-image-size", cli.photo.max_image_size,
-                 "Photos are shrunk so that their longer side is at most this before SIFT "
-                 "(COLMAP's --SiftExtraction.max_image_size)")
-      ->capture_default_str();
-  app.add_option("--max-features", cli.photo.sift.max_num_features,
-                 "SIFT keeps whole scale levels, coarse first, until their count exceeds this "
-                 "(COLMAP's --SiftExtraction.max_num_features)")
-      ->capture_default_str();
-  app.add_option("--max-image-pixels", cli.photo.max_image_pixels,
-                 "Photos with more pixels are refused before decoding")
-      ->capture_default_str();
-  app.add_option("--query", cli.query_names, "Query image name in --database (repeatable)");
+                 "Folder the --image-list names are relative to (default: the list's folder)")
+      ->group(kQueries);
+  app.add_option("--query", cli.query_names, "Query image name in --database (repeatable)")
+      ->group(kQueries);
   app.add_option("--query-list", cli.query_list,
                  "File of queries, one per line: a name in --database (or a feature file), "
                  "optionally followed by "
-                 "'MODEL W H PARAMS' (hloc's queries_with_intrinsics.txt)");
+                 "'MODEL W H PARAMS' (hloc's queries_with_intrinsics.txt)")
+      ->group(kQueries);
   app.add_option("--features", cli.feature_files,
                  "COLMAP text feature file ('N 128', then 'x y scale orientation d1..d128' lines; "
-                 "repeatable)");
+                 "repeatable)")
+      ->group(kQueries);
   auto* camera = app.add_option("--camera", cli.camera_spec,
-                                "Query camera 'MODEL W H PARAMS...' (known focal)");
+                                "Query camera 'MODEL W H PARAMS...' (known focal)")
+                     ->group(kQueries);
   app.add_option("--image-size", cli.image_size,
                  "Query image size 'W H' when the focal length is unknown (P4Pf)")
-      ->excludes(camera);
+      ->excludes(camera)
+      ->group(kQueries);
   app.add_option("--focal", cli.focal,
                  "Query focal length in pixels, a prior: refined with a radial distortion term "
                  "(principal point at the image centre)")
-      ->excludes(camera);
-  app.add_flag(
-      "--unknown-focal", cli.unknown_focal,
-      "Withhold the focal length: P4Pf estimates it, then focal and radial distortion are refined");
+      ->excludes(camera)
+      ->group(kQueries);
+  app.add_flag("--unknown-focal", cli.unknown_focal,
+               "Withhold the focal length: P4Pf estimates it, then focal and radial distortion are "
+               "refined")
+      ->group(kQueries);
   app.add_option("--prior-position", cli.prior_position,
                  "GPS prior 'LAT LON [HEIGHT] RADIUS_M' (WGS84): only model cameras within the "
-                 "radius are matched; needs a georeferenced index");
+                 "radius are matched; needs a georeferenced index")
+      ->group(kQueries);
   app.add_option(
-      "--prior-gravity", cli.prior_gravity,
-      "Gravity direction 'GX GY GZ' in the camera frame (x right, y down, z forward), as "
-      "an IMU gives it; needs a georeferenced index");
-  app.add_option("--prior-gravity-sigma", options.prior_gravity_sigma_deg,
-                 "Standard deviation of --prior-gravity, degrees")
-      ->capture_default_str();
+         "--prior-gravity", cli.prior_gravity,
+         "Gravity direction 'GX GY GZ' in the camera frame (x right, y down, z forward), as "
+         "an IMU gives it; needs a georeferenced index")
+      ->group(kQueries);
   app.add_option("--priors", cli.priors_path,
                  "Per-query priors: lines 'NAME position LAT LON HEIGHT|- RADIUS_M' and 'NAME "
-                 "gravity GX GY GZ'");
-  app.add_flag("--use-exif-gps", cli.use_exif_gps,
-               "Use a photo's EXIF GPS as a position prior (horizontal, --exif-gps-radius)");
-  app.add_option("--exif-gps-radius", cli.exif_gps_radius_m, "Radius of the EXIF GPS prior, metres")
-      ->capture_default_str();
+                 "gravity GX GY GZ'")
+      ->group(kQueries);
   app.add_option("-o,--output", cli.output_path,
                  "JSON lines output (default: stdout). A file keeps its previous content until "
                  "this run's first records replace it, about a second in, and only ever holds "
-                 "whole lines, saved about once a second");
+                 "whole lines, saved about once a second")
+      ->group(kOutput);
   app.add_option("--poses", cli.poses_path,
                  "Also write 'NAME QW QX QY QZ TX TY TZ' lines of localized queries (saved as -o "
-                 "is)");
+                 "is)")
+      ->group(kOutput);
+  app.add_flag("-q,--quiet", cli.quiet, "No summary or readable lines")->group(kOutput);
   app.add_option("--threads", cli.threads, "Queries localized in parallel")->capture_default_str();
   app.add_flag("--verify", cli.verify,
                "Verify the index's checksums and stored indices before localizing");
-  app.add_flag("-q,--quiet", cli.quiet, "No summary or readable lines");
-
-  std::string matcher = "cluster-wise";
-  app.add_option(
-         "--matcher", matcher,
-         "cluster-wise (the paper), global-ratio (diagnostic baseline) or cluster-exhaustive (the "
-         "paper's brute-force gold standard; slow)")
-      ->check(CLI::IsMember(
-          std::vector<std::string>(cwloc::kMatcherNames.begin(), cwloc::kMatcherNames.end())))
-      ->capture_default_str();
-  app.add_option("--k", options.k, "Nearest neighbours per query feature (k; k+1 are searched)")
-      ->capture_default_str();
-  app.add_option("--checks", options.checks, "kd-forest leaf checks per search")
-      ->capture_default_str();
-  app.add_option("--ratio", options.ratio, "Ratio test threshold tau")->capture_default_str();
-  app.add_option("--nf", options.forward_matches, "N_F: forward matches passing both ratio tests")
-      ->capture_default_str();
-  app.add_option("--nb", options.back_matches, "N_B: back-matches to collect")
-      ->capture_default_str();
-  app.add_option("--max-back-images", options.max_back_images, "Clusters to back-match at most")
-      ->capture_default_str();
-  app.add_option("--min-vote-matches", options.min_matches_to_vote,
-                 "Back-matches a cluster needs to cast co-visibility votes")
-      ->capture_default_str();
-  app.add_option("--query-checks", options.query_tree_checks,
-                 "Leaf checks in the query features' kd-forest")
-      ->capture_default_str();
-  app.add_option("--min-inliers", options.pose.min_inliers, "Inliers needed for success")
-      ->capture_default_str();
-  app.add_option("--max-error", options.pose.max_error_px,
-                 "Inlier reprojection error threshold, pixels")
-      ->capture_default_str();
-  app.add_option("--min-ransac-iterations", options.pose.ransac.min_iterations,
-                 "RANSAC samples at least this many hypotheses (COLMAP's min_num_trials)")
-      ->capture_default_str();
-  app.add_option("--max-ransac-iterations", options.pose.ransac.max_iterations,
-                 "RANSAC iteration cap")
-      ->capture_default_str();
-  app.add_option("--ransac-confidence", options.pose.ransac.confidence,
-                 "RANSAC stops once an all-inlier sample was drawn with this probability")
-      ->capture_default_str();
-  app.add_option("--seed", options.seed, "Seed of the feature order and RANSAC")
-      ->capture_default_str();
-  app.add_flag("!--no-refine", options.pose.refine, "Skip the final refinement");
-  std::string refiner(cwloc::PoseRefinerName(options.pose.refiner));
-  app.add_option("--refiner", refiner,
-                 "Solver of the final refinement: ceres (Ceres' Levenberg-Marquardt, in builds "
-                 "with Ceres) or builtin (ours, the same steps and poses without Ceres)")
-      ->check(CLI::IsMember(std::vector<std::string>(cwloc::kPoseRefinerNames.begin(),
-                                                     cwloc::kPoseRefinerNames.end())))
-      ->capture_default_str();
+  cwloc::TableFlags table_flags;
+  table_flags.AddTo(&app);
 
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? cwloc::kExitOk : cwloc::kExitBadInput;
   }
-  options.matcher = *cwloc::ParseMatcher(matcher);
-  options.pose.refiner = *cwloc::ParsePoseRefiner(refiner);
-  return cwloc::RunTool("cwloc-localize", [&] { return cwloc::Run(cli, options); });
+  return cwloc::RunTool("cwloc-localize", [&] {
+    table_flags.Apply(&cli.options);
+    return cwloc::Run(cli);
+  });
 }

@@ -67,12 +67,13 @@ MatcherOutput MatchClusterExhaustive(const Index& index, const ClusterMembers& c
   const Stopwatch selection;
   const std::vector<FeatureMatch>* best = nullptr;
   int best_inliers = 0;
+  LocalizerOptions unrefined = options;
+  unrefined.pose.refine = false;
   for (const ClusterMatches& cluster : per_cluster) {
     if (!ClusterAllowed(allowed, cluster.cluster)) continue;
     out.forward.insert(out.forward.end(), cluster.matches.begin(), cluster.matches.end());
     if (cluster.matches.size() < static_cast<size_t>(options.pose.min_inliers)) continue;
-    const QueryPose candidate =
-        EstimateQueryPose(index, query, cluster.matches, options, /*refine=*/false);
+    const QueryPose candidate = EstimateQueryPose(index, query, cluster.matches, unrefined);
     if (candidate.pose.success && candidate.pose.num_inliers > best_inliers) {
       best_inliers = candidate.pose.num_inliers;
       best = &cluster.matches;
@@ -137,35 +138,6 @@ void ValidateQuery(const Query& query) {
 }
 
 }  // namespace
-
-void ValidateLocalizerOptions(const LocalizerOptions& o) {
-  auto require = [](bool ok, const std::string& message) {
-    if (!ok) throw InputError(message);
-  };
-  require(o.k >= 1 && o.k <= kMaxK,
-          "--k " + std::to_string(o.k) + ": expected 1 to " + std::to_string(kMaxK));
-  require(o.checks >= 1, "--checks must be at least 1");
-  require(o.ratio > 0 && o.ratio <= 1,
-          "--ratio " + std::to_string(o.ratio) + ": expected a value in (0, 1]");
-  require(o.forward_matches >= 1, "--nf must be at least 1");
-  require(o.max_back_images >= 1, "--max-back-images must be at least 1");
-  require(o.query_tree_checks >= 1, "--query-checks must be at least 1");
-  require(o.pose.min_inliers >= 4,
-          "--min-inliers " + std::to_string(o.pose.min_inliers) + ": expected at least 4");
-  require(o.pose.max_error_px > 0 && std::isfinite(o.pose.max_error_px),
-          "--max-error must be a positive number of pixels");
-  require(o.pose.ransac.max_iterations >= 1, "--max-ransac-iterations must be at least 1");
-  require(o.pose.ransac.min_iterations <= o.pose.ransac.max_iterations,
-          "--min-ransac-iterations must not exceed --max-ransac-iterations");
-  require(o.pose.ransac.confidence > 0 && o.pose.ransac.confidence < 1,
-          "--ransac-confidence: expected a value in (0, 1)");
-  require(o.prior_gravity_sigma_deg > 0 && o.prior_gravity_sigma_deg <= 90,
-          "--prior-gravity-sigma: expected degrees in (0, 90]");
-  require(PoseRefinerAvailable(o.pose.refiner),
-          "--refiner " + std::string(PoseRefinerName(o.pose.refiner)) +
-              ": this build has no Ceres (configured with -DCWLOC_WITH_CERES=OFF); use "
-              "--refiner builtin");
-}
 
 Localizer::Localizer(const Index& index)
     : index_(index), clusters_(index), geo_(IndexGeo::Of(index)) {}
@@ -245,8 +217,7 @@ LocalizationResult Localizer::Localize(const Query& query, const LocalizerOption
   const Stopwatch pose_time;
   QueryPose fit;
   if (matched.failure_reason.empty()) {
-    fit = EstimateQueryPose(index_, query, matched.correspondences, pose_options,
-                            options.pose.refine);
+    fit = EstimateQueryPose(index_, query, matched.correspondences, pose_options);
   } else {
     fit.pose.failure_reason = matched.failure_reason;
   }

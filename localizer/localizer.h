@@ -39,7 +39,4 @@ class Localizer {
   std::optional<IndexGeo> geo_;
 };
 
-// Checks options against absurd values; throws InputError naming the CLI flag.
-void ValidateLocalizerOptions(const LocalizerOptions& options);
-
 }  // namespace cwloc

@@ -6,6 +6,7 @@
 #include <string_view>
 
 #include "format/base/enum_names.h"
+#include "format/kdtree/kd_forest.h"
 #include "localizer/pose/absolute_pose.h"
 
 namespace cwloc {
@@ -33,26 +34,27 @@ inline std::optional<Matcher> ParseMatcher(std::string_view name) {
 inline constexpr uint32_t kMaxK = 63;
 
 // Every threshold and count of the pipeline; defaults are the paper's (section 4,
-// "Experimental details"). ValidateLocalizerOptions checks each one, naming its CLI flag.
+// "Experimental details"). The option table (localizer/io/option_table.inc) names each knob's
+// flag and range; ValidateQueryOptions checks them.
 struct LocalizerOptions {
   Matcher matcher = Matcher::kClusterWise;
   // Forward matching (Algorithm 1): k nearest neighbours plus one for the k-ratio test.
   uint32_t k = 5;
-  // Descriptor distance computations per kd-forest search. Our leaves hold up to 8 views, so
-  // 384 reaches the recall of the paper's FLANN setting (128 checks of 1-view leaves);
-  // docs/kd_forest.md has the measurements.
-  uint32_t checks = 384;
+  // Descriptor distance computations per search of the index's kd-forest: the search's own
+  // default, which reaches the recall of the paper's FLANN setting (kd_forest.h).
+  uint32_t checks = KdSearchOptions().max_checks;
   double ratio = 0.7;  // tau, used by every ratio test
   // N_F: forward matching stops once this many (query feature, view) matches have passed the
   // k-ratio *and* the cluster-wise ratio test (docs/algorithm.md explains this reading).
   uint32_t forward_matches = 200;
   // Back-matching (Algorithm 3).
   uint32_t back_matches = 200;        // N_B: stop once this many back-matches are found
-  uint32_t max_back_images = 20;      // ... or this many clusters were back-matched
+  uint32_t max_back_images = 20;      // ... or this many clusters (not images) were back-matched
   uint32_t min_matches_to_vote = 12;  // a back-matched cluster votes for co-visible ones
-  uint32_t query_tree_checks = 64;    // leaf checks in the per-query kd-forest
-  // Robust pose: inlier threshold, minimum inliers, RANSAC's limits, refinement. Its RANSAC
-  // seed is not used: the localizer seeds RANSAC with `seed` below.
+  uint32_t query_tree_checks = 64;    // distance computations per search of the query's forest
+  // Robust pose: inlier threshold, minimum inliers, RANSAC's limits, refinement. Its
+  // ransac.seed is overwritten with `seed` below for each query: one seed drives a query's
+  // randomness (the pose stage alone, in benchmarks and tests, takes its own).
   AbsolutePoseOptions pose;
   // A query's gravity prior (--prior-gravity): its standard deviation, degrees.
   double prior_gravity_sigma_deg = GravityPrior().sigma_deg;

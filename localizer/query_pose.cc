@@ -28,7 +28,7 @@ std::vector<FeatureMatch> UniqueCorrespondences(const Index& index,
 
 QueryPose EstimateQueryPose(const Index& index, const Query& query,
                             std::span<const FeatureMatch> correspondences,
-                            const LocalizerOptions& options, bool refine) {
+                            const LocalizerOptions& options) {
   std::vector<Eigen::Vector2d> points2D;
   std::vector<Eigen::Vector3d> points3D;
   points2D.reserve(correspondences.size());
@@ -57,7 +57,6 @@ QueryPose EstimateQueryPose(const Index& index, const Query& query,
 
   AbsolutePoseOptions pose_options = options.pose;
   pose_options.ransac.seed = options.seed;
-  pose_options.refine = refine;
   switch (camera.calibration) {
     case Calibration::kKnown:
       result.pose = EstimateAbsolutePose(

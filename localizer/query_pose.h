@@ -25,14 +25,15 @@ struct QueryPose {
   std::vector<uint32_t> used;
 };
 
-// The pose stage: LO-RANSAC with the minimal solver the camera calls for, then, with `refine`,
-// the final refinement (absolute_pose.h). A known camera undistorts the keypoints with its model
-// and P3P holds its focal length. An uncalibrated camera (Calibration::kFocalPrior, kUnknown) is
-// a SIMPLE_RADIAL with its principal point at QueryCamera::ImageCenter: RANSAC runs P3P with the
-// prior focal length (the camera's mean focal) or P4Pf, and the refinement estimates the focal
-// length and the radial distortion with the pose. RANSAC is seeded with options.seed.
+// The pose stage: LO-RANSAC with the minimal solver the camera calls for, then, with
+// options.pose.refine, the final refinement (absolute_pose.h). A known camera undistorts the
+// keypoints with its model and P3P holds its focal length. An uncalibrated camera
+// (Calibration::kFocalPrior, kUnknown) is a SIMPLE_RADIAL with its principal point at
+// QueryCamera::ImageCenter: RANSAC runs P3P with the prior focal length (the camera's mean focal)
+// or P4Pf, and the refinement estimates the focal length and the radial distortion with the pose.
+// RANSAC is seeded with options.seed.
 QueryPose EstimateQueryPose(const Index& index, const Query& query,
                             std::span<const FeatureMatch> correspondences,
-                            const LocalizerOptions& options, bool refine);
+                            const LocalizerOptions& options);
 
 }  // namespace cwloc

@@ -125,25 +125,36 @@ TEST_F(CApiTest, OptionsAreSetByFlagNameAndChecked) {
   EXPECT_EQ(cwloc_options_set(options, "warp-speed", 9), CWLOC_ERROR_INVALID_ARGUMENT);
   EXPECT_STREQ(cwloc_last_error(), "unknown option 'warp-speed'");
   EXPECT_EQ(cwloc_options_set(options, "k", 2.5), CWLOC_ERROR_INVALID_ARGUMENT);
-  EXPECT_STREQ(cwloc_last_error(), "option 'k': 2.500000 is not a valid value");
+  EXPECT_STREQ(cwloc_last_error(), "--k 2.5: expected a whole number");
   EXPECT_EQ(cwloc_options_set(options, "seed", -1), CWLOC_ERROR_INVALID_ARGUMENT);
+  EXPECT_STREQ(cwloc_last_error(), "--seed -1: expected at least 0");
   EXPECT_EQ(cwloc_options_set(options, "refine", 2), CWLOC_ERROR_INVALID_ARGUMENT);
+  EXPECT_STREQ(cwloc_last_error(), "--refine 2: expected true or false (1 or 0)");
 
-  // In range for the type, out of range for the pipeline: refused when the query runs.
+  // Out of the pipeline's range: refused at once, with cwloc-localize's message.
   EXPECT_EQ(cwloc_options_set(options, "min-inliers", 12), CWLOC_OK);
-  EXPECT_EQ(cwloc_options_set(options, "k", 64), CWLOC_OK);
+  EXPECT_EQ(cwloc_options_set(options, "k", 64), CWLOC_ERROR_INVALID_ARGUMENT);
+  EXPECT_STREQ(cwloc_last_error(), "--k 64: expected 1 to 63");
+  // A rule between options: refused when the query runs.
+  EXPECT_EQ(cwloc_options_set(options, "min-ransac-iterations", 20000), CWLOC_OK);
   EXPECT_EQ(Localize(&camera, options, &result), CWLOC_ERROR_INVALID_ARGUMENT);
   EXPECT_EQ(result, nullptr);
-  EXPECT_STREQ(cwloc_last_error(), "--k 64: expected 1 to 63");
+  EXPECT_STREQ(cwloc_last_error(),
+               "--min-ransac-iterations 20000: expected at most --max-ransac-iterations 10000");
+  EXPECT_EQ(cwloc_options_set(options, "min-ransac-iterations", 100), CWLOC_OK);
 
   EXPECT_EQ(cwloc_options_set(options, "k", 5), CWLOC_OK);
   EXPECT_EQ(cwloc_options_set_matcher(options, "cluster-exhaustive"), CWLOC_OK);
   ASSERT_EQ(Localize(&camera, options, &result), CWLOC_OK) << cwloc_last_error();
   EXPECT_EQ(cwloc_result_success(result), 1) << cwloc_result_failure_reason(result);
   cwloc_result_destroy(result);
-  EXPECT_EQ(cwloc_options_set_matcher(options, "psychic"), CWLOC_OK);
-  EXPECT_EQ(Localize(&camera, options, &result), CWLOC_ERROR_INVALID_ARGUMENT);
-  EXPECT_STREQ(cwloc_last_error(), "unknown matcher 'psychic'");
+  EXPECT_EQ(cwloc_options_set_matcher(options, "psychic"), CWLOC_ERROR_INVALID_ARGUMENT);
+  EXPECT_STREQ(cwloc_last_error(),
+               "--matcher psychic: expected cluster-wise, global-ratio or cluster-exhaustive");
+  EXPECT_EQ(cwloc_options_set_text(options, "matcher", "global-ratio"), CWLOC_OK);
+  EXPECT_EQ(cwloc_options_set_text(options, "nb", "1e2"), CWLOC_OK);
+  EXPECT_EQ(cwloc_options_set_text(options, "nb", "many"), CWLOC_ERROR_INVALID_ARGUMENT);
+  EXPECT_STREQ(cwloc_last_error(), "--nb many: expected a whole number");
   cwloc_options_destroy(options);
 }
 
@@ -387,15 +398,15 @@ TEST_F(CApiGeoTest, BadPriorsAndKnobsAreRefused) {
   ASSERT_EQ(cwloc_options_set_gravity(options_, zero), CWLOC_OK);
   expect_refused("features: gravity prior must be a finite, non-zero vector");
   ASSERT_EQ(cwloc_options_set_gravity(options_, nullptr), CWLOC_OK);
-  ASSERT_EQ(cwloc_options_set(options_, "prior-gravity-sigma", 0), CWLOC_OK);
-  expect_refused("--prior-gravity-sigma: expected degrees in (0, 90]");
+  EXPECT_EQ(cwloc_options_set(options_, "prior-gravity-sigma", 0), CWLOC_ERROR_INVALID_ARGUMENT);
+  EXPECT_STREQ(cwloc_last_error(), "--prior-gravity-sigma 0: expected degrees in (0, 90]");
   ASSERT_EQ(cwloc_options_set(options_, "prior-gravity-sigma", 90), CWLOC_OK);
-  ASSERT_EQ(cwloc_options_set(options_, "exif-gps-radius", -1), CWLOC_OK);
-  expect_refused("--exif-gps-radius must be a positive number of metres");
+  EXPECT_EQ(cwloc_options_set(options_, "exif-gps-radius", -1), CWLOC_ERROR_INVALID_ARGUMENT);
+  EXPECT_STREQ(cwloc_last_error(), "--exif-gps-radius -1: expected a number of metres > 0");
   ASSERT_EQ(cwloc_options_set(options_, "exif-gps-radius", 30), CWLOC_OK);
   // A flag is 0 or 1.
   EXPECT_EQ(cwloc_options_set(options_, "use-exif-gps", 2), CWLOC_ERROR_INVALID_ARGUMENT);
-  EXPECT_STREQ(cwloc_last_error(), "option 'use-exif-gps': 2.000000 is not a valid value");
+  EXPECT_STREQ(cwloc_last_error(), "--use-exif-gps 2: expected true or false (1 or 0)");
   EXPECT_EQ(cwloc_options_set(options_, "use-exif-gps", 1), CWLOC_OK);
   ASSERT_EQ(Localize(localizer_, options_, &result), CWLOC_OK) << cwloc_last_error();
   EXPECT_EQ(cwloc_result_success(result), 1);  // features have no EXIF: no prior

@@ -249,10 +249,10 @@ TEST_F(LocalizerApiGeoTest, BadPriorsAreInvalidArgumentsWithThePipelinesMessage)
 
   options = api::Options();
   options.prior_gravity_sigma_deg = 0;
-  expect(options, "--prior-gravity-sigma: expected degrees in (0, 90]");
+  expect(options, "--prior-gravity-sigma 0: expected degrees in (0, 90]");
   options = api::Options();
   options.exif_gps_radius_m = 0;
-  expect(options, "--exif-gps-radius must be a positive number of metres");
+  expect(options, "--exif-gps-radius 0: expected a number of metres > 0");
 
   // Priors need an index on the globe; the golden 1.0 index (the same city) is not.
   const api::Localizer plain = api::Localizer::Open(GoldenIndex().string());

@@ -214,7 +214,8 @@ TEST_F(LocalizerApiTest, BadArgumentsAreInvalidArgumentWithTheReason) {
   options = api::Options();
   options.matcher = "psychic";
   ExpectError([&] { localizer.Localize(features, good, options); },
-              api::ErrorCode::kInvalidArgument, "unknown matcher 'psychic'");
+              api::ErrorCode::kInvalidArgument,
+              "--matcher psychic: expected cluster-wise, global-ratio or cluster-exhaustive");
 
   const std::vector<uint8_t> pixels(64 * 48, 128);
   api::Camera small = good;

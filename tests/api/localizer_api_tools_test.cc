@@ -115,7 +115,7 @@ TEST_F(LocalizerApiPhotoTest, FileBytesAndGreyPixelsGiveOnePoseNearColmaps) {
   ExpectError([&] { localizer_->LocalizePhoto(photo.string(), wrong, options); },
               api::ErrorCode::kInvalidArgument,
               photo.string() + ": the camera is 640 x " + std::to_string(grey.height) +
-                  " but the image is " + std::to_string(grey.width) + " x " +
+                  " but the photo is " + std::to_string(grey.width) + " x " +
                   std::to_string(grey.height));
 }
 

@@ -250,12 +250,19 @@ TEST_F(LocalizeCliTest, UnknownCameraModelNamesTheKnownOnes) {
 TEST_F(LocalizeCliTest, AbsurdParametersAreRejected) {
   std::string output;
   EXPECT_EQ(Run("--database " + database_path_.string() + " --query x --ratio 2", &output), 2);
-  EXPECT_THAT(output, HasSubstr("--ratio 2.000000: expected a value in (0, 1]"));
+  EXPECT_THAT(output, HasSubstr("--ratio 2: expected a value in (0, 1]"));
   EXPECT_EQ(Run("--database " + database_path_.string() + " --query x --k 0", &output), 2);
   EXPECT_THAT(output, HasSubstr("--k 0: expected 1 to 63"));
   EXPECT_EQ(Run("--database " + database_path_.string() + " --query x --matcher nearest", &output),
             2);
-  EXPECT_THAT(output, HasSubstr("--matcher"));
+  EXPECT_THAT(output, HasSubstr("cwloc-localize: error: --matcher nearest: expected cluster-wise, "
+                                "global-ratio or cluster-exhaustive"));
+  // Refused, not failing every query later (the option table's ranges).
+  EXPECT_EQ(Run("--database " + database_path_.string() + " --query x --nb 0", &output), 2);
+  EXPECT_THAT(output, HasSubstr("cwloc-localize: error: --nb 0: expected at least 1\n"));
+  EXPECT_EQ(
+      Run("--database " + database_path_.string() + " --query x --min-vote-matches 0", &output), 2);
+  EXPECT_THAT(output, HasSubstr("--min-vote-matches 0: expected at least 1"));
   EXPECT_EQ(Run("", &output), 2);
   EXPECT_THAT(output, HasSubstr("no queries"));
 }

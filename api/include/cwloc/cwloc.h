@@ -93,13 +93,16 @@ CWLOC_C_API cwloc_status cwloc_localizer_info(const cwloc_localizer* localizer,
 /* Options with cwloc-localize's defaults; NULL options anywhere below means the defaults. */
 CWLOC_C_API cwloc_status cwloc_options_create(cwloc_options** out);
 CWLOC_C_API void cwloc_options_destroy(cwloc_options* options);
-/* Sets a numeric knob by its cwloc-localize flag name without dashes: "k", "checks", "ratio",
- * "nf", "nb", "max-back-images", "max-error", "min-inliers", "max-ransac-iterations",
- * "refine" (0 or 1), "ranked-images", "seed", "max-image-size", "max-features",
- * "max-image-pixels", "prior-gravity-sigma", "use-exif-gps" (0 or 1), "exif-gps-radius".
- * Values are checked when a query runs. */
+/* Sets an option by its cwloc-localize flag name without dashes (every line of
+ * <cwloc/options.inc>: "k", "checks", "nb", "refine", ...), from a number (a switch takes 1 or
+ * 0) or, with _text, from text as cwloc-localize takes it ("cluster-wise", "0.7", "true").
+ * An unknown name or a value out of range is CWLOC_ERROR_INVALID_ARGUMENT, with the message
+ * cwloc-localize gives ("--nb 0: expected at least 1"); rules between options are checked
+ * when a query runs. */
 CWLOC_C_API cwloc_status cwloc_options_set(cwloc_options* options, const char* name, double value);
-/* "cluster-wise" (default), "global-ratio" or "cluster-exhaustive". */
+CWLOC_C_API cwloc_status cwloc_options_set_text(cwloc_options* options, const char* name,
+                                                const char* value);
+/* cwloc_options_set_text(options, "matcher", matcher). */
 CWLOC_C_API cwloc_status cwloc_options_set_matcher(cwloc_options* options, const char* matcher);
 /* Priors for every query (a georeferenced index only; docs/geo.md); NULL removes one. The
  * position prior wins over a photo's EXIF GPS ("use-exif-gps"). gravity_xyz is the direction

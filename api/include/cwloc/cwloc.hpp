@@ -77,36 +77,28 @@ struct PositionPrior {
   double radius_m = 0;             // > 0
 };
 
-// The knobs of cwloc-localize, with its defaults (set by the constructor). docs/cli.md
-// explains each under the flag named in its comment.
+// The knobs of cwloc-localize, with its defaults (set by the constructor): one field per line
+// of <cwloc/options.inc>, named there with its cwloc-localize flag, range and meaning
+// (docs/cli.md). Values are checked when a query runs, as the CLI checks its flags: a bad one
+// throws Error(kInvalidArgument) with the CLI's message ("--nb 0: expected at least 1").
 struct CWLOC_API Options {
   Options();
-  std::string matcher;             // --matcher: cluster-wise, global-ratio, cluster-exhaustive
-  uint32_t k;                      // --k
-  uint32_t checks;                 // --checks
-  double ratio;                    // --ratio
-  uint32_t forward_matches;        // --nf
-  uint32_t back_matches;           // --nb
-  uint32_t max_back_images;        // --max-back-images
-  double max_error_px;             // --max-error
-  int min_inliers;                 // --min-inliers
-  uint32_t max_ransac_iterations;  // --max-ransac-iterations
-  bool refine;                     // false: --no-refine
-  uint32_t ranked_images;          // --ranked-images
-  uint64_t seed;                   // --seed
-  // Photos only: how they become SIFT features, as colmap feature_extractor does.
-  uint32_t max_image_size;    // --max-image-size
-  uint32_t max_features;      // --max-features
-  uint64_t max_image_pixels;  // --max-image-pixels
+
+#define CWLOC_OPTION(field, type, ...) type field;
+#include "cwloc/options.inc"
+#undef CWLOC_OPTION
+
+  // Sets the option named by its flag without dashes ("nb", "matcher"), from text as
+  // cwloc-localize takes it or from a number; throws Error(kInvalidArgument) with the CLI's
+  // message for an unknown name or a value out of range.
+  void Set(const std::string& name, const std::string& value);
+  void Set(const std::string& name, double value);
+
   // Priors (docs/geo.md); each needs a georeferenced index. gravity is the direction gravity
-  // pulls in the camera frame (x right, y down, z forward), of any non-zero length.
+  // pulls in the camera frame (x right, y down, z forward), of any non-zero length. The
+  // position prior wins over a photo's EXIF GPS (use_exif_gps).
   std::optional<PositionPrior> position_prior;   // --prior-position
   std::optional<std::array<double, 3>> gravity;  // --prior-gravity
-  double prior_gravity_sigma_deg;                // --prior-gravity-sigma
-  // Photos only: the EXIF GPS becomes a horizontal position prior of exif_gps_radius_m, unless
-  // position_prior is set.
-  bool use_exif_gps;         // --use-exif-gps
-  double exif_gps_radius_m;  // --exif-gps-radius
 };
 
 struct RankedImage {
