@@ -5,8 +5,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <limits>
 #include <optional>
+#include <regex>
+#include <set>
+#include <sstream>
 #include <string>
 #include <variant>
 #include <vector>
@@ -200,6 +204,52 @@ TEST(OptionTable, MessagesNameTheFlagAndTheRange) {
   EXPECT_EQ(options.localizer.seed, std::numeric_limits<uint64_t>::max());
   EXPECT_EQ(message("seed", "-1"), "--seed -1: expected at least 0");
   EXPECT_THROW(FindOption("warp-speed"), InputError);
+}
+
+// The flags cwloc-localize --help lists.
+std::set<std::string> LocalizeFlags() {
+  std::string help;
+  EXPECT_EQ(test::RunCommand(test::Quote(test::ToolPath("cwloc-localize")) + " --help", &help), 0);
+  std::set<std::string> flags = {"--help", "--version"};
+  const std::regex flag(R"(--[a-z][a-z0-9-]*)");
+  for (std::sregex_iterator it(help.begin(), help.end(), flag), end; it != end; ++it)
+    flags.insert(it->str());
+  return flags;
+}
+
+// Where the API and cwloc-localize are documented, every --flag said of cwloc-localize exists:
+// on a line, a flag belongs to the last tool named before it (cwloc-localize when none is).
+TEST(OptionTable, DocsAndHeadersNameOnlyFlagsThatExist) {
+  const std::set<std::string> flags = LocalizeFlags();
+  for (const OptionSpec& spec : OptionTable())
+    EXPECT_TRUE(flags.count("--" + std::string(spec.flag))) << spec.flag << " is not a flag";
+  const std::filesystem::path source = test::SourceDir();
+  std::vector<std::pair<std::string, std::string>> texts;  // file, text
+  for (const char* file : {"api/include/cwloc/cwloc.hpp", "api/include/cwloc/cwloc.h",
+                           "localizer/io/option_table.inc", "docs/api.md"})
+    texts.emplace_back(file, test::ReadFile(source / file));
+  const std::string cli = test::ReadFile(source / "docs/cli.md");
+  const size_t section = cli.find("\n## cwloc-localize");
+  ASSERT_NE(section, std::string::npos);
+  texts.emplace_back("docs/cli.md", cli.substr(section, cli.find("\n## ", section + 1) - section));
+  const std::regex token(R"((cwloc-[a-z]+|cmake|colmap|ctest)|(--[a-z][a-z0-9-]*))");
+  int checked = 0;
+  for (const auto& [file, text] : texts) {
+    ASSERT_FALSE(text.empty()) << file;
+    std::istringstream lines(text);
+    for (std::string line; std::getline(lines, line);) {
+      std::string tool = "cwloc-localize";
+      for (std::sregex_iterator it(line.begin(), line.end(), token), end; it != end; ++it) {
+        if ((*it)[1].matched) {
+          tool = it->str();
+        } else if (tool == "cwloc-localize") {
+          ++checked;
+          EXPECT_TRUE(flags.count(it->str())) << file << ": " << it->str() << " in: " << line;
+        }
+      }
+    }
+  }
+  EXPECT_GE(checked, 40);
 }
 
 }  // namespace
