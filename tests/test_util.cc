@@ -11,9 +11,11 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <cerrno>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <iterator>
 #include <stdexcept>
@@ -74,6 +76,14 @@ void WriteBytes(const std::filesystem::path& path, std::span<const uint8_t> byte
   if (!out.flush()) throw std::runtime_error(path.string() + ": cannot write");
 }
 
+std::filesystem::path WriteSparseFile(const std::filesystem::path& path, uint64_t size) {
+  std::ofstream(path, std::ios::binary | std::ios::trunc).close();
+  if (::truncate(path.c_str(), static_cast<off_t>(size)) != 0)
+    throw std::runtime_error(path.string() +
+                             ": cannot make a sparse file: " + std::strerror(errno));
+  return path;
+}
+
 std::filesystem::path ToolPath(const std::string& name) {
   const char* dir = std::getenv("CWLOC_BIN_DIR");
   return std::filesystem::path(dir ? dir : CWLOC_TEST_BIN_DIR) / name;
@@ -97,6 +107,17 @@ int RunCommand(const std::string& command, std::string* output) {
     output->append(buffer.data(), n);
   const int status = ::pclose(pipe);
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+std::string UnderMemoryLimit(uint64_t kib, const std::string& command) {
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+  return command;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
+  return command;
+#endif
+#endif
+  return "ulimit -v " + std::to_string(kib) + " && " + command;
 }
 
 std::string ReadFile(const std::filesystem::path& path) {

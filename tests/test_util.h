@@ -46,6 +46,8 @@ class TempDir {
 // std::runtime_error when it cannot be written).
 std::vector<uint8_t> ReadBytes(const std::filesystem::path& path);
 void WriteBytes(const std::filesystem::path& path, std::span<const uint8_t> bytes);
+// A file of `size` zero bytes that takes no disk space (a hole), for size limits; returns `path`.
+std::filesystem::path WriteSparseFile(const std::filesystem::path& path, uint64_t size);
 
 // The InputError message `body` throws, "" when it returns.
 template <typename Body>
@@ -66,6 +68,10 @@ std::string Quote(const std::filesystem::path& path);
 
 // Runs a shell command, captures stdout+stderr, returns the exit code.
 int RunCommand(const std::string& command, std::string* output);
+
+// `command` for RunCommand under `ulimit -v kib` (the address space a small device leaves a
+// tool). Sanitizer builds reserve terabytes of address space, so there it runs without one.
+std::string UnderMemoryLimit(uint64_t kib, const std::string& command);
 
 // A file's bytes as text ("" when it cannot be read) and a folder's entries.
 std::string ReadFile(const std::filesystem::path& path);
