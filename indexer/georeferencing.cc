@@ -97,7 +97,7 @@ std::vector<GeoObservation> ExifObservations(const ModelViews& views,
   std::vector<GeoObservation> observations;
   for (const IndexImage& image : views.images) {
     const std::string name(views.ImageName(image));
-    const std::optional<ExifGps> gps = ReadExifGps(ReadFileBytes(dir / name));
+    const std::optional<ExifGps> gps = ReadExifGps(ReadPhotoFile(dir / name));
     if (!gps || !gps->altitude_m) {
       ++*without;
       continue;

@@ -8,10 +8,10 @@
 #include <csetjmp>
 #include <cstdio>
 #include <cstring>
-#include <fstream>
 #include <new>
 #include <string>
 
+#include "format/base/bounded_file.h"
 #include "format/base/error.h"
 
 namespace cwloc {
@@ -202,16 +202,8 @@ GreyImage DecodePng(std::span<const uint8_t> bytes, const std::filesystem::path&
 
 }  // namespace
 
-std::vector<uint8_t> ReadFileBytes(const std::filesystem::path& path) {
-  std::error_code error;
-  if (std::filesystem::is_directory(path, error))
-    throw InputError(path.string() + ": is a directory, not an image");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path.string() + ": cannot open the file");
-  std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)),
-                             std::istreambuf_iterator<char>());
-  if (in.bad()) throw InputError(path.string() + ": cannot read the file");
-  return bytes;
+std::vector<uint8_t> ReadPhotoFile(const std::filesystem::path& path) {
+  return ReadFileBounded(path, kPhotoFile);
 }
 
 GreyImage DecodeGreyImage(std::span<const uint8_t> bytes, const std::filesystem::path& path,

@@ -17,8 +17,9 @@ inline constexpr uint64_t kDefaultMaxImagePixels = 100'000'000;
 // The smallest side SIFT can work on: VLFeat's coarsest octave must keep a few pixels.
 inline constexpr uint32_t kMinImageSide = 16;
 
-// Reads a whole file; throws InputError naming it when it cannot be read.
-std::vector<uint8_t> ReadFileBytes(const std::filesystem::path& path);
+// A photo file's bytes, read whole through ReadFileBounded (format/base/bounded_file.h): a
+// regular file of at most kPhotoFile.max_bytes; throws InputError naming it otherwise.
+std::vector<uint8_t> ReadPhotoFile(const std::filesystem::path& path);
 
 // Decodes a JPEG or PNG (recognised by its signature, not its name) to 8-bit grey exactly as
 // COLMAP 3.8 reads images through FreeImage 3.18: JPEG with libjpeg's fast integer IDCT and

@@ -37,7 +37,7 @@ QueryCamera FocalPriorCamera(double focal_length_px, uint32_t width, uint32_t he
 Query LoadPhotoQuery(const std::filesystem::path& path, const std::string& name,
                      const PhotoOptions& options) {
   const Stopwatch time;
-  Query query = PhotoQueryFromBytes(ReadFileBytes(path), path.string(), name, options);
+  Query query = PhotoQueryFromBytes(ReadPhotoFile(path), path.string(), name, options);
   query.photo->extraction_seconds = time.Seconds();
   return query;
 }

@@ -86,7 +86,7 @@ TEST_F(LocalizerApiPhotoTest, FileBytesAndGreyPixelsGiveOnePoseNearColmaps) {
   const Eigen::Vector3d center(from_file.center[0], from_file.center[1], from_file.center[2]);
   EXPECT_LT((center - truth.pose.Center()).norm() * metres_per_unit, 0.05);
 
-  const std::vector<uint8_t> bytes = ReadFileBytes(photo);
+  const std::vector<uint8_t> bytes = ReadPhotoFile(photo);
   const api::Result from_bytes =
       localizer_->LocalizeEncodedPhoto(bytes.data(), bytes.size(), std::nullopt, options);
   EXPECT_EQ(from_bytes.rotation, from_file.rotation);

@@ -63,12 +63,12 @@ TEST(ExifFocal, RealCamerasGiveColmapsFocal) {
   CWLOC_REQUIRE_SHARED_DATA(sceaux, "sceaux_castle");
   // The database COLMAP made from these photos holds 2832 (its README).
   const auto castle =
-      ReadExifFocal(ReadFileBytes(sceaux / "query_images/100_7101.JPG"), 2832, 2128);
+      ReadExifFocal(ReadPhotoFile(sceaux / "query_images/100_7101.JPG"), 2832, 2128);
   ASSERT_TRUE(castle);
   EXPECT_DOUBLE_EQ(castle->focal_length_px, 2832.0);
   const auto phones = test::SharedDataDir("exif_samples");
   if (!phones) GTEST_SKIP() << "shared data 'exif_samples' not found";
-  const auto phone = ReadExifFocal(ReadFileBytes(*phones / "berlin_iphone4s/01.jpg"), 3264, 2448);
+  const auto phone = ReadExifFocal(ReadPhotoFile(*phones / "berlin_iphone4s/01.jpg"), 3264, 2448);
   ASSERT_TRUE(phone);
   EXPECT_DOUBLE_EQ(phone->focal_length_px, 3264.0);
 }
@@ -176,7 +176,7 @@ TEST(ExifGps, RealPhonePhotos) {
        {Expected{"01.jpg", 31, 8.10, 24, 1.06, 27}, Expected{"02.jpg", 31, 8.13, 24, 1.40, 30},
         Expected{"03.jpg", 31, 8.57, 24, 1.61, 39}}) {
     SCOPED_TRACE(e.file);
-    const auto gps = ReadExifGps(ReadFileBytes(samples / "berlin_iphone4s" / e.file));
+    const auto gps = ReadExifGps(ReadPhotoFile(samples / "berlin_iphone4s" / e.file));
     ASSERT_TRUE(gps);
     EXPECT_NEAR(gps->latitude_deg, 52 + e.lat_minutes / 60 + e.lat_seconds / 3600, 1e-12);
     EXPECT_NEAR(gps->longitude_deg, 13 + e.lon_minutes / 60 + e.lon_seconds / 3600, 1e-12);
@@ -184,7 +184,7 @@ TEST(ExifGps, RealPhonePhotos) {
     EXPECT_DOUBLE_EQ(*gps->altitude_m, e.altitude);
     EXPECT_FALSE(gps->horizontal_error_m);  // an iPhone 4S writes none (only a DOP, 5)
   }
-  const auto first = ReadExifGps(ReadFileBytes(samples / "berlin_iphone4s/01.jpg"));
+  const auto first = ReadExifGps(ReadPhotoFile(samples / "berlin_iphone4s/01.jpg"));
   ASSERT_TRUE(first);
   EXPECT_NEAR(first->latitude_deg, 52.518916667, 1e-9);
   EXPECT_NEAR(first->longitude_deg, 13.400294444, 1e-9);

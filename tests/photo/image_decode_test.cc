@@ -18,7 +18,7 @@ std::filesystem::path PhotoFixture(const std::string& name) {
 }
 
 GreyImage Decode(const std::filesystem::path& path, uint64_t max_pixels = kDefaultMaxImagePixels) {
-  return DecodeGreyImage(ReadFileBytes(path), path, max_pixels);
+  return DecodeGreyImage(ReadPhotoFile(path), path, max_pixels);
 }
 
 // The grey image COLMAP 3.8 extracts from: decoded, then shrunk to max_image_size.
@@ -116,7 +116,7 @@ class BadPhotoTest : public ::testing::Test {
     return path;
   }
   static std::string Bytes(const std::filesystem::path& path) {
-    const std::vector<uint8_t> bytes = ReadFileBytes(path);
+    const std::vector<uint8_t> bytes = ReadPhotoFile(path);
     return std::string(bytes.begin(), bytes.end());
   }
   std::filesystem::path WritePng(const std::string& name, uint32_t width, uint32_t height,
@@ -151,6 +151,19 @@ TEST_F(BadPhotoTest, EmptyAndMissingFiles) {
   EXPECT_EQ(ErrorOf([&] { Decode(empty); }), empty.string() + ": the file is empty");
   const auto missing = dir_ / "missing.jpg";
   EXPECT_EQ(ErrorOf([&] { Decode(missing); }), missing.string() + ": cannot open the file");
+}
+
+// Issue #23: a device, a pipe or a file over the photo limit is refused before it is read
+// (reading /dev/zero used to go on until memory ran out).
+TEST_F(BadPhotoTest, DevicesDirectoriesAndHugeFilesAreRefusedUnread) {
+  EXPECT_EQ(ErrorOf([] { ReadPhotoFile("/dev/zero"); }),
+            "/dev/zero: not a regular file (a character device); an image must be a regular "
+            "file, not a device, a pipe, a socket or /dev/stdin");
+  EXPECT_EQ(ErrorOf([&] { Decode(dir_.path()); }),
+            dir_.path().string() + ": is a directory, not an image");
+  const auto huge = test::WriteSparseFile(dir_ / "huge.jpg", 512'000'001);
+  EXPECT_EQ(ErrorOf([&] { Decode(huge); }),
+            huge.string() + ": 512.000001 MB, more than the 512 MB limit for an image");
 }
 
 TEST_F(BadPhotoTest, TinyImageIsRefused) {

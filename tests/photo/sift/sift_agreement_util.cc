@@ -14,7 +14,7 @@
 namespace cwloc::sift_bench {
 
 GreyImage DecodeJpegLikeColmap(const std::filesystem::path& path) {
-  return DecodeGreyImage(ReadFileBytes(path), path);
+  return DecodeGreyImage(ReadPhotoFile(path), path);
 }
 
 SiftFeatures ReadColmapFeatures(const std::filesystem::path& database, const std::string& name) {

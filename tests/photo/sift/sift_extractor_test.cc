@@ -250,7 +250,7 @@ TEST(SiftCwlocTest, EqualsVlfeatForVariousOptions) {
 TEST(SiftCwlocTest, SameFeaturesOnEveryPlatform) {
   CWLOC_REQUIRE_SHARED_DATA(data, "herz_jesu_p25");
   const std::filesystem::path path = data / "query_images" / "0002.jpg";
-  GreyImage image = DecodeGreyImage(ReadFileBytes(path), path);
+  GreyImage image = DecodeGreyImage(ReadPhotoFile(path), path);
   const ImageSize size = ExtractionSize(image.width, image.height, 640);
   image = ResizeBilinear(image, size.width, size.height);
   const SiftFeatures features = ExtractSift(image, SiftOptions{});
