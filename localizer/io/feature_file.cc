@@ -6,6 +6,7 @@
 #include <string>
 #include <string_view>
 
+#include "format/base/bounded_file.h"
 #include "format/base/error.h"
 
 namespace cwloc {
@@ -35,6 +36,7 @@ bool ParseNumber(std::string_view token, T* value) {
 }  // namespace
 
 void ReadFeatureFile(const std::filesystem::path& path, Query* query) {
+  CheckInputFile(path, kFeatureFile);
   std::ifstream in(path);
   if (!in) throw InputError(path.string() + ": cannot open feature file");
   const std::string name = path.string();

@@ -3,11 +3,13 @@
 #include <fstream>
 #include <sstream>
 
+#include "format/base/bounded_file.h"
 #include "format/base/error.h"
 
 namespace cwloc {
 
 std::vector<QueryListEntry> ReadQueryList(const std::filesystem::path& list) {
+  CheckInputFile(list, kQueryListFile);
   std::ifstream in(list);
   if (!in) throw InputError(list.string() + ": cannot open the list");
   std::vector<QueryListEntry> entries;

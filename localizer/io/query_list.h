@@ -14,7 +14,8 @@ struct QueryListEntry {
 };
 
 // Every entry of a list file; blank lines and lines starting with '#' are skipped. Throws
-// InputError naming the list when it cannot be read.
+// InputError naming the list when it cannot be read, is not a regular file or is over
+// kQueryListFile's limit (format/base/bounded_file.h).
 std::vector<QueryListEntry> ReadQueryList(const std::filesystem::path& list);
 
 }  // namespace cwloc

@@ -5,6 +5,7 @@
 #include <sstream>
 #include <vector>
 
+#include "format/base/bounded_file.h"
 #include "format/base/error.h"
 
 namespace cwloc {
@@ -58,6 +59,7 @@ std::array<double, 3> ParseGravityPrior(const std::string& text, const std::stri
 }
 
 std::unordered_map<std::string, QueryPriors> ReadPriorsFile(const std::filesystem::path& path) {
+  CheckInputFile(path, kPriorsFile);
   std::ifstream in(path);
   if (!in) throw InputError(path.string() + ": cannot open the priors file");
   std::unordered_map<std::string, QueryPriors> priors;

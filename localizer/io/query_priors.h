@@ -27,7 +27,8 @@ struct QueryPriors {
 
 // A priors file: per line `NAME position LAT LON HEIGHT RADIUS_M` (HEIGHT '-' when unknown)
 // or `NAME gravity GX GY GZ`; '#' comments and blank lines skipped. Keyed by query name.
-// Throws InputError naming the file, the line and the problem.
+// Throws InputError naming the file, the line and the problem; a file that is not a regular one
+// or is over kPriorsFile's limit (format/base/bounded_file.h) is refused before it is read.
 std::unordered_map<std::string, QueryPriors> ReadPriorsFile(const std::filesystem::path& path);
 
 // --exif-gps-radius: a phone's fix in a street canyon is often 10-30 m off.
