@@ -8,12 +8,14 @@
 #include <sstream>
 #include <unordered_map>
 
+#include "format/base/bounded_file.h"
 #include "format/base/error.h"
 
 namespace cwloc {
 namespace {
 
 Clustering ReadClusteringFile(const std::filesystem::path& path, const ModelViews& views) {
+  CheckInputFile(path, kClusterFile);
   std::ifstream in(path);
   if (!in) throw InputError(path.string() + ": cannot open clustering file");
   std::unordered_map<std::string, int64_t> cluster_by_name;

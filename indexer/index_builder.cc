@@ -1,9 +1,9 @@
 #include "indexer/index_builder.h"
 
-#include <fstream>
 #include <nlohmann/json.hpp>
 
 #include "cwloc/version.h"
+#include "format/base/bounded_file.h"
 #include "format/base/error.h"
 #include "format/base/parallel_for.h"
 #include "format/base/progress.h"
@@ -29,8 +29,7 @@ std::string FingerprintModel(const std::filesystem::path& dir) {
   std::sort(files.begin(), files.end());
   uint64_t hash = 0;
   for (const auto& file : files) {
-    std::ifstream in(file, std::ios::binary);
-    std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)), {});
+    const std::vector<uint8_t> bytes = ReadFileBounded(file, kColmapModelFile);
     const std::string name = file.filename().string();
     hash = XxHash64({reinterpret_cast<const uint8_t*>(name.data()), name.size()}, hash);
     hash = XxHash64(bytes, hash);

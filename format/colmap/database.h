@@ -57,7 +57,8 @@ struct ImageFeatures {
 // created. The schema and every blob size are checked; a mismatch throws InputError naming
 // the file, the table, the image and the size expected. Only SIFT descriptors (N x 128
 // uint8) are accepted. Not thread-safe (prepared statements are reused): use one reader
-// per thread. Do not run colmap on the same database while reading it.
+// per thread. Do not run colmap on the same database while reading it. A path that is not a
+// regular file (a device, a pipe) is refused before SQLite opens it (kColmapDatabaseFile).
 class DatabaseReader {
  public:
   explicit DatabaseReader(const std::filesystem::path& path);

@@ -9,6 +9,7 @@
 #include <span>
 #include <string_view>
 
+#include "format/base/bounded_file.h"
 #include "format/base/error.h"
 #include "format/colmap/database.h"
 #include "format/colmap/sqlite_util.h"
@@ -173,6 +174,8 @@ DatabaseReader::DatabaseReader(const std::filesystem::path& path) : path_(path) 
   if (std::filesystem::is_directory(status)) {
     throw InputError(file + ": is a directory, expected a COLMAP database.db file");
   }
+  // A device or a pipe would have SQLite read it; no size limit (kColmapDatabaseFile).
+  CheckInputFile(path_, kColmapDatabaseFile);
 
   // Check the header ourselves: an SQLite handle on a non-database fails late and vaguely,
   // and bytes 18/19 tell whether the file is in WAL mode.

@@ -24,7 +24,9 @@ enum class ModelLayout {
 // its frame's rig_from_world and the rig's sensor_from_rig, as COLMAP does; the pose stored
 // in images.* is ignored.
 // Throws InputError naming the file, the record and the field on any malformed input,
-// including broken cross-references (see the invariants listed on Reconstruction).
+// including broken cross-references (see the invariants listed on Reconstruction). A model file
+// that is not a regular file or is over kColmapModelFile's limit (format/base/bounded_file.h)
+// is refused before it is opened.
 Reconstruction ReadReconstruction(const std::filesystem::path& dir);
 Reconstruction ReadReconstructionBinary(const std::filesystem::path& dir);
 Reconstruction ReadReconstructionText(const std::filesystem::path& dir);

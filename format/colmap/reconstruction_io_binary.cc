@@ -12,6 +12,7 @@
 #include <system_error>
 
 #include "format/base/atomic_file.h"
+#include "format/base/bounded_file.h"
 #include "format/base/error.h"
 #include "format/colmap/reconstruction_io.h"
 
@@ -56,6 +57,7 @@ class BinaryReader {
   static constexpr size_t kWindow = size_t{1} << 20;
 
   explicit BinaryReader(fs::path path) : path_(std::move(path)) {
+    CheckInputFile(path_, kColmapModelFile);  // before open(), which waits on a pipe
     fd_ = ::open(path_.c_str(), O_RDONLY | O_CLOEXEC);
     if (fd_ < 0) Fail("cannot open: " + std::generic_category().message(errno), false);
     struct stat st {};

@@ -12,6 +12,7 @@
 #include <system_error>
 
 #include "format/base/atomic_file.h"
+#include "format/base/bounded_file.h"
 #include "format/base/error.h"
 #include "format/colmap/reconstruction_io.h"
 
@@ -33,6 +34,7 @@ std::string_view Trim(std::string_view s) {
 class LineReader {
  public:
   explicit LineReader(fs::path path) : path_(std::move(path)) {
+    CheckInputFile(path_, kColmapModelFile);  // before open(), which waits on a pipe
     fd_ = ::open(path_.c_str(), O_RDONLY | O_CLOEXEC);
     if (fd_ < 0) {
       throw InputError(path_.string() + ": cannot open: " + std::generic_category().message(errno));

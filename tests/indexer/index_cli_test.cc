@@ -1,8 +1,10 @@
 // cwloc-index as a user runs it: build, info (--json against its schema), verify, and the
 // exit code and message for each kind of damaged file.
 #include <gmock/gmock.h>
+#include <sys/stat.h>
 
 #include <chrono>
+#include <cstring>
 #include <fstream>
 #include <nlohmann/json.hpp>
 
@@ -125,6 +127,100 @@ TEST_F(IndexCliTest, BuildFromAMissingModelIsABadInputError) {
             2);
   EXPECT_THAT(output, HasSubstr("cwloc-index: error: "));
   EXPECT_THAT(output, HasSubstr("nope"));
+  EXPECT_FALSE(std::filesystem::exists(index_path_));
+}
+
+// Every input file of a build given as a device, a pipe or an oversized file is refused by name
+// before it is read (issue #23), with exit code 2, under a 1 GB address-space limit that reading
+// /dev/zero would exhaust within a second.
+class IndexInputLimitsTest : public IndexCliTest {
+ protected:
+  int RunBuild(const std::string& args, std::string* output) const {
+    return test::RunCommand(
+        test::UnderMemoryLimit(1'048'576, test::ToolPath("cwloc-index").string() + " build " +
+                                              args + " -o " + test::Quote(index_path_)),
+        output);
+  }
+  std::string Inputs(const std::filesystem::path& model) const {
+    return "--model " + test::Quote(model) + " --database " + test::Quote(database_path_);
+  }
+  // A copy of the fixture's model, in `format`, with `file` replaced by a link to /dev/zero.
+  std::filesystem::path ModelWithDevZero(const std::string& file,
+                                         colmap::ModelFormat format) const {
+    const auto model = dir_ / ("zero_" + file);
+    std::filesystem::create_directories(model);
+    colmap::WriteReconstruction(model_, model, format);
+    std::filesystem::remove(model / file);
+    std::filesystem::create_symlink("/dev/zero", model / file);
+    return model;
+  }
+  static std::string NotRegular(const std::string& path, const std::string& kind,
+                                const std::string& what) {
+    return "cwloc-index: error: " + path + ": not a regular file (" + kind + "); " + what +
+           " must be a regular file, not a device, a pipe, a socket or /dev/stdin\n";
+  }
+};
+
+TEST_F(IndexInputLimitsTest, DevZeroAsAModelOrDatabaseIsRefused) {
+  std::string output;
+  EXPECT_EQ(RunBuild(Inputs("/dev/zero"), &output), 2) << output;
+  EXPECT_THAT(output, HasSubstr("cwloc-index: error: /dev/zero: not a directory (expected a "
+                                "COLMAP sparse model)\n"));
+  for (const auto& [file, format] : {std::pair{"images.bin", colmap::ModelFormat::kBinary},
+                                     std::pair{"points3D.txt", colmap::ModelFormat::kText}}) {
+    const auto model = ModelWithDevZero(file, format);
+    EXPECT_EQ(RunBuild(Inputs(model), &output), 2) << output;
+    EXPECT_THAT(output, HasSubstr(NotRegular((model / file).string(), "a character device",
+                                             "a COLMAP model file")));
+  }
+  EXPECT_EQ(RunBuild("--model " + test::Quote(model_dir_) + " --database /dev/zero", &output), 2)
+      << output;
+  EXPECT_THAT(output,
+              HasSubstr(NotRegular("/dev/zero", "a character device", "a COLMAP database")));
+  EXPECT_FALSE(std::filesystem::exists(index_path_));
+}
+
+TEST_F(IndexInputLimitsTest, DevZeroOrAPipeAsAGeorefClusteringOrPhotoFileIsRefused) {
+  std::string output;
+  EXPECT_EQ(RunBuild(Inputs(model_dir_) + " --georef /dev/zero", &output), 2) << output;
+  EXPECT_THAT(output, HasSubstr(NotRegular("/dev/zero", "a character device", "a georef file")));
+  EXPECT_EQ(RunBuild(Inputs(model_dir_) + " --cluster-file /dev/zero", &output), 2) << output;
+  EXPECT_THAT(output,
+              HasSubstr(NotRegular("/dev/zero", "a character device", "a clustering file")));
+
+  // A named pipe nobody writes would block an open() forever.
+  const auto fifo = dir_ / "georef.fifo";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0) << std::strerror(errno);
+  EXPECT_EQ(RunBuild(Inputs(model_dir_) + " --georef " + test::Quote(fifo), &output), 2) << output;
+  EXPECT_THAT(output, HasSubstr(NotRegular(fifo.string(), "a pipe", "a georef file")));
+
+  // --georef-images: the first model image's photo is /dev/zero.
+  const auto photos = dir_ / "photos";
+  const std::string first = model_.images.begin()->second.name;
+  std::filesystem::create_directories((photos / first).parent_path());
+  std::filesystem::create_symlink("/dev/zero", photos / first);
+  EXPECT_EQ(RunBuild(Inputs(model_dir_) + " --georef-images " + test::Quote(photos), &output), 2)
+      << output;
+  EXPECT_THAT(output,
+              HasSubstr(NotRegular((photos / first).string(), "a character device", "an image")));
+  EXPECT_FALSE(std::filesystem::exists(index_path_));
+}
+
+TEST_F(IndexInputLimitsTest, FilesOverTheirLimitAreRefusedBeforeTheyAreRead) {
+  std::string output;
+  const auto georef = test::WriteSparseFile(dir_ / "georef.txt", 300'000'000);
+  EXPECT_EQ(RunBuild(Inputs(model_dir_) + " --georef " + test::Quote(georef), &output), 2)
+      << output;
+  EXPECT_THAT(output, HasSubstr("cwloc-index: error: " + georef.string() +
+                                ": 300 MB, more than the 256 MB limit for a georef file\n"));
+
+  const auto model = dir_ / "huge_model";
+  std::filesystem::create_directories(model);
+  colmap::WriteReconstruction(model_, model, colmap::ModelFormat::kBinary);
+  test::WriteSparseFile(model / "points3D.bin", 300'000'000'000);
+  EXPECT_EQ(RunBuild(Inputs(model), &output), 2) << output;
+  EXPECT_THAT(output, HasSubstr("cwloc-index: error: " + (model / "points3D.bin").string() +
+                                ": 300 GB, more than the 256 GB limit for a COLMAP model file\n"));
   EXPECT_FALSE(std::filesystem::exists(index_path_));
 }
 
