@@ -8,6 +8,7 @@
 #include <sstream>
 #include <unordered_map>
 
+#include "format/base/bounded_file.h"
 #include "format/base/error.h"
 
 namespace cwloc::eval {
@@ -35,6 +36,7 @@ std::vector<std::string> ReadLines(const std::filesystem::path& path) {
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec))
     throw InputError(path.string() + ": is a directory, expected a file");
+  CheckInputFile(path, kEvalInputFile);
   std::ifstream file(path);
   if (!file) throw InputError(path.string() + ": cannot open (" + std::strerror(errno) + ")");
   std::vector<std::string> lines;

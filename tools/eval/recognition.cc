@@ -4,12 +4,14 @@
 #include <sstream>
 #include <unordered_map>
 
+#include "format/base/bounded_file.h"
 #include "format/base/error.h"
 #include "format/colmap/reconstruction_io.h"
 
 namespace cwloc::eval {
 
 std::map<std::string, std::vector<uint64_t>> ReadQueryPoints(const std::filesystem::path& path) {
+  CheckInputFile(path, kEvalInputFile);
   std::ifstream in(path);
   if (!in) throw InputError(path.string() + ": cannot open query points file");
   std::map<std::string, std::vector<uint64_t>> points;

@@ -7,6 +7,7 @@
 #include "tests/test_util.h"
 #include "tests/tools/eval/eval_fixtures.h"
 #include "tools/eval/ground_truth.h"
+#include "tools/eval/recognition.h"
 #include "tools/eval/report.h"
 #include "tools/eval/result_reader.h"
 
@@ -234,6 +235,20 @@ TEST(Readers, MissingFileNamesTheFile) {
             path.string() + ": cannot open (No such file or directory)");
   EXPECT_EQ(InputErrorOf([&] { ReadResults(dir.path()); }),
             dir.path().string() + ": is a directory, expected a file");
+}
+
+// Issue #23: devices and files over the limit are refused before they are read.
+TEST(Readers, DevicesAndHugeFilesAreRefusedUnread) {
+  EXPECT_EQ(InputErrorOf([] { ReadResults("/dev/zero"); }),
+            "/dev/zero: not a regular file (a character device); an evaluation input must be a "
+            "regular file, not a device, a pipe, a socket or /dev/stdin");
+  EXPECT_EQ(InputErrorOf([] { ReadQueryPoints("/dev/zero"); }),
+            "/dev/zero: not a regular file (a character device); an evaluation input must be a "
+            "regular file, not a device, a pipe, a socket or /dev/stdin");
+  cwloc::test::TempDir dir;
+  const auto huge = cwloc::test::WriteSparseFile(dir / "gt.txt", 5'000'000'000);
+  EXPECT_EQ(InputErrorOf([&] { ReadGroundTruth(huge); }),
+            huge.string() + ": 5 GB, more than the 4 GB limit for an evaluation input");
 }
 
 TEST(Readers, MalformedLinesNameFileAndLine) {
