@@ -4,7 +4,7 @@
 // that is not a regular file (a device such as /dev/zero, a pipe, a socket, /dev/stdin from a
 // pipe or a terminal, a directory) or that is larger than its kind's limit is refused with an
 // InputError naming the file and the limit, so the tools exit 2 at once instead of reading
-// until memory runs out. The limits are tabled in docs/reliability.md ("Input size limits").
+// until memory runs out. The limits are tabled in docs/reliability.md ("Input files").
 
 #include <cstdint>
 #include <filesystem>
@@ -25,7 +25,7 @@ struct InputKind {
 inline constexpr uint64_t kNoSizeLimit = std::numeric_limits<uint64_t>::max();
 
 // Photos (--image, --image-list, --georef-images): a 100-megapixel photo, the default
-// --max-image-pixels, is 20 to 60 MB as JPEG and at most ~400 MB as a 16-bit RGB PNG.
+// --max-image-pixels, is 20 to 60 MB as JPEG and ~400 MB as a 16-bit RGB PNG.
 inline constexpr InputKind kPhotoFile{"an image", 512'000'000};
 // COLMAP text feature files (--features): 100k features are ~50 MB of text, 1 GB about 2M.
 inline constexpr InputKind kFeatureFile{"a feature file", 1'000'000'000};
