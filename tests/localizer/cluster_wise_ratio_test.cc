@@ -4,22 +4,15 @@
 
 #include <tuple>
 
-#include "indexer/index_builder.h"
-#include "tests/indexer/indexer_fixture.h"
+#include "tests/localizer/matching_fixture.h"
 
 namespace cwloc {
 namespace {
 
 // Neighbour lists are made by hand over a real index (one cluster per image) so that each
 // branch of Algorithm 2 is exercised with known distances.
-class ClusterRatioTest : public test::IndexerFixture {
+class ClusterRatioTest : public test::MatchingFixture {
  protected:
-  void SetUp() override {
-    IndexerFixture::SetUp();
-    BuildFixtureIndex();
-    index_.emplace(Index::Open(index_path_));
-  }
-
   // The i-th view of image row `image` (distinct points for distinct i in practice).
   uint32_t View(uint32_t image, uint32_t i) const { return index_->images()[image].first_view + i; }
 
@@ -29,8 +22,6 @@ class ClusterRatioTest : public test::IndexerFixture {
     ClusterWiseRatioTest(*index_, 7, neighbors, 0.7, &accepted, stats);
     return accepted;
   }
-
-  std::optional<Index> index_;
 };
 
 TEST_F(ClusterRatioTest, TwoViewsOfDistinctPointsInOneClusterUseTheLocalRatio) {

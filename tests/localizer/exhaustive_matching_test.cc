@@ -2,30 +2,19 @@
 
 #include <gtest/gtest.h>
 
-#include "indexer/index_builder.h"
-#include "tests/indexer/indexer_fixture.h"
+#include "tests/localizer/matching_fixture.h"
 
 namespace cwloc {
 namespace {
 
 // Queries made of model descriptors, over the fixture index (one cluster per image, random
 // descriptors per view), so each cluster's nearest and second-nearest views are known.
-class ExhaustiveMatchingTest : public test::IndexerFixture {
+class ExhaustiveMatchingTest : public test::MatchingFixture {
  protected:
-  void SetUp() override {
-    IndexerFixture::SetUp();
-    BuildFixtureIndex();
-    index_.emplace(Index::Open(index_path_));
-    clusters_.emplace(*index_);
-  }
-
   void AddFeature(Query* query, const uint8_t* descriptor) const {
     query->keypoints.insert(query->keypoints.end(), {10.0f, 20.0f});
     query->descriptors.insert(query->descriptors.end(), descriptor, descriptor + 128);
   }
-
-  std::optional<Index> index_;
-  std::optional<ClusterMembers> clusters_;
 };
 
 TEST_F(ExhaustiveMatchingTest, AModelDescriptorMatchesItsOwnPointInItsCluster) {

@@ -4,31 +4,36 @@
 
 #include <algorithm>
 #include <array>
+#include <filesystem>
 #include <optional>
 #include <vector>
 
+#include "format/base/split_mix64.h"
 #include "format/index/index.h"
 #include "format/kdtree/descriptor_distance.h"
 #include "localizer/localizer_options.h"
 #include "localizer/matching.h"
 #include "localizer/query.h"
-#include "tests/indexer/indexer_fixture.h"
+#include "tests/localizer/matching_scene.h"
 #include "tests/test_util.h"
 
 namespace cwloc::test {
 
-// The indexer fixture's index (one cluster per image, random descriptors in [0, 64) per view),
-// opened, with tools to build queries whose neighbours are known: copies of model views'
-// descriptors are at distance 0 from their view and ~260 from every other one, and random
-// descriptors are about equally far from everything.
-class MatchingFixture : public IndexerFixture {
+// The index of a random matching scene (tests/localizer/matching_scene.h: one cluster per
+// image, random descriptors in [0, 64) per view), drawn from Rng() and opened, with tools to
+// build queries whose neighbours are known: copies of model views' descriptors are at distance
+// 0 from their view and ~260 from every other one, and random descriptors are about equally far
+// from everything. Made in memory: no SQLite, COLMAP readers or indexer, so device builds run
+// these tests too.
+class MatchingFixture : public testing::Test {
  protected:
   using Descriptor = std::array<uint8_t, 128>;
 
   void SetUp() override {
-    IndexerFixture::SetUp();
-    BuildFixtureIndex();
-    index_.emplace(Index::Open(index_path_));
+    SplitMix64 rng(Rng()());
+    const std::filesystem::path path = dir_ / "model.cwl";
+    WriteMatchingIndex(RandomMatchingScene(rng), path);
+    index_.emplace(Index::Open(path));
     clusters_.emplace(*index_);
     // One cluster per image, so a cluster is an image and its views are known.
     ASSERT_EQ(clusters_->num_clusters(), index_->images().size());
@@ -80,6 +85,7 @@ class MatchingFixture : public IndexerFixture {
     return index_->images()[clusters_->images[clusters_->offsets[cluster]]];
   }
 
+  TempDir dir_;  // outlives the index, which maps its file
   std::optional<Index> index_;
   std::optional<ClusterMembers> clusters_;
 };
