@@ -7,6 +7,7 @@
 #include <type_traits>
 
 #include "format/base/error.h"
+#include "photo/sift/sift_extractor.h"
 
 namespace cwloc {
 namespace {
@@ -278,6 +279,11 @@ void ValidateQueryOptions(const QueryOptions& options) {
     throw InputError("--min-ransac-iterations " + std::to_string(ransac.min_iterations) +
                      ": expected at most --max-ransac-iterations " +
                      std::to_string(ransac.max_iterations));
+  }
+  try {  // what only VLFeat computes, in a build without it (docs/devices.md)
+    ValidateSiftOptions(options.photo.sift);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(e.what());
   }
   const PoseRefiner refiner = options.localizer.pose.refiner;
   if (!PoseRefinerAvailable(refiner)) {

@@ -8,20 +8,6 @@
 
 namespace cwloc {
 
-void ValidatePhotoOptions(const PhotoOptions& options) {
-  if (options.max_image_size < kMinImageSide)
-    throw InputError("--max-image-size must be at least " + std::to_string(kMinImageSide));
-  if (options.max_image_pixels < uint64_t{kMinImageSide} * kMinImageSide)
-    throw InputError("--max-image-pixels must be at least " +
-                     std::to_string(kMinImageSide * kMinImageSide));
-  if (options.sift.max_num_features < 1) throw InputError("--max-features must be at least 1");
-  try {
-    ValidateSiftOptions(options.sift);
-  } catch (const std::invalid_argument& e) {
-    throw InputError(e.what());
-  }
-}
-
 QueryCamera FocalPriorCamera(double focal_length_px, uint32_t width, uint32_t height,
                              IntrinsicsSource source) {
   QueryCamera camera;

@@ -19,9 +19,6 @@ struct PhotoOptions {
   SiftOptions sift;                                    // its max_num_features: --max-features
 };
 
-// Throws InputError naming the CLI flag of a bad option.
-void ValidatePhotoOptions(const PhotoOptions& options);
-
 // Turns a JPEG or PNG into a query as `colmap feature_extractor` would: decoded to grey,
 // shrunk to max_image_size, SIFT, keypoints scaled back to the photo's own pixels. Its camera
 // has the photo's size and, when the EXIF gives a focal length, that focal as a prior

@@ -100,11 +100,6 @@ std::unordered_map<std::string, QueryPriors> ReadPriorsFile(const std::filesyste
   return priors;
 }
 
-void ValidateExifGpsRadius(double radius_m) {
-  if (!(radius_m > 0) || !std::isfinite(radius_m))
-    throw InputError("--exif-gps-radius must be a positive number of metres");
-}
-
 std::optional<PositionPrior> ExifPositionPrior(const Query& query, double radius_m) {
   if (!query.photo || !query.photo->exif_gps) return std::nullopt;
   const GpsFix& fix = *query.photo->exif_gps;

@@ -34,9 +34,6 @@ std::unordered_map<std::string, QueryPriors> ReadPriorsFile(const std::filesyste
 // --exif-gps-radius: a phone's fix in a street canyon is often 10-30 m off.
 inline constexpr double kDefaultExifGpsRadiusM = 50.0;
 
-// Throws InputError naming --exif-gps-radius unless radius_m is a positive number of metres.
-void ValidateExifGpsRadius(double radius_m);
-
 // The photo's EXIF GPS as a horizontal position prior of radius_m; nullopt without a fix.
 std::optional<PositionPrior> ExifPositionPrior(const Query& query, double radius_m);
 

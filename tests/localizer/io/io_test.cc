@@ -5,6 +5,7 @@
 #include "format/base/error.h"
 #include "localizer/io/camera_spec.h"
 #include "localizer/io/feature_file.h"
+#include "localizer/io/option_table.h"
 #include "localizer/io/photo_query.h"
 #ifdef CWLOC_WITH_COLMAP_DB
 #include "format/colmap/database.h"
@@ -69,12 +70,12 @@ class FeatureFileTest : public testing::Test {
 
 // What only VLFeat computes is a usage error in a build without it (docs/devices.md).
 TEST(PhotoOptions, VlfeatOnlySiftOptionsNeedVlfeat) {
-  PhotoOptions options;
-  options.sift.first_octave = -2;
+  QueryOptions options;
+  options.photo.sift.first_octave = -2;
   if (SiftVlfeatAvailable()) {
-    EXPECT_NO_THROW(ValidatePhotoOptions(options));
+    EXPECT_NO_THROW(ValidateQueryOptions(options));
   } else {
-    EXPECT_THAT(InputErrorOf([&] { ValidatePhotoOptions(options); }),
+    EXPECT_THAT(InputErrorOf([&] { ValidateQueryOptions(options); }),
                 HasSubstr("first_octave must be >= -1"));
   }
 }
