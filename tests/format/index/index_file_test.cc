@@ -2,6 +2,7 @@
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <cstring>
 #include <numeric>
@@ -196,6 +197,15 @@ TEST_F(IndexFileTest, UnknownOptionalSectionIsSkippedUnknownRequiredIsRefused) {
 TEST_F(IndexFileTest, MissingFileIsAClearError) {
   EXPECT_THAT(OpenError(dir_ / "nope.cwl"),
               HasSubstr("nope.cwl: cannot open: No such file or directory"));
+}
+
+// A device, a folder or a named pipe with no writer (which open() would wait on) is refused.
+TEST_F(IndexFileTest, WhatIsNotARegularFileIsRefusedAtOnce) {
+  const std::filesystem::path fifo = dir_ / "pipe.cwl";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  EXPECT_EQ(OpenError(fifo), fifo.string() + ": not a regular file");
+  EXPECT_EQ(OpenError("/dev/zero"), "/dev/zero: not a regular file");
+  EXPECT_EQ(OpenError(dir_.path()), dir_.path().string() + ": not a regular file");
 }
 
 }  // namespace
