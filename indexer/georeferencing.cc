@@ -5,7 +5,6 @@
 #include <unordered_map>
 #include <vector>
 
-#include "format/base/bounded_file.h"
 #include "format/base/error.h"
 #include "format/geo/index_georeference.h"
 #include "photo/exif.h"
@@ -118,8 +117,6 @@ ModelGeoreference FittedGeoreference(const ModelViews& views,
   const std::string source =
       from_file ? options.georef_file.string() : "--georef-images " + options.images_dir.string();
   size_t without_gps = 0;
-  // ReadGeorefFile streams the file; refuse /dev/zero and the like before it starts.
-  if (from_file) CheckInputFile(options.georef_file, kGeorefFile);
   const std::vector<GeoObservation> observations =
       from_file ? ReadGeorefFile(options.georef_file)
                 : ExifObservations(views, options.images_dir, &without_gps);

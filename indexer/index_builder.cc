@@ -55,6 +55,11 @@ IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
                      ": expected 1 to 255");
   }
   const int threads = ResolveThreads(options.threads);
+  // The small inputs are read after the model; refuse a bad one before minutes of reading.
+  if (!options.georeferencing.georef_file.empty())
+    CheckInputFile(options.georeferencing.georef_file, kGeorefFile);
+  if (options.clustering.method == ClusteringMethod::kFile)
+    CheckInputFile(options.clustering.file, kClusterFile);
 
   Stopwatch stage;
   const colmap::Reconstruction model = colmap::ReadReconstruction(options.model_dir);

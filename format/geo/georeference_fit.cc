@@ -13,6 +13,7 @@
 #include <string_view>
 #include <unordered_map>
 
+#include "format/base/bounded_file.h"
 #include "format/base/error.h"
 #include "format/base/ransac.h"
 
@@ -253,6 +254,7 @@ static_assert(RansacEstimator<SimilarityEstimator>);
 
 std::vector<GeoObservation> ReadGeorefFile(const std::filesystem::path& path) {
   const std::string name = path.string();
+  CheckInputFile(path, kGeorefFile);  // /dev/zero and the like, before streaming starts
   std::ifstream in(path);
   if (!in) throw InputError(name + ": cannot open");
   std::vector<GeoObservation> observations;
