@@ -39,7 +39,7 @@ BackMatchingResult MatchBack(const Index& index, const ClusterMembers& clusters,
   std::vector<KdNeighbor> neighbors(2);
   std::vector<uint32_t> track_clusters;
   while (result.matches.size() < options.back_matches &&
-         result.visited.size() < options.max_back_images) {
+         result.visited.size() < options.max_back_clusters) {
     uint32_t best = UINT32_MAX;
     for (uint32_t cluster : voted) {
       if (!visited[cluster] && (best == UINT32_MAX || votes[cluster] > votes[best] ||

@@ -29,7 +29,7 @@ struct BackMatchingResult {
 // views are matched back against a kd-forest of the query's features (1-ratio test); a cluster
 // with at least options.min_matches_to_vote back-matches votes, through each matched view's
 // 3D point, for every cluster that sees that point. Stops at options.back_matches matches or
-// options.max_back_images clusters, or when no cluster has votes left. Clusters outside
+// options.max_back_clusters clusters, or when no cluster has votes left. Clusters outside
 // `allowed` get no votes, so they are never back-matched.
 BackMatchingResult MatchBack(const Index& index, const ClusterMembers& clusters, const Query& query,
                              std::span<const FeatureMatch> forward_matches,

@@ -72,8 +72,8 @@ struct LocalizationResult {
   uint32_t num_inliers = 0;
   double inlier_ratio = 0;
   uint32_t ransac_iterations = 0;
-  uint32_t back_matched_images = 0;
-  std::vector<InlierMatch> inliers;  // on success, in feature order
+  uint32_t back_matched_clusters = 0;  // JSON: back_matched_images
+  std::vector<InlierMatch> inliers;    // on success, in feature order
   std::vector<RankedImage> ranked_images;
   std::optional<GeoPose> geo;  // on success with a georeferenced index
   PriorUse priors;

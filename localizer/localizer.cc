@@ -24,7 +24,7 @@ struct MatcherOutput {
   std::vector<FeatureMatch> correspondences;  // unique 2D-3D pairs for the pose stage
   std::string failure_reason;                 // set when the matcher left nothing to fit
   ForwardMatchingStats forward_stats;
-  uint32_t back_matched_images = 0;
+  uint32_t back_matched_clusters = 0;
   double seconds_query_tree = 0;
   double seconds_back_matching = 0;
   double seconds_pose = 0;  // pose estimation a matcher ran to choose its correspondences
@@ -39,7 +39,7 @@ MatcherOutput MatchClusterWise(const Index& index, const ClusterMembers& cluster
   out.forward = MatchForward(index, query, options, searcher, &out.forward_stats, allowed);
   BackMatchingResult back = MatchBack(index, clusters, query, out.forward, options, allowed);
   out.back = std::move(back.matches);
-  out.back_matched_images = static_cast<uint32_t>(back.visited.size());
+  out.back_matched_clusters = static_cast<uint32_t>(back.visited.size());
   out.seconds_query_tree = back.seconds_query_tree;
   out.seconds_back_matching = back.seconds_matching;
   out.correspondences = UniqueCorrespondences(index, out.back);
@@ -230,7 +230,7 @@ LocalizationResult Localizer::Localize(const Query& query, const LocalizerOption
   result.features_searched = matched.forward_stats.features_searched;
   result.forward_matches = static_cast<uint32_t>(matched.forward.size());
   result.back_matches = static_cast<uint32_t>(matched.back.size());
-  result.back_matched_images = matched.back_matched_images;
+  result.back_matched_clusters = matched.back_matched_clusters;
   result.ranked_images = RankImages(index_, matched.forward, matched.back, options.ranked_images);
   result.correspondences = static_cast<uint32_t>(matched.correspondences.size());
   result.num_inliers = static_cast<uint32_t>(pose.num_inliers);

@@ -49,7 +49,7 @@ struct LocalizerOptions {
   uint32_t forward_matches = 200;
   // Back-matching (Algorithm 3).
   uint32_t back_matches = 200;        // N_B: stop once this many back-matches are found
-  uint32_t max_back_images = 20;      // ... or this many clusters (not images) were back-matched
+  uint32_t max_back_clusters = 20;    // ... or this many clusters were back-matched
   uint32_t min_matches_to_vote = 12;  // a back-matched cluster votes for co-visible ones
   uint32_t query_tree_checks = 64;    // distance computations per search of the query's forest
   // Robust pose: inlier threshold, minimum inliers, RANSAC's limits, refinement. Its

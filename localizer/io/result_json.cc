@@ -13,7 +13,7 @@ nlohmann::ordered_json OptionsToJson(const LocalizerOptions& options) {
           {"ratio", options.ratio},
           {"forward_matches", options.forward_matches},
           {"back_matches", options.back_matches},
-          {"max_back_images", options.max_back_images},
+          {"max_back_images", options.max_back_clusters},
           {"min_matches_to_vote", options.min_matches_to_vote},
           {"query_tree_checks", options.query_tree_checks},
           {"min_inliers", options.pose.min_inliers},
@@ -77,7 +77,7 @@ nlohmann::ordered_json ResultToJson(const LocalizationResult& result,
                     {"forward", result.forward_matches},
                     {"back", result.back_matches},
                     {"correspondences", result.correspondences},
-                    {"back_matched_images", result.back_matched_images},
+                    {"back_matched_images", result.back_matched_clusters},
                     {"ransac_iterations", result.ransac_iterations}};
   nlohmann::ordered_json ranked = nlohmann::ordered_json::array();
   for (const RankedImage& image : result.ranked_images) {

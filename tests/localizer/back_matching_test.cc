@@ -152,7 +152,7 @@ TEST_F(BackMatchingTest, EqualVotesGoToTheLowerClusterFirst) {
 }
 
 TEST_F(BackMatchingTest, StopsAfterMaxBackImagesClusters) {
-  EXPECT_EQ(LocalizerOptions().max_back_images, 20u);  // the paper's 20 clusters
+  EXPECT_EQ(LocalizerOptions().max_back_clusters, 20u);  // the paper's 20 clusters
   std::vector<uint32_t> views;
   std::vector<std::pair<uint32_t, uint32_t>> votes;
   for (uint32_t i = 0; i < 6; ++i) {
@@ -162,11 +162,11 @@ TEST_F(BackMatchingTest, StopsAfterMaxBackImagesClusters) {
   std::vector<FeatureMatch> copies;
   const Query query = QueryOf(views, &copies);
   LocalizerOptions options = Options(query);
-  options.max_back_images = 3;
+  options.max_back_clusters = 3;
   const BackMatchingResult result = Run(query, Votes(votes), options);
   ExpectVisited(result.visited, {{Cluster(0), 6, 1}, {Cluster(1), 5, 1}, {Cluster(2), 4, 1}});
   ExpectMatches(result.matches, CopiesOf(copies, {Cluster(0), Cluster(1), Cluster(2)}, *index_));
-  options.max_back_images = 20;
+  options.max_back_clusters = 20;
   EXPECT_EQ(Run(query, Votes(votes), options).visited.size(), 6u);
 }
 
@@ -257,7 +257,7 @@ TEST_F(BackMatchingTest, OnlyClustersWithMinMatchesToVoteCastCovisibilityVotes) 
   std::vector<FeatureMatch> copies;
   Query query = QueryOf(views, &copies);
   LocalizerOptions options = Options(query);
-  options.max_back_images = 2;
+  options.max_back_clusters = 2;
   BackMatchingResult result = Run(query, forward, options);
   // b had no forward vote; it is visited second with a's 12 votes (and finds nothing).
   ExpectVisited(result.visited, {{a, 1, 12}, {b, 12, 0}});
@@ -269,7 +269,7 @@ TEST_F(BackMatchingTest, OnlyClustersWithMinMatchesToVoteCastCovisibilityVotes) 
   copies.clear();
   query = QueryOf(views, &copies);
   options = Options(query);
-  options.max_back_images = 2;
+  options.max_back_clusters = 2;
   result = Run(query, forward, options);
   ExpectVisited(result.visited, {{a, 1, 11}});
   std::vector<uint32_t> forward_votes(clusters_->num_clusters(), 0);

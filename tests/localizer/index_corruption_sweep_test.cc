@@ -41,7 +41,7 @@ LocalizerOptions SweepOptions() {
   options.checks = 64;
   options.forward_matches = 60;
   options.back_matches = 60;
-  options.max_back_images = 4;
+  options.max_back_clusters = 4;
   options.query_tree_checks = 16;
   return options;
 }
