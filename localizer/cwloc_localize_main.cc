@@ -4,8 +4,11 @@
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <iostream>
 #include <memory>
@@ -164,6 +167,7 @@ class ResultSink {
 
   void Write(const LocalizationResult& result, const LocalizerOptions& options) {
     std::lock_guard lock(mutex_);
+    if (closed_) return;  // a query abandoned by a stopped batch
     EmitJsonLine(ResultToJson(result, options).dump());
     // With the JSON in a file, stdout gets a readable line per query.
     if (json_file_ && !cli_.quiet) {
@@ -181,6 +185,7 @@ class ResultSink {
 
   void WriteError(const std::string& name, const std::string& error) {
     std::lock_guard lock(mutex_);
+    if (closed_) return;
     EmitJsonLine(ErrorToJson(name, error).dump());
     std::fprintf(stderr, "cwloc-localize: error: %s\n", error.c_str());
   }
@@ -190,6 +195,7 @@ class ResultSink {
   // Puts every record in place; throws the first write error.
   void Close() {
     std::lock_guard lock(mutex_);
+    closed_ = true;
     for (CheckpointedFile* file : {json_file_.get(), poses_file_.get()}) {
       if (file && !failed_) Guard([&] { file->Close(); });
     }
@@ -232,6 +238,7 @@ class ResultSink {
   std::unique_ptr<CheckpointedFile> poses_file_;
   std::mutex mutex_;
   std::atomic<bool> failed_{false};
+  bool closed_ = false;
   std::string error_;
 };
 
@@ -242,8 +249,11 @@ static_assert(std::atomic<int>::is_always_lock_free);
 
 void RequestStop(int signal_number) { stop_signal = signal_number; }
 
-// Ctrl-C or a plain kill lets the running queries finish and puts every finished record in
-// place; a second one ends the process at once (SA_RESETHAND).
+// How long a stopped batch waits for its running queries (a large photo's SIFT takes seconds).
+constexpr std::chrono::seconds kStopGrace{1};
+
+// Ctrl-C or a plain kill lets the running queries finish, for up to kStopGrace, and puts every
+// finished record in place; a second one ends the process at once (SA_RESETHAND).
 void StopOnInterrupt() {
   struct sigaction action {};
   action.sa_handler = RequestStop;
@@ -294,17 +304,44 @@ int Run(const CliOptions& cli) {
     }
   };
   StopOnInterrupt();
-  std::vector<std::thread> pool;
   const int threads = std::min<int>(cli.threads, static_cast<int>(sources.size()));
-  for (int t = 1; t < threads; ++t) pool.emplace_back(worker);
-  worker();
-  for (auto& thread : pool) thread.join();
+  // The workers have threads of their own; this one waits for them to finish or for a stop,
+  // after which the running queries get kStopGrace to finish and are abandoned after it.
+  std::mutex done_mutex;
+  std::condition_variable done;
+  int running = threads;
+  std::vector<std::thread> pool;
+  for (int t = 0; t < threads; ++t) {
+    pool.emplace_back([&] {
+      worker();
+      const std::lock_guard lock(done_mutex);
+      --running;
+      done.notify_all();
+    });
+  }
+  int abandoned = 0;
+  {
+    std::unique_lock lock(done_mutex);
+    while (running > 0 && stop_signal == 0) done.wait_for(lock, std::chrono::milliseconds(50));
+    done.wait_for(lock, kStopGrace, [&] { return running == 0; });
+    abandoned = running;
+  }
+  for (auto& thread : pool) abandoned > 0 ? thread.detach() : thread.join();
   progress.Finish();
   sink.Close();
   if (const int signal_number = stop_signal) {
-    std::fprintf(stderr, "cwloc-localize: interrupted by %s after %d of %zu queries\n",
+    std::fprintf(stderr, "cwloc-localize: interrupted by %s after %d of %zu queries",
                  signal_number == SIGINT ? "SIGINT" : "SIGTERM",
                  localized + failed + errors + internal_errors, sources.size());
+    if (abandoned > 0) {
+      // Their threads still use this function's objects: end here, without unwinding.
+      std::fprintf(stderr, "; %d running %s abandoned\n", abandoned,
+                   abandoned == 1 ? "query" : "queries");
+      std::cout.flush();
+      std::fflush(nullptr);
+      std::_Exit(128 + signal_number);
+    }
+    std::fprintf(stderr, "\n");
     return 128 + signal_number;  // the shell's code for a process a signal ended
   }
 

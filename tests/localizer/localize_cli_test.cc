@@ -18,6 +18,7 @@
 #include "localizer/pose/refine_pose.h"
 #include "tests/indexer/indexer_fixture.h"
 #include "tests/localization_check.h"
+#include "tests/test_png.h"
 
 namespace cwloc {
 namespace {
@@ -588,6 +589,35 @@ TEST_F(LocalizeInterruptTest, AnInterruptedRunKeepsEveryFinishedRecord) {
       pose_bytes = complete_poses_.find('\n', pose_bytes) + 1;
     EXPECT_EQ(test::ReadFile(poses_), complete_poses_.substr(0, pose_bytes));
   }
+}
+
+// A query still running a second after the signal is abandoned: the batch ends then, with the
+// records finished before it, instead of waiting for a large photo's SIFT (seconds; a minute
+// under the sanitizers).
+TEST_F(LocalizeInterruptTest, AQueryRunningASecondAfterTheSignalIsAbandoned) {
+  const std::filesystem::path photo = dir_ / "noise.png";
+  test::WriteNoisePng(photo, 3200, 3200, 1);
+  const std::filesystem::path log = dir_ / "log.txt";
+  const std::vector<std::string> args = {test::ToolPath("cwloc-localize").string(),
+                                         "--index",
+                                         (test::GoldenDir() / "index-1.1.cwl").string(),
+                                         "--image",
+                                         photo.string(),
+                                         "-o",
+                                         json_.string(),
+                                         "-q"};
+  const pid_t pid = test::Spawn(args, log);
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  const auto signalled = std::chrono::steady_clock::now();
+  ::kill(pid, SIGTERM);
+  EXPECT_EQ(test::Wait(pid), 128 + SIGTERM);
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - signalled).count();
+  EXPECT_LT(seconds, 3.0);  // 1 s of grace, and a margin for a loaded machine
+  EXPECT_EQ(test::ReadFile(log),
+            "cwloc-localize: interrupted by SIGTERM after 0 of 1 queries; 1 running query "
+            "abandoned\n");
+  EXPECT_EQ(test::ReadFile(json_), "");
 }
 
 }  // namespace
