@@ -14,20 +14,34 @@ namespace {
 
 // The range column's vocabulary.
 constexpr ValueRange AnyValue() { return {}; }
-constexpr ValueRange AtLeast(double min) { return {.min = min}; }
-constexpr ValueRange Between(double min, double max) { return {.min = min, .max = max}; }
-constexpr ValueRange Above(double min, std::string_view unit) {
-  return {.min = min, .min_open = true, .unit = unit};
+constexpr ValueRange Between(double min, double max) {
+  ValueRange range;
+  range.min = min;
+  range.max = max;
+  return range;
+}
+constexpr ValueRange AtLeast(double min) {
+  return Between(min, std::numeric_limits<double>::infinity());
 }
 constexpr ValueRange AboveUpTo(double min, double max, std::string_view unit) {
-  return {.min = min, .max = max, .min_open = true, .unit = unit};
+  ValueRange range = Between(min, max);
+  range.min_open = true;
+  range.unit = unit;
+  return range;
+}
+constexpr ValueRange Above(double min, std::string_view unit) {
+  return AboveUpTo(min, std::numeric_limits<double>::infinity(), unit);
 }
 constexpr ValueRange Inside(double min, double max) {
-  return {.min = min, .max = max, .min_open = true, .max_open = true};
+  ValueRange range = AboveUpTo(min, max, "");
+  range.max_open = true;
+  return range;
 }
 template <size_t N>
 constexpr ValueRange OneOf(const std::array<std::string_view, N>& names) {
-  return {.names = names};
+  ValueRange range;
+  range.names = names;
+  return range;
 }
 
 // Between an option's API type and the member it lands in.
@@ -50,29 +64,23 @@ constexpr size_t TypeIndex() {
   return OptionValue(std::in_place_type<T>).index();
 }
 
-struct TableEntry {
-  OptionSpec spec;
-  size_t type;  // of the value: TypeIndex
-};
-
-#define CWLOC_OPTION(field, type, flag, target, range, help)                                  \
-  TableEntry{                                                                                 \
-      {flag, help, range,                                                                     \
-       [](const QueryOptions& o) { return OptionValue(type(ApiValue(o.target))); },           \
-       [](QueryOptions* o, const OptionValue& v) { Assign(std::get<type>(v), &o->target); }}, \
-      TypeIndex<type>()},
-const TableEntry kTable[] = {
+#define CWLOC_OPTION(field, type, flag, target, range, help)                       \
+  OptionSpec{                                                                      \
+      flag,                                                                        \
+      help,                                                                        \
+      range,                                                                       \
+      TypeIndex<type>(),                                                           \
+      [](const QueryOptions& o) { return OptionValue(type(ApiValue(o.target))); }, \
+      [](QueryOptions* o, const OptionValue& v) { Assign(std::get<type>(v), &o->target); }},
+// Function-local, so that an Options built during another file's static initialisation
+// finds the table made.
+std::span<const OptionSpec> Specs() {
+  static const OptionSpec specs[] = {
 #include "localizer/io/option_table.inc"
-};
-#undef CWLOC_OPTION
-
-const std::array<OptionSpec, std::size(kTable)> kSpecs = [] {
-  std::array<OptionSpec, std::size(kTable)> specs{};
-  for (size_t i = 0; i < specs.size(); ++i) specs[i] = kTable[i].spec;
+  };
   return specs;
-}();
-
-size_t TypeOf(const OptionSpec& spec) { return kTable[&spec - kSpecs.data()].type; }
+}
+#undef CWLOC_OPTION
 
 [[noreturn]] void Refuse(const OptionSpec& spec, std::string_view shown,
                          const std::string& expected) {
@@ -173,17 +181,17 @@ OptionValue WholeFromText(const OptionSpec& spec, std::string_view text) {
 
 }  // namespace
 
-std::span<const OptionSpec> OptionTable() { return kSpecs; }
+std::span<const OptionSpec> OptionTable() { return Specs(); }
 
 const OptionSpec& FindOption(std::string_view flag) {
-  for (const OptionSpec& spec : kSpecs) {
+  for (const OptionSpec& spec : Specs()) {
     if (spec.flag == flag) return spec;
   }
   throw InputError("unknown option '" + std::string(flag) + "'");
 }
 
 void CheckOption(const OptionSpec& spec, const OptionValue& value) {
-  if (value.index() != TypeOf(spec))
+  if (value.index() != spec.type)
     throw std::logic_error("option --" + std::string(spec.flag) + ": value of the wrong type");
   const ValueRange& range = spec.range;
   std::visit(
@@ -204,7 +212,7 @@ void CheckOption(const OptionSpec& spec, const OptionValue& value) {
 }
 
 OptionValue ParseOption(const OptionSpec& spec, std::string_view text) {
-  switch (TypeOf(spec)) {
+  switch (spec.type) {
     case TypeIndex<bool>():
       if (text == "true" || text == "1") return true;
       if (text == "false" || text == "0") return false;
@@ -230,7 +238,7 @@ OptionValue ParseOption(const OptionSpec& spec, std::string_view text) {
 }
 
 OptionValue OptionFromNumber(const OptionSpec& spec, double number) {
-  switch (TypeOf(spec)) {
+  switch (spec.type) {
     case TypeIndex<bool>():
       if (number == 1) return true;
       if (number == 0) return false;
@@ -273,7 +281,7 @@ void SetOption(QueryOptions* options, std::string_view flag, const OptionValue& 
 }
 
 void ValidateQueryOptions(const QueryOptions& options) {
-  for (const OptionSpec& spec : kSpecs) CheckOption(spec, spec.get(options));
+  for (const OptionSpec& spec : Specs()) CheckOption(spec, spec.get(options));
   const RansacOptions& ransac = options.localizer.pose.ransac;
   if (ransac.min_iterations > ransac.max_iterations) {
     throw InputError("--min-ransac-iterations " + std::to_string(ransac.min_iterations) +

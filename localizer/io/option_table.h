@@ -44,6 +44,7 @@ struct OptionSpec {
   std::string_view flag;  // cwloc-localize's flag without dashes; the C API's name
   std::string_view help;
   ValueRange range;
+  size_t type;  // index of the option's type in OptionValue
   OptionValue (*get)(const QueryOptions& options);
   void (*set)(QueryOptions* options, const OptionValue& value);  // of the spec's type, checked
 };
