@@ -385,7 +385,6 @@ class TableFlags {
       const OptionValue value = spec.get(defaults);
       const std::string flag = "--" + std::string(spec.flag);
       CLI::Option* option = nullptr;
-      is_switch_.push_back(std::holds_alternative<bool>(value));
       if (const bool* on = std::get_if<bool>(&value)) {
         switches_[i] = *on;
         // A switch that is on by default is turned off by --no-NAME.
@@ -401,14 +400,15 @@ class TableFlags {
     }
   }
 
-  // Every flag given, through the table.
+  // Every flag given, through the table: ParseOption checks a value, a switch has no range,
+  // and ValidateQueryOptions adds the rules between options.
   void Apply(QueryOptions* options) const {
     const std::span<const OptionSpec> table = OptionTable();
     for (size_t i = 0; i < table.size(); ++i) {
       if (options_[i]->count() == 0) continue;
       const OptionSpec& spec = table[i];
-      SetOption(options, spec.flag,
-                is_switch_[i] ? OptionValue(switches_[i]) : ParseOption(spec, texts_[i]));
+      const bool is_switch = spec.type == OptionValue(false).index();
+      spec.set(options, is_switch ? OptionValue(switches_[i]) : ParseOption(spec, texts_[i]));
     }
     ValidateQueryOptions(*options);
   }
@@ -430,7 +430,6 @@ class TableFlags {
 
   std::vector<std::string> texts_;
   std::unique_ptr<bool[]> switches_;  // CLI11 sets bools, and vector<bool> has none to point at
-  std::vector<bool> is_switch_;
   std::vector<CLI::Option*> options_;
 };
 
