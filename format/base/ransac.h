@@ -46,18 +46,21 @@ struct RansacStats {
 //   NumData()                    number of data points (correspondences)
 //   GenerateModels(sample, &ms)  appends the models a minimal sample gives to ms, which Ransac
 //                                empties first; none for a degenerate sample
-//   Score(model, &n)             MSAC score sum_i min(r_i^2, threshold^2) (lower is better);
-//                                n = number of inliers (r_i below the threshold)
+//   Score(model, &n, bound)      MSAC score sum_i min(r_i^2, threshold^2) (lower is better);
+//                                n = number of inliers (r_i below the threshold). Once the
+//                                partial sum reaches `bound` the model has lost (Ransac keeps
+//                                only a score below it): Score may stop and return that sum.
 //   Refine(&model)               local optimisation on the model's inliers (e.g. non-linear
 //                                least squares); Ransac keeps the result only if it scores better
 template <typename E>
 concept RansacEstimator = requires(const E& e, const typename E::Model& model,
                                    typename E::Model* model_out, std::span<const uint32_t> sample,
-                                   std::vector<typename E::Model>* models, uint32_t* num_inliers) {
+                                   std::vector<typename E::Model>* models, uint32_t* num_inliers,
+                                   double bound) {
   { E::kSampleSize } -> std::convertible_to<size_t>;
   { e.NumData() } -> std::convertible_to<size_t>;
   e.GenerateModels(sample, models);
-  { e.Score(model, num_inliers) } -> std::convertible_to<double>;
+  { e.Score(model, num_inliers, bound) } -> std::convertible_to<double>;
   e.Refine(model_out);
 };
 
@@ -110,7 +113,7 @@ RansacStats Ransac(const Estimator& estimator, const RansacOptions& options,
     uint32_t best_inliers = 0;
     for (size_t m = 0; m < models.size(); ++m) {
       uint32_t inliers = 0;
-      const double score = estimator.Score(models[m], &inliers);
+      const double score = estimator.Score(models[m], &inliers, best_score);
       if (score < best_score) {
         best_score = score;
         best_inliers = inliers;
@@ -126,7 +129,7 @@ RansacStats Ransac(const Estimator& estimator, const RansacOptions& options,
       estimator.Refine(&refined);
       ++stats.refinements;
       uint32_t inliers = 0;
-      const double score = estimator.Score(refined, &inliers);
+      const double score = estimator.Score(refined, &inliers, best_score);
       if (!(score < best_score)) break;
       model = refined;
       best_score = score;

@@ -219,8 +219,8 @@ class SimilarityEstimator {
   }
 
   // The MSAC cost: residuals in sigmas, squared and truncated at the threshold; inliers are the
-  // residuals within it.
-  double Score(const Similarity& model, uint32_t* num_inliers) const {
+  // residuals within it. A handful of observations: scored in full whatever the bound.
+  double Score(const Similarity& model, uint32_t* num_inliers, double /*bound*/) const {
     double cost = 0;
     *num_inliers = 0;
     for (size_t i = 0; i < centres_.size(); ++i) {

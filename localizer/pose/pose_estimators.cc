@@ -11,10 +11,11 @@ namespace cwloc {
 namespace {
 
 // MSAC score sum_i min(r_i^2, max_sq) of f * pi(R X_i + t) - x_i; a point behind the camera
-// counts as an outlier.
+// counts as an outlier. Stops once the sum reaches `bound` (terms are >= 0, so the model has
+// lost): most of RANSAC's wrong hypotheses are dropped after a few points.
 double MsacScore(std::span<const Eigen::Vector2d> points2D,
                  std::span<const Eigen::Vector3d> points3D, const CameraPose& pose, double f,
-                 double max_sq, uint32_t* num_inliers) {
+                 double max_sq, double bound, uint32_t* num_inliers) {
   const Eigen::Matrix3d rot = pose.rotation.toRotationMatrix();
   const Eigen::Vector3d& t = pose.translation;
   double score = 0.0;
@@ -33,6 +34,7 @@ double MsacScore(std::span<const Eigen::Vector2d> points2D,
       }
     }
     score += max_sq;
+    if (score >= bound) break;
   }
   *num_inliers = inliers;
   return score;
@@ -90,8 +92,8 @@ void AbsolutePoseEstimator::GenerateModels(std::span<const uint32_t> sample,
   }
 }
 
-double AbsolutePoseEstimator::Score(const Model& model, uint32_t* num_inliers) const {
-  return MsacScore(points2D_, points3D_, model, 1.0, max_error_sq_, num_inliers);
+double AbsolutePoseEstimator::Score(const Model& model, uint32_t* num_inliers, double bound) const {
+  return MsacScore(points2D_, points3D_, model, 1.0, max_error_sq_, bound, num_inliers);
 }
 
 void AbsolutePoseEstimator::Refine(Model* model) const {
@@ -127,8 +129,8 @@ void GravityPoseEstimator::GenerateModels(std::span<const uint32_t> sample,
   GravityP2P(bearings, points, gravity_in_camera_, gravity_in_world_, models);
 }
 
-double GravityPoseEstimator::Score(const Model& model, uint32_t* num_inliers) const {
-  return MsacScore(points2D_, points3D_, model, 1.0, max_error_sq_, num_inliers);
+double GravityPoseEstimator::Score(const Model& model, uint32_t* num_inliers, double bound) const {
+  return MsacScore(points2D_, points3D_, model, 1.0, max_error_sq_, bound, num_inliers);
 }
 
 void GravityPoseEstimator::Refine(Model* model) const {
@@ -172,8 +174,9 @@ void AbsolutePoseFocalEstimator::GenerateModels(std::span<const uint32_t> sample
   }
 }
 
-double AbsolutePoseFocalEstimator::Score(const Model& model, uint32_t* num_inliers) const {
-  return MsacScore(points2D_, points3D_, model.pose, model.focal_length, max_error_sq_,
+double AbsolutePoseFocalEstimator::Score(const Model& model, uint32_t* num_inliers,
+                                         double bound) const {
+  return MsacScore(points2D_, points3D_, model.pose, model.focal_length, max_error_sq_, bound,
                    num_inliers);
 }
 

@@ -39,7 +39,7 @@ class AbsolutePoseEstimator {
 
   size_t NumData() const { return points2D_.size(); }
   void GenerateModels(std::span<const uint32_t> sample, std::vector<Model>* models) const;
-  double Score(const Model& model, uint32_t* num_inliers) const;
+  double Score(const Model& model, uint32_t* num_inliers, double bound) const;
   void Refine(Model* model) const;
 
   // Indices of the correspondences with squared error below the threshold (and in front).
@@ -77,7 +77,7 @@ class GravityPoseEstimator {
 
   size_t NumData() const { return points2D_.size(); }
   void GenerateModels(std::span<const uint32_t> sample, std::vector<Model>* models) const;
-  double Score(const Model& model, uint32_t* num_inliers) const;
+  double Score(const Model& model, uint32_t* num_inliers, double bound) const;
   void Refine(Model* model) const;
   // The correspondences within max_error (not the window).
   void Inliers(const Model& model, std::vector<uint32_t>* inliers) const;
@@ -116,7 +116,7 @@ class AbsolutePoseFocalEstimator {
 
   size_t NumData() const { return points2D_.size(); }
   void GenerateModels(std::span<const uint32_t> sample, std::vector<Model>* models) const;
-  double Score(const Model& model, uint32_t* num_inliers) const;
+  double Score(const Model& model, uint32_t* num_inliers, double bound) const;
   void Refine(Model* model) const;
   void Inliers(const Model& model, std::vector<uint32_t>* inliers) const;
 

@@ -39,7 +39,7 @@ class LineEstimator {
     const double a = (q.y() - p.y()) / (q.x() - p.x());
     models->push_back({a, p.y() - a * p.x()});
   }
-  double Score(const Model& m, uint32_t* num_inliers) const {
+  double Score(const Model& m, uint32_t* num_inliers, double /*bound*/) const {
     double score = 0.0;
     *num_inliers = 0;
     for (const auto& p : points_) {
