@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "format/base/stopwatch.h"
 #include "format/kdtree/kd_forest_builder.h"
@@ -9,7 +10,8 @@
 namespace cwloc {
 BackMatchingResult MatchBack(const Index& index, const ClusterMembers& clusters, const Query& query,
                              std::span<const FeatureMatch> forward_matches,
-                             const LocalizerOptions& options, ClusterMask allowed) {
+                             const LocalizerOptions& options, ClusterMask allowed,
+                             PoseGuide* guide) {
   BackMatchingResult result;
   result.cluster_votes.assign(clusters.num_clusters(), 0);
   std::vector<uint32_t>& votes = result.cluster_votes;
@@ -21,15 +23,20 @@ BackMatchingResult MatchBack(const Index& index, const ClusterMembers& clusters,
   for (const FeatureMatch& match : forward_matches) vote(ClusterOfView(index, match.view));
   if (voted.empty() || query.NumFeatures() < 2) return result;
 
+  // Without a guide, views are searched in a kd-forest over all the query's features.
   Stopwatch stopwatch;
-  KdForestBuildOptions tree_options;
-  tree_options.num_trees = 4;
-  tree_options.num_threads = 1;
-  tree_options.seed = options.seed;
+  std::optional<KdForest> query_forest;
+  std::optional<KdForestSearcher> searcher;
   const std::span<const uint8_t> query_descriptors(query.descriptors.data(),
                                                    size_t{query.NumFeatures()} * 128);
-  const KdForest query_forest = BuildKdForest(query_descriptors, tree_options);
-  KdForestSearcher searcher(query_forest.View(query_descriptors));
+  if (guide == nullptr) {
+    KdForestBuildOptions tree_options;
+    tree_options.num_trees = 4;
+    tree_options.num_threads = 1;
+    tree_options.seed = options.seed;
+    query_forest = BuildKdForest(query_descriptors, tree_options);
+    searcher.emplace(query_forest->View(query_descriptors));
+  }
   result.seconds_query_tree = stopwatch.Seconds();
 
   stopwatch.Restart();
@@ -54,8 +61,13 @@ BackMatchingResult MatchBack(const Index& index, const ClusterMembers& clusters,
       const IndexImage& image = index.images()[clusters.images[i]];
       for (uint32_t view = image.first_view; view < image.first_view + image.num_views; ++view) {
         if (view >= index.num_views()) break;  // a corrupt range; verify names it
+        if (guide != nullptr) {
+          if (const std::optional<FeatureMatch> match = guide->Match(index, view, options.ratio))
+            result.matches.push_back(*match);
+          continue;
+        }
         const KdSearchResult found =
-            searcher.Search(index.descriptor(view), search_options, neighbors);
+            searcher->Search(index.descriptor(view), search_options, neighbors);
         if (found.num_neighbors < 2) continue;
         if (!PassesRatioTest(neighbors[0].distance, neighbors[1].distance, options.ratio)) continue;
         result.matches.push_back(

@@ -7,6 +7,7 @@
 #include "format/index/index.h"
 #include "localizer/localizer_options.h"
 #include "localizer/matching.h"
+#include "localizer/pose_guide.h"
 #include "localizer/query.h"
 
 namespace cwloc {
@@ -33,6 +34,7 @@ struct BackMatchingResult {
 // `allowed` get no votes, so they are never back-matched.
 BackMatchingResult MatchBack(const Index& index, const ClusterMembers& clusters, const Query& query,
                              std::span<const FeatureMatch> forward_matches,
-                             const LocalizerOptions& options, ClusterMask allowed = {});
+                             const LocalizerOptions& options, ClusterMask allowed = {},
+                             PoseGuide* guide = nullptr);
 
 }  // namespace cwloc

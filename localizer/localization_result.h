@@ -73,6 +73,7 @@ struct LocalizationResult {
   double inlier_ratio = 0;
   uint32_t ransac_iterations = 0;
   uint32_t back_matched_clusters = 0;  // JSON: back_matched_images
+  bool guided = false;                 // back-matching was guided by a pose hypothesis
   std::vector<InlierMatch> inliers;    // on success, in feature order
   std::vector<RankedImage> ranked_images;
   std::optional<GeoPose> geo;  // on success with a georeferenced index

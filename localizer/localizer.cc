@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <string>
 #include <unordered_map>
 
@@ -27,8 +28,33 @@ struct MatcherOutput {
   uint32_t back_matched_clusters = 0;
   double seconds_query_tree = 0;
   double seconds_back_matching = 0;
-  double seconds_pose = 0;  // pose estimation a matcher ran to choose its correspondences
+  double seconds_pose = 0;   // pose estimation a matcher ran to choose its correspondences
+  double seconds_guide = 0;  // the pose hypothesis of guided back-matching
+  bool guided = false;
 };
+
+// Guided back-matching's hypothesis: the pose stage on the forward matches.
+std::optional<PoseHypothesis> FitPoseHypothesis(const Index& index, const Query& query,
+                                                std::span<const FeatureMatch> forward,
+                                                const LocalizerOptions& options) {
+  const std::vector<FeatureMatch> correspondences =
+      UniqueCorrespondences(index, {forward.begin(), forward.end()});
+  if (correspondences.size() < size_t(options.pose.min_inliers)) return std::nullopt;
+  const QueryPose fit = EstimateQueryPose(index, query, correspondences, options);
+  if (!fit.pose.success) return std::nullopt;
+  PoseHypothesis hypothesis;
+  hypothesis.pose = fit.pose.pose;
+  if (query.camera.FocalKnown()) {
+    hypothesis.model_id = query.camera.model_id;
+    hypothesis.params = query.camera.params;
+  } else {
+    const std::array<double, 2> center = query.camera.ImageCenter();
+    hypothesis.model_id = CameraModelId::kSimpleRadial;
+    hypothesis.params = {fit.pose.focal_length_px, center[0], center[1],
+                         fit.pose.radial_distortion};
+  }
+  return hypothesis;
+}
 
 // The paper: forward matching, then back-matching; the pose is fit to the back-matches.
 MatcherOutput MatchClusterWise(const Index& index, const ClusterMembers& clusters,
@@ -37,11 +63,21 @@ MatcherOutput MatchClusterWise(const Index& index, const ClusterMembers& cluster
   MatcherOutput out;
   KdForestSearcher searcher(index.kd_forest());
   out.forward = MatchForward(index, query, options, searcher, &out.forward_stats, allowed);
-  BackMatchingResult back = MatchBack(index, clusters, query, out.forward, options, allowed);
+  const Stopwatch guide_time;
+  std::optional<PoseGuide> guide;
+  if (options.back_matching == BackMatching::kGuided) {
+    if (std::optional<PoseHypothesis> hypothesis =
+            FitPoseHypothesis(index, query, out.forward, options))
+      guide.emplace(query, std::move(*hypothesis), options.guide_radius_px);
+  }
+  out.seconds_guide = guide_time.Seconds();
+  out.guided = guide.has_value();
+  BackMatchingResult back =
+      MatchBack(index, clusters, query, out.forward, options, allowed, guide ? &*guide : nullptr);
   out.back = std::move(back.matches);
   out.back_matched_clusters = static_cast<uint32_t>(back.visited.size());
   out.seconds_query_tree = back.seconds_query_tree;
-  out.seconds_back_matching = back.seconds_matching;
+  out.seconds_back_matching = back.seconds_matching + out.seconds_guide;
   out.correspondences = UniqueCorrespondences(index, out.back);
   return out;
 }
@@ -231,6 +267,7 @@ LocalizationResult Localizer::Localize(const Query& query, const LocalizerOption
   result.forward_matches = static_cast<uint32_t>(matched.forward.size());
   result.back_matches = static_cast<uint32_t>(matched.back.size());
   result.back_matched_clusters = matched.back_matched_clusters;
+  result.guided = matched.guided;
   result.ranked_images = RankImages(index_, matched.forward, matched.back, options.ranked_images);
   result.correspondences = static_cast<uint32_t>(matched.correspondences.size());
   result.num_inliers = static_cast<uint32_t>(pose.num_inliers);

@@ -30,6 +30,18 @@ inline std::optional<Matcher> ParseMatcher(std::string_view name) {
   return ParseEnumName<Matcher>(kMatcherNames, name);
 }
 
+// How back-matching finds a model view's query feature (docs/algorithm.md, section 3).
+enum class BackMatching {
+  kGuided,  // near where the view's 3D point projects under a pose fit to the forward matches,
+            // when they give one; otherwise as kFull
+  kFull,    // the paper: 2-NN in a kd-forest over all the query's features
+};
+inline constexpr std::array<std::string_view, 2> kBackMatchingNames = {"guided", "full"};
+
+inline std::optional<BackMatching> ParseBackMatching(std::string_view name) {
+  return ParseEnumName<BackMatching>(kBackMatchingNames, name);
+}
+
 // The largest k: the k + 1 neighbours of a feature fit the ratio test's fixed-size arrays.
 inline constexpr uint32_t kMaxK = 63;
 
@@ -52,6 +64,8 @@ struct LocalizerOptions {
   uint32_t max_back_clusters = 20;    // ... or this many clusters were back-matched
   uint32_t min_matches_to_vote = 12;  // a back-matched cluster votes for co-visible ones
   uint32_t query_tree_checks = 64;    // distance computations per search of the query's forest
+  BackMatching back_matching = BackMatching::kGuided;
+  double guide_radius_px = 20.0;  // guided: query features this near the projection compete
   // Robust pose: inlier threshold, minimum inliers, RANSAC's limits, refinement. Its
   // ransac.seed is overwritten with `seed` below for each query: one seed drives a query's
   // randomness (the pose stage alone, in benchmarks and tests, takes its own).

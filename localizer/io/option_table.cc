@@ -49,12 +49,18 @@ template <typename T>
 requires std::is_arithmetic_v<T> T ApiValue(T value) { return value; }
 std::string ApiValue(Matcher matcher) { return std::string(MatcherName(matcher)); }
 std::string ApiValue(PoseRefiner refiner) { return std::string(PoseRefinerName(refiner)); }
+std::string ApiValue(BackMatching mode) {
+  return std::string(kBackMatchingNames[static_cast<size_t>(mode)]);
+}
 
 template <typename Api, typename T>
 requires std::is_arithmetic_v<T>
 void Assign(const Api& value, T* member) { *member = static_cast<T>(value); }
 // Names were checked against the range's names by then.
 void Assign(const std::string& name, Matcher* member) { *member = ParseMatcher(name).value(); }
+void Assign(const std::string& name, BackMatching* member) {
+  *member = ParseBackMatching(name).value();
+}
 void Assign(const std::string& name, PoseRefiner* member) {
   *member = ParsePoseRefiner(name).value();
 }

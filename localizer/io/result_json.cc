@@ -16,6 +16,8 @@ nlohmann::ordered_json OptionsToJson(const LocalizerOptions& options) {
           {"max_back_images", options.max_back_clusters},
           {"min_matches_to_vote", options.min_matches_to_vote},
           {"query_tree_checks", options.query_tree_checks},
+          {"back_matching", std::string(kBackMatchingNames[size_t(options.back_matching)])},
+          {"guide_radius_px", options.guide_radius_px},
           {"min_inliers", options.pose.min_inliers},
           {"max_error_px", options.pose.max_error_px},
           {"min_ransac_iterations", options.pose.ransac.min_iterations},
@@ -78,6 +80,7 @@ nlohmann::ordered_json ResultToJson(const LocalizationResult& result,
                     {"back", result.back_matches},
                     {"correspondences", result.correspondences},
                     {"back_matched_images", result.back_matched_clusters},
+                    {"guided", result.guided},
                     {"ransac_iterations", result.ransac_iterations}};
   nlohmann::ordered_json ranked = nlohmann::ordered_json::array();
   for (const RankedImage& image : result.ranked_images) {

@@ -1,0 +1,105 @@
+#include "localizer/pose_guide.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "format/kdtree/descriptor_distance.h"
+
+namespace cwloc {
+
+PoseGuide::PoseGuide(const Query& query, PoseHypothesis hypothesis, double radius_px)
+    : query_(query),
+      hypothesis_(std::move(hypothesis)),
+      rotation_(hypothesis_.pose.RotationMatrix()),
+      radius_px_(radius_px) {
+  // Competitors for the ratio test come from a window that holds about kCompetitors features
+  // at the query's mean density, and at least the radius: a sparse query still has a second
+  // neighbour to compare with.
+  constexpr double kCompetitors = 8;
+  const double area = double(query.camera.width) * double(query.camera.height);
+  const double density = std::max<uint32_t>(query.NumFeatures(), 1) / std::max(area, 1.0);
+  reach_px_ = std::max(radius_px, std::sqrt(kCompetitors / (M_PI * density)));
+  cell_px_ = std::max(reach_px_, 1.0);
+  columns_ = std::max<uint32_t>(1, uint32_t(std::ceil(query.camera.width / cell_px_)));
+  rows_ = std::max<uint32_t>(1, uint32_t(std::ceil(query.camera.height / cell_px_)));
+  // Counting sort of the features by cell; keypoints outside the image go to the border cells.
+  const uint32_t num_features = query.NumFeatures();
+  std::vector<uint32_t> cell_of(num_features);
+  cell_start_.assign(size_t{columns_} * rows_ + 1, 0);
+  for (uint32_t f = 0; f < num_features; ++f) {
+    const double x = query.keypoints[2 * f] / cell_px_, y = query.keypoints[2 * f + 1] / cell_px_;
+    const uint32_t column = uint32_t(std::clamp(x, 0.0, double(columns_ - 1)));
+    const uint32_t row = uint32_t(std::clamp(y, 0.0, double(rows_ - 1)));
+    cell_of[f] = row * columns_ + column;
+    ++cell_start_[cell_of[f] + 1];
+  }
+  for (size_t c = 1; c < cell_start_.size(); ++c) cell_start_[c] += cell_start_[c - 1];
+  features_.resize(num_features);
+  std::vector<uint32_t> next(cell_start_.begin(), cell_start_.end() - 1);
+  for (uint32_t f = 0; f < num_features; ++f) features_[next[cell_of[f]]++] = f;
+}
+
+std::optional<FeatureMatch> PoseGuide::Match(const Index& index, uint32_t view, double ratio) {
+  if (view >= index.num_views()) return std::nullopt;
+  const uint32_t point_index = index.view_points()[view];
+  if (point_index >= index.points().size()) return std::nullopt;
+  const double* xyz = index.points()[point_index].xyz;
+  const Eigen::Vector3d in_camera =
+      rotation_ * Eigen::Vector3d(xyz[0], xyz[1], xyz[2]) + hypothesis_.pose.translation;
+  std::array<double, 2> pixel;
+  if (!ProjectToPixel(hypothesis_.model_id, hypothesis_.params,
+                      {in_camera.x(), in_camera.y(), in_camera.z()}, &pixel)) {
+    return std::nullopt;
+  }
+  const double x = pixel[0], y = pixel[1];
+  if (!(x > -radius_px_ && y > -radius_px_ && x < query_.camera.width + radius_px_ &&
+        y < query_.camera.height + radius_px_)) {
+    return std::nullopt;
+  }
+  const auto cell = [this](double v, uint32_t count) {
+    return uint32_t(std::clamp(v / cell_px_, 0.0, double(count - 1)));
+  };
+  const uint32_t column_begin = cell(x - reach_px_, columns_);
+  const uint32_t column_end = cell(x + reach_px_, columns_);
+  const uint32_t row_begin = cell(y - reach_px_, rows_);
+  const uint32_t row_end = cell(y + reach_px_, rows_);
+  const double reach_squared = reach_px_ * reach_px_;
+  candidates_.clear();
+  for (uint32_t row = row_begin; row <= row_end; ++row) {
+    const uint32_t first = cell_start_[row * columns_ + column_begin];
+    const uint32_t last = cell_start_[row * columns_ + column_end + 1];
+    for (uint32_t i = first; i < last; ++i) {
+      const uint32_t f = features_[i];
+      const double dx = query_.keypoints[2 * f] - x, dy = query_.keypoints[2 * f + 1] - y;
+      if (dx * dx + dy * dy <= reach_squared) candidates_.push_back(f);
+    }
+  }
+  if (candidates_.size() < 2) return std::nullopt;
+  distances_.resize(candidates_.size());
+  BestDistanceFunctions().batch(index.descriptor(view), query_.descriptors.data(),
+                                candidates_.data(), candidates_.size(), distances_.data());
+  uint32_t best = 0, second = 1;
+  if (distances_[1] < distances_[0] ||
+      (distances_[1] == distances_[0] && candidates_[1] < candidates_[0])) {
+    std::swap(best, second);
+  }
+  for (uint32_t i = 2; i < candidates_.size(); ++i) {
+    const auto closer = [&](uint32_t a, uint32_t b) {
+      return distances_[a] < distances_[b] ||
+             (distances_[a] == distances_[b] && candidates_[a] < candidates_[b]);
+    };
+    if (closer(i, best)) {
+      second = best;
+      best = i;
+    } else if (closer(i, second)) {
+      second = i;
+    }
+  }
+  if (!PassesRatioTest(distances_[best], distances_[second], ratio)) return std::nullopt;
+  const uint32_t feature = candidates_[best];
+  const double dx = query_.keypoints[2 * feature] - x, dy = query_.keypoints[2 * feature + 1] - y;
+  if (dx * dx + dy * dy > radius_px_ * radius_px_) return std::nullopt;
+  return FeatureMatch{candidates_[best], view, std::sqrt(float(distances_[best]))};
+}
+
+}  // namespace cwloc
