@@ -23,7 +23,8 @@ void ThrowCorrupt(const Index& index) {
 
 std::vector<FeatureMatch> MatchForward(const Index& index, const Query& query,
                                        const LocalizerOptions& options, KdForestSearcher& searcher,
-                                       ForwardMatchingStats* stats, ClusterMask allowed) {
+                                       ForwardMatchingStats* stats, ClusterMask allowed,
+                                       const Deadline& stop) {
   std::vector<uint32_t> order(query.NumFeatures());
   std::iota(order.begin(), order.end(), 0u);
   SplitMix64(options.seed).Shuffle(std::span<uint32_t>(order));
@@ -38,6 +39,10 @@ std::vector<FeatureMatch> MatchForward(const Index& index, const Query& query,
   std::vector<FeatureMatch> matches;
   for (const uint32_t feature : order) {
     if (matches.size() >= options.forward_matches) break;
+    if (stop.Passed()) {
+      stats->stopped_by_deadline = true;
+      break;
+    }
     const Stopwatch knn;
     const KdSearchResult result =
         searcher.Search(query.Descriptor(feature), search_options, neighbors);
@@ -59,7 +64,7 @@ std::vector<FeatureMatch> MatchForward(const Index& index, const Query& query,
 std::vector<FeatureMatch> MatchGlobalRatio(const Index& index, const Query& query,
                                            const LocalizerOptions& options,
                                            KdForestSearcher& searcher, ForwardMatchingStats* stats,
-                                           ClusterMask allowed) {
+                                           ClusterMask allowed, const Deadline& stop) {
   std::vector<KdNeighbor> neighbors(2);
   const std::vector<uint64_t> region = AllowedViews(index, allowed);
   KdSearchOptions search_options;
@@ -68,6 +73,10 @@ std::vector<FeatureMatch> MatchGlobalRatio(const Index& index, const Query& quer
   std::vector<FeatureMatch> matches;
   const Stopwatch knn;
   for (uint32_t feature = 0; feature < query.NumFeatures(); ++feature) {
+    if (stop.Passed()) {
+      stats->stopped_by_deadline = true;
+      break;
+    }
     const KdSearchResult result =
         searcher.Search(query.Descriptor(feature), search_options, neighbors);
     ++stats->features_searched;

@@ -3,6 +3,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "format/base/deadline.h"
 #include "format/index/index.h"
 #include "format/kdtree/kd_forest.h"
 #include "localizer/localizer_options.h"
@@ -15,15 +16,17 @@ namespace cwloc {
 // options.seed, (k+1)-NN in the global kd-forest, the k-ratio test, then the cluster-wise ratio
 // test on the k neighbours; stops once options.forward_matches matches have passed both.
 // With `allowed` (a position prior), the searches compare only the views of those clusters.
+// No feature is searched once `stop` has passed (a latency budget).
 std::vector<FeatureMatch> MatchForward(const Index& index, const Query& query,
                                        const LocalizerOptions& options, KdForestSearcher& searcher,
-                                       ForwardMatchingStats* stats, ClusterMask allowed = {});
+                                       ForwardMatchingStats* stats, ClusterMask allowed = {},
+                                       const Deadline& stop = {});
 
 // The diagnostic baseline: every query feature's 2-NN in the global forest, the plain 1-ratio
-// test; with `allowed`, among the views of those clusters only.
+// test; with `allowed`, among the views of those clusters only; until `stop`.
 std::vector<FeatureMatch> MatchGlobalRatio(const Index& index, const Query& query,
                                            const LocalizerOptions& options,
                                            KdForestSearcher& searcher, ForwardMatchingStats* stats,
-                                           ClusterMask allowed = {});
+                                           ClusterMask allowed = {}, const Deadline& stop = {});
 
 }  // namespace cwloc

@@ -74,7 +74,10 @@ struct LocalizationResult {
   uint32_t ransac_iterations = 0;
   uint32_t back_matched_clusters = 0;  // JSON: back_matched_images
   bool guided = false;                 // back-matching was guided by a pose hypothesis
-  std::vector<InlierMatch> inliers;    // on success, in feature order
+  // With a latency budget (LocalizerOptions::budget_ms): the stages it cut short, in order
+  // ("forward", "back_matching", "ransac", "refinement").
+  std::vector<std::string> budget_cut;
+  std::vector<InlierMatch> inliers;  // on success, in feature order
   std::vector<RankedImage> ranked_images;
   std::optional<GeoPose> geo;  // on success with a georeferenced index
   PriorUse priors;

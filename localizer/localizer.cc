@@ -18,6 +18,20 @@
 namespace cwloc {
 namespace {
 
+// Each stage's deadline under a latency budget: the share of the budget by which it stops.
+// Forward matching and back-matching take most of a real query; RANSAC stops at 80 % and the
+// refinement (a few ms on thousands of inliers) starts only before 85 %.
+struct StageDeadlines {
+  Deadline forward, back, ransac, refine;
+
+  static StageDeadlines For(Deadline::Clock::time_point start, double budget_ms) {
+    if (!(budget_ms > 0)) return {};
+    const double budget = budget_ms * 1e-3;
+    return {Deadline::After(start, 0.3 * budget), Deadline::After(start, 0.6 * budget),
+            Deadline::After(start, 0.8 * budget), Deadline::After(start, 0.85 * budget)};
+  }
+};
+
 // What a matcher hands to the pose stage, and what it did on the way.
 struct MatcherOutput {
   std::vector<FeatureMatch> forward;          // forward matches: votes for location recognition
@@ -31,16 +45,21 @@ struct MatcherOutput {
   double seconds_pose = 0;   // pose estimation a matcher ran to choose its correspondences
   double seconds_guide = 0;  // the pose hypothesis of guided back-matching
   bool guided = false;
+  bool back_stopped_by_deadline = false;
 };
 
 // Guided back-matching's hypothesis: the pose stage on the forward matches.
 std::optional<PoseHypothesis> FitPoseHypothesis(const Index& index, const Query& query,
                                                 std::span<const FeatureMatch> forward,
-                                                const LocalizerOptions& options) {
+                                                const LocalizerOptions& options,
+                                                const Deadline& stop) {
   const std::vector<FeatureMatch> correspondences =
       UniqueCorrespondences(index, {forward.begin(), forward.end()});
   if (correspondences.size() < size_t(options.pose.min_inliers)) return std::nullopt;
-  const QueryPose fit = EstimateQueryPose(index, query, correspondences, options);
+  LocalizerOptions fit_options = options;
+  fit_options.pose.ransac.deadline = stop;
+  fit_options.pose.refine_deadline = stop;
+  const QueryPose fit = EstimateQueryPose(index, query, correspondences, fit_options);
   if (!fit.pose.success) return std::nullopt;
   PoseHypothesis hypothesis;
   hypothesis.pose = fit.pose.pose;
@@ -59,35 +78,45 @@ std::optional<PoseHypothesis> FitPoseHypothesis(const Index& index, const Query&
 // The paper: forward matching, then back-matching; the pose is fit to the back-matches.
 MatcherOutput MatchClusterWise(const Index& index, const ClusterMembers& clusters,
                                const Query& query, const LocalizerOptions& options,
-                               ClusterMask allowed) {
+                               ClusterMask allowed, const StageDeadlines& deadlines) {
   MatcherOutput out;
   KdForestSearcher searcher(index.kd_forest());
-  out.forward = MatchForward(index, query, options, searcher, &out.forward_stats, allowed);
+  out.forward =
+      MatchForward(index, query, options, searcher, &out.forward_stats, allowed, deadlines.forward);
   const Stopwatch guide_time;
   std::optional<PoseGuide> guide;
   if (options.back_matching == BackMatching::kGuided) {
     if (std::optional<PoseHypothesis> hypothesis =
-            FitPoseHypothesis(index, query, out.forward, options))
+            FitPoseHypothesis(index, query, out.forward, options, deadlines.back))
       guide.emplace(query, std::move(*hypothesis), options.guide_radius_px);
   }
   out.seconds_guide = guide_time.Seconds();
   out.guided = guide.has_value();
-  BackMatchingResult back =
-      MatchBack(index, clusters, query, out.forward, options, allowed, guide ? &*guide : nullptr);
+  BackMatchingResult back = MatchBack(index, clusters, query, out.forward, options, allowed,
+                                      guide ? &*guide : nullptr, deadlines.back);
+  out.back_stopped_by_deadline = back.stopped_by_deadline;
+
   out.back = std::move(back.matches);
   out.back_matched_clusters = static_cast<uint32_t>(back.visited.size());
   out.seconds_query_tree = back.seconds_query_tree;
   out.seconds_back_matching = back.seconds_matching + out.seconds_guide;
-  out.correspondences = UniqueCorrespondences(index, out.back);
+  std::vector<FeatureMatch> pairs = out.back;
+  if (back.stopped_by_deadline) {
+    // Cut short by the budget: the forward matches join the pose stage's correspondences, so
+    // that a query cut before its back-matches can still be localized (the anytime reading).
+    pairs.insert(pairs.end(), out.forward.begin(), out.forward.end());
+  }
+  out.correspondences = UniqueCorrespondences(index, std::move(pairs));
   return out;
 }
 
 // The diagnostic baseline: the pose is fit to the global 1-ratio matches.
 MatcherOutput MatchGlobally(const Index& index, const Query& query, const LocalizerOptions& options,
-                            ClusterMask allowed) {
+                            ClusterMask allowed, const StageDeadlines& deadlines) {
   MatcherOutput out;
   KdForestSearcher searcher(index.kd_forest());
-  out.forward = MatchGlobalRatio(index, query, options, searcher, &out.forward_stats, allowed);
+  out.forward = MatchGlobalRatio(index, query, options, searcher, &out.forward_stats, allowed,
+                                 deadlines.forward);
   out.correspondences = UniqueCorrespondences(index, out.forward);
   return out;
 }
@@ -203,6 +232,7 @@ void Localizer::ValidatePriors(const Query& query) const {
 
 LocalizationResult Localizer::Localize(const Query& query, const LocalizerOptions& options) const {
   const Stopwatch total;
+  const StageDeadlines deadlines = StageDeadlines::For(Deadline::Clock::now(), options.budget_ms);
   ValidateQuery(query);
   ValidatePriors(query);
 
@@ -226,10 +256,10 @@ LocalizationResult Localizer::Localize(const Query& query, const LocalizerOption
   } else {
     switch (options.matcher) {
       case Matcher::kClusterWise:
-        matched = MatchClusterWise(index_, clusters_, query, options, allowed);
+        matched = MatchClusterWise(index_, clusters_, query, options, allowed, deadlines);
         break;
       case Matcher::kGlobalRatio:
-        matched = MatchGlobally(index_, query, options, allowed);
+        matched = MatchGlobally(index_, query, options, allowed, deadlines);
         break;
       case Matcher::kClusterExhaustive:
         matched = MatchClusterExhaustive(index_, clusters_, query, options, allowed);
@@ -241,6 +271,8 @@ LocalizationResult Localizer::Localize(const Query& query, const LocalizerOption
 
   // The gravity prior: the model's down direction where the query is thought to be.
   LocalizerOptions pose_options = options;
+  pose_options.pose.ransac.deadline = deadlines.ransac;
+  pose_options.pose.refine_deadline = deadlines.refine;
   if (query.gravity) {
     GravityPrior prior;
     prior.in_camera = {(*query.gravity)[0], (*query.gravity)[1], (*query.gravity)[2]};
@@ -268,6 +300,15 @@ LocalizationResult Localizer::Localize(const Query& query, const LocalizerOption
   result.back_matches = static_cast<uint32_t>(matched.back.size());
   result.back_matched_clusters = matched.back_matched_clusters;
   result.guided = matched.guided;
+  if (options.budget_ms > 0) {
+    const auto cut = [&](bool was_cut, const char* stage) {
+      if (was_cut) result.budget_cut.push_back(stage);
+    };
+    cut(matched.forward_stats.stopped_by_deadline, "forward");
+    cut(matched.back_stopped_by_deadline, "back_matching");
+    cut(pose.stats.stopped_by_deadline, "ransac");
+    cut(pose.refinement_skipped, "refinement");
+  }
   result.ranked_images = RankImages(index_, matched.forward, matched.back, options.ranked_images);
   result.correspondences = static_cast<uint32_t>(matched.correspondences.size());
   result.num_inliers = static_cast<uint32_t>(pose.num_inliers);

@@ -72,6 +72,10 @@ struct LocalizerOptions {
   AbsolutePoseOptions pose;
   // A query's gravity prior (--prior-gravity): its standard deviation, degrees.
   double prior_gravity_sigma_deg = GravityPrior().sigma_deg;
+  // A latency budget per query, milliseconds after the features are known (0: none). Each stage
+  // stops at its share of it (StageDeadlines in localizer.cc): N_F, N_B and RANSAC's
+  // iterations then adapt, and the result lists what was cut.
+  double budget_ms = 0;
   // Output.
   uint32_t ranked_images = 10;  // model images listed for location recognition
   uint64_t seed = 0;            // query feature order, the query's kd-forest, RANSAC

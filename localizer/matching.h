@@ -31,6 +31,7 @@ struct ForwardMatchingStats {
   uint32_t t_ratio_tests = 0;      // clusters with a single neighbour
   double seconds_knn = 0;
   double seconds_ratio_test = 0;
+  bool stopped_by_deadline = false;  // the latency budget ended the search before N_F
 };
 
 // The cluster of a view (UINT32_MAX for a view outside every image's range: a corrupt index).

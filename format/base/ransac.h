@@ -10,6 +10,7 @@
 #include <span>
 #include <vector>
 
+#include "format/base/deadline.h"
 #include "format/base/split_mix64.h"
 
 namespace cwloc {
@@ -31,6 +32,9 @@ struct RansacOptions {
   double confidence = 0.9999;       // probability of drawing one all-inlier sample
   uint64_t seed = 0;                // same seed, same data: same result on every platform
   uint32_t max_refinements = 4;     // local optimisation rounds per new best hypothesis
+  // A latency budget: no new sample once it has passed (after the first), whatever the
+  // iteration counts above ask for.
+  Deadline deadline;
 };
 
 struct RansacStats {
@@ -39,6 +43,7 @@ struct RansacStats {
   double inlier_ratio = 0.0;                               // num_inliers / number of data points
   uint32_t refinements = 0;                                // local optimisation rounds run
   double score = std::numeric_limits<double>::infinity();  // MSAC score of the best model
+  bool stopped_by_deadline = false;  // RansacOptions::deadline ended the sampling
 };
 
 // What Ransac needs from a problem.
@@ -96,6 +101,10 @@ RansacStats Ransac(const Estimator& estimator, const RansacOptions& options,
 
   while (stats.iterations < options.max_iterations &&
          (stats.iterations < min_iterations || stats.iterations < required)) {
+    if (stats.iterations > 0 && options.deadline.Passed()) {
+      stats.stopped_by_deadline = true;
+      break;
+    }
     ++stats.iterations;
     // Distinct indices by rejection: the sample is tiny compared to the data.
     for (size_t i = 0; i < kSampleSize; ++i) {

@@ -18,6 +18,7 @@ nlohmann::ordered_json OptionsToJson(const LocalizerOptions& options) {
           {"query_tree_checks", options.query_tree_checks},
           {"back_matching", std::string(kBackMatchingNames[size_t(options.back_matching)])},
           {"guide_radius_px", options.guide_radius_px},
+          {"budget_ms", options.budget_ms},
           {"min_inliers", options.pose.min_inliers},
           {"max_error_px", options.pose.max_error_px},
           {"min_ransac_iterations", options.pose.ransac.min_iterations},
@@ -99,6 +100,9 @@ nlohmann::ordered_json ResultToJson(const LocalizationResult& result,
                      {"back_matching", t.back_matching * 1e3},
                      {"pose", t.pose * 1e3},
                      {"total", t.total * 1e3}};
+  if (options.budget_ms > 0) {
+    out["budget"] = {{"ms", options.budget_ms}, {"cut", result.budget_cut}};
+  }
   out["parameters"] = OptionsToJson(options);
   return out;
 }

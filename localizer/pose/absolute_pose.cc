@@ -184,6 +184,12 @@ bool SaneCamera(const RadialCamera& camera, const FocalBounds& bounds,
   return 1.0 + 3.0 * camera.k * corner * corner > 0.0;
 }
 
+// The budget's deadline passed: the result keeps RANSAC's pose and says so.
+bool SkipsRefinement(const AbsolutePoseOptions& options, AbsolutePoseResult* result) {
+  result->refinement_skipped = options.refine_deadline.Passed();
+  return result->refinement_skipped;
+}
+
 // The uncalibrated refinement: rounds of refining pose, f and k on the inliers, then
 // re-scoring every correspondence, while the camera stays sane and the inliers are kept.
 // Starts from *pose and *camera (RANSAC's, k = 0) with RANSAC's inliers.
@@ -288,7 +294,7 @@ AbsolutePoseResult EstimateAbsolutePose(std::span<const Eigen::Vector2d> normali
   // Errors in pixels from here on.
   std::vector<Eigen::Vector2d> pixels(normalized_points.size());
   for (size_t i = 0; i < pixels.size(); ++i) pixels[i] = focal_length_px * normalized_points[i];
-  if (options.refine) {
+  if (options.refine && !SkipsRefinement(options, &result)) {
     std::vector<uint32_t> inliers;
     p3p.Inliers(result.pose, &inliers);
     PoseRefinementOptions refine;
@@ -339,7 +345,7 @@ AbsolutePoseResult EstimateAbsolutePoseUnknownFocal(
   result.pose = model.pose;
   result.focal_length_px = model.focal_length;
 
-  if (options.refine) {
+  if (options.refine && !SkipsRefinement(options, &result)) {
     std::vector<uint32_t> inliers;
     estimator.Inliers(model, &inliers);
     RefineUncalibrated(centered_pixels, points3D, std::move(inliers), bounds, options, gravity,
@@ -387,7 +393,7 @@ AbsolutePoseResult EstimateAbsolutePoseFocalPrior(std::span<const Eigen::Vector2
         "no pose hypothesis: every minimal sample was degenerate" + GravityRejectionText(check);
     return result;
   }
-  if (options.refine) {
+  if (options.refine && !SkipsRefinement(options, &result)) {
     std::vector<uint32_t> inliers;
     estimator.Inliers(result.pose, &inliers);
     RefineUncalibrated(centered_pixels, points3D, std::move(inliers), bounds, options, gravity,

@@ -77,6 +77,8 @@ struct AbsolutePoseOptions {
   int lo_iterations = 10;
   // Final refinement of the best pose (and the focal length when unknown), and its solver.
   bool refine = true;
+  // A latency budget: the refinement is skipped once this has passed (the result says so).
+  Deadline refine_deadline;
   PoseRefiner refiner = PoseRefinementOptions().refiner;
   // Cauchy loss scale of the final refinement, pixels: residuals well below it count as
   // squared errors, residuals near the 6 px threshold already weigh about 1/(1 + 36/a^2).
@@ -116,6 +118,7 @@ struct AbsolutePoseResult {
   int num_inliers = 0;
   RansacStats stats;                        // of the RANSAC run (before the final refinement)
   bool refined = false;                     // the final refinement was applied
+  bool refinement_skipped = false;          // refine_deadline had passed
   int camera_refinement_rounds = 0;         // uncalibrated: refinement rounds kept
   double mean_reprojection_error_px = 0.0;  // over the inliers
   // With a gravity prior: the angle between the reported pose's R * in_world and in_camera.
