@@ -315,11 +315,12 @@ double ProcessCpuSeconds() {
   return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
 }
 
-// One timed pass of `search(q)` over all queries: thread-CPU µs per query.
+// One timed pass of `search(i)` for i < calls (a query each, or a batch each) over
+// num_queries queries: thread-CPU µs per query.
 template <typename Search>
-double TimeQueries(size_t num_queries, Search&& search) {
+double TimeQueries(size_t calls, size_t num_queries, Search&& search) {
   const double start = ThreadSeconds();
-  for (size_t q = 0; q < num_queries; ++q) search(q);
+  for (size_t i = 0; i < calls; ++i) search(i);
   return (ThreadSeconds() - start) * 1e6 / double(num_queries);
 }
 
@@ -370,6 +371,8 @@ int Main(int argc, char** argv) {
   std::string database, query_list, checks_text = "64,128,256", kernel_name;
   size_t synthetic = 2000000, num_queries = 20000, gt_queries = 2000;
   uint32_t trees = 4, leaf_size = 8, threads = 0, flann_checks = 128, interleave = 4;
+  std::string batch_text = "0";
+  size_t batch_chunk = 256;
   int k = 6, reps = 3;
   uint64_t seed = 1;
   bool no_flann = false, build_only = false, hugepages = false;
@@ -395,6 +398,12 @@ int Main(int argc, char** argv) {
                  "distance kernel: scalar, avx2, avx512, avx512vnni, neon, neon-dotprod");
   app.add_option("--interleave", interleave,
                  "descents our search keeps in flight (1 = FLANN order)");
+  app.add_option("--batch", batch_text,
+                 "also time our forest with SearchBatch at these widths (searches in flight), "
+                 "comma-separated; 0 or 1 = one at a time only");
+  app.add_option("--batch-chunk", batch_chunk,
+                 "queries per SearchBatch call (the localizer's forward matching calls it with "
+                 "as many queries as the width)");
   app.add_flag("--no-flann", no_flann, "skip FLANN");
   app.add_flag("--hugepages", hugepages,
                "put the base descriptors on transparent huge pages (both methods)");
@@ -402,6 +411,11 @@ int Main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   if (threads == 0) threads = std::max(1u, std::thread::hardware_concurrency());
   const std::vector<uint32_t> budgets = ParseList(checks_text);
+  std::vector<uint32_t> batch_widths;
+  for (uint32_t w : ParseList(batch_text)) {
+    if (w > 1) batch_widths.push_back(w);
+  }
+  batch_chunk = std::max<size_t>(batch_chunk, 1);
   if (k < 2) Fail("-k must be at least 2 (recall@2)");
 
   const DistanceFunctions* distance = &BestDistanceFunctions();
@@ -500,6 +514,7 @@ int Main(int argc, char** argv) {
   // them alike, and the median pass is reported.
   std::vector<Row> rows;
   std::vector<std::function<void(size_t)>> timed;
+  std::vector<size_t> timed_calls;           // calls of timed[m] per pass
   std::vector<std::vector<uint32_t>> found;  // ground-truth queries' results, k per query
 
   std::unique_ptr<flann::Index<flann::L2<unsigned char>>> flann_index;
@@ -535,11 +550,16 @@ int Main(int argc, char** argv) {
     Recall(truth, f, k, &row);
     rows.push_back(row);
     timed.push_back(search);
+    timed_calls.push_back(nq);
   }
 
   KdForestSearcher searcher(view, *distance);
   std::vector<KdNeighbor> out(k);
-  std::vector<size_t> checked_row(budgets.size()), unchecked_row(budgets.size());
+  std::vector<size_t> checked_row,
+      unchecked_row;  // rows[checked_row[i]] times in timed[unchecked_row[i]]
+  // One-at-a-time results of every timed query per budget: the batched ones must equal them.
+  std::vector<std::vector<KdNeighbor>> alone_neighbors(budgets.size());
+  std::vector<std::vector<KdSearchResult>> alone_results(budgets.size());
   for (size_t b = 0; b < budgets.size(); ++b) {
     Row row;
     row.method = "flat kd-forest " + std::to_string(trees) + " trees, " +
@@ -551,10 +571,14 @@ int Main(int argc, char** argv) {
     options.interleave = interleave;
     std::vector<uint32_t> f(gt_queries * k, UINT32_MAX);
     uint64_t total_checks = 0;
+    alone_neighbors[b].resize(nq * k);
+    alone_results[b].resize(nq);
     for (size_t q = 0; q < nq; ++q) {
       const KdSearchResult r =
           searcher.Search(data.queries.data() + q * kDescriptorDim, options, out);
       if (r.corrupt) Fail("search reported a corrupt forest");
+      std::copy(out.begin(), out.end(), alone_neighbors[b].begin() + q * k);
+      alone_results[b][q] = r;
       total_checks += r.checks;
       if (q < gt_queries) {
         for (uint32_t j = 0; j < r.num_neighbors; ++j) f[q * k + j] = out[j].index;
@@ -562,29 +586,91 @@ int Main(int argc, char** argv) {
     }
     row.checks = double(total_checks) / double(nq);
     Recall(truth, f, k, &row);
-    checked_row[b] = rows.size();
+    checked_row.push_back(rows.size());
     rows.push_back(row);
     timed.push_back([&searcher, &out, &data, options](size_t q) {
       searcher.Search(data.queries.data() + q * kDescriptorDim, options, out);
     });
+    timed_calls.push_back(nq);
     KdSearchOptions unchecked = options;
     unchecked.skip_range_checks = true;
-    unchecked_row[b] = timed.size();
+    unchecked_row.push_back(timed.size());
     timed.push_back([&searcher, &out, &data, unchecked](size_t q) {
       searcher.Search(data.queries.data() + q * kDescriptorDim, unchecked, out);
     });
+    timed_calls.push_back(nq);
+  }
+
+  // Batched: the same searches, `width` in flight, `batch_chunk` queries per call into a reused
+  // output buffer (as a caller would), checked bit for bit against the one-at-a-time results.
+  std::vector<const uint8_t*> query_ptrs(nq);
+  for (size_t q = 0; q < nq; ++q) query_ptrs[q] = data.queries.data() + q * kDescriptorDim;
+  const size_t chunk = std::min(batch_chunk, std::max<size_t>(nq, 1));
+  const size_t num_chunks = (nq + chunk - 1) / chunk;
+  std::vector<KdNeighbor> batch_out(chunk * k);
+  std::vector<std::span<KdNeighbor>> batch_spans(chunk);
+  for (size_t i = 0; i < chunk; ++i) batch_spans[i] = {batch_out.data() + i * k, size_t(k)};
+  std::vector<KdSearchResult> batch_results(chunk);
+  for (const uint32_t width : batch_widths) {
+    for (size_t b = 0; b < budgets.size(); ++b) {
+      Row row = rows[checked_row[b]];  // recall and checks: equal to the one-at-a-time row
+      row.method =
+          "  batch " + std::to_string(width) + " x " + std::to_string(budgets[b]) + " checks";
+      KdSearchOptions options;
+      options.max_checks = budgets[b];
+      options.interleave = interleave;
+      auto run = [&searcher, &query_ptrs, &batch_spans, &batch_results, nq, chunk, width](
+                     const KdSearchOptions& o, size_t c) {
+        const size_t begin = c * chunk, count = std::min(chunk, nq - begin);
+        searcher.SearchBatch(std::span(query_ptrs).subspan(begin, count), o,
+                             std::span<const std::span<KdNeighbor>>(batch_spans).first(count),
+                             std::span(batch_results).first(count), width);
+      };
+      for (const bool skip : {false, true}) {
+        KdSearchOptions o = options;
+        o.skip_range_checks = skip;
+        for (size_t c = 0; c < num_chunks; ++c) {
+          run(o, c);
+          for (size_t i = 0; i < std::min(chunk, nq - c * chunk); ++i) {
+            const size_t q = c * chunk + i;
+            const KdSearchResult& r = batch_results[i];
+            const KdSearchResult& a = alone_results[b][q];
+            if (r.num_neighbors != a.num_neighbors || r.checks != a.checks ||
+                r.corrupt != a.corrupt ||
+                !std::equal(batch_spans[i].begin(), batch_spans[i].begin() + r.num_neighbors,
+                            alone_neighbors[b].begin() + q * k)) {
+              Fail("batch " + std::to_string(width) + ", " + std::to_string(budgets[b]) +
+                   " checks: query " + std::to_string(q) + " differs from its search alone");
+            }
+          }
+        }
+      }
+      checked_row.push_back(rows.size());
+      rows.push_back(row);
+      timed.push_back([run, options](size_t c) { run(options, c); });
+      timed_calls.push_back(num_chunks);
+      KdSearchOptions unchecked = options;
+      unchecked.skip_range_checks = true;
+      unchecked_row.push_back(timed.size());
+      timed.push_back([run, unchecked](size_t c) { run(unchecked, c); });
+      timed_calls.push_back(num_chunks);
+    }
+  }
+  if (!batch_widths.empty()) {
+    std::printf("batched searches (chunks of %zu queries) equal one-at-a-time: checked\n", chunk);
   }
 
   std::vector<std::vector<double>> times(timed.size());
   for (int r = 0; r < reps; ++r) {
-    for (size_t m = 0; m < timed.size(); ++m) times[m].push_back(TimeQueries(nq, timed[m]));
+    for (size_t m = 0; m < timed.size(); ++m) {
+      times[m].push_back(TimeQueries(timed_calls[m], nq, timed[m]));
+    }
   }
-  const size_t first_ours = no_flann ? 0 : 1;
   double flann_us = 0;
   if (!no_flann) rows[0].us_per_query = flann_us = Median(times[0]);
   std::vector<std::string> check_costs;
-  for (size_t b = 0; b < budgets.size(); ++b) {
-    const std::vector<double>& with = times[first_ours + 2 * b];
+  for (size_t b = 0; b < checked_row.size(); ++b) {
+    const std::vector<double>& with = times[unchecked_row[b] - 1];
     const std::vector<double>& without = times[unchecked_row[b]];
     rows[checked_row[b]].us_per_query = Median(with);
     rows[checked_row[b]].us_unchecked = Median(without);
@@ -593,8 +679,9 @@ int Main(int argc, char** argv) {
     for (int r = 0; r < reps; ++r) ratios.push_back(with[r] / without[r] - 1);
     std::sort(ratios.begin(), ratios.end());
     char text[160];
-    std::snprintf(text, sizeof(text), "%u checks: %+.1f%% (per-pass range %+.1f%% .. %+.1f%%)",
-                  budgets[b], 100 * Median(ratios), 100 * ratios.front(), 100 * ratios.back());
+    std::snprintf(text, sizeof(text), "%s: %+.1f%% (per-pass range %+.1f%% .. %+.1f%%)",
+                  rows[checked_row[b]].method.c_str(), 100 * Median(ratios), 100 * ratios.front(),
+                  100 * ratios.back());
     check_costs.push_back(text);
   }
   PrintTable(rows, flann_us);

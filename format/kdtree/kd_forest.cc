@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <functional>
 #include <limits>
+#include <stdexcept>
 
 #include "format/base/prefetch.h"
 
@@ -140,8 +141,9 @@ KdForestSearcher::KdForestSearcher(const KdForestView& forest, const DistanceFun
     : forest_(forest),
       distance_(&distance),
       num_descriptors_(uint32_t(std::min<uint64_t>(forest.NumDescriptors(), kMaxDescriptors))),
-      cursor_rows_(size_t(kMaxInterleave) * 256) {
-  heap_.reserve(4096);
+      states_(1) {
+  states_[0].heap.reserve(4096);
+  states_[0].cursor_rows.resize(size_t(kMaxInterleave) * 256);
 }
 
 KdSearchResult KdForestSearcher::Search(const uint8_t* query, const KdSearchOptions& options,
@@ -150,36 +152,46 @@ KdSearchResult KdForestSearcher::Search(const uint8_t* query, const KdSearchOpti
   return SearchImpl<true>(query, options, out);
 }
 
-uint32_t KdForestSearcher::WorstDistance() const {
-  return num_results_ == k_ ? result_[k_ - 1].distance : std::numeric_limits<uint32_t>::max();
+void KdForestSearcher::SearchBatch(std::span<const uint8_t* const> queries,
+                                   const KdSearchOptions& options,
+                                   std::span<const std::span<KdNeighbor>> outs,
+                                   std::span<KdSearchResult> results, uint32_t width) {
+  if (outs.size() != queries.size() || results.size() != queries.size()) {
+    throw std::invalid_argument("KdForestSearcher::SearchBatch: " + std::to_string(queries.size()) +
+                                " queries but " + std::to_string(outs.size()) + " outputs and " +
+                                std::to_string(results.size()) + " results");
+  }
+  if (options.skip_range_checks)
+    return SearchBatchImpl<false>(queries, options, outs, results, width);
+  SearchBatchImpl<true>(queries, options, outs, results, width);
 }
 
-void KdForestSearcher::ResetVisited(size_t expected) {
+void KdForestSearcher::State::ResetVisited(size_t expected) {
   // Power-of-two table at most half full; multiplicative hashing spreads sequential indices.
   uint32_t log2 = 6;
   while ((size_t(1) << log2) < 2 * expected && log2 < 31) ++log2;
   const size_t capacity = size_t(1) << log2;
-  if (visited_.size() < capacity) visited_.resize(capacity);
-  std::fill(visited_.begin(), visited_.begin() + capacity, kEmptySlot);
-  visited_shift_ = 32 - log2;
-  visited_count_ = 0;
-  visited_limit_ = capacity / 2;
+  if (visited.size() < capacity) visited.resize(capacity);
+  std::fill(visited.begin(), visited.begin() + capacity, kEmptySlot);
+  visited_shift = 32 - log2;
+  visited_count = 0;
+  visited_limit = capacity / 2;
 }
 
-inline bool KdForestSearcher::InsertVisited(uint32_t index) {
-  const uint32_t mask = (uint32_t(1) << (32 - visited_shift_)) - 1;
-  uint32_t slot = (index * 0x9E3779B1u) >> visited_shift_;
+inline bool KdForestSearcher::State::InsertVisited(uint32_t index) {
+  const uint32_t mask = (uint32_t(1) << (32 - visited_shift)) - 1;
+  uint32_t slot = (index * 0x9E3779B1u) >> visited_shift;
   for (;;) {
-    const uint32_t value = visited_[slot];
+    const uint32_t value = visited[slot];
     if (value == index) return false;
     if (value == kEmptySlot) break;
     slot = (slot + 1) & mask;
   }
-  visited_[slot] = index;
-  if (++visited_count_ > visited_limit_) {
+  visited[slot] = index;
+  if (++visited_count > visited_limit) {
     // More compared than expected (an exhaustive or unfillable search): grow and rehash.
-    std::vector<uint32_t> old(visited_.begin(), visited_.begin() + (size_t(mask) + 1));
-    ResetVisited(2 * visited_limit_);
+    std::vector<uint32_t> old(visited.begin(), visited.begin() + (size_t(mask) + 1));
+    ResetVisited(2 * visited_limit);
     for (uint32_t v : old) {
       if (v != kEmptySlot) InsertVisited(v);
     }
@@ -187,31 +199,32 @@ inline bool KdForestSearcher::InsertVisited(uint32_t index) {
   return true;
 }
 
-void KdForestSearcher::AddCandidate(uint32_t index, uint32_t distance) {
+void KdForestSearcher::State::AddCandidate(uint32_t index, uint32_t distance) {
   uint32_t i;
-  if (num_results_ < k_) {
-    i = num_results_++;
+  if (num_results < k) {
+    i = num_results++;
   } else {
-    const KdNeighbor& worst = result_[k_ - 1];
+    const KdNeighbor& worst = result[k - 1];
     if (distance > worst.distance || (distance == worst.distance && index > worst.index)) return;
-    i = k_ - 1;
+    i = k - 1;
   }
-  while (i > 0 && (result_[i - 1].distance > distance ||
-                   (result_[i - 1].distance == distance && result_[i - 1].index > index))) {
-    result_[i] = result_[i - 1];
+  while (i > 0 && (result[i - 1].distance > distance ||
+                   (result[i - 1].distance == distance && result[i - 1].index > index))) {
+    result[i] = result[i - 1];
     --i;
   }
-  result_[i] = KdNeighbor{index, distance};
+  result[i] = KdNeighbor{index, distance};
 }
 
 // The search keeps up to `interleave` descents in flight and advances them round-robin, one
 // memory access each: a kd descent is a chain of dependent cache misses (node, node, ..., leaf
 // bucket, descriptor rows), so while one waits for its prefetched line the others work. With
 // interleave = 1 this is exactly FLANN's order (pop the best branch, descend it to a leaf);
-// with more, the few best branches are descended together.
+// with more, the few best branches are descended together. A search's order depends only on
+// its own state, so taking turns with other searches (SearchBatch) cannot change its result.
 
 template <bool kChecked>
-bool KdForestSearcher::StepNode(Cursor& c) {
+bool KdForestSearcher::StepNode(State& s, Cursor& c) {
   const KdNode* nodes = forest_.nodes.data();
   const size_t num_nodes = forest_.nodes.size();
   uint32_t node_index = c.node;
@@ -219,15 +232,15 @@ bool KdForestSearcher::StepNode(Cursor& c) {
   for (;;) {
     if constexpr (kChecked) {
       // A tree visits each node once per search; more steps means shared subtrees.
-      if (steps_left_ == 0) return false;
-      --steps_left_;
+      if (s.steps_left == 0) return false;
+      --s.steps_left;
     }
     const KdNode node = nodes[node_index];
     if (node.dim >= kDescriptorDim) {
       if constexpr (kChecked) {
         if (node.dim != kKdLeaf) return false;
       }
-      if (BudgetSpent()) {
+      if (s.BudgetSpent()) {
         c.stage = Cursor::kIdle;
         return true;
       }
@@ -253,7 +266,7 @@ bool KdForestSearcher::StepNode(Cursor& c) {
     // Lower bounds of the distance along `dim` to anything on either side: the side with the
     // smaller one is descended now, the other is queued with its gap added (like FLANN, which
     // sums the gaps of all splits crossed).
-    const uint32_t q = query_[node.dim];
+    const uint32_t q = s.query[node.dim];
     const uint32_t gap_left = q > node.low ? q - node.low : 0;
     const uint32_t gap_right = q < node.high ? node.high - q : 0;
     uint32_t best, other, best_gap, other_gap;
@@ -262,15 +275,15 @@ bool KdForestSearcher::StepNode(Cursor& c) {
     } else {
       best = node.index, other = node_index + 1, best_gap = gap_right, other_gap = gap_left;
     }
-    const uint32_t worst = WorstDistance();
+    const uint32_t worst = s.WorstDistance();
     const uint32_t other_bound =
         uint32_t(std::min<uint64_t>(uint64_t(bound) + other_gap * other_gap, kEmptySlot));
-    if (!prune_ || other_bound <= worst) {
-      heap_.push_back(uint64_t(other_bound) << 32 | other);
-      std::push_heap(heap_.begin(), heap_.end(), std::greater<uint64_t>());
+    if (!s.prune || other_bound <= worst) {
+      s.heap.push_back(uint64_t(other_bound) << 32 | other);
+      std::push_heap(s.heap.begin(), s.heap.end(), std::greater<uint64_t>());
     }
     bound = uint32_t(std::min<uint64_t>(uint64_t(bound) + best_gap * best_gap, kEmptySlot));
-    if (prune_ && bound > worst) {
+    if (s.prune && bound > worst) {
       c.stage = Cursor::kIdle;
       return true;
     }
@@ -289,7 +302,7 @@ bool KdForestSearcher::StepNode(Cursor& c) {
 }
 
 template <bool kChecked>
-bool KdForestSearcher::StepBucket(Cursor& c, uint32_t* rows) {
+bool KdForestSearcher::StepBucket(State& s, Cursor& c, uint32_t* rows) {
   const uint32_t* bucket = forest_.leaves.data() + c.node;
   const uint8_t* descriptors = forest_.descriptors.data();
   uint32_t num_rows = 0;
@@ -298,10 +311,10 @@ bool KdForestSearcher::StepBucket(Cursor& c, uint32_t* rows) {
     if constexpr (kChecked) {
       if (row >= num_descriptors_) return false;
     }
-    if (!InsertVisited(row)) continue;
-    if (!allowed_.empty() &&
-        (size_t{row} / 64 >= allowed_.size() || ((allowed_[row / 64] >> (row % 64)) & 1) == 0)) {
-      ++checks_;  // walked past, not compared
+    if (!s.InsertVisited(row)) continue;
+    if (!s.allowed.empty() &&
+        (size_t{row} / 64 >= s.allowed.size() || ((s.allowed[row / 64] >> (row % 64)) & 1) == 0)) {
+      ++s.checks;  // walked past, not compared
       continue;
     }
     const uint8_t* p = descriptors + size_t(row) * kDescriptorDim;
@@ -314,101 +327,166 @@ bool KdForestSearcher::StepBucket(Cursor& c, uint32_t* rows) {
   return true;
 }
 
-void KdForestSearcher::StepRows(Cursor& c, const uint32_t* rows) {
-  distance_->batch(query_, forest_.descriptors.data(), rows, c.count, leaf_distances_);
+void KdForestSearcher::StepRows(State& s, Cursor& c, const uint32_t* rows) {
+  distance_->batch(s.query, forest_.descriptors.data(), rows, c.count, leaf_distances_);
   for (uint32_t i = 0; i < c.count; ++i) {
-    if (BudgetSpent()) break;
-    ++checks_;
-    AddCandidate(rows[i], leaf_distances_[i]);
+    if (s.BudgetSpent()) break;
+    ++s.checks;
+    s.AddCandidate(rows[i], leaf_distances_[i]);
   }
   c.stage = Cursor::kIdle;
 }
 
 template <bool kChecked>
-KdSearchResult KdForestSearcher::SearchImpl(const uint8_t* query, const KdSearchOptions& options,
-                                            std::span<KdNeighbor> out) {
-  KdSearchResult result;
-  query_ = query;
-  result_ = out.data();
-  k_ = uint32_t(std::min<size_t>(out.size(), num_descriptors_));
-  num_results_ = 0;
-  checks_ = 0;
-  max_checks_ = options.max_checks;
-  allowed_ = options.allowed_rows;
-  if (k_ == 0 || forest_.roots.empty()) return result;
-  prune_ = max_checks_ < num_descriptors_;
-  steps_left_ = forest_.nodes.size();
-  heap_.clear();
+bool KdForestSearcher::Start(State& s, const uint8_t* query, const KdSearchOptions& options,
+                             std::span<KdNeighbor> out) {
+  s.query = query;
+  s.result = out.data();
+  s.k = uint32_t(std::min<size_t>(out.size(), num_descriptors_));
+  s.num_results = 0;
+  s.checks = 0;
+  s.max_checks = options.max_checks;
+  s.allowed = options.allowed_rows;
+  s.ok = true;
+  if (s.k == 0 || forest_.roots.empty()) return false;
+  s.prune = s.max_checks < num_descriptors_;
+  s.steps_left = forest_.nodes.size();
+  s.heap.clear();
   // A few leaves in flight may be marked beyond the budget; a bigger overshoot just grows it.
-  ResetVisited(std::min<size_t>(num_descriptors_, size_t(max_checks_) + 64));
+  s.ResetVisited(std::min<size_t>(num_descriptors_, size_t(s.max_checks) + 64));
 
-  const uint32_t num_cursors = std::clamp<uint32_t>(options.interleave, 1, kMaxInterleave);
-  Cursor cursors[kMaxInterleave];
+  s.num_cursors = std::clamp<uint32_t>(options.interleave, 1, kMaxInterleave);
+  if (s.cursor_rows.size() < size_t(s.num_cursors) * 256) {
+    s.cursor_rows.resize(size_t(s.num_cursors) * 256);
+  }
   // Roots start with bound 0: the first ones as descents, the rest queued.
   for (size_t t = 0; t < forest_.roots.size(); ++t) {
     const uint32_t root = forest_.roots[t];
     if (kChecked && root >= forest_.nodes.size()) {
-      result.corrupt = true;
-      return result;
+      s.ok = false;
+      return false;
     }
-    if (t < num_cursors) {
+    if (t < s.num_cursors) {
       Prefetch(forest_.nodes.data() + root);
-      cursors[t] = Cursor{root, 0, 0, Cursor::kNode};
+      s.cursors[t] = Cursor{root, 0, 0, Cursor::kNode};
     } else {
-      heap_.push_back(root);
-      std::push_heap(heap_.begin(), heap_.end(), std::greater<uint64_t>());
+      s.heap.push_back(root);
+      std::push_heap(s.heap.begin(), s.heap.end(), std::greater<uint64_t>());
     }
   }
-  for (uint32_t i = uint32_t(forest_.roots.size()); i < num_cursors; ++i) cursors[i] = Cursor{};
+  for (uint32_t i = uint32_t(forest_.roots.size()); i < s.num_cursors; ++i) {
+    s.cursors[i] = Cursor{};
+  }
+  return true;
+}
 
-  bool ok = true;
-  for (bool busy = true; busy && ok;) {
-    busy = false;
-    for (uint32_t i = 0; i < num_cursors && ok; ++i) {
-      Cursor& c = cursors[i];
-      uint32_t* rows = cursor_rows_.data() + size_t(i) * 256;
-      switch (c.stage) {
-        case Cursor::kIdle: {
-          if (heap_.empty() || BudgetSpent()) break;
-          std::pop_heap(heap_.begin(), heap_.end(), std::greater<uint64_t>());
-          const uint64_t branch = heap_.back();
-          heap_.pop_back();
-          const uint32_t bound = uint32_t(branch >> 32);
-          if (prune_ && bound > WorstDistance()) {
-            // Branches come out in order of their bound: all the queued ones are too far.
-            heap_.clear();
-            break;
-          }
-          Prefetch(forest_.nodes.data() + uint32_t(branch));
-          c = Cursor{uint32_t(branch), bound, 0, Cursor::kNode};
-          busy = true;
+template <bool kChecked>
+inline bool KdForestSearcher::Round(State& s) {
+  bool busy = false;
+  for (uint32_t i = 0; i < s.num_cursors; ++i) {
+    Cursor& c = s.cursors[i];
+    uint32_t* rows = s.cursor_rows.data() + size_t(i) * 256;
+    switch (c.stage) {
+      case Cursor::kIdle: {
+        if (s.heap.empty() || s.BudgetSpent()) break;
+        std::pop_heap(s.heap.begin(), s.heap.end(), std::greater<uint64_t>());
+        const uint64_t branch = s.heap.back();
+        s.heap.pop_back();
+        const uint32_t bound = uint32_t(branch >> 32);
+        if (s.prune && bound > s.WorstDistance()) {
+          // Branches come out in order of their bound: all the queued ones are too far.
+          s.heap.clear();
           break;
         }
-        case Cursor::kNode:
-          ok = StepNode<kChecked>(c);
-          busy = true;
-          break;
-        case Cursor::kBucket:
-          ok = StepBucket<kChecked>(c, rows);
-          busy = true;
-          break;
-        case Cursor::kRows:
-          StepRows(c, rows);
-          busy = true;
-          break;
+        Prefetch(forest_.nodes.data() + uint32_t(branch));
+        c = Cursor{uint32_t(branch), bound, 0, Cursor::kNode};
+        busy = true;
+        break;
       }
+      case Cursor::kNode:
+        if (!StepNode<kChecked>(s, c)) return s.ok = false;
+        busy = true;
+        break;
+      case Cursor::kBucket:
+        if (!StepBucket<kChecked>(s, c, rows)) return s.ok = false;
+        busy = true;
+        break;
+      case Cursor::kRows:
+        StepRows(s, c, rows);
+        busy = true;
+        break;
     }
-    // FLANN's stopping rule: the budget is spent and k neighbours are known. Descents still
-    // in flight are dropped.
-    if (BudgetSpent()) break;
   }
-  result.checks = checks_;
-  if (!ok) {
+  // FLANN's stopping rule: the budget is spent and k neighbours are known. Descents still in
+  // flight are dropped.
+  return busy && !s.BudgetSpent();
+}
+
+KdSearchResult KdForestSearcher::Finish(const State& s) {
+  KdSearchResult result;
+  result.checks = s.checks;
+  if (!s.ok) {
     result.corrupt = true;
     return result;
   }
-  result.num_neighbors = num_results_;
+  result.num_neighbors = s.num_results;
   return result;
+}
+
+template <bool kChecked>
+KdSearchResult KdForestSearcher::SearchImpl(const uint8_t* query, const KdSearchOptions& options,
+                                            std::span<KdNeighbor> out) {
+  State& s = states_[0];
+  if (Start<kChecked>(s, query, options, out)) {
+    while (Round<kChecked>(s)) {
+    }
+  }
+  return Finish(s);
+}
+
+template <bool kChecked>
+void KdForestSearcher::SearchBatchImpl(std::span<const uint8_t* const> queries,
+                                       const KdSearchOptions& options,
+                                       std::span<const std::span<KdNeighbor>> outs,
+                                       std::span<KdSearchResult> results, uint32_t width) {
+  width = std::clamp<uint32_t>(width, 1, kMaxBatchWidth);
+  width = uint32_t(std::min<size_t>(width, queries.size()));
+  if (states_.size() < width) states_.resize(width);
+  // live[0, active): the states with a search in flight; query[slot]: whose search.
+  uint32_t live[kMaxBatchWidth];
+  size_t query[kMaxBatchWidth];
+  uint32_t active = 0;
+  size_t next = 0;
+  // Starts the next query that needs any stepping in `slot`; false when none is left.
+  const auto start = [&](uint32_t slot) {
+    while (next < queries.size()) {
+      const size_t q = next++;
+      if (Start<kChecked>(states_[slot], queries[q], options, outs[q])) {
+        query[slot] = q;
+        return true;
+      }
+      results[q] = Finish(states_[slot]);
+    }
+    return false;
+  };
+  for (uint32_t slot = 0; slot < width; ++slot) {
+    if (start(slot)) live[active++] = slot;
+  }
+  while (active > 0) {
+    for (uint32_t j = 0; j < active;) {
+      const uint32_t slot = live[j];
+      if (Round<kChecked>(states_[slot])) {
+        ++j;
+        continue;
+      }
+      results[query[slot]] = Finish(states_[slot]);
+      if (start(slot)) {
+        ++j;
+      } else {
+        live[j] = live[--active];
+      }
+    }
+  }
 }
 
 template KdSearchResult KdForestSearcher::SearchImpl<true>(const uint8_t*, const KdSearchOptions&,

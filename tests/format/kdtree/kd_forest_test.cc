@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstring>
 #include <random>
+#include <stdexcept>
 #include <vector>
 
 #if defined(__unix__)
@@ -293,6 +294,89 @@ TEST(KdForest, RecallAtTheDefaultBudget) {
   }
 }
 
+// SearchBatch(queries) must give every query exactly what Search gives it alone: neighbours,
+// checks and the corrupt flag. Returns how many queries differed (0 is a pass); `found` counts
+// the neighbours returned, so that a batch returning nothing cannot pass by matching nothing.
+size_t BatchMismatches(KdForestSearcher& searcher, const std::vector<uint8_t>& queries,
+                       const KdSearchOptions& options, size_t k, uint32_t width,
+                       size_t* found = nullptr) {
+  const size_t nq = queries.size() / kDescriptorDim;
+  std::vector<const uint8_t*> pointers(nq);
+  for (size_t q = 0; q < nq; ++q) pointers[q] = queries.data() + q * kDescriptorDim;
+  // Poisoned outputs: stale entries would show.
+  std::vector<KdNeighbor> batch(nq * k, KdNeighbor{0xDEADBEEF, 0xDEADBEEF});
+  std::vector<std::span<KdNeighbor>> outs(nq);
+  for (size_t q = 0; q < nq; ++q) outs[q] = {batch.data() + q * k, k};
+  std::vector<KdSearchResult> results(nq, KdSearchResult{77, 77, true});
+  searcher.SearchBatch(pointers, options, outs, results, width);
+  size_t mismatches = 0;
+  std::vector<KdNeighbor> alone(k);
+  for (size_t q = 0; q < nq; ++q) {
+    const KdSearchResult r = searcher.Search(pointers[q], options, alone);
+    const KdSearchResult& b = results[q];
+    const bool same = r.num_neighbors == b.num_neighbors && r.checks == b.checks &&
+                      r.corrupt == b.corrupt &&
+                      std::equal(alone.begin(), alone.begin() + r.num_neighbors, outs[q].begin());
+    mismatches += !same;
+    if (found) *found += b.num_neighbors;
+  }
+  return mismatches;
+}
+
+TEST(KdForest, BatchEqualsOneAtATime) {
+  const std::vector<uint8_t> data = ClusteredDescriptors(6000, 60, 20);
+  const KdForest forest = Build(data);
+  KdForestSearcher searcher(forest.View(data));
+  std::vector<uint8_t> queries = NearbyQueries(data, 150, 15);
+  const std::vector<uint8_t> far = ClusteredDescriptors(20, 5, 60);
+  queries.insert(queries.end(), far.begin(), far.end());
+  // Exhaustive searches are slow: fewer of them.
+  const std::vector<uint8_t> few(queries.end() - 40 * kDescriptorDim, queries.end());
+  std::vector<uint64_t> allowed(6000 / 64 + 1, 0);
+  for (uint32_t row = 0; row < 6000; row += 3) allowed[row / 64] |= uint64_t{1} << (row % 64);
+  for (uint32_t width : {1u, 3u, 8u}) {
+    for (size_t k : {1, 2, 6}) {
+      for (uint32_t budget : {32u, 256u, 6000u}) {  // 6000 >= N: exhaustive, exact
+        for (uint32_t interleave : {1u, 4u}) {
+          for (bool filter : {false, true}) {
+            for (bool skip : {false, true}) {
+              KdSearchOptions options;
+              options.max_checks = budget;
+              options.interleave = interleave;
+              options.skip_range_checks = skip;
+              if (filter) options.allowed_rows = allowed;
+              const std::vector<uint8_t>& qs = budget >= 6000 ? few : queries;
+              size_t found = 0;
+              EXPECT_EQ(BatchMismatches(searcher, qs, options, k, width, &found), 0u)
+                  << "width " << width << " k " << k << " budget " << budget << " interleave "
+                  << interleave << " filter " << filter << " skip " << skip;
+              // A filtered search may spend its budget before it finds k.
+              if (filter) {
+                EXPECT_GT(found, 0u);
+              } else {
+                EXPECT_EQ(found, k * qs.size() / kDescriptorDim);
+              }
+            }
+          }
+        }
+      }
+    }
+  }
+  // Fewer queries than the width, a single one, and none.
+  KdSearchOptions options;
+  const std::vector<uint8_t> two(queries.begin(), queries.begin() + 2 * kDescriptorDim);
+  EXPECT_EQ(BatchMismatches(searcher, two, options, 6, 8), 0u);
+  const std::vector<uint8_t> one(queries.begin(), queries.begin() + kDescriptorDim);
+  EXPECT_EQ(BatchMismatches(searcher, one, options, 6, 8), 0u);
+  EXPECT_EQ(BatchMismatches(searcher, {}, options, 6, 8), 0u);
+  // Sizes that do not match are refused.
+  std::vector<const uint8_t*> pointers(2, queries.data());
+  std::vector<KdNeighbor> buffer(6);
+  std::vector<std::span<KdNeighbor>> outs(1, std::span<KdNeighbor>(buffer));
+  std::vector<KdSearchResult> results(2);
+  EXPECT_THROW(searcher.SearchBatch(pointers, options, outs, results), std::invalid_argument);
+}
+
 TEST(KdForest, BuildIsDeterministic) {
   const std::vector<uint8_t> data = ClusteredDescriptors(30000, 100, 20);
   const KdForest a = Build(data, 5, 1);
@@ -545,6 +629,55 @@ TEST_F(CorruptForest, RandomByteFlipsNeverReadOutOfBounds) {
   std::cout << corrupt_searches << " searches reported corruption, " << ok_searches
             << " returned (valid) neighbours\n";
   EXPECT_GT(corrupt_searches, 0u);
+}
+
+TEST_F(CorruptForest, BatchReportsCorruptionPerQueryLikeAlone) {
+  // Some queries of a batch run into the damage and some do not (a budgeted search may miss
+  // it): each must get the flag it gets alone.
+  const std::vector<uint8_t> queries = NearbyQueries(data_, 60, 10);
+  auto check = [&](GuardedForest& g, const char* what) {
+    KdForestSearcher searcher(g.View());
+    for (uint32_t budget : {64u, 128u, 100000u}) {
+      for (uint32_t width : {1u, 3u, 8u}) {
+        KdSearchOptions options;  // range-checked: unchecked reads of a corrupt forest are unsafe
+        options.max_checks = budget;
+        EXPECT_EQ(BatchMismatches(searcher, queries, options, 6, width), 0u)
+            << what << " budget " << budget << " width " << width;
+      }
+    }
+  };
+  size_t corrupt = 0, clean = 0;
+  auto count = [&](GuardedForest& g) {
+    KdForestSearcher searcher(g.View());
+    KdSearchOptions options;
+    options.max_checks = 64;
+    std::vector<KdNeighbor> out(6);
+    for (size_t q = 0; q < 60; ++q) {
+      (searcher.Search(queries.data() + q * kDescriptorDim, options, out).corrupt ? corrupt
+                                                                                  : clean)++;
+    }
+  };
+  {
+    GuardedForest g(forest_, data_);
+    g.nodes[g.roots[0]].index = uint32_t(g.nodes.size());
+    check(g, "child out of range");
+  }
+  {
+    GuardedForest g(forest_, data_);
+    const size_t leaf = FirstLeaf(g.nodes.span(), g.roots[2]);
+    g.leaves[g.nodes[leaf].index] = 2000;
+    check(g, "view index");
+    count(g);
+  }
+  {
+    GuardedForest g(forest_, data_);
+    g.roots[3] = uint32_t(g.nodes.size());
+    check(g, "root");
+  }
+  // The view-index damage is met by some budgeted searches and missed by others: the batch
+  // mixes both kinds.
+  EXPECT_GT(corrupt, 0u);
+  EXPECT_GT(clean, 0u);
 }
 
 }  // namespace
