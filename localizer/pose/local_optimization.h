@@ -16,6 +16,11 @@ namespace cwloc {
 // damping is Marquardt's (scaled by the diagonal of J^T J).
 struct LocalOptimizationOptions {
   int max_iterations = 10;  // LM iterations (accepted or rejected steps)
+  // RANSAC's local optimisation fits at most this many of a hypothesis' inliers, spread evenly
+  // over them (0: all). Lebeda et al. bound the least-squares set the same way: the refit only
+  // has to rank hypotheses, and the final refinement uses every inlier. With thousands of
+  // inliers it was most of the pose stage.
+  uint32_t max_points = 256;
   // Cauchy loss scale in residual units: rho(r^2) = s^2 log(1 + r^2 / s^2). 0: plain least
   // squares.
   double loss_scale = 0.0;

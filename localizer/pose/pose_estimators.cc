@@ -53,6 +53,15 @@ void CollectInliers(std::span<const Eigen::Vector2d> points2D,
   }
 }
 
+// Every k-th inlier, so that at most max_points remain (local_optimization.h).
+void Thin(uint32_t max_points, std::vector<uint32_t>* inliers) {
+  if (max_points == 0 || inliers->size() <= max_points) return;
+  const size_t stride = (inliers->size() + max_points - 1) / max_points;
+  size_t kept = 0;
+  for (size_t i = 0; i < inliers->size(); i += stride) (*inliers)[kept++] = (*inliers)[i];
+  inliers->resize(kept);
+}
+
 bool PassesGravityCheck(const std::optional<GravityCheck>& check, const CameraPose& pose) {
   return !check.has_value() ||
          GravityAngle(pose.RotationMatrix(), check->in_world, check->in_camera) <= check->max_angle;
@@ -99,6 +108,7 @@ double AbsolutePoseEstimator::Score(const Model& model, uint32_t* num_inliers, d
 void AbsolutePoseEstimator::Refine(Model* model) const {
   Inliers(*model, &scratch_);
   if (scratch_.size() <= kSampleSize) return;  // the minimal solution is already exact
+  Thin(lo_options_.max_points, &scratch_);
   OptimizePose(points2D_, points3D_, scratch_, lo_options_, model);
 }
 
@@ -136,6 +146,7 @@ double GravityPoseEstimator::Score(const Model& model, uint32_t* num_inliers, do
 void GravityPoseEstimator::Refine(Model* model) const {
   CollectInliers(points2D_, points3D_, *model, 1.0, lo_window_sq_, &scratch_);
   if (scratch_.size() <= kSampleSize) return;  // the minimal solution is already exact
+  Thin(lo_options_.max_points, &scratch_);
   OptimizePose(points2D_, points3D_, scratch_, lo_options_, model);
 }
 
@@ -183,6 +194,7 @@ double AbsolutePoseFocalEstimator::Score(const Model& model, uint32_t* num_inlie
 void AbsolutePoseFocalEstimator::Refine(Model* model) const {
   Inliers(*model, &scratch_);
   if (scratch_.size() <= kSampleSize) return;
+  Thin(lo_options_.max_points, &scratch_);
   PoseAndFocal refined = *model;
   OptimizePoseAndFocal(points2D_, points3D_, scratch_, lo_options_, &refined.pose,
                        &refined.focal_length);
