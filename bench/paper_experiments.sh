@@ -9,7 +9,10 @@
 #            and N_B (25 to 500); below N_F = 50 is where this city starts to lose queries
 #
 #   bench/paper_experiments.sh WORKDIR
+#   CWLOC_LOCALIZE_FLAGS="--back-matching full" bench/paper_experiments.sh WORKDIR2
 #
+# CWLOC_LOCALIZE_FLAGS are added to every cwloc-localize run (e.g. the paper's full
+# back-matching; WORKDIR2 may link WORKDIR's city and indices to reuse them).
 # The city and the indices are made only when missing, so reruns only localize. Exhaustive
 # matching compares every feature with every view (seconds per query) and runs on
 # ${CWLOC_EXHAUSTIVE_THREADS:-2} threads; every other run uses 1 thread, so its times compare.
@@ -51,7 +54,8 @@ localize() {
   shift 2
   echo "## localize $run: $*" >&2
   "$bin/cwloc-localize" --index "$work/$idx.cwl" --database "$city/database.db" \
-    --query-list "$city/queries_with_intrinsics.txt" --threads "${threads:-1}" -q -o "$runs/$run.jsonl" "$@" || status=$?
+    --query-list "$city/queries_with_intrinsics.txt" --threads "${threads:-1}" -q -o "$runs/$run.jsonl" "$@" \
+    ${CWLOC_LOCALIZE_FLAGS:-} || status=$?
   [ "$status" -le 1 ] || exit "$status"
 }
 
