@@ -11,29 +11,48 @@ namespace cwloc {
 namespace {
 
 // MSAC score sum_i min(r_i^2, max_sq) of f * pi(R X_i + t) - x_i; a point behind the camera
-// counts as an outlier. Stops once the sum reaches `bound` (terms are >= 0, so the model has
-// lost): most of RANSAC's wrong hypotheses are dropped after a few points.
-double MsacScore(std::span<const Eigen::Vector2d> points2D,
-                 std::span<const Eigen::Vector3d> points3D, const CameraPose& pose, double f,
-                 double max_sq, double bound, uint32_t* num_inliers) {
+// counts as an outlier. The squared errors of a block of points are computed independently
+// (the loop vectorizes), then summed in point order, so the score is the plain loop's to the
+// bit. Stops after a block once the sum reaches `bound` (terms are >= 0, so the model has
+// lost): most of RANSAC's wrong hypotheses are dropped after a block or two.
+double MsacScore(const ScoringColumns& points, const CameraPose& pose, double f, double max_sq,
+                 double bound, uint32_t* num_inliers) {
   const Eigen::Matrix3d rot = pose.rotation.toRotationMatrix();
-  const Eigen::Vector3d& t = pose.translation;
+  const double r00 = rot(0, 0), r01 = rot(0, 1), r02 = rot(0, 2);
+  const double r10 = rot(1, 0), r11 = rot(1, 1), r12 = rot(1, 2);
+  const double r20 = rot(2, 0), r21 = rot(2, 1), r22 = rot(2, 2);
+  const double t0 = pose.translation(0), t1 = pose.translation(1), t2 = pose.translation(2);
+  const double* x = points.x.data();
+  const double* y = points.y.data();
+  const double* z = points.z.data();
+  const double* u = points.u.data();
+  const double* v = points.v.data();
+  constexpr size_t kBlock = 64;
+  double errors[kBlock], depths[kBlock];
   double score = 0.0;
   uint32_t inliers = 0;
-  for (size_t i = 0; i < points2D.size(); ++i) {
-    const Eigen::Vector3d z = rot * points3D[i] + t;
-    if (z(2) > 0.0) {
-      const double inv_z = f / z(2);
-      const double dx = z(0) * inv_z - points2D[i](0);
-      const double dy = z(1) * inv_z - points2D[i](1);
-      const double r2 = dx * dx + dy * dy;
-      if (r2 < max_sq) {
-        score += r2;
+  const size_t n = points.x.size();
+  for (size_t begin = 0; begin < n; begin += kBlock) {
+    const size_t count = std::min(kBlock, n - begin);
+    for (size_t i = 0; i < count; ++i) {
+      const size_t k = begin + i;
+      const double cx = r00 * x[k] + r01 * y[k] + r02 * z[k] + t0;
+      const double cy = r10 * x[k] + r11 * y[k] + r12 * z[k] + t1;
+      const double cz = r20 * x[k] + r21 * y[k] + r22 * z[k] + t2;
+      const double inv_z = f / cz;
+      const double dx = cx * inv_z - u[k];
+      const double dy = cy * inv_z - v[k];
+      errors[i] = dx * dx + dy * dy;
+      depths[i] = cz;
+    }
+    for (size_t i = 0; i < count; ++i) {
+      if (depths[i] > 0.0 && errors[i] < max_sq) {
+        score += errors[i];
         ++inliers;
-        continue;
+      } else {
+        score += max_sq;
       }
     }
-    score += max_sq;
     if (score >= bound) break;
   }
   *num_inliers = inliers;
@@ -62,6 +81,20 @@ void Thin(uint32_t max_points, std::vector<uint32_t>* inliers) {
   inliers->resize(kept);
 }
 
+}  // namespace
+
+ScoringColumns::ScoringColumns(std::span<const Eigen::Vector2d> points2D,
+                               std::span<const Eigen::Vector3d> points3D) {
+  const size_t n = std::min(points2D.size(), points3D.size());
+  for (std::vector<double>* column : {&x, &y, &z, &u, &v}) column->resize(n);
+  for (size_t i = 0; i < n; ++i) {
+    x[i] = points3D[i](0), y[i] = points3D[i](1), z[i] = points3D[i](2);
+    u[i] = points2D[i](0), v[i] = points2D[i](1);
+  }
+}
+
+namespace {
+
 bool PassesGravityCheck(const std::optional<GravityCheck>& check, const CameraPose& pose) {
   return !check.has_value() ||
          GravityAngle(pose.RotationMatrix(), check->in_world, check->in_camera) <= check->max_angle;
@@ -84,6 +117,7 @@ AbsolutePoseEstimator::AbsolutePoseEstimator(std::span<const Eigen::Vector2d> po
     : points2D_(points2D),
       points3D_(points3D),
       bearings_(Bearings(points2D)),
+      columns_(points2D, points3D),
       max_error_sq_(max_error * max_error),
       lo_options_(lo_options),
       gravity_check_(gravity_check) {}
@@ -102,7 +136,7 @@ void AbsolutePoseEstimator::GenerateModels(std::span<const uint32_t> sample,
 }
 
 double AbsolutePoseEstimator::Score(const Model& model, uint32_t* num_inliers, double bound) const {
-  return MsacScore(points2D_, points3D_, model, 1.0, max_error_sq_, bound, num_inliers);
+  return MsacScore(columns_, model, 1.0, max_error_sq_, bound, num_inliers);
 }
 
 void AbsolutePoseEstimator::Refine(Model* model) const {
@@ -126,6 +160,7 @@ GravityPoseEstimator::GravityPoseEstimator(std::span<const Eigen::Vector2d> poin
     : points2D_(points2D),
       points3D_(points3D),
       bearings_(Bearings(points2D)),
+      columns_(points2D, points3D),
       max_error_sq_(max_error * max_error),
       lo_window_sq_(std::max(lo_window, max_error) * std::max(lo_window, max_error)),
       gravity_in_camera_(gravity_in_camera),
@@ -140,7 +175,7 @@ void GravityPoseEstimator::GenerateModels(std::span<const uint32_t> sample,
 }
 
 double GravityPoseEstimator::Score(const Model& model, uint32_t* num_inliers, double bound) const {
-  return MsacScore(points2D_, points3D_, model, 1.0, max_error_sq_, bound, num_inliers);
+  return MsacScore(columns_, model, 1.0, max_error_sq_, bound, num_inliers);
 }
 
 void GravityPoseEstimator::Refine(Model* model) const {
@@ -160,6 +195,7 @@ AbsolutePoseFocalEstimator::AbsolutePoseFocalEstimator(
     const LocalOptimizationOptions& lo_options, const std::optional<GravityCheck>& gravity_check)
     : points2D_(centered_pixels),
       points3D_(points3D),
+      columns_(centered_pixels, points3D),
       max_error_sq_(max_error_px * max_error_px),
       min_focal_(min_focal_px),
       max_focal_(max_focal_px),
@@ -187,8 +223,7 @@ void AbsolutePoseFocalEstimator::GenerateModels(std::span<const uint32_t> sample
 
 double AbsolutePoseFocalEstimator::Score(const Model& model, uint32_t* num_inliers,
                                          double bound) const {
-  return MsacScore(points2D_, points3D_, model.pose, model.focal_length, max_error_sq_, bound,
-                   num_inliers);
+  return MsacScore(columns_, model.pose, model.focal_length, max_error_sq_, bound, num_inliers);
 }
 
 void AbsolutePoseFocalEstimator::Refine(Model* model) const {

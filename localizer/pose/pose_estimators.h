@@ -16,6 +16,14 @@ namespace cwloc {
 // 2D-3D correspondences. All keep views of the caller's arrays, which must outlive them, and a
 // scratch buffer, so one estimator must not be used from several threads at once.
 
+// The correspondences as coordinate columns (x_i, p_i), which RANSAC's scoring reads in
+// vectorizable loops.
+struct ScoringColumns {
+  ScoringColumns(std::span<const Eigen::Vector2d> points2D,
+                 std::span<const Eigen::Vector3d> points3D);
+  std::vector<double> x, y, z, u, v;
+};
+
 // A gravity prior's test of hypotheses (GravityRejectionAngle, gravity_prior.h): GenerateModels
 // drops poses whose angle between R in_world and in_camera exceeds max_angle.
 struct GravityCheck {
@@ -49,6 +57,7 @@ class AbsolutePoseEstimator {
   std::span<const Eigen::Vector2d> points2D_;
   std::span<const Eigen::Vector3d> points3D_;
   std::vector<Eigen::Vector3d> bearings_;
+  ScoringColumns columns_;
   double max_error_sq_;
   LocalOptimizationOptions lo_options_;
   std::optional<GravityCheck> gravity_check_;
@@ -86,6 +95,7 @@ class GravityPoseEstimator {
   std::span<const Eigen::Vector2d> points2D_;
   std::span<const Eigen::Vector3d> points3D_;
   std::vector<Eigen::Vector3d> bearings_;
+  ScoringColumns columns_;
   double max_error_sq_;
   double lo_window_sq_;
   Eigen::Vector3d gravity_in_camera_, gravity_in_world_;
@@ -123,6 +133,7 @@ class AbsolutePoseFocalEstimator {
  private:
   std::span<const Eigen::Vector2d> points2D_;
   std::span<const Eigen::Vector3d> points3D_;
+  ScoringColumns columns_;
   double max_error_sq_;
   double min_focal_, max_focal_;
   LocalOptimizationOptions lo_options_;
