@@ -119,6 +119,48 @@ TEST_F(LocalizeCliTest, EveryMatcherNameRunsAndIsReported) {
   }
 }
 
+// Both back-matching modes and a latency budget reach the JSON, which the schema accepts: a
+// budget spent before the first search cuts forward matching and says so.
+TEST_F(LocalizeCliTest, BackMatchingModeAndBudgetAreReported) {
+  const std::string query =
+      "--database " + database_path_.string() + " --query " + FirstImageName();
+  struct Case {
+    std::string flags;
+    std::string mode;
+    nlohmann::json budget;  // null: no "budget" key
+  };
+  const std::vector<Case> cases = {
+      {"", "guided", nullptr},
+      {"--back-matching full", "full", nullptr},
+      {"--budget-ms 1e-6", "guided", {{"ms", 1e-6}, {"cut", {"forward"}}}},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.flags);
+    std::string output;
+    const auto jsonl = dir_ / "modes.jsonl";
+    EXPECT_LE(Run(query + " " + c.flags + " -o " + jsonl.string(), &output), 1) << output;
+    const auto records = test::ReadJsonLines(jsonl);
+    ASSERT_EQ(records.size(), 1u);
+    EXPECT_EQ(records[0]["parameters"]["back_matching"], c.mode);
+    if (c.budget.is_null()) {
+      EXPECT_FALSE(records[0].contains("budget"));
+      EXPECT_TRUE(records[0]["success"].get<bool>());
+      EXPECT_EQ(records[0]["matches"]["guided"], c.mode == "guided");
+    } else {
+      EXPECT_EQ(records[0]["budget"], c.budget);
+      EXPECT_FALSE(records[0]["success"].get<bool>());
+      EXPECT_EQ(records[0]["matches"]["features_searched"], 0);
+    }
+    std::string validation;
+    EXPECT_EQ(ValidateAgainstSchema(jsonl, &validation), 0) << validation;
+  }
+  std::string output;
+  EXPECT_EQ(Run(query + " --back-matching psychic", &output), 2);
+  EXPECT_THAT(output, HasSubstr("--back-matching psychic: expected guided or full"));
+  EXPECT_EQ(Run(query + " --budget-ms -1", &output), 2);
+  EXPECT_THAT(output, HasSubstr("--budget-ms -1: expected"));
+}
+
 TEST_F(LocalizeCliTest, RefinerIsReportedAndCeresNeedsABuildWithIt) {
   for (const std::string_view name : kPoseRefinerNames) {
     const std::string refiner(name);
