@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Localization latency, old build against new in one run: the real queries (herz_jesu_p25 from
-# their stored features and from their JPEGs, sceaux_castle from its features) and, when given,
+# their stored features and from their JPEGs, sceaux_castle from its features with the
+# database's EXIF focal prior and with the known camera) and, when given,
 # a generated city. Each round runs every workload with each build, one thread, alternating
 # builds so that load drift hits both; the table gives, per workload and build, the localized
 # count and the medians over queries and rounds of the time after the features are known
@@ -33,7 +34,7 @@ run() {
   [ "$status" -le 1 ] || exit "$status"
 }
 
-workloads=(hj-features hj-jpeg sc-features)
+workloads=(hj-features hj-jpeg sc-features sc-known)
 [ -n "$city" ] && workloads+=(city)
 # Cached as if read from disk (large folios), not as the indexer left them.
 indexes=("$work/herz_jesu_p25.cwl" "$work/sceaux_castle.cwl")
@@ -51,6 +52,8 @@ for ((round = 1; round <= rounds; round++)); do
       --image-list "$hj/queries_with_intrinsics.txt" --image-dir "$hj/query_images"
     run "sc-features.$build" "$bin" "$extra" -- --index "$work/sceaux_castle.cwl" \
       --database "$sc/database.db" --query-list "$sc/query_list.txt"
+    run "sc-known.$build" "$bin" "$extra" -- --index "$work/sceaux_castle.cwl" \
+      --database "$sc/database.db" --query-list "$sc/queries_with_intrinsics.txt"
     if [ -n "$city" ]; then
       run "city.$build" "$bin" "$extra" -- --index "$city/city.cwl" \
         --database "$city/city/database.db" --query-list "$city/city/queries_with_intrinsics.txt"
