@@ -86,7 +86,9 @@ MatcherOutput MatchClusterWise(const Index& index, const ClusterMembers& cluster
       MatchForward(index, query, options, searcher, &out.forward_stats, allowed, deadlines.forward);
   const Stopwatch guide_time;
   std::optional<PoseGuide> guide;
-  if (options.back_matching == BackMatching::kGuided) {
+  const bool guided = options.back_matching == BackMatching::kGuided ||
+                      (options.back_matching == BackMatching::kAuto && query.camera.FocalKnown());
+  if (guided) {
     if (std::optional<PoseHypothesis> hypothesis =
             FitPoseHypothesis(index, query, out.forward, options, deadlines.back))
       guide.emplace(query, std::move(*hypothesis), options.guide_radius_px);

@@ -32,11 +32,14 @@ inline std::optional<Matcher> ParseMatcher(std::string_view name) {
 
 // How back-matching finds a model view's query feature (docs/algorithm.md, section 3).
 enum class BackMatching {
+  kAuto,    // kGuided for a known camera, kFull when the focal length is estimated: on zoomed,
+            // uncalibrated queries the guided matches bias the focal length and distortion
+            // (docs/benchmarks.md, "Zoomed queries")
   kGuided,  // near where the view's 3D point projects under a pose fit to the forward matches,
             // when they give one; otherwise as kFull
   kFull,    // the paper: 2-NN in a kd-forest over all the query's features
 };
-inline constexpr std::array<std::string_view, 2> kBackMatchingNames = {"guided", "full"};
+inline constexpr std::array<std::string_view, 3> kBackMatchingNames = {"auto", "guided", "full"};
 
 inline std::optional<BackMatching> ParseBackMatching(std::string_view name) {
   return ParseEnumName<BackMatching>(kBackMatchingNames, name);
@@ -64,7 +67,7 @@ struct LocalizerOptions {
   uint32_t max_back_clusters = 20;    // ... or this many clusters were back-matched
   uint32_t min_matches_to_vote = 12;  // a back-matched cluster votes for co-visible ones
   uint32_t query_tree_checks = 64;    // distance computations per search of the query's forest
-  BackMatching back_matching = BackMatching::kGuided;
+  BackMatching back_matching = BackMatching::kAuto;
   double guide_radius_px = 20.0;  // guided: query features this near the projection compete
   // Robust pose: inlier threshold, minimum inliers, RANSAC's limits, refinement. Its
   // ransac.seed is overwritten with `seed` below for each query: one seed drives a query's

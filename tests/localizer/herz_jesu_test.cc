@@ -169,9 +169,10 @@ TEST_F(HerzJesuTest, SameSeedGivesTheSamePose) {
   EXPECT_EQ(a.num_inliers, b.num_inliers);
 }
 
-// Guided back-matching (the default) against the paper's full search: both localize every
-// query as accurately (measured: under 4 mm each), the guided one without a query kd-forest
-// and with at least as many back-matches from the same top image.
+// Guided back-matching (the default for a known camera) against the paper's full search: both
+// localize every query as accurately (measured: under 4 mm each), the guided one without a
+// query kd-forest and with at least as many back-matches from the same top image. With the
+// focal length withheld the default searches in full.
 TEST_F(HerzJesuTest, GuidedAndFullBackMatchingBothLocalize) {
   const DatabaseQueries queries(data_ / "database.db");
   const Localizer localizer(*index_);
@@ -187,6 +188,8 @@ TEST_F(HerzJesuTest, GuidedAndFullBackMatchingBothLocalize) {
     ExpectPoseClose(guided, truth, 0.01, 0.05);
     ExpectPoseClose(paper, truth, 0.01, 0.05);
     EXPECT_GE(guided.back_matches, paper.back_matches) << name;
+    query.camera.calibration = Calibration::kUnknown;
+    EXPECT_FALSE(localizer.Localize(query, LocalizerOptions{}).guided) << name;
   }
 }
 

@@ -119,20 +119,23 @@ TEST_F(LocalizeCliTest, EveryMatcherNameRunsAndIsReported) {
   }
 }
 
-// Both back-matching modes and a latency budget reach the JSON, which the schema accepts: a
-// budget spent before the first search cuts forward matching and says so.
+// The back-matching modes and a latency budget reach the JSON, which the schema accepts: auto
+// does not guide a camera whose focal length is estimated (HerzJesuTest has it guide a known
+// one); a budget spent before the first search cuts forward matching and says so.
 TEST_F(LocalizeCliTest, BackMatchingModeAndBudgetAreReported) {
   const std::string query =
       "--database " + database_path_.string() + " --query " + FirstImageName();
   struct Case {
     std::string flags;
     std::string mode;
+    bool guided;
     nlohmann::json budget;  // null: no "budget" key
   };
   const std::vector<Case> cases = {
-      {"", "guided", nullptr},
-      {"--back-matching full", "full", nullptr},
-      {"--budget-ms 1e-6", "guided", {{"ms", 1e-6}, {"cut", {"forward"}}}},
+      {"", "auto", false, nullptr},  // the database camera: its focal length is estimated
+      {"--back-matching guided", "guided", true, nullptr},
+      {"--back-matching full", "full", false, nullptr},
+      {"--budget-ms 1e-6", "auto", false, {{"ms", 1e-6}, {"cut", {"forward"}}}},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.flags);
@@ -142,10 +145,10 @@ TEST_F(LocalizeCliTest, BackMatchingModeAndBudgetAreReported) {
     const auto records = test::ReadJsonLines(jsonl);
     ASSERT_EQ(records.size(), 1u);
     EXPECT_EQ(records[0]["parameters"]["back_matching"], c.mode);
+    EXPECT_EQ(records[0]["matches"]["guided"], c.guided);
     if (c.budget.is_null()) {
       EXPECT_FALSE(records[0].contains("budget"));
       EXPECT_TRUE(records[0]["success"].get<bool>());
-      EXPECT_EQ(records[0]["matches"]["guided"], c.mode == "guided");
     } else {
       EXPECT_EQ(records[0]["budget"], c.budget);
       EXPECT_FALSE(records[0]["success"].get<bool>());
@@ -156,7 +159,7 @@ TEST_F(LocalizeCliTest, BackMatchingModeAndBudgetAreReported) {
   }
   std::string output;
   EXPECT_EQ(Run(query + " --back-matching psychic", &output), 2);
-  EXPECT_THAT(output, HasSubstr("--back-matching psychic: expected guided or full"));
+  EXPECT_THAT(output, HasSubstr("--back-matching psychic: expected auto, guided or full"));
   EXPECT_EQ(Run(query + " --budget-ms -1", &output), 2);
   EXPECT_THAT(output, HasSubstr("--budget-ms -1: expected"));
 }
