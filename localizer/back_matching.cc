@@ -36,11 +36,11 @@ BackMatchingResult MatchBack(const Index& index, const ClusterMembers& clusters,
   std::optional<KdForestSearcher> searcher;
   const std::span<const uint8_t> query_descriptors(query.descriptors.data(),
                                                    size_t{query.NumFeatures()} * 128);
-  if (guide == nullptr && stop.Passed()) {
-    result.stopped_by_deadline = true;  // the forest alone would cost milliseconds
-    return result;
-  }
   if (guide == nullptr) {
+    if (stop.Passed()) {
+      result.stopped_by_deadline = true;  // the forest alone would cost milliseconds
+      return result;
+    }
     KdForestBuildOptions tree_options;
     tree_options.num_trees = 4;
     tree_options.num_threads = 1;

@@ -49,6 +49,14 @@ struct MatcherOutput {
   bool back_stopped_by_deadline = false;
 };
 
+// The parameters of an uncalibrated query camera as the pose stage estimated it: SIMPLE_RADIAL
+// (f, cx, cy, k) with the principal point at the image centre.
+std::vector<double> EstimatedCameraParams(const QueryCamera& camera,
+                                          const AbsolutePoseResult& pose) {
+  const std::array<double, 2> center = camera.ImageCenter();
+  return {pose.focal_length_px, center[0], center[1], pose.radial_distortion};
+}
+
 // Guided back-matching's hypothesis: the pose stage on the forward matches.
 std::optional<PoseHypothesis> FitPoseHypothesis(const Index& index, const Query& query,
                                                 std::span<const FeatureMatch> forward,
@@ -68,10 +76,8 @@ std::optional<PoseHypothesis> FitPoseHypothesis(const Index& index, const Query&
     hypothesis.model_id = query.camera.model_id;
     hypothesis.params = query.camera.params;
   } else {
-    const std::array<double, 2> center = query.camera.ImageCenter();
     hypothesis.model_id = CameraModelId::kSimpleRadial;
-    hypothesis.params = {fit.pose.focal_length_px, center[0], center[1],
-                         fit.pose.radial_distortion};
+    hypothesis.params = EstimatedCameraParams(query.camera, fit.pose);
   }
   return hypothesis;
 }
@@ -332,12 +338,9 @@ LocalizationResult Localizer::Localize(const Query& query, const LocalizerOption
       result.inliers.push_back({match.feature, index_.view_points()[match.view]});
     }
     if (!query.camera.FocalKnown()) {
-      // The uncalibrated camera as estimated: SIMPLE_RADIAL (f, cx, cy, k).
-      const std::array<double, 2> principal_point = query.camera.ImageCenter();
       result.focal_estimated = true;
       result.camera.model_id = CameraModelId::kSimpleRadial;
-      result.camera.params = {pose.focal_length_px, principal_point[0], principal_point[1],
-                              pose.radial_distortion};
+      result.camera.params = EstimatedCameraParams(query.camera, pose);
     }
   } else {
     result.failure_reason = pose.failure_reason;

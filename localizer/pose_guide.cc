@@ -78,16 +78,14 @@ std::optional<FeatureMatch> PoseGuide::Match(const Index& index, uint32_t view, 
   distances_.resize(candidates_.size());
   BestDistanceFunctions().batch(index.descriptor(view), query_.descriptors.data(),
                                 candidates_.data(), candidates_.size(), distances_.data());
+  // Nearest and second nearest in descriptor space; ties go to the lower feature index.
+  const auto closer = [&](uint32_t a, uint32_t b) {
+    return distances_[a] < distances_[b] ||
+           (distances_[a] == distances_[b] && candidates_[a] < candidates_[b]);
+  };
   uint32_t best = 0, second = 1;
-  if (distances_[1] < distances_[0] ||
-      (distances_[1] == distances_[0] && candidates_[1] < candidates_[0])) {
-    std::swap(best, second);
-  }
+  if (closer(1, 0)) std::swap(best, second);
   for (uint32_t i = 2; i < candidates_.size(); ++i) {
-    const auto closer = [&](uint32_t a, uint32_t b) {
-      return distances_[a] < distances_[b] ||
-             (distances_[a] == distances_[b] && candidates_[a] < candidates_[b]);
-    };
     if (closer(i, best)) {
       second = best;
       best = i;
