@@ -77,6 +77,14 @@ class HerzJesuTest : public testing::Test {
     EXPECT_GE(result.num_inliers, 12u);
   }
 
+  // A query's stored features with its ground-truth camera (the database holds the extractor's
+  // initial guess).
+  Query KnownCameraQuery(const DatabaseQueries& queries, const std::string& name) const {
+    Query query = queries.Load(name);
+    query.camera = ParseCameraSpec(truth_.at(name).camera, "queries_gt.txt");
+    return query;
+  }
+
   static inline std::filesystem::path data_;
   static inline Index* index_ = nullptr;
   std::map<std::string, GroundTruth> truth_;
@@ -86,9 +94,7 @@ TEST_F(HerzJesuTest, AllQueriesLocalizeWithKnownFocal) {
   const DatabaseQueries queries(data_ / "database.db");
   const Localizer localizer(*index_);
   for (const auto& [name, truth] : truth_) {
-    Query query = queries.Load(name);
-    query.camera =
-        ParseCameraSpec(truth.camera, "queries_gt.txt");  // the database holds the initial guess
+    const Query query = KnownCameraQuery(queries, name);
     const LocalizationResult result = localizer.Localize(query, LocalizerOptions{});
     // Issue bound: 5 cm, 0.5 degrees; measured: under 4 mm and 0.02 degrees.
     ExpectPoseClose(result, truth, 0.05, 0.5);
@@ -131,8 +137,7 @@ TEST_F(HerzJesuTest, GlobalRatioBaselineAlsoLocalizesThisSmallModel) {
   LocalizerOptions options;
   options.matcher = Matcher::kGlobalRatio;
   for (const auto& [name, truth] : truth_) {
-    Query query = queries.Load(name);
-    query.camera = ParseCameraSpec(truth.camera, "queries_gt.txt");
+    const Query query = KnownCameraQuery(queries, name);
     const LocalizationResult result = localizer.Localize(query, options);
     ExpectPoseClose(result, truth, 0.05, 0.5);
     EXPECT_EQ(result.back_matches, 0u);
@@ -146,8 +151,7 @@ TEST_F(HerzJesuTest, ExhaustivePerClusterMatchingLocalizesFromOneCluster) {
   options.matcher = Matcher::kClusterExhaustive;
   // Two queries: brute force compares every feature with all 63,727 views.
   for (const std::string name : {"0002.jpg", "0017.jpg"}) {
-    Query query = queries.Load(name);
-    query.camera = ParseCameraSpec(truth_[name].camera, "queries_gt.txt");
+    const Query query = KnownCameraQuery(queries, name);
     const LocalizationResult result = localizer.Localize(query, options);
     ExpectPoseClose(result, truth_[name], 0.05, 0.5);
     EXPECT_EQ(result.features_searched, query.NumFeatures());
@@ -160,8 +164,7 @@ TEST_F(HerzJesuTest, ExhaustivePerClusterMatchingLocalizesFromOneCluster) {
 TEST_F(HerzJesuTest, SameSeedGivesTheSamePose) {
   const DatabaseQueries queries(data_ / "database.db");
   const Localizer localizer(*index_);
-  Query query = queries.Load("0012.jpg");
-  query.camera = ParseCameraSpec(truth_["0012.jpg"].camera, "queries_gt.txt");
+  const Query query = KnownCameraQuery(queries, "0012.jpg");
   const LocalizationResult a = localizer.Localize(query, LocalizerOptions{});
   const LocalizationResult b = localizer.Localize(query, LocalizerOptions{});
   EXPECT_EQ(a.rotation, b.rotation);
@@ -179,8 +182,7 @@ TEST_F(HerzJesuTest, GuidedAndFullBackMatchingBothLocalize) {
   LocalizerOptions full;
   full.back_matching = BackMatching::kFull;
   for (const auto& [name, truth] : truth_) {
-    Query query = queries.Load(name);
-    query.camera = ParseCameraSpec(truth.camera, "queries_gt.txt");
+    Query query = KnownCameraQuery(queries, name);
     const LocalizationResult guided = localizer.Localize(query, LocalizerOptions{});
     const LocalizationResult paper = localizer.Localize(query, full);
     EXPECT_TRUE(guided.guided) << name;
@@ -198,8 +200,7 @@ TEST_F(HerzJesuTest, GuidedAndFullBackMatchingBothLocalize) {
 TEST_F(HerzJesuTest, ALatencyBudgetCutsTheStagesItEnds) {
   const DatabaseQueries queries(data_ / "database.db");
   const Localizer localizer(*index_);
-  Query query = queries.Load("0012.jpg");
-  query.camera = ParseCameraSpec(truth_["0012.jpg"].camera, "queries_gt.txt");
+  const Query query = KnownCameraQuery(queries, "0012.jpg");
   LocalizerOptions spent;
   spent.budget_ms = 1e-6;
   const LocalizationResult cut = localizer.Localize(query, spent);
@@ -269,8 +270,7 @@ TEST_F(HerzJesuTest, AGeorefFileFromStrechasCamerasFitsToItsAlignmentResidual) {
   const Localizer plain(*index_);
   const Localizer geo(georeferenced);
   for (const auto& [name, truth] : truth_) {
-    Query query = queries.Load(name);
-    query.camera = ParseCameraSpec(truth.camera, "queries_gt.txt");
+    const Query query = KnownCameraQuery(queries, name);
     const LocalizationResult a = plain.Localize(query, LocalizerOptions{});
     const LocalizationResult b = geo.Localize(query, LocalizerOptions{});
     ASSERT_TRUE(a.success && b.success) << name;
