@@ -2,10 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <optional>
 
 #include "format/base/stopwatch.h"
-#include "format/kdtree/kd_forest_builder.h"
 
 namespace cwloc {
 namespace {
@@ -15,100 +13,118 @@ constexpr uint32_t kViewsPerDeadlineCheck = 32;
 
 }  // namespace
 
-BackMatchingResult MatchBack(const Index& index, const ClusterMembers& clusters, const Query& query,
-                             std::span<const FeatureMatch> forward_matches,
-                             const LocalizerOptions& options, ClusterMask allowed, PoseGuide* guide,
-                             const Deadline& stop) {
-  BackMatchingResult result;
-  result.cluster_votes.assign(clusters.num_clusters(), 0);
-  std::vector<uint32_t>& votes = result.cluster_votes;
-  std::vector<uint32_t> voted;  // clusters with votes, to find the best without scanning all
-  auto vote = [&](uint32_t cluster) {
-    if (cluster >= votes.size() || !ClusterAllowed(allowed, cluster)) return;
-    if (votes[cluster]++ == 0) voted.push_back(cluster);
-  };
-  for (const FeatureMatch& match : forward_matches) vote(ClusterOfView(index, match.view));
-  if (voted.empty() || query.NumFeatures() < 2) return result;
+BackMatcher::BackMatcher(const Index& index, const ClusterMembers& clusters, const Query& query,
+                         std::span<const FeatureMatch> forward_matches,
+                         const LocalizerOptions& options, ClusterMask allowed, PoseGuide* guide,
+                         const Deadline& stop)
+    : index_(index),
+      clusters_(clusters),
+      query_(query),
+      options_(options),
+      allowed_(allowed),
+      guide_(guide),
+      stop_(stop),
+      visited_(clusters.num_clusters(), false),
+      neighbors_(2) {
+  result_.cluster_votes.assign(clusters.num_clusters(), 0);
+  for (const FeatureMatch& match : forward_matches) Vote(ClusterOfView(index, match.view));
+}
 
-  // Without a guide, views are searched in a kd-forest over all the query's features.
-  Stopwatch stopwatch;
-  std::optional<KdForest> query_forest;
-  std::optional<KdForestSearcher> searcher;
-  const std::span<const uint8_t> query_descriptors(query.descriptors.data(),
-                                                   size_t{query.NumFeatures()} * 128);
-  if (guide == nullptr) {
-    if (stop.Passed()) {
-      result.stopped_by_deadline = true;  // the forest alone would cost milliseconds
-      return result;
-    }
-    KdForestBuildOptions tree_options;
-    tree_options.num_trees = 4;
-    tree_options.num_threads = 1;
-    tree_options.seed = options.seed;
-    query_forest = BuildKdForest(query_descriptors, tree_options);
-    searcher.emplace(query_forest->View(query_descriptors));
-  }
-  result.seconds_query_tree = stopwatch.Seconds();
+void BackMatcher::Vote(uint32_t cluster) {
+  if (cluster >= result_.cluster_votes.size() || !ClusterAllowed(allowed_, cluster)) return;
+  if (result_.cluster_votes[cluster]++ == 0) voted_.push_back(cluster);
+}
 
-  stopwatch.Restart();
+std::optional<FeatureMatch> BackMatcher::MatchView(uint32_t view) {
+  if (guide_ != nullptr) return guide_->Match(index_, view, options_.ratio);
   KdSearchOptions search_options;
-  search_options.max_checks = options.query_tree_checks;
-  std::vector<bool> visited(clusters.num_clusters(), false);
-  std::vector<KdNeighbor> neighbors(2);
-  std::vector<uint32_t> track_clusters;
-  while (result.matches.size() < options.back_matches &&
-         result.visited.size() < options.max_back_clusters && !result.stopped_by_deadline) {
+  search_options.max_checks = options_.query_tree_checks;
+  const KdSearchResult found =
+      searcher_->Search(index_.descriptor(view), search_options, neighbors_);
+  if (found.num_neighbors < 2) return std::nullopt;
+  if (!PassesRatioTest(neighbors_[0].distance, neighbors_[1].distance, options_.ratio))
+    return std::nullopt;
+  return FeatureMatch{neighbors_[0].index, view,
+                      std::sqrt(static_cast<float>(neighbors_[0].distance))};
+}
+
+void BackMatcher::Run(uint32_t back_matches) {
+  if (voted_.empty() || query_.NumFeatures() < 2 || result_.stopped_by_deadline) return;
+  Stopwatch stopwatch;
+  if (!started_) {
+    started_ = true;
+    if (guide_ == nullptr) {
+      if (stop_.Passed()) {
+        result_.stopped_by_deadline = true;  // the forest alone would cost milliseconds
+        return;
+      }
+      const std::span<const uint8_t> descriptors(query_.descriptors.data(),
+                                                 size_t{query_.NumFeatures()} * 128);
+      KdForestBuildOptions tree_options;
+      tree_options.num_trees = 4;
+      tree_options.num_threads = 1;
+      tree_options.seed = options_.seed;
+      query_forest_ = BuildKdForest(descriptors, tree_options);
+      searcher_.emplace(query_forest_->View(descriptors));
+    }
+    result_.seconds_query_tree = stopwatch.Seconds();
+    stopwatch.Restart();
+  }
+
+  const std::vector<uint32_t>& votes = result_.cluster_votes;
+  while (result_.matches.size() < back_matches &&
+         result_.visited.size() < options_.max_back_clusters && !result_.stopped_by_deadline) {
     uint32_t best = UINT32_MAX;
-    for (uint32_t cluster : voted) {
-      if (!visited[cluster] && (best == UINT32_MAX || votes[cluster] > votes[best] ||
-                                (votes[cluster] == votes[best] && cluster < best))) {
+    for (uint32_t cluster : voted_) {
+      if (!visited_[cluster] && (best == UINT32_MAX || votes[cluster] > votes[best] ||
+                                 (votes[cluster] == votes[best] && cluster < best))) {
         best = cluster;
       }
     }
     if (best == UINT32_MAX) break;
-    visited[best] = true;
-    const size_t first_match = result.matches.size();
-    for (uint32_t i = clusters.offsets[best];
-         i < clusters.offsets[best + 1] && !result.stopped_by_deadline; ++i) {
-      const IndexImage& image = index.images()[clusters.images[i]];
+    visited_[best] = true;
+    const size_t first_match = result_.matches.size();
+    for (uint32_t i = clusters_.offsets[best];
+         i < clusters_.offsets[best + 1] && !result_.stopped_by_deadline; ++i) {
+      const IndexImage& image = index_.images()[clusters_.images[i]];
       for (uint32_t view = image.first_view; view < image.first_view + image.num_views; ++view) {
-        if (view >= index.num_views()) break;  // a corrupt range; verify names it
-        if ((view - image.first_view) % kViewsPerDeadlineCheck == 0 && stop.Passed()) {
-          result.stopped_by_deadline = true;
+        if (view >= index_.num_views()) break;  // a corrupt range; verify names it
+        if ((view - image.first_view) % kViewsPerDeadlineCheck == 0 && stop_.Passed()) {
+          result_.stopped_by_deadline = true;
           break;
         }
-        if (guide != nullptr) {
-          if (const std::optional<FeatureMatch> match = guide->Match(index, view, options.ratio))
-            result.matches.push_back(*match);
-          continue;
-        }
-        const KdSearchResult found =
-            searcher->Search(index.descriptor(view), search_options, neighbors);
-        if (found.num_neighbors < 2) continue;
-        if (!PassesRatioTest(neighbors[0].distance, neighbors[1].distance, options.ratio)) continue;
-        result.matches.push_back(
-            {neighbors[0].index, view, std::sqrt(static_cast<float>(neighbors[0].distance))});
+        if (const std::optional<FeatureMatch> match = MatchView(view))
+          result_.matches.push_back(*match);
       }
     }
-    const uint32_t found_here = static_cast<uint32_t>(result.matches.size() - first_match);
-    result.visited.push_back({best, votes[best], found_here});
-    if (found_here < options.min_matches_to_vote) continue;
+    const uint32_t found_here = static_cast<uint32_t>(result_.matches.size() - first_match);
+    result_.visited.push_back({best, votes[best], found_here});
+    if (found_here < options_.min_matches_to_vote) continue;
     // Co-visibility votes: every other cluster that sees a matched 3D point, once per match.
-    for (size_t m = first_match; m < result.matches.size(); ++m) {
-      track_clusters.clear();
-      for (const uint32_t other_view : index.TrackOf(index.view_points()[result.matches[m].view])) {
-        const uint32_t cluster = ClusterOfView(index, other_view);
+    for (size_t m = first_match; m < result_.matches.size(); ++m) {
+      track_clusters_.clear();
+      for (const uint32_t other_view :
+           index_.TrackOf(index_.view_points()[result_.matches[m].view])) {
+        const uint32_t cluster = ClusterOfView(index_, other_view);
         if (cluster == best || cluster == UINT32_MAX) continue;
-        if (std::find(track_clusters.begin(), track_clusters.end(), cluster) ==
-            track_clusters.end()) {
-          track_clusters.push_back(cluster);
-          vote(cluster);
+        if (std::find(track_clusters_.begin(), track_clusters_.end(), cluster) ==
+            track_clusters_.end()) {
+          track_clusters_.push_back(cluster);
+          Vote(cluster);
         }
       }
     }
   }
-  result.seconds_matching = stopwatch.Seconds();
-  return result;
+  result_.seconds_matching += stopwatch.Seconds();
+}
+
+BackMatchingResult MatchBack(const Index& index, const ClusterMembers& clusters, const Query& query,
+                             std::span<const FeatureMatch> forward_matches,
+                             const LocalizerOptions& options, ClusterMask allowed, PoseGuide* guide,
+                             const Deadline& stop) {
+  BackMatcher matcher(index, clusters, query, forward_matches, options, allowed, guide, stop);
+  matcher.Run(options.back_matches);
+  return matcher.TakeResult();
 }
 
 }  // namespace cwloc

@@ -1,11 +1,13 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <vector>
 
 #include "format/base/deadline.h"
 #include "format/index/index.h"
+#include "format/kdtree/kd_forest_builder.h"
 #include "localizer/localizer_options.h"
 #include "localizer/matching.h"
 #include "localizer/pose_guide.h"
@@ -31,11 +33,52 @@ struct BackMatchingResult {
 // Algorithm 3: forward matches vote for their clusters; the most voted unvisited cluster's
 // views are matched back against a kd-forest of the query's features (1-ratio test); a cluster
 // with at least options.min_matches_to_vote back-matches votes, through each matched view's
-// 3D point, for every cluster that sees that point. Stops at options.back_matches matches or
+// 3D point, for every cluster that sees that point. Stops at N_B matches or
 // options.max_back_clusters clusters, or when no cluster has votes left. Clusters outside
 // `allowed` get no votes, so they are never back-matched. With `guide`, views are matched near
 // their projection (pose_guide.h) instead of in a kd-forest of the query's features. Stops
 // once `stop` has passed (a latency budget).
+//
+// A BackMatcher keeps its votes and visited clusters, so that a query whose pose the first N_B
+// matches leave weakly constrained can continue with a larger N_B where it stopped.
+class BackMatcher {
+ public:
+  // The index, the clusters, the query and the guide must outlive the matcher; the forward
+  // matches are read here, for their votes.
+  BackMatcher(const Index& index, const ClusterMembers& clusters, const Query& query,
+              std::span<const FeatureMatch> forward_matches, const LocalizerOptions& options,
+              ClusterMask allowed = {}, PoseGuide* guide = nullptr, const Deadline& stop = {});
+  BackMatcher(const BackMatcher&) = delete;
+  BackMatcher& operator=(const BackMatcher&) = delete;
+
+  // Back-matches until the result holds back_matches matches (or a stop above).
+  void Run(uint32_t back_matches);
+  const BackMatchingResult& result() const { return result_; }
+  BackMatchingResult TakeResult() { return std::move(result_); }
+
+ private:
+  void Vote(uint32_t cluster);
+  // The view's back-match, if it passes the ratio test.
+  std::optional<FeatureMatch> MatchView(uint32_t view);
+
+  const Index& index_;
+  const ClusterMembers& clusters_;
+  const Query& query_;
+  LocalizerOptions options_;
+  ClusterMask allowed_;
+  PoseGuide* guide_;
+  Deadline stop_;
+  BackMatchingResult result_;
+  std::vector<uint32_t> voted_;  // clusters with votes, to find the best without scanning all
+  std::vector<bool> visited_;
+  std::optional<KdForest> query_forest_;  // without a guide: over all the query's features
+  std::optional<KdForestSearcher> searcher_;
+  std::vector<KdNeighbor> neighbors_;
+  std::vector<uint32_t> track_clusters_;
+  bool started_ = false;  // the first Run builds the query forest
+};
+
+// One BackMatcher run to options.back_matches.
 BackMatchingResult MatchBack(const Index& index, const ClusterMembers& clusters, const Query& query,
                              std::span<const FeatureMatch> forward_matches,
                              const LocalizerOptions& options, ClusterMask allowed = {},

@@ -64,6 +64,8 @@ struct LocalizationResult {
   std::array<double, 3> center{0, 0, 0};
   QueryCamera camera;  // as used; the estimated focal when it was unknown
   bool focal_estimated = false;
+  // An estimated focal length: how well it is told apart from the depth (refine_pose.h).
+  std::optional<FocalDepthUncertainty> focal_depth;
   uint32_t num_features = 0;
   uint32_t features_searched = 0;
   uint32_t forward_matches = 0;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <optional>
 #include <string>
 #include <unordered_map>
@@ -47,6 +48,9 @@ struct MatcherOutput {
   double seconds_guide = 0;  // the pose hypothesis of guided back-matching
   bool guided = false;
   bool back_stopped_by_deadline = false;
+  // The cluster-wise matcher's back-matching, to continue it (ConstrainFocalLength).
+  std::unique_ptr<PoseGuide> guide;
+  std::unique_ptr<BackMatcher> back_matcher;
 };
 
 // The parameters of an uncalibrated query camera as the pose stage estimated it: SIMPLE_RADIAL
@@ -82,6 +86,23 @@ std::optional<PoseHypothesis> FitPoseHypothesis(const Index& index, const Query&
   return hypothesis;
 }
 
+// The back-matcher's matches so far become the pose stage's correspondences.
+void TakeBackMatches(const Index& index, MatcherOutput* out) {
+  const BackMatchingResult& back = out->back_matcher->result();
+  out->back_stopped_by_deadline = back.stopped_by_deadline;
+  out->back = back.matches;
+  out->back_matched_clusters = static_cast<uint32_t>(back.visited.size());
+  out->seconds_query_tree = back.seconds_query_tree;
+  out->seconds_back_matching = back.seconds_matching + out->seconds_guide;
+  std::vector<FeatureMatch> pairs = out->back;
+  if (back.stopped_by_deadline) {
+    // Cut short by the budget: the forward matches join the pose stage's correspondences, so
+    // that a query cut before its back-matches can still be localized (the anytime reading).
+    pairs.insert(pairs.end(), out->forward.begin(), out->forward.end());
+  }
+  out->correspondences = UniqueCorrespondences(index, std::move(pairs));
+}
+
 // The paper: forward matching, then back-matching; the pose is fit to the back-matches.
 MatcherOutput MatchClusterWise(const Index& index, const ClusterMembers& clusters,
                                const Query& query, const LocalizerOptions& options,
@@ -91,31 +112,20 @@ MatcherOutput MatchClusterWise(const Index& index, const ClusterMembers& cluster
   out.forward =
       MatchForward(index, query, options, searcher, &out.forward_stats, allowed, deadlines.forward);
   const Stopwatch guide_time;
-  std::optional<PoseGuide> guide;
   const bool guided = options.back_matching == BackMatching::kGuided ||
                       (options.back_matching == BackMatching::kAuto && query.camera.FocalKnown());
   if (guided) {
     if (std::optional<PoseHypothesis> hypothesis =
             FitPoseHypothesis(index, query, out.forward, options, deadlines.back))
-      guide.emplace(query, std::move(*hypothesis), options.guide_radius_px);
+      out.guide =
+          std::make_unique<PoseGuide>(query, std::move(*hypothesis), options.guide_radius_px);
   }
   out.seconds_guide = guide_time.Seconds();
-  out.guided = guide.has_value();
-  BackMatchingResult back = MatchBack(index, clusters, query, out.forward, options, allowed,
-                                      guide ? &*guide : nullptr, deadlines.back);
-  out.back_stopped_by_deadline = back.stopped_by_deadline;
-
-  out.back = std::move(back.matches);
-  out.back_matched_clusters = static_cast<uint32_t>(back.visited.size());
-  out.seconds_query_tree = back.seconds_query_tree;
-  out.seconds_back_matching = back.seconds_matching + out.seconds_guide;
-  std::vector<FeatureMatch> pairs = out.back;
-  if (back.stopped_by_deadline) {
-    // Cut short by the budget: the forward matches join the pose stage's correspondences, so
-    // that a query cut before its back-matches can still be localized (the anytime reading).
-    pairs.insert(pairs.end(), out.forward.begin(), out.forward.end());
-  }
-  out.correspondences = UniqueCorrespondences(index, std::move(pairs));
+  out.guided = out.guide != nullptr;
+  out.back_matcher = std::make_unique<BackMatcher>(index, clusters, query, out.forward, options,
+                                                   allowed, out.guide.get(), deadlines.back);
+  out.back_matcher->Run(options.back_matches);
+  TakeBackMatches(index, &out);
   return out;
 }
 
@@ -160,6 +170,31 @@ MatcherOutput MatchClusterExhaustive(const Index& index, const ClusterMembers& c
     out.failure_reason = "no cluster gave " + std::to_string(options.pose.min_inliers) + " inliers";
   }
   return out;
+}
+
+// An estimated focal length that leaves the pose weakly constrained (refine_pose.h): the
+// back-matching continues where N_B stopped it, to twice the back-matches it has (at most
+// options.max_back_matches), and the pose is estimated again on the larger set, until it is
+// well constrained. A pose estimate that fails keeps the last one that localized.
+void ConstrainFocalLength(const Index& index, const Query& query, const LocalizerOptions& options,
+                          MatcherOutput* matched, QueryPose* fit) {
+  while (matched->back_matcher != nullptr && fit->pose.success &&
+         fit->pose.focal_depth.has_value() &&
+         WeaklyConstrained(*fit->pose.focal_depth, fit->pose.focal_length_px)) {
+    const size_t before = matched->back_matcher->result().matches.size();
+    if (before >= options.max_back_matches) break;
+    matched->back_matcher->Run(static_cast<uint32_t>(
+        std::min<size_t>(options.max_back_matches, std::max<size_t>(2 * before, 1))));
+    if (matched->back_matcher->result().matches.size() == before) break;  // nothing left to see
+    const std::vector<FeatureMatch> previous = matched->correspondences;
+    TakeBackMatches(index, matched);
+    QueryPose more = EstimateQueryPose(index, query, matched->correspondences, options);
+    if (!more.pose.success) {
+      matched->correspondences = previous;
+      break;
+    }
+    *fit = std::move(more);
+  }
 }
 
 // Images ranked by their votes: forward matches plus back-matches (location recognition).
@@ -295,6 +330,7 @@ LocalizationResult Localizer::Localize(const Query& query, const LocalizerOption
   QueryPose fit;
   if (matched.failure_reason.empty()) {
     fit = EstimateQueryPose(index_, query, matched.correspondences, pose_options);
+    ConstrainFocalLength(index_, query, pose_options, &matched, &fit);
   } else {
     fit.pose.failure_reason = matched.failure_reason;
   }
@@ -341,6 +377,7 @@ LocalizationResult Localizer::Localize(const Query& query, const LocalizerOption
       result.focal_estimated = true;
       result.camera.model_id = CameraModelId::kSimpleRadial;
       result.camera.params = EstimatedCameraParams(query.camera, pose);
+      result.focal_depth = pose.focal_depth;
     }
   } else {
     result.failure_reason = pose.failure_reason;

@@ -63,7 +63,10 @@ struct LocalizerOptions {
   // k-ratio *and* the cluster-wise ratio test (docs/algorithm.md explains this reading).
   uint32_t forward_matches = 200;
   // Back-matching (Algorithm 3).
-  uint32_t back_matches = 200;        // N_B: stop once this many back-matches are found
+  uint32_t back_matches = 200;  // N_B: stop once this many back-matches are found
+  // ... but while an estimated focal length leaves the pose weakly constrained, N_B doubles up
+  // to this and the pose is estimated again (localizer.cc, ConstrainFocalLength).
+  uint32_t max_back_matches = 1600;
   uint32_t max_back_clusters = 20;    // ... or this many clusters were back-matched
   uint32_t min_matches_to_vote = 12;  // a back-matched cluster votes for co-visible ones
   uint32_t query_tree_checks = 64;    // distance computations per search of the query's forest

@@ -13,6 +13,7 @@ nlohmann::ordered_json OptionsToJson(const LocalizerOptions& options) {
           {"ratio", options.ratio},
           {"forward_matches", options.forward_matches},
           {"back_matches", options.back_matches},
+          {"max_back_matches", options.max_back_matches},
           {"max_back_images", options.max_back_clusters},
           {"min_matches_to_vote", options.min_matches_to_vote},
           {"query_tree_checks", options.query_tree_checks},
@@ -47,6 +48,13 @@ nlohmann::ordered_json ResultToJson(const LocalizationResult& result,
                    {"focal_estimated", result.focal_estimated},
                    {"calibration", std::string(CalibrationName(result.camera.calibration))},
                    {"intrinsics_source", std::string(IntrinsicsSourceName(result.camera.source))}};
+  if (const auto& coupling = result.focal_depth) {
+    out["focal_depth"] = {
+        {"correlation", coupling->correlation},
+        {"focal_std_px", coupling->focal_std_px},
+        {"depth_std", coupling->depth_std},
+        {"weakly_constrained", WeaklyConstrained(*coupling, result.camera.params.at(0))}};
+  }
   if (result.geo) {
     const GeoPose& g = *result.geo;
     out["geo"] = {{"latitude_deg", g.latitude_deg}, {"longitude_deg", g.longitude_deg},

@@ -190,6 +190,18 @@ bool SkipsRefinement(const AbsolutePoseOptions& options, AbsolutePoseResult* res
   return result->refinement_skipped;
 }
 
+// The uncalibrated refinement's problem: pose, f and k under the Cauchy loss.
+PoseRefinementOptions UncalibratedRefinement(const AbsolutePoseOptions& options,
+                                             const std::optional<GravityPrior>& gravity) {
+  PoseRefinementOptions refine;
+  refine.loss_scale_px = options.loss_scale_px;
+  refine.refine_focal_length = true;
+  refine.refine_radial_distortion = options.refine_radial_distortion;
+  refine.refiner = options.refiner;
+  refine.gravity = SoftGravity(gravity, options, 1.0);
+  return refine;
+}
+
 // The uncalibrated refinement: rounds of refining pose, f and k on the inliers, then
 // re-scoring every correspondence, while the camera stays sane and the inliers are kept.
 // Starts from *pose and *camera (RANSAC's, k = 0) with RANSAC's inliers.
@@ -197,12 +209,7 @@ void RefineUncalibrated(std::span<const Eigen::Vector2d> pixels,
                         std::span<const Eigen::Vector3d> points3D, std::vector<uint32_t> inliers,
                         const FocalBounds& bounds, const AbsolutePoseOptions& options,
                         const std::optional<GravityPrior>& gravity, AbsolutePoseResult* result) {
-  PoseRefinementOptions refine;
-  refine.loss_scale_px = options.loss_scale_px;
-  refine.refine_focal_length = true;
-  refine.refine_radial_distortion = options.refine_radial_distortion;
-  refine.refiner = options.refiner;
-  refine.gravity = SoftGravity(gravity, options, 1.0);
+  const PoseRefinementOptions refine = UncalibratedRefinement(options, gravity);
   const double max_sq = options.max_error_px * options.max_error_px;
   const size_t ransac_count = inliers.size();
   std::vector<uint32_t> rescored;
@@ -223,6 +230,21 @@ void RefineUncalibrated(std::span<const Eigen::Vector2d> pixels,
     if (rescored == inliers) break;
     inliers.swap(rescored);
   }
+}
+
+// After Finish: how well the refined focal length is told apart from the depth, on the final
+// inliers.
+void ReportFocalDepth(std::span<const Eigen::Vector2d> pixels,
+                      std::span<const Eigen::Vector3d> points3D, const AbsolutePoseOptions& options,
+                      const std::optional<GravityPrior>& gravity, AbsolutePoseResult* result) {
+  if (!result->refined || !result->success) return;
+  std::vector<uint32_t> inliers;
+  for (uint32_t i = 0; i < result->inliers.size(); ++i) {
+    if (result->inliers[i]) inliers.push_back(i);
+  }
+  result->focal_depth = FocalDepthUncertaintyAt(
+      pixels, points3D, inliers, UncalibratedRefinement(options, gravity), result->pose,
+      RadialCamera{result->focal_length_px, result->radial_distortion});
 }
 
 }  // namespace
@@ -352,6 +374,7 @@ AbsolutePoseResult EstimateAbsolutePoseUnknownFocal(
                        &result);
   }
   Finish(centered_pixels, points3D, options, &result);
+  ReportFocalDepth(centered_pixels, points3D, options, gravity, &result);
   return result;
 }
 
@@ -400,6 +423,7 @@ AbsolutePoseResult EstimateAbsolutePoseFocalPrior(std::span<const Eigen::Vector2
                        &result);
   }
   Finish(centered_pixels, points3D, options, &result);
+  ReportFocalDepth(centered_pixels, points3D, options, gravity, &result);
   return result;
 }
 

@@ -121,6 +121,9 @@ struct AbsolutePoseResult {
   bool refinement_skipped = false;          // refine_deadline had passed
   int camera_refinement_rounds = 0;         // uncalibrated: refinement rounds kept
   double mean_reprojection_error_px = 0.0;  // over the inliers
+  // Uncalibrated, refined and successful: how well the focal length and the depth are told
+  // apart on the final inliers (refine_pose.h).
+  std::optional<FocalDepthUncertainty> focal_depth;
   // With a gravity prior: the angle between the reported pose's R * in_world and in_camera.
   double gravity_angle_deg = 0.0;
   // Known focal length with a gravity prior: GravityP2P's best pose had fewer than min_inliers

@@ -1,5 +1,7 @@
 #include "localizer/pose/refine_pose.h"
 
+#include <Eigen/LU>
+#include <algorithm>
 #include <cmath>
 
 #include "format/base/error.h"
@@ -111,6 +113,43 @@ bool RefinePoseAndCamera(std::span<const Eigen::Vector2d> centered_pixels,
   camera->focal_length_px = x.focal;
   camera->k = x.k;
   return true;
+}
+
+std::optional<FocalDepthUncertainty> FocalDepthUncertaintyAt(
+    std::span<const Eigen::Vector2d> centered_pixels, std::span<const Eigen::Vector3d> points3D,
+    std::span<const uint32_t> indices, const PoseRefinementOptions& options, const CameraPose& pose,
+    const RadialCamera& camera) {
+  RefinementProblem problem = MakeProblem(centered_pixels, points3D, indices, options);
+  problem.radial = true;
+  problem.refine_focal_length = true;
+  problem.refine_radial_distortion = options.refine_radial_distortion;
+  Linearization linear;
+  if (!LinearizeWithBuiltin(problem, MakeParameters(pose, camera.focal_length_px, camera.k),
+                            &linear)) {
+    return std::nullopt;
+  }
+  const Eigen::Index n = linear.hessian.rows();
+  const Eigen::FullPivLU<Eigen::MatrixXd> lu(linear.hessian);
+  if (2 * Eigen::Index(indices.size()) <= n || !lu.isInvertible()) return std::nullopt;
+  const Eigen::MatrixXd inverse = lu.inverse();
+  const Eigen::MatrixXd covariance = inverse * linear.scores * inverse;
+  // Parameters: rotation increment d (R' = (I + 2 [d]x) R), t, f, k. The centre C = -R^T t
+  // moves along the optical axis a = R^T e_z by a^T dC = -dt_z - 2 e_z^T [t]x d.
+  const Eigen::Vector3d& t = pose.translation;
+  Eigen::VectorXd depth = Eigen::VectorXd::Zero(n);
+  depth(0) = 2.0 * t.y();
+  depth(1) = -2.0 * t.x();
+  depth(5) = -1.0;
+  const Eigen::Index focal = 6;
+  const double var_depth = depth.dot(covariance * depth);
+  const double var_focal = covariance(focal, focal);
+  if (!(var_depth > 0.0) || !(var_focal > 0.0)) return std::nullopt;
+  FocalDepthUncertainty out;
+  out.focal_std_px = std::sqrt(var_focal);
+  out.depth_std = std::sqrt(var_depth);
+  out.correlation =
+      std::clamp(depth.dot(covariance.col(focal)) / (out.focal_std_px * out.depth_std), -1.0, 1.0);
+  return out;
 }
 
 }  // namespace cwloc

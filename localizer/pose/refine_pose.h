@@ -2,6 +2,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <optional>
 #include <span>
@@ -96,5 +97,38 @@ bool RefinePoseAndCamera(std::span<const Eigen::Vector2d> centered_pixels,
                          std::span<const uint32_t> indices, const PoseRefinementOptions& options,
                          CameraPose* pose, RadialCamera* camera,
                          PoseRefinementSummary* summary = nullptr);
+
+// How well a refined uncalibrated camera's focal length is told apart from its distance to the
+// scene. A narrow view (a telephoto shot, a far facade) sees the scene almost as an affine
+// camera does: the pixels fix f / depth, so a longer focal length and a camera further back
+// explain them nearly as well, and the two estimates are strongly correlated. From the
+// covariance of the refinement's parameters at its solution, H^-1 S H^-1 with H the robust
+// cost's Hessian and S the sum of the points' gradient outer products (Huber's sandwich).
+struct FocalDepthUncertainty {
+  double focal_std_px = 0.0;
+  double depth_std = 0.0;    // of the camera centre along its optical axis, model units
+  double correlation = 0.0;  // between the focal length and that depth, in [-1, 1]
+};
+
+// A pose is reported as weakly constrained when its focal length is uncertain by more than
+// kWeakRelativeFocalStd (1 sigma, relative) and that uncertainty moves the camera along its axis
+// (|correlation| >= kWeakFocalDepthCorrelation): the depth is then uncertain by about as much,
+// relative to the scene's distance. The correlation alone is no verdict: a full-frame photo
+// with thousands of inliers can have 0.99 and a focal length known to 0.03 %.
+inline constexpr double kWeakRelativeFocalStd = 0.005;
+inline constexpr double kWeakFocalDepthCorrelation = 0.95;
+
+inline bool WeaklyConstrained(const FocalDepthUncertainty& uncertainty, double focal_length_px) {
+  return uncertainty.focal_std_px > kWeakRelativeFocalStd * focal_length_px &&
+         std::abs(uncertainty.correlation) >= kWeakFocalDepthCorrelation;
+}
+
+// The focal length and depth above for the problem RefinePoseAndCamera solves (options as
+// given to it, with refine_focal_length), at `pose` and `camera`; empty when the problem cannot
+// be evaluated there or its Hessian is singular.
+std::optional<FocalDepthUncertainty> FocalDepthUncertaintyAt(
+    std::span<const Eigen::Vector2d> centered_pixels, std::span<const Eigen::Vector3d> points3D,
+    std::span<const uint32_t> indices, const PoseRefinementOptions& options, const CameraPose& pose,
+    const RadialCamera& camera);
 
 }  // namespace cwloc

@@ -107,6 +107,13 @@ struct Normal {
   double g[kMaxParams] = {};  // J^T W r, the gradient
 };
 
+// What the covariance of the solution needs (LinearizeWithBuiltin): the robust cost's exact
+// Hessian and the sum of the points' gradient outer products.
+struct Sandwich {
+  Matrix hessian = {};
+  Matrix scores = {};
+};
+
 template <typename Model>
 class Evaluator {
  public:
@@ -119,7 +126,8 @@ class Evaluator {
 
   // False where Ceres' evaluation fails: a point not in front of the camera, or a non-finite
   // residual or derivative.
-  bool Evaluate(const RefinementParameters& x, Normal* out, bool linearize) const {
+  bool Evaluate(const RefinementParameters& x, Normal* out, bool linearize,
+                Sandwich* sandwich = nullptr) const {
     // R = I + 2 M for the unit quaternion (w, x, y, z), as ceres::UnitQuaternionRotatePoint.
     const double* q = x.q_wxyz;
     const double m[3][3] = {
@@ -174,8 +182,22 @@ class Evaluator {
         out->g[a] += w0 * r[0] + w1 * r[1];
         for (int col = 0; col <= a; ++col) out->h[a][col] += w0 * jac[0][col] + w1 * jac[1][col];
       }
+      if (sandwich != nullptr)
+        AddSandwich(jac, r, weight, robust ? -c * weight * weight : 0.0, sandwich);
     }
-    if (problem_.gravity.has_value()) AddGravity(m, linearize, out);
+    if (problem_.gravity.has_value()) {
+      Matrix before;
+      if (sandwich != nullptr)
+        std::copy(&out->h[0][0], &out->h[0][0] + kMaxParams * kMaxParams, &before[0][0]);
+      AddGravity(m, linearize, out);
+      // A prior of unit-variance residuals: its information is curvature and score alike.
+      for (int a = 0; sandwich != nullptr && a < n; ++a) {
+        for (int col = 0; col <= a; ++col) {
+          sandwich->hessian[a][col] += out->h[a][col] - before[a][col];
+          sandwich->scores[a][col] += out->h[a][col] - before[a][col];
+        }
+      }
+    }
     for (int a = 0; a < n; ++a) {
       if (!std::isfinite(out->g[a])) return false;
       for (int col = 0; col <= a; ++col) {
@@ -187,6 +209,21 @@ class Evaluator {
   }
 
  private:
+  // One point's share of the exact Hessian of 0.5 rho(|r|^2), rho' J^T J + 2 rho'' (J^T r)(J^T
+  // r)^T, and of the scores' outer products, rho'^2 (J^T r)(J^T r)^T (lower triangles).
+  void AddSandwich(const double (&jac)[2][kMaxParams], const double (&r)[2], double rho1,
+                   double rho2, Sandwich* sandwich) const {
+    double jr[kMaxParams];
+    for (int a = 0; a < num_params_; ++a) jr[a] = jac[0][a] * r[0] + jac[1][a] * r[1];
+    for (int a = 0; a < num_params_; ++a) {
+      for (int col = 0; col <= a; ++col) {
+        sandwich->hessian[a][col] += rho1 * (jac[0][a] * jac[0][col] + jac[1][a] * jac[1][col]) +
+                                     2.0 * rho2 * jr[a] * jr[col];
+        sandwich->scores[a][col] += rho1 * rho1 * jr[a] * jr[col];
+      }
+    }
+  }
+
   // The gravity block w (R g_w - g_c) with R = I + 2 M: no loss (weight 1), and only the rotation
   // increment moves it, R g_w by -2 [R g_w]x d as every point.
   void AddGravity(const double (&m)[3][3], bool linearize, Normal* out) const {
@@ -448,6 +485,35 @@ bool RefineWithBuiltin(const RefinementProblem& problem, RefinementParameters* p
                        PoseRefinementSummary* summary) {
   return problem.radial ? Minimize<RadialModel>(problem, parameters, summary)
                         : Minimize<PinholeModel>(problem, parameters, summary);
+}
+
+namespace {
+
+template <typename Model>
+bool Linearize(const RefinementProblem& problem, const RefinementParameters& parameters,
+               Linearization* out) {
+  const Evaluator<Model> evaluator(problem);
+  Normal normal;
+  Sandwich sandwich;
+  if (!evaluator.Evaluate(parameters, &normal, /*linearize=*/true, &sandwich)) return false;
+  const int n = evaluator.num_params();
+  out->hessian.resize(n, n);
+  out->scores.resize(n, n);
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j <= i; ++j) {
+      out->hessian(i, j) = out->hessian(j, i) = sandwich.hessian[i][j];
+      out->scores(i, j) = out->scores(j, i) = sandwich.scores[i][j];
+    }
+  }
+  return out->hessian.allFinite() && out->scores.allFinite();
+}
+
+}  // namespace
+
+bool LinearizeWithBuiltin(const RefinementProblem& problem, const RefinementParameters& parameters,
+                          Linearization* out) {
+  return problem.radial ? Linearize<RadialModel>(problem, parameters, out)
+                        : Linearize<PinholeModel>(problem, parameters, out);
 }
 
 }  // namespace cwloc

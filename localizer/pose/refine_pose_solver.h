@@ -43,4 +43,16 @@ bool RefineWithCeres(const RefinementProblem& problem, RefinementParameters* par
 bool RefineWithBuiltin(const RefinementProblem& problem, RefinementParameters* parameters,
                        PoseRefinementSummary* summary);
 
+// The problem at `parameters` (a solution), in the builtin refiner's tangent space (rotation
+// increment, t, then f and k when refined): the exact Hessian H of the robust cost and the sum
+// S of the points' gradient outer products, whose sandwich H^-1 S H^-1 is the M-estimator's
+// covariance (Huber's; it holds whatever the pixel noise's scale against the loss's). False
+// where the problem cannot be evaluated (a point behind the camera, a non-finite value).
+struct Linearization {
+  Eigen::MatrixXd hessian;
+  Eigen::MatrixXd scores;
+};
+bool LinearizeWithBuiltin(const RefinementProblem& problem, const RefinementParameters& parameters,
+                          Linearization* out);
+
 }  // namespace cwloc

@@ -362,6 +362,11 @@ TEST(LocalizeCliHerzJesu, DatabaseCameraWithoutPriorIsAnUnknownFocal) {
     EXPECT_EQ(camera.at("model"), "SIMPLE_RADIAL");
     EXPECT_TRUE(camera.at("focal_estimated").get<bool>());
     EXPECT_NEAR(camera.at("params").at(0).get<double>(), 1375.77, 0.01 * 1375.77);
+    // Full frames: the estimated focal length is known to well under a pixel.
+    const auto& focal_depth = result.at("focal_depth");
+    EXPECT_LT(focal_depth.at("focal_std_px").get<double>(), 1.0);
+    EXPECT_GT(focal_depth.at("depth_std").get<double>(), 0.0);
+    EXPECT_FALSE(focal_depth.at("weakly_constrained").get<bool>());
     const test::PoseError error =
         test::ErrorOf(test::PoseOfResult(result), truth.at(name).pose, metres_per_unit);
     EXPECT_LE(error.rotation_deg, 0.5);

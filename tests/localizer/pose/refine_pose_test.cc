@@ -524,5 +524,119 @@ TEST(LocalOptimization, PoseAndFocalConverge) {
   }
 }
 
+// Refines pose, f and k on `trials` noisy copies of one scene: the spread of the estimates, and
+// what FocalDepthUncertaintyAt predicts at each solution (variances and correlations averaged
+// over the trials, so that one trial's residual variance does not decide).
+struct Spread {
+  double focal_std = 0, depth_std = 0, correlation = 0;
+  FocalDepthUncertainty predicted;
+};
+
+Spread MeasureSpread(const test::SyntheticPoseOptions& synth, int trials, std::mt19937_64& rng) {
+  test::SyntheticPoseOptions clean = synth;
+  clean.noise_px = 0.0;
+  const auto truth = test::MakeSyntheticProblem(clean, rng);
+  const Eigen::Vector3d axis = truth.pose.rotation.conjugate() * Eigen::Vector3d::UnitZ();
+  std::normal_distribution<double> noise(0.0, synth.noise_px);
+  PoseRefinementOptions options;
+  options.refine_focal_length = true;
+  options.refine_radial_distortion = true;
+  options.loss_scale_px = 2.0;
+  const std::vector<uint32_t> all = AllIndices(truth.pixels.size());
+  std::vector<double> focal, depth;
+  Spread spread;
+  double focal_variance = 0, depth_variance = 0, correlation = 0;
+  for (int trial = 0; trial < trials; ++trial) {
+    std::vector<Eigen::Vector2d> pixels = truth.pixels;
+    for (Eigen::Vector2d& pixel : pixels) pixel += Eigen::Vector2d(noise(rng), noise(rng));
+    CameraPose pose = truth.pose;
+    RadialCamera camera{truth.focal_px, 0.0};
+    EXPECT_TRUE(RefinePoseAndCamera(pixels, truth.points3D, all, options, &pose, &camera));
+    focal.push_back(camera.focal_length_px);
+    depth.push_back(axis.dot(pose.Center()));
+    const auto predicted =
+        FocalDepthUncertaintyAt(pixels, truth.points3D, all, options, pose, camera);
+    EXPECT_TRUE(predicted.has_value());
+    if (!predicted) continue;
+    focal_variance += predicted->focal_std_px * predicted->focal_std_px / trials;
+    depth_variance += predicted->depth_std * predicted->depth_std / trials;
+    correlation += predicted->correlation / trials;
+  }
+  spread.predicted = {std::sqrt(focal_variance), std::sqrt(depth_variance), correlation};
+  const auto mean = [](const std::vector<double>& v) {
+    return std::accumulate(v.begin(), v.end(), 0.0) / double(v.size());
+  };
+  const double mf = mean(focal), md = mean(depth);
+  double sff = 0, sdd = 0, sfd = 0;
+  for (size_t i = 0; i < focal.size(); ++i) {
+    sff += (focal[i] - mf) * (focal[i] - mf);
+    sdd += (depth[i] - md) * (depth[i] - md);
+    sfd += (focal[i] - mf) * (depth[i] - md);
+  }
+  spread.focal_std = std::sqrt(sff / double(trials - 1));
+  spread.depth_std = std::sqrt(sdd / double(trials - 1));
+  spread.correlation = sfd / std::sqrt(sff * sdd);
+  return spread;
+}
+
+// Inliers only, at uniform pixels of a width x height image.
+test::SyntheticPoseOptions View(int points, double noise_px, double focal_px, double width_px,
+                                double height_px) {
+  test::SyntheticPoseOptions synth;
+  synth.num_points = points;
+  synth.outlier_ratio = 0.0;
+  synth.noise_px = noise_px;
+  synth.focal_px = focal_px;
+  synth.width_px = width_px;
+  synth.height_px = height_px;
+  return synth;
+}
+
+void ExpectPredictedSpread(const Spread& spread) {
+  EXPECT_NEAR(spread.predicted.focal_std_px, spread.focal_std, 0.25 * spread.focal_std);
+  EXPECT_NEAR(spread.predicted.depth_std, spread.depth_std, 0.25 * spread.depth_std);
+  EXPECT_NEAR(spread.predicted.correlation, spread.correlation, 0.02);
+}
+
+TEST(FocalDepthUncertainty, PredictsTheSpreadOfANarrowView) {
+  // A telephoto shot: f = 3000 px on a 1000 x 700 image of a scene 40-50 units deep, 60 inliers
+  // with 1.5 px of noise.
+  test::SyntheticPoseOptions synth = View(60, 1.5, 3000.0, 1000.0, 700.0);
+  synth.min_depth = 40.0;
+  synth.max_depth = 50.0;
+  const Spread spread = MeasureSpread(synth, 300, test::Rng());
+  ExpectPredictedSpread(spread);
+  // A longer focal length goes with a camera further back: along the axis the centre's
+  // coordinate falls.
+  EXPECT_LT(spread.predicted.correlation, -0.95);
+  EXPECT_TRUE(WeaklyConstrained(spread.predicted, synth.focal_px))
+      << spread.predicted.focal_std_px << " px";
+}
+
+TEST(FocalDepthUncertainty, AWideDeepViewIsWellConstrained) {
+  const test::SyntheticPoseOptions synth = View(150, 1.0, 800.0, 1600.0, 1200.0);
+  const Spread spread = MeasureSpread(synth, 300, test::Rng());
+  ExpectPredictedSpread(spread);
+  EXPECT_LT(spread.predicted.focal_std_px, 0.002 * synth.focal_px);
+  EXPECT_FALSE(WeaklyConstrained(spread.predicted, synth.focal_px));
+}
+
+TEST(FocalDepthUncertainty, EmptyWhenTheProblemCannotBeEvaluated) {
+  auto& rng = test::Rng();
+  const auto problem = test::MakeSyntheticProblem(Clean(), rng);
+  PoseRefinementOptions options;
+  options.refine_focal_length = true;
+  options.refine_radial_distortion = true;
+  // Every point behind the camera.
+  CameraPose behind = problem.pose;
+  behind.translation.z() -= 1e3;
+  EXPECT_FALSE(FocalDepthUncertaintyAt(problem.pixels, problem.points3D,
+                                       AllIndices(problem.pixels.size()), options, behind,
+                                       RadialCamera{problem.focal_px, 0.0}));
+  // Fewer residuals than parameters.
+  EXPECT_FALSE(FocalDepthUncertaintyAt(problem.pixels, problem.points3D, AllIndices(3), options,
+                                       problem.pose, RadialCamera{problem.focal_px, 0.0}));
+}
+
 }  // namespace
 }  // namespace cwloc
