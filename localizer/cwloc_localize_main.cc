@@ -157,6 +157,21 @@ class QueryLoader {
 // to --poses, a readable line to stdout when the JSON goes to a file. Files get whole records
 // only and keep their previous content until the first checkpoint (CheckpointedFile). The first
 // error writing them stops the run: failed() tells the workers, Close() throws it.
+// " f 1380.2 +- 9.7 px," for an estimated focal length, and what a weak constraint leaves.
+std::string EstimatedFocalText(const LocalizationResult& result) {
+  if (!result.focal_depth || result.camera.params.empty()) return "";
+  const FocalDepthUncertainty& uncertainty = *result.focal_depth;
+  const double focal = result.camera.params[0];
+  char text[160];
+  if (WeaklyConstrained(uncertainty, focal)) {
+    std::snprintf(text, sizeof(text), " f %.1f +- %.1f px, weakly constrained (depth +- %.3g),",
+                  focal, uncertainty.focal_std_px, uncertainty.depth_std);
+  } else {
+    std::snprintf(text, sizeof(text), " f %.1f +- %.1f px,", focal, uncertainty.focal_std_px);
+  }
+  return text;
+}
+
 class ResultSink {
  public:
   explicit ResultSink(const CliOptions& cli) : cli_(cli) {
@@ -172,9 +187,9 @@ class ResultSink {
     // With the JSON in a file, stdout gets a readable line per query.
     if (json_file_ && !cli_.quiet) {
       if (result.success) {
-        std::printf("%s: localized, %u inliers / %u correspondences, %.1f ms\n",
+        std::printf("%s: localized, %u inliers / %u correspondences,%s %.1f ms\n",
                     result.name.c_str(), result.num_inliers, result.correspondences,
-                    result.times.total * 1e3);
+                    EstimatedFocalText(result).c_str(), result.times.total * 1e3);
       } else {
         std::printf("%s: not localized: %s\n", result.name.c_str(), result.failure_reason.c_str());
       }
