@@ -1,0 +1,218 @@
+// cwloc-code-bench: how much of nearest-neighbour matching survives when an index's descriptors
+// are stored as product-quantization codes (format/kdtree/product_quantizer.h), the first
+// measurement of issue #26's compact index. For each code size it trains a quantizer on the
+// index's descriptors, codes all of them, and scans them with the asymmetric distance for a
+// sample of real query features; against exact brute force over the full descriptors it prints:
+//   recall@1 / @10: the true nearest view is the code scan's first / among its first 10;
+//   re-rank R: the code scan's first R views re-ranked by exact distance (what a compact index
+//     with a short exact or finer second stage would do; R = 0: none, the ratio test on the
+//     codes' asymmetric distances; "corrected": the same, each distance less the view's own
+//     quantization error |x - decode(code(x))|^2, which the asymmetric distance adds to the exact
+//     one on average): recall@1, and of the matches the
+//     paper's ratio test (d1 < 0.7 d2) makes on exact distances, the share it still makes with
+//     the same view ("kept") and the share of other matches it makes instead ("added");
+//   code bytes per view, training time, coding time per view, scan time per query.
+//
+//   cwloc-code-bench --index hj.cwl --database database.db --query-list query_list.txt
+//       [--codes 8,16,32,64] [--rerank 0,10,100] [--gt-queries 2000] [--threads 2]
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <numeric>
+#include <string>
+#include <vector>
+
+#include "format/base/parallel_for.h"
+#include "format/base/split_mix64.h"
+#include "format/base/tool_main.h"
+#include "format/index/index.h"
+#include "format/kdtree/descriptor_distance.h"
+#include "format/kdtree/product_quantizer.h"
+#include "localizer/io/database/database_queries.h"
+
+namespace cwloc {
+namespace {
+
+constexpr double kRatio = 0.7;
+
+double Seconds(std::chrono::steady_clock::time_point since) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
+}
+
+struct Neighbors {
+  uint32_t first = 0, second = 0;
+  float d1 = 0, d2 = 0;  // squared distances
+};
+
+bool PassesRatio(const Neighbors& n) { return n.d1 < kRatio * kRatio * n.d2; }
+
+std::vector<uint32_t> ParseList(const std::string& text) {
+  std::vector<uint32_t> out;
+  size_t start = 0;
+  while (start <= text.size()) {
+    const size_t end = std::min(text.find(',', start), text.size());
+    out.push_back(static_cast<uint32_t>(std::stoul(text.substr(start, end - start))));
+    start = end + 1;
+  }
+  return out;
+}
+
+int Main(int argc, char** argv) {
+  CLI::App app{"Product-quantization codes of an index's descriptors against exact matching"};
+  std::string index_path, database, query_list, codes_text = "8,16,32,64", rerank_text = "0,10,100";
+  uint32_t gt_queries = 2000, threads = 2, iterations = 15, train = 50000;
+  uint64_t seed = 0;
+  app.add_option("--index", index_path, "cwloc index whose descriptors are coded")->required();
+  app.add_option("--database", database, "COLMAP database.db with the query features")->required();
+  app.add_option("--query-list", query_list, "query image names, one per line")->required();
+  app.add_option("--codes", codes_text, "code bytes per view (subspaces), comma-separated");
+  app.add_option("--rerank", rerank_text, "exact re-rank depths, comma-separated");
+  app.add_option("--gt-queries", gt_queries, "query features sampled (exact ground truth)");
+  app.add_option("--train", train, "descriptors k-means trains on");
+  app.add_option("--iterations", iterations, "k-means iterations");
+  app.add_option("--threads", threads, "threads for ground truth and scans");
+  app.add_option("--seed", seed, "sampling and k-means seed");
+  CLI11_PARSE(app, argc, argv);
+  const std::vector<uint32_t> code_sizes = ParseList(codes_text);
+  const std::vector<uint32_t> reranks = ParseList(rerank_text);
+
+  const Index index = Index::Open(index_path);
+  const uint32_t num_views = index.num_views();
+  std::vector<uint8_t> base(size_t{num_views} * 128);
+  for (uint32_t v = 0; v < num_views; ++v)
+    std::copy_n(index.descriptor(v), 128, &base[size_t{v} * 128]);
+
+  // Query features: a seeded sample of every listed query's features.
+  std::vector<uint8_t> all_queries;
+  const DatabaseQueries queries(database);
+  std::ifstream list(query_list);
+  for (std::string line; std::getline(list, line);) {
+    const std::string name = line.substr(0, line.find(' '));
+    if (name.empty()) continue;
+    const Query query = queries.Load(name);
+    all_queries.insert(all_queries.end(), query.descriptors.begin(), query.descriptors.end());
+  }
+  std::vector<uint32_t> order(all_queries.size() / 128);
+  std::iota(order.begin(), order.end(), 0u);
+  SplitMix64 rng(seed);
+  rng.Shuffle(std::span<uint32_t>(order));
+  order.resize(std::min<size_t>(order.size(), gt_queries));
+  const size_t nq = order.size();
+  auto query = [&](size_t i) { return &all_queries[size_t{order[i]} * 128]; };
+
+  std::printf("%u views in %s, %zu query features sampled\n", num_views, index_path.c_str(), nq);
+  auto start = std::chrono::steady_clock::now();
+  std::vector<Neighbors> truth(nq);
+  ParallelFor(nq, static_cast<int>(threads), [&](size_t i) {
+    Neighbors n{0, 0, 1e30f, 1e30f};
+    for (uint32_t v = 0; v < num_views; ++v) {
+      const float d = static_cast<float>(SquaredL2(query(i), &base[size_t{v} * 128]));
+      if (d < n.d1) {
+        n = {v, n.first, d, n.d1};
+      } else if (d < n.d2) {
+        n.second = v;
+        n.d2 = d;
+      }
+    }
+    truth[i] = n;
+  });
+  const size_t truth_pass = std::count_if(truth.begin(), truth.end(), PassesRatio);
+  std::printf("exact brute force: %.1f s; %zu of %zu pass the ratio test %.1f\n\n", Seconds(start),
+              truth_pass, nq, kRatio);
+
+  std::printf("| code bytes / view | recall@1 | recall@10 |");
+  for (const uint32_t r : reranks) std::printf(" re-rank %u: recall@1, matches kept, added |", r);
+  std::printf(" corrected: recall@1, matches kept, added |");
+  std::printf(" train s | code us / view | scan ms / query |\n|---|---|---|");
+  for (size_t r = 0; r <= reranks.size(); ++r) std::printf("---|");
+  std::printf("---|---|---|\n");
+  const uint32_t max_rerank =
+      std::max<uint32_t>(10, *std::max_element(reranks.begin(), reranks.end()));
+  for (const uint32_t m : code_sizes) {
+    ProductQuantizerOptions options;
+    options.num_subspaces = m;
+    options.iterations = iterations;
+    options.max_training = train;
+    options.seed = seed;
+    start = std::chrono::steady_clock::now();
+    const ProductQuantizer pq = ProductQuantizer::Train(base, options);
+    const double train_seconds = Seconds(start);
+    start = std::chrono::steady_clock::now();
+    std::vector<uint8_t> codes(size_t{num_views} * m);
+    std::vector<float> code_error(num_views);
+    ParallelFor(num_views, static_cast<int>(threads), [&](size_t v) {
+      pq.Encode(&base[v * 128], &codes[v * m]);
+      float decoded[128];
+      pq.Decode(&codes[v * m], decoded);
+      float sum = 0;
+      for (int d = 0; d < 128; ++d)
+        sum += (base[v * 128 + d] - decoded[d]) * (base[v * 128 + d] - decoded[d]);
+      code_error[v] = sum;
+    });
+    const double code_us = Seconds(start) * 1e6 * threads / num_views;
+    std::vector<int> hit1(nq), hit10(nq);
+    // Index reranks.size(): the corrected asymmetric distance.
+    const size_t columns = reranks.size() + 1;
+    std::vector<std::vector<int>> rerank_hit(columns, std::vector<int>(nq)),
+        kept(columns, std::vector<int>(nq)), added(columns, std::vector<int>(nq));
+    start = std::chrono::steady_clock::now();
+    ParallelFor(nq, static_cast<int>(threads), [&](size_t i) {
+      std::vector<float> table(size_t{m} * 256);
+      pq.DistanceTable(query(i), table.data());
+      std::vector<std::pair<float, uint32_t>> scored(num_views);
+      for (uint32_t v = 0; v < num_views; ++v)
+        scored[v] = {pq.Distance(table.data(), &codes[size_t{v} * m]), v};
+      const uint32_t depth = std::min(max_rerank, num_views);
+      std::partial_sort(scored.begin(), scored.begin() + depth, scored.end());
+      hit1[i] = scored[0].second == truth[i].first;
+      hit10[i] = std::any_of(scored.begin(), scored.begin() + std::min(10u, depth),
+                             [&](const auto& s) { return s.second == truth[i].first; });
+      for (size_t r = 0; r < columns; ++r) {
+        const bool corrected = r == reranks.size();
+        Neighbors n{0, 0, 1e30f, 1e30f};
+        if (!corrected && reranks[r] == 0)
+          n = {scored[0].second, scored[1].second, scored[0].first, scored[1].first};
+        const uint32_t count = corrected ? num_views : std::min(reranks[r], depth);
+        for (uint32_t j = 0; j < count; ++j) {
+          const uint32_t v = corrected ? j : scored[j].second;
+          const float d =
+              corrected
+                  ? std::max(0.0f, pq.Distance(table.data(), &codes[size_t{v} * m]) - code_error[v])
+                  : static_cast<float>(SquaredL2(query(i), &base[size_t{v} * 128]));
+          if (d < n.d1) {
+            n = {v, n.first, d, n.d1};
+          } else if (d < n.d2) {
+            n.second = v;
+            n.d2 = d;
+          }
+        }
+        rerank_hit[r][i] = n.first == truth[i].first;
+        const bool exact = PassesRatio(truth[i]), coded = PassesRatio(n);
+        kept[r][i] = exact && coded && n.first == truth[i].first;
+        added[r][i] = coded && !kept[r][i];
+      }
+    });
+    const double scan_ms = Seconds(start) * 1e3 * threads / nq;
+    const auto share = [&](const std::vector<int>& v, size_t of) {
+      return double(std::accumulate(v.begin(), v.end(), 0)) / double(std::max<size_t>(of, 1));
+    };
+    std::printf("| %u | %.3f | %.3f |", m, share(hit1, nq), share(hit10, nq));
+    for (size_t r = 0; r < columns; ++r) {
+      std::printf(" %.3f, %.3f, %.3f |", share(rerank_hit[r], nq), share(kept[r], truth_pass),
+                  share(added[r], truth_pass));
+    }
+    std::printf(" %.1f | %.2f | %.2f |\n", train_seconds, code_us, scan_ms);
+    std::fflush(stdout);
+  }
+  return 0;
+}
+
+}  // namespace
+}  // namespace cwloc
+
+int main(int argc, char** argv) {
+  return cwloc::RunTool("cwloc-code-bench", [&] { return cwloc::Main(argc, argv); });
+}
