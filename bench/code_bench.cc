@@ -11,6 +11,8 @@
 //     one on average): recall@1, and of the matches the
 //     paper's ratio test (d1 < 0.7 d2) makes on exact distances, the share it still makes with
 //     the same view ("kept") and the share of other matches it makes instead ("added");
+//   residual R (with --residual B): the first R re-ranked by the distance to the reconstruction
+//     of the code plus a B-byte code of its residual, a second stage a compact index can ship;
 //   code bytes per view, training time, coding time per view, scan time per query.
 //
 //   cwloc-code-bench --index hj.cwl --database database.db --query-list query_list.txt
@@ -63,13 +65,16 @@ std::vector<uint32_t> ParseList(const std::string& text) {
 int Main(int argc, char** argv) {
   CLI::App app{"Product-quantization codes of an index's descriptors against exact matching"};
   std::string index_path, database, query_list, codes_text = "8,16,32,64", rerank_text = "0,10,100";
-  uint32_t gt_queries = 2000, threads = 2, iterations = 15, train = 50000;
+  uint32_t gt_queries = 2000, threads = 2, iterations = 15, train = 50000, residual = 0;
   uint64_t seed = 0;
   app.add_option("--index", index_path, "cwloc index whose descriptors are coded")->required();
   app.add_option("--database", database, "COLMAP database.db with the query features")->required();
   app.add_option("--query-list", query_list, "query image names, one per line")->required();
   app.add_option("--codes", codes_text, "code bytes per view (subspaces), comma-separated");
   app.add_option("--rerank", rerank_text, "exact re-rank depths, comma-separated");
+  app.add_option("--residual", residual,
+                 "bytes of a second code of what the first leaves (0: none); its columns re-rank "
+                 "the first R by the distance to both codes' reconstruction");
   app.add_option("--gt-queries", gt_queries, "query features sampled (exact ground truth)");
   app.add_option("--train", train, "descriptors k-means trains on");
   app.add_option("--iterations", iterations, "k-means iterations");
@@ -126,8 +131,14 @@ int Main(int argc, char** argv) {
   std::printf("| code bytes / view | recall@1 | recall@10 |");
   for (const uint32_t r : reranks) std::printf(" re-rank %u: recall@1, matches kept, added |", r);
   std::printf(" corrected: recall@1, matches kept, added |");
+  std::vector<uint32_t> residual_depths;
+  for (const uint32_t r : reranks) {
+    if (residual == 0 || r == 0) continue;
+    residual_depths.push_back(r);
+    std::printf(" residual %u B, first %u: recall@1, kept, added |", residual, r);
+  }
   std::printf(" train s | code us / view | scan ms / query |\n|---|---|---|");
-  for (size_t r = 0; r <= reranks.size(); ++r) std::printf("---|");
+  for (size_t r = 0; r <= reranks.size() + residual_depths.size(); ++r) std::printf("---|");
   std::printf("---|---|---|\n");
   const uint32_t max_rerank =
       std::max<uint32_t>(10, *std::max_element(reranks.begin(), reranks.end()));
@@ -153,9 +164,31 @@ int Main(int argc, char** argv) {
       code_error[v] = sum;
     });
     const double code_us = Seconds(start) * 1e6 * threads / num_views;
+    // The second code: of x - decode(code(x)), trained on those residuals.
+    std::vector<float> reconstruction;
+    if (residual > 0) {
+      std::vector<float> residuals(size_t{num_views} * 128);
+      ParallelFor(num_views, static_cast<int>(threads), [&](size_t v) {
+        pq.Decode(&codes[v * m], &residuals[v * 128]);
+        for (int d = 0; d < 128; ++d)
+          residuals[v * 128 + d] = base[v * 128 + d] - residuals[v * 128 + d];
+      });
+      ProductQuantizerOptions second = options;
+      second.num_subspaces = residual;
+      const ProductQuantizer fine = ProductQuantizer::Train(residuals, second);
+      reconstruction.resize(size_t{num_views} * 128);
+      ParallelFor(num_views, static_cast<int>(threads), [&](size_t v) {
+        uint8_t fine_code[128];
+        fine.Encode(&residuals[v * 128], fine_code);
+        float first[128];
+        pq.Decode(&codes[v * m], first);
+        fine.Decode(fine_code, &reconstruction[v * 128]);
+        for (int d = 0; d < 128; ++d) reconstruction[v * 128 + d] += first[d];
+      });
+    }
     std::vector<int> hit1(nq), hit10(nq);
     // Index reranks.size(): the corrected asymmetric distance.
-    const size_t columns = reranks.size() + 1;
+    const size_t columns = reranks.size() + 1 + residual_depths.size();
     std::vector<std::vector<int>> rerank_hit(columns, std::vector<int>(nq)),
         kept(columns, std::vector<int>(nq)), added(columns, std::vector<int>(nq));
     start = std::chrono::steady_clock::now();
@@ -172,16 +205,26 @@ int Main(int argc, char** argv) {
                              [&](const auto& s) { return s.second == truth[i].first; });
       for (size_t r = 0; r < columns; ++r) {
         const bool corrected = r == reranks.size();
+        const bool fine = r > reranks.size();
         Neighbors n{0, 0, 1e30f, 1e30f};
-        if (!corrected && reranks[r] == 0)
+        if (r < reranks.size() && reranks[r] == 0)
           n = {scored[0].second, scored[1].second, scored[0].first, scored[1].first};
-        const uint32_t count = corrected ? num_views : std::min(reranks[r], depth);
+        const uint32_t count = corrected ? num_views
+                               : fine    ? std::min(residual_depths[r - reranks.size() - 1], depth)
+                                         : std::min(reranks[r], depth);
         for (uint32_t j = 0; j < count; ++j) {
           const uint32_t v = corrected ? j : scored[j].second;
-          const float d =
-              corrected
-                  ? std::max(0.0f, pq.Distance(table.data(), &codes[size_t{v} * m]) - code_error[v])
-                  : static_cast<float>(SquaredL2(query(i), &base[size_t{v} * 128]));
+          float d = 0;
+          if (corrected) {
+            d = std::max(0.0f, pq.Distance(table.data(), &codes[size_t{v} * m]) - code_error[v]);
+          } else if (fine) {
+            for (int k = 0; k < 128; ++k) {
+              const float diff = query(i)[k] - reconstruction[size_t{v} * 128 + k];
+              d += diff * diff;
+            }
+          } else {
+            d = static_cast<float>(SquaredL2(query(i), &base[size_t{v} * 128]));
+          }
           if (d < n.d1) {
             n = {v, n.first, d, n.d1};
           } else if (d < n.d2) {

@@ -93,8 +93,9 @@ std::vector<float> KMeans(const std::vector<float>& points, size_t n, uint32_t d
 
 }  // namespace
 
-ProductQuantizer ProductQuantizer::Train(std::span<const uint8_t> descriptors,
-                                         const ProductQuantizerOptions& options) {
+template <typename T>
+ProductQuantizer ProductQuantizer::TrainOn(std::span<const T> descriptors,
+                                           const ProductQuantizerOptions& options) {
   const uint32_t m = options.num_subspaces;
   if (m == 0 || kDims % m != 0) {
     throw InputError("product quantizer: " + std::to_string(m) +
@@ -112,7 +113,7 @@ ProductQuantizer ProductQuantizer::Train(std::span<const uint8_t> descriptors,
   std::vector<float> points(n * dims);
   for (uint32_t s = 0; s < m; ++s) {
     for (size_t i = 0; i < n; ++i) {
-      const uint8_t* descriptor = &descriptors[(i * total / n) * kDims + size_t{s} * dims];
+      const T* descriptor = &descriptors[(i * total / n) * kDims + size_t{s} * dims];
       for (uint32_t d = 0; d < dims; ++d) points[i * dims + d] = descriptor[d];
     }
     SplitMix64 rng(options.seed + s);
@@ -122,7 +123,24 @@ ProductQuantizer ProductQuantizer::Train(std::span<const uint8_t> descriptors,
   return ProductQuantizer(m, std::move(centroids));
 }
 
+ProductQuantizer ProductQuantizer::Train(std::span<const uint8_t> descriptors,
+                                         const ProductQuantizerOptions& options) {
+  return TrainOn(descriptors, options);
+}
+
+ProductQuantizer ProductQuantizer::Train(std::span<const float> vectors,
+                                         const ProductQuantizerOptions& options) {
+  return TrainOn(vectors, options);
+}
+
 void ProductQuantizer::Encode(const uint8_t* descriptor, uint8_t* code) const {
+  EncodeAny(descriptor, code);
+}
+
+void ProductQuantizer::Encode(const float* vector, uint8_t* code) const { EncodeAny(vector, code); }
+
+template <typename T>
+void ProductQuantizer::EncodeAny(const T* descriptor, uint8_t* code) const {
   const uint32_t dims = subspace_dims();
   float part[kDims];
   for (uint32_t s = 0; s < num_subspaces_; ++s) {

@@ -32,12 +32,16 @@ class ProductQuantizer {
   // on every platform.
   static ProductQuantizer Train(std::span<const uint8_t> descriptors,
                                 const ProductQuantizerOptions& options);
+  // The same for N x 128 float vectors (e.g. the residuals another quantizer leaves).
+  static ProductQuantizer Train(std::span<const float> vectors,
+                                const ProductQuantizerOptions& options);
 
   uint32_t num_subspaces() const { return num_subspaces_; }
   uint32_t subspace_dims() const { return kDims / num_subspaces_; }
 
   // The nearest centroid of each part: num_subspaces bytes.
   void Encode(const uint8_t* descriptor, uint8_t* code) const;
+  void Encode(const float* vector, uint8_t* code) const;
   // The descriptor a code stands for, 128 floats.
   void Decode(const uint8_t* code, float* descriptor) const;
   // table[s * 256 + c]: squared distance of the query's part s to centroid c of subspace s.
@@ -49,6 +53,12 @@ class ProductQuantizer {
   std::span<const float> centroids() const { return centroids_; }
 
  private:
+  template <typename T>
+  static ProductQuantizer TrainOn(std::span<const T> descriptors,
+                                  const ProductQuantizerOptions& options);
+  template <typename T>
+  void EncodeAny(const T* descriptor, uint8_t* code) const;
+
   ProductQuantizer(uint32_t num_subspaces, std::vector<float> centroids)
       : num_subspaces_(num_subspaces), centroids_(std::move(centroids)) {}
 

@@ -127,6 +127,29 @@ TEST(ProductQuantizer, TrainingIsDeterministicForASeed) {
   EXPECT_FALSE(std::equal(a.centroids().begin(), a.centroids().end(), c.centroids().begin()));
 }
 
+TEST(ProductQuantizer, FloatVectorsTrainAndEncodeAsTheirBytes) {
+  // Residual codes train on floats; descriptors given as floats must give the same quantizer.
+  const std::vector<uint8_t> data = PatternDescriptors(1000, 15, 6);
+  const std::vector<float> as_float(data.begin(), data.end());
+  ProductQuantizerOptions options;
+  options.iterations = 4;
+  const ProductQuantizer bytes = ProductQuantizer::Train(data, options);
+  const ProductQuantizer floats =
+      ProductQuantizer::Train(std::span<const float>(as_float), options);
+  EXPECT_TRUE(
+      std::equal(bytes.centroids().begin(), bytes.centroids().end(), floats.centroids().begin()));
+  std::vector<uint8_t> a(16), b(16);
+  for (size_t i = 0; i < 100; ++i) {
+    bytes.Encode(&data[i * 128], a.data());
+    floats.Encode(&as_float[i * 128], b.data());
+    EXPECT_EQ(a, b);
+  }
+  EXPECT_THAT(
+      [&] { ProductQuantizer::Train(std::span<const float>(as_float).first(100 * 128), options); },
+      testing::ThrowsMessage<InputError>(
+          "product quantizer: 100 training descriptors, need at least 256"));
+}
+
 TEST(ProductQuantizer, RefusesWhatItCannotTrain) {
   const std::vector<uint8_t> data = PatternDescriptors(300, 5, 5);
   ProductQuantizerOptions options;
