@@ -27,6 +27,7 @@
 #include <string>
 #include <vector>
 
+#include "format/base/comma_list.h"
 #include "format/base/parallel_for.h"
 #include "format/base/split_mix64.h"
 #include "format/base/tool_main.h"
@@ -51,15 +52,14 @@ struct Neighbors {
 
 bool PassesRatio(const Neighbors& n) { return n.d1 < kRatio * kRatio * n.d2; }
 
-std::vector<uint32_t> ParseList(const std::string& text) {
-  std::vector<uint32_t> out;
-  size_t start = 0;
-  while (start <= text.size()) {
-    const size_t end = std::min(text.find(',', start), text.size());
-    out.push_back(static_cast<uint32_t>(std::stoul(text.substr(start, end - start))));
-    start = end + 1;
+// Keeps the two nearest of the views offered.
+void Offer(uint32_t view, float distance, Neighbors* n) {
+  if (distance < n->d1) {
+    *n = {view, n->first, distance, n->d1};
+  } else if (distance < n->d2) {
+    n->second = view;
+    n->d2 = distance;
   }
-  return out;
 }
 
 int Main(int argc, char** argv) {
@@ -81,8 +81,8 @@ int Main(int argc, char** argv) {
   app.add_option("--threads", threads, "threads for ground truth and scans");
   app.add_option("--seed", seed, "sampling and k-means seed");
   CLI11_PARSE(app, argc, argv);
-  const std::vector<uint32_t> code_sizes = ParseList(codes_text);
-  const std::vector<uint32_t> reranks = ParseList(rerank_text);
+  const std::vector<uint32_t> code_sizes = ParseCommaList(codes_text);
+  const std::vector<uint32_t> reranks = ParseCommaList(rerank_text);
 
   const Index index = Index::Open(index_path);
   const uint32_t num_views = index.num_views();
@@ -114,13 +114,7 @@ int Main(int argc, char** argv) {
   ParallelFor(nq, static_cast<int>(threads), [&](size_t i) {
     Neighbors n{0, 0, 1e30f, 1e30f};
     for (uint32_t v = 0; v < num_views; ++v) {
-      const float d = static_cast<float>(SquaredL2(query(i), &base[size_t{v} * 128]));
-      if (d < n.d1) {
-        n = {v, n.first, d, n.d1};
-      } else if (d < n.d2) {
-        n.second = v;
-        n.d2 = d;
-      }
+      Offer(v, static_cast<float>(SquaredL2(query(i), &base[size_t{v} * 128])), &n);
     }
     truth[i] = n;
   });
@@ -225,12 +219,7 @@ int Main(int argc, char** argv) {
           } else {
             d = static_cast<float>(SquaredL2(query(i), &base[size_t{v} * 128]));
           }
-          if (d < n.d1) {
-            n = {v, n.first, d, n.d1};
-          } else if (d < n.d2) {
-            n.second = v;
-            n.d2 = d;
-          }
+          Offer(v, d, &n);
         }
         rerank_hit[r][i] = n.first == truth[i].first;
         const bool exact = PassesRatio(truth[i]), coded = PassesRatio(n);

@@ -32,6 +32,7 @@
 #include <thread>
 #include <vector>
 
+#include "format/base/comma_list.h"
 #include "format/base/split_mix64.h"
 #include "format/base/stopwatch.h"
 #include "format/kdtree/descriptor_distance.h"
@@ -357,15 +358,6 @@ void PrintTable(const std::vector<Row>& rows, double flann_us) {
   }
 }
 
-std::vector<uint32_t> ParseList(const std::string& text) {
-  std::vector<uint32_t> out;
-  std::stringstream in(text);
-  for (std::string item; std::getline(in, item, ',');) {
-    if (!item.empty()) out.push_back(uint32_t(std::stoul(item)));
-  }
-  return out;
-}
-
 int Main(int argc, char** argv) {
   CLI::App app{"Compare FLANN's randomized kd-trees with cwloc's flat kd-forest (kNN of SIFT)"};
   std::string database, query_list, checks_text = "64,128,256", kernel_name;
@@ -410,9 +402,9 @@ int Main(int argc, char** argv) {
   app.add_flag("--build-only", build_only, "only build our forest and report time and memory");
   CLI11_PARSE(app, argc, argv);
   if (threads == 0) threads = std::max(1u, std::thread::hardware_concurrency());
-  const std::vector<uint32_t> budgets = ParseList(checks_text);
+  const std::vector<uint32_t> budgets = ParseCommaList(checks_text);
   std::vector<uint32_t> batch_widths;
-  for (uint32_t w : ParseList(batch_text)) {
+  for (uint32_t w : ParseCommaList(batch_text)) {
     if (w > 1) batch_widths.push_back(w);
   }
   batch_chunk = std::max<size_t>(batch_chunk, 1);

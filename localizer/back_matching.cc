@@ -26,6 +26,7 @@ BackMatcher::BackMatcher(const Index& index, const ClusterMembers& clusters, con
       stop_(stop),
       visited_(clusters.num_clusters(), false),
       neighbors_(2) {
+  search_options_.max_checks = options.query_tree_checks;
   result_.cluster_votes.assign(clusters.num_clusters(), 0);
   for (const FeatureMatch& match : forward_matches) Vote(ClusterOfView(index, match.view));
 }
@@ -37,10 +38,8 @@ void BackMatcher::Vote(uint32_t cluster) {
 
 std::optional<FeatureMatch> BackMatcher::MatchView(uint32_t view) {
   if (guide_ != nullptr) return guide_->Match(index_, view, options_.ratio);
-  KdSearchOptions search_options;
-  search_options.max_checks = options_.query_tree_checks;
   const KdSearchResult found =
-      searcher_->Search(index_.descriptor(view), search_options, neighbors_);
+      searcher_->Search(index_.descriptor(view), search_options_, neighbors_);
   if (found.num_neighbors < 2) return std::nullopt;
   if (!PassesRatioTest(neighbors_[0].distance, neighbors_[1].distance, options_.ratio))
     return std::nullopt;

@@ -73,6 +73,7 @@ class BackMatcher {
   std::vector<bool> visited_;
   std::optional<KdForest> query_forest_;  // without a guide: over all the query's features
   std::optional<KdForestSearcher> searcher_;
+  KdSearchOptions search_options_;
   std::vector<KdNeighbor> neighbors_;
   std::vector<uint32_t> track_clusters_;
   bool started_ = false;  // the first Run builds the query forest

@@ -153,10 +153,6 @@ class QueryLoader {
 #endif
 };
 
-// Writes each finished query's record: JSON lines to --output (stdout by default), a pose line
-// to --poses, a readable line to stdout when the JSON goes to a file. Files get whole records
-// only and keep their previous content until the first checkpoint (CheckpointedFile). The first
-// error writing them stops the run: failed() tells the workers, Close() throws it.
 // " f 1380.2 +- 9.7 px," for an estimated focal length, and what a weak constraint leaves.
 std::string EstimatedFocalText(const LocalizationResult& result) {
   if (!result.focal_depth || result.camera.params.empty()) return "";
@@ -172,6 +168,10 @@ std::string EstimatedFocalText(const LocalizationResult& result) {
   return text;
 }
 
+// Writes each finished query's record: JSON lines to --output (stdout by default), a pose line
+// to --poses, a readable line to stdout when the JSON goes to a file. Files get whole records
+// only and keep their previous content until the first checkpoint (CheckpointedFile). The first
+// error writing them stops the run: failed() tells the workers, Close() throws it.
 class ResultSink {
  public:
   explicit ResultSink(const CliOptions& cli) : cli_(cli) {

@@ -175,7 +175,8 @@ MatcherOutput MatchClusterExhaustive(const Index& index, const ClusterMembers& c
 // An estimated focal length that leaves the pose weakly constrained (refine_pose.h): the
 // back-matching continues where N_B stopped it, to twice the back-matches it has (at most
 // options.max_back_matches), and the pose is estimated again on the larger set, until it is
-// well constrained. A pose estimate that fails keeps the last one that localized.
+// well constrained. A pose estimate that fails keeps the last one that localized and its
+// correspondences (the back-match counts and image votes then include the larger set).
 void ConstrainFocalLength(const Index& index, const Query& query, const LocalizerOptions& options,
                           MatcherOutput* matched, QueryPose* fit) {
   while (matched->back_matcher != nullptr && fit->pose.success &&
@@ -186,11 +187,11 @@ void ConstrainFocalLength(const Index& index, const Query& query, const Localize
     matched->back_matcher->Run(static_cast<uint32_t>(
         std::min<size_t>(options.max_back_matches, std::max<size_t>(2 * before, 1))));
     if (matched->back_matcher->result().matches.size() == before) break;  // nothing left to see
-    const std::vector<FeatureMatch> previous = matched->correspondences;
+    std::vector<FeatureMatch> previous = std::move(matched->correspondences);
     TakeBackMatches(index, matched);
     QueryPose more = EstimateQueryPose(index, query, matched->correspondences, options);
     if (!more.pose.success) {
-      matched->correspondences = previous;
+      matched->correspondences = std::move(previous);
       break;
     }
     *fit = std::move(more);

@@ -34,6 +34,17 @@ RefinementProblem MakeProblem(std::span<const Eigen::Vector2d> centered_pixels,
   return problem;
 }
 
+// RefinePoseAndCamera's problem: the RadialCamera residual, f and k refined as options ask.
+RefinementProblem MakeCameraProblem(std::span<const Eigen::Vector2d> centered_pixels,
+                                    std::span<const Eigen::Vector3d> points3D,
+                                    std::span<const uint32_t> indices,
+                                    const PoseRefinementOptions& options) {
+  RefinementProblem problem = MakeProblem(centered_pixels, points3D, indices, options);
+  problem.radial = true;
+  problem.refine_radial_distortion = options.refine_radial_distortion;
+  return problem;
+}
+
 RefinementParameters MakeParameters(const CameraPose& pose, double focal, double k) {
   const Eigen::Quaterniond q = pose.rotation.normalized();
   RefinementParameters x;
@@ -101,9 +112,7 @@ bool RefinePoseAndCamera(std::span<const Eigen::Vector2d> centered_pixels,
   const size_t min_points =
       4 + size_t{options.refine_focal_length} + size_t{options.refine_radial_distortion};
   if (indices.size() < min_points || !(camera->focal_length_px > 0.0)) return false;
-  RefinementProblem problem = MakeProblem(centered_pixels, points3D, indices, options);
-  problem.radial = true;
-  problem.refine_radial_distortion = options.refine_radial_distortion;
+  const RefinementProblem problem = MakeCameraProblem(centered_pixels, points3D, indices, options);
   RefinementParameters x = MakeParameters(*pose, camera->focal_length_px, camera->k);
   if (!Solve(problem, options.refiner, &x, summary,
              [&] { return x.focal > 0.0 && std::isfinite(x.k); })) {
@@ -119,10 +128,8 @@ std::optional<FocalDepthUncertainty> FocalDepthUncertaintyAt(
     std::span<const Eigen::Vector2d> centered_pixels, std::span<const Eigen::Vector3d> points3D,
     std::span<const uint32_t> indices, const PoseRefinementOptions& options, const CameraPose& pose,
     const RadialCamera& camera) {
-  RefinementProblem problem = MakeProblem(centered_pixels, points3D, indices, options);
-  problem.radial = true;
+  RefinementProblem problem = MakeCameraProblem(centered_pixels, points3D, indices, options);
   problem.refine_focal_length = true;
-  problem.refine_radial_distortion = options.refine_radial_distortion;
   Linearization linear;
   if (!LinearizeWithBuiltin(problem, MakeParameters(pose, camera.focal_length_px, camera.k),
                             &linear)) {
