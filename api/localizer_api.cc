@@ -128,12 +128,11 @@ Result ToResult(const LocalizationResult& r, const Query& query, const Index& in
   result.ransac_iterations = r.ransac_iterations;
   result.inliers.reserve(r.inliers.size());
   for (const InlierMatch& match : r.inliers) {
-    const IndexPoint& point = index.points()[match.point];
     result.inliers.push_back(
         {match.feature,
          {query.keypoints[2 * match.feature], query.keypoints[2 * match.feature + 1]},
          match.point,
-         {point.xyz[0], point.xyz[1], point.xyz[2]}});
+         index.PointXyz(match.point)});
   }
   for (const cwloc::RankedImage& image : r.ranked_images)
     result.ranked_images.push_back({image.image_id, image.name, image.votes});
@@ -248,7 +247,7 @@ IndexInfo Localizer::Info() const {
   info.format_version = std::to_string(index.file().header().format_major) + "." +
                         std::to_string(index.file().header().format_minor);
   info.num_images = static_cast<uint32_t>(index.images().size());
-  info.num_points = static_cast<uint32_t>(index.points().size());
+  info.num_points = static_cast<uint32_t>(index.num_points());
   info.num_views = static_cast<uint32_t>(index.num_views());
   if (const IndexGeoreference* georeference = index.georeference()) {
     info.georeferenced = true;

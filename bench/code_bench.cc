@@ -87,8 +87,9 @@ int Main(int argc, char** argv) {
   const Index index = Index::Open(index_path);
   const uint32_t num_views = index.num_views();
   std::vector<uint8_t> base(size_t{num_views} * 128);
+  uint8_t scratch[128];
   for (uint32_t v = 0; v < num_views; ++v)
-    std::copy_n(index.descriptor(v), 128, &base[size_t{v} * 128]);
+    std::copy_n(index.ViewDescriptor(v, scratch), 128, &base[size_t{v} * 128]);
 
   // Query features: a seeded sample of every listed query's features.
   std::vector<uint8_t> all_queries;

@@ -19,7 +19,8 @@
 namespace cwloc {
 namespace {
 
-// Up to 48 features: the first views' descriptors at made-up pixels.
+// Up to 48 features: the first kd-forest rows' descriptors (views', or decoded point codes) at
+// made-up pixels.
 Query QueryFromIndex(const Index& index) {
   Query query;
   query.name = "fuzz";
@@ -27,9 +28,13 @@ Query QueryFromIndex(const Index& index) {
   query.camera.width = 1024;
   query.camera.height = 768;
   query.camera.params = {900, 512, 384};
-  const size_t features = std::min<size_t>(index.descriptors().size() / kDescriptorBytes, 48);
-  query.descriptors.assign(index.descriptors().begin(),
-                           index.descriptors().begin() + features * kDescriptorBytes);
+  const size_t features = std::min<size_t>(index.num_rows(), 48);
+  query.descriptors.resize(features * kDescriptorBytes);
+  uint8_t scratch[kDescriptorBytes];
+  for (size_t i = 0; i < features; ++i) {
+    std::copy_n(index.RowDescriptor(uint32_t(i), scratch), kDescriptorBytes,
+                &query.descriptors[i * kDescriptorBytes]);
+  }
   for (size_t i = 0; i < features; ++i) {
     query.keypoints.push_back(float(37 * i % 1024));
     query.keypoints.push_back(float(53 * i % 768));

@@ -1,5 +1,6 @@
 // cwloc-index: builds, inspects and verifies cwloc index files.
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cstdio>
 #include <iostream>
 #include <nlohmann/json.hpp>
@@ -51,6 +52,7 @@ int RunBuild(const IndexBuildOptions& options, bool json) {
          {{"read", report.seconds_read},
           {"covisibility", report.seconds_covisibility},
           {"clustering", report.seconds_clustering},
+          {"point_codes", report.seconds_point_codes},
           {"view_neighbors", report.seconds_neighbor_distances},
           {"kd_forest", report.seconds_kd_forest},
           {"write", report.seconds_write},
@@ -65,13 +67,24 @@ int RunBuild(const IndexBuildOptions& options, bool json) {
       report.num_clusters, report.num_covisibility_edges);
   std::printf(
       "%.1f MB, %.1f bytes per view; %.2f s (read %.2f, co-visibility %.2f, clustering %.2f, "
-      "v_NN %.2f, kd-forest %.2f, write %.2f)\n",
+      "codes %.2f, v_NN %.2f, kd-forest %.2f, write %.2f)\n",
       report.file_bytes / 1e6, double(report.file_bytes) / double(report.num_views),
       report.seconds_total, report.seconds_read, report.seconds_covisibility,
-      report.seconds_clustering, report.seconds_neighbor_distances, report.seconds_kd_forest,
-      report.seconds_write);
+      report.seconds_clustering, report.seconds_point_codes, report.seconds_neighbor_distances,
+      report.seconds_kd_forest, report.seconds_write);
   if (!report.georeference.is_null()) PrintGeoreference(report.georeference);
   return kExitOk;
+}
+
+// What `info` says about how the descriptors are stored.
+std::string DescriptorStorage(const Index& index) {
+  if (!index.coded()) return "one 128-byte SIFT descriptor per view";
+  char text[160];
+  std::snprintf(text, sizeof(text),
+                "one %u-byte product-quantization code per 3D point (%.2f views per point)",
+                index.codes().code_bytes,
+                double(index.num_views()) / double(std::max<size_t>(index.num_points(), 1)));
+  return text;
 }
 
 int RunInfo(const std::string& path, bool json) {
@@ -86,6 +99,8 @@ int RunInfo(const std::string& path, bool json) {
     out["file_bytes"] = header.file_size;
     out["format_version"] =
         std::to_string(header.format_major) + "." + std::to_string(header.format_minor);
+    out["bytes_per_view"] = double(header.file_size) / double(index.num_views());
+    out["descriptors"] = DescriptorStorage(index);
     out["sections"] = nlohmann::ordered_json::array();
     for (const SectionEntry& entry : index.file().sections()) {
       out["sections"].push_back({{"tag", SectionTagName(entry.tag)},
@@ -113,6 +128,7 @@ int RunInfo(const std::string& path, bool json) {
               manifest["source"]["model"]["path"].get<std::string>().c_str());
   if (manifest.contains("georeference") && manifest["georeference"].is_object())
     PrintGeoreference(manifest["georeference"]);
+  std::printf("  descriptors: %s\n", DescriptorStorage(index).c_str());
   std::printf("  %-6s %12s %14s %12s  %s\n", "tag", "offset", "bytes", "count", "bytes/view");
   const double views = static_cast<double>(index.num_views());
   for (const SectionEntry& entry : index.file().sections()) {
@@ -179,6 +195,16 @@ int main(int argc, char** argv) {
   build->add_flag(
       "--keypoints", options.keypoints,
       "Also store each view's keypoint (8 bytes per view; the localizer does not need them)");
+  bool compact = false;
+  build->add_flag("--compact", compact,
+                  "A device-sized index: one " + std::to_string(cwloc::kCompactCodeBytes) +
+                      "-byte code per 3D point instead of each view's 128-byte descriptor "
+                      "(--code-bytes " +
+                      std::to_string(cwloc::kCompactCodeBytes) + " --trees " +
+                      std::to_string(cwloc::kCompactTrees) + " unless given)");
+  auto* code_bytes_option = build->add_option(
+      "--code-bytes", options.code_bytes,
+      "Compact index code bytes per 3D point: 4, 8, 16, 32 or 64 (0 = full descriptors per view)");
   cwloc::GeoreferencingOptions& geo = options.georeferencing;
   build->add_option("--georef", geo.georef_file,
                     "Georeference from lines 'IMAGE_NAME LAT LON HEIGHT [SIGMA_M]' (WGS84)");
@@ -214,6 +240,8 @@ int main(int argc, char** argv) {
         options.clustering.method = cwloc::ClusteringMethod::kCovisibility;
         options.clustering.target_clusters = clusters;
       }
+      if (compact && code_bytes_option->count() == 0) options.code_bytes = cwloc::kCompactCodeBytes;
+      if (compact && build->count("--trees") == 0) options.forest.num_trees = cwloc::kCompactTrees;
       return cwloc::RunBuild(options, json);
     }
     if (info->parsed()) return cwloc::RunInfo(index_path, json);

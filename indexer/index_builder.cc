@@ -15,6 +15,7 @@
 #include "indexer/covisibility.h"
 #include "indexer/model_views.h"
 #include "indexer/neighbor_distances.h"
+#include "indexer/point_codes.h"
 
 namespace cwloc {
 namespace {
@@ -54,6 +55,11 @@ IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
     throw InputError("--leaf-size " + std::to_string(options.forest.max_leaf_size) +
                      ": expected 1 to 255");
   }
+  if (options.code_bytes != 0 && !IsValidCodeBytes(options.code_bytes)) {
+    throw InputError("--code-bytes " + std::to_string(options.code_bytes) +
+                     ": expected 0 (full descriptors) or 4, 8, 16, 32 or 64");
+  }
+  const bool coded = options.code_bytes != 0;
   const int threads = ResolveThreads(options.threads);
   // The small inputs are read after the model; refuse a bad one before minutes of reading.
   if (!options.georeferencing.georef_file.empty())
@@ -89,9 +95,19 @@ IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
     views.images[i].cluster = clustering.cluster_of_image[i];
   report.seconds_clustering = stage.Seconds();
 
+  PointCodes point_codes;
+  if (coded) {
+    stage.Restart();
+    point_codes = CodePointDescriptors(views, options.code_bytes, options.seed, threads);
+    report.seconds_point_codes = stage.Seconds();
+  }
+
   stage.Restart();
+  // The full index's v_NN is per view; the compact one's per point, on the decoded codes
+  // (this overwrites the views' descriptors, which it no longer stores).
   const std::vector<float> neighbor_distances =
-      ComputeViewNeighborDistances(views, clustering, threads);
+      coded ? ComputePointNeighborDistances(&views, point_codes, clustering, threads)
+            : ComputeViewNeighborDistances(views, clustering, threads);
   report.seconds_neighbor_distances = stage.Seconds();
 
   stage.Restart();
@@ -107,7 +123,9 @@ IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
       permille_shown = permille;
     }
   };
-  const KdForest forest = BuildKdForest(views.descriptors, forest_options);
+  // The forest's rows: views, or the compact index's points (as the localizer decodes them).
+  const KdForest forest =
+      BuildKdForest(coded ? point_codes.decoded : views.descriptors, forest_options);
   forest_progress.Finish();
   report.seconds_kd_forest = stage.Seconds();
 
@@ -119,7 +137,8 @@ IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
   report.num_covisibility_edges = graph.edges.size();
 
   nlohmann::ordered_json manifest;
-  manifest["format_version"] = std::to_string(kFormatMajor) + "." + std::to_string(kFormatMinor);
+  // Set once the sections are known (FormatMinorOf).
+  manifest["format_version"] = "";
   manifest["tool"] = "cwloc-index";
   manifest["tool_version"] = kToolVersion;
   manifest["counts"] = CountsJson(report);
@@ -137,7 +156,15 @@ IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
       {"seed", options.seed},
       {"keypoints", options.keypoints},
       {"clustering", clustering_json},
-      {"view_neighbor", "nearest view of another 3D point in the same cluster"}};
+      {"view_neighbor", coded ? "per point: nearest other point's decoded code in any cluster "
+                                "that sees the point"
+                              : "nearest view of another 3D point in the same cluster"}};
+  if (coded) {  // absent: a full index, as before format 1.2
+    manifest["build_parameters"]["descriptors"] = {{"storage", "point_codes"},
+                                                   {"per_point", "mean of its views"},
+                                                   {"code", "product quantization"},
+                                                   {"code_bytes", options.code_bytes}};
+  }
   manifest["source"] = {{"model",
                          {{"path", options.model_dir.string()},
                           {"layout", model.rigs.empty() ? "classic" : "rigs"},
@@ -145,26 +172,41 @@ IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
                         {"database", {{"path", options.database_path.string()}}}};
   manifest["georeference"] = georeference ? georeference->manifest : nlohmann::ordered_json();
   report.georeference = manifest["georeference"];
-  const std::string manifest_text = manifest.dump(2) + "\n";
 
   stage.Restart();
+  std::string manifest_text;
   std::vector<SectionData> sections = {
-      MakeSection<char>(section::kManifest, {manifest_text.data(), manifest_text.size()}),
+      SectionData{section::kManifest},  // filled below, once the format version is known
       MakeSection(section::kCameras, Span(views.cameras)),
       MakeSection(section::kImages, Span(views.images)),
       MakeSection<char>(section::kStrings, {views.strings.data(), views.strings.size()}),
-      MakeSection(section::kPoints, Span(views.points)),
-      MakeSection(section::kTracks, Span(views.tracks)),
-      SectionData{section::kDescriptors, kSectionRequired, kDescriptorBytes, views.num_views(),
-                  views.descriptors},
-      MakeSection(section::kViewPoint, Span(views.view_points)),
-      MakeSection(section::kViewNeighbor, Span(neighbor_distances)),
-      MakeSection(section::kKdNodes, Span(forest.nodes)),
-      MakeSection(section::kKdRoots, Span(forest.roots)),
-      MakeSection(section::kKdLeaves, Span(forest.leaves)),
-      MakeSection(section::kCovisOffsets, Span(graph.offsets)),
-      MakeSection(section::kCovisEdges, Span(graph.edges)),
   };
+  const PointOffsets point_offsets = coded ? OffsetPoints(views.points) : PointOffsets{};
+  if (coded) {
+    sections.push_back(MakeSection(section::kPointOrigin,
+                                   std::span<const IndexPointOrigin>(&point_offsets.origin, 1)));
+    sections.push_back(MakeSection(section::kPointOffsets, Span(point_offsets.offsets)));
+  } else {
+    sections.push_back(MakeSection(section::kPoints, Span(views.points)));
+  }
+  sections.push_back(MakeSection(section::kTracks, Span(views.tracks)));
+  if (coded) {
+    sections.push_back(MakeSection(section::kCodebook, Span(point_codes.codebook)));
+    sections.push_back(SectionData{section::kPointCodes, kSectionRequired, options.code_bytes,
+                                   views.points.size(), point_codes.codes});
+  } else {
+    sections.push_back(SectionData{section::kDescriptors, kSectionRequired, kDescriptorBytes,
+                                   views.num_views(), views.descriptors});
+  }
+  sections.push_back(MakeSection(section::kViewPoint, Span(views.view_points)));
+  sections.push_back(MakeSection(coded ? section::kPointNeighbor : section::kViewNeighbor,
+                                 Span(neighbor_distances)));
+  for (SectionData section : {MakeSection(section::kKdNodes, Span(forest.nodes)),
+                              MakeSection(section::kKdRoots, Span(forest.roots)),
+                              MakeSection(section::kKdLeaves, Span(forest.leaves)),
+                              MakeSection(section::kCovisOffsets, Span(graph.offsets)),
+                              MakeSection(section::kCovisEdges, Span(graph.edges))})
+    sections.push_back(section);
   if (options.keypoints) {
     // Optional: the localizer does not read model keypoints; tools that draw matches do.
     sections.push_back(
@@ -175,6 +217,10 @@ IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
                                    std::span<const IndexGeoreference>(&georeference->section, 1),
                                    /*flags=*/0));
   }
+  manifest["format_version"] =
+      std::to_string(kFormatMajor) + "." + std::to_string(FormatMinorOf(sections));
+  manifest_text = manifest.dump(2) + "\n";
+  sections[0] = MakeSection<char>(section::kManifest, {manifest_text.data(), manifest_text.size()});
   WriteIndexFile(options.output_path, sections);
   report.seconds_write = stage.Seconds();
   report.file_bytes = std::filesystem::file_size(options.output_path);

@@ -11,6 +11,11 @@
 
 namespace cwloc {
 
+// `cwloc-index build --compact`: its code size and kd-trees (docs/benchmarks.md, "The compact
+// index"; 2 trees localize as 4 do over the points, in 3-4 bytes per view less).
+inline constexpr uint32_t kCompactCodeBytes = 32;
+inline constexpr uint32_t kCompactTrees = 2;
+
 // Parameters of `cwloc-index build`; all are recorded in the manifest.
 struct IndexBuildOptions {
   std::filesystem::path model_dir;
@@ -22,6 +27,9 @@ struct IndexBuildOptions {
   KdForestBuildOptions forest;
   uint64_t seed = 0;       // kd-forest randomization and k-means initialisation
   bool keypoints = false;  // also store each view's keypoint (optional section VKXY, 8 B/view)
+  // 0: every view's 128-byte descriptor (DESC). Else a compact index: one code of this many
+  // bytes per 3D point (PQCB, PCOD, PVNN; indexer/point_codes.h).
+  uint32_t code_bytes = 0;
   GeoreferencingOptions georeferencing;  // its fit seed is set from `seed`
   int threads = 0;                       // 0 = all cores
 };
@@ -32,6 +40,7 @@ struct IndexBuildReport {
   uint64_t file_bytes = 0;
   nlohmann::ordered_json georeference;  // the manifest's; null when not georeferenced
   double seconds_read = 0, seconds_covisibility = 0, seconds_clustering = 0;
+  double seconds_point_codes = 0;
   double seconds_neighbor_distances = 0, seconds_kd_forest = 0, seconds_write = 0,
          seconds_total = 0;
 };

@@ -39,7 +39,7 @@ void BackMatcher::Vote(uint32_t cluster) {
 std::optional<FeatureMatch> BackMatcher::MatchView(uint32_t view) {
   if (guide_ != nullptr) return guide_->Match(index_, view, options_.ratio);
   const KdSearchResult found =
-      searcher_->Search(index_.descriptor(view), search_options_, neighbors_);
+      searcher_->Search(index_.ViewDescriptor(view, decoded_), search_options_, neighbors_);
   if (found.num_neighbors < 2) return std::nullopt;
   if (!PassesRatioTest(neighbors_[0].distance, neighbors_[1].distance, options_.ratio))
     return std::nullopt;
@@ -92,6 +92,8 @@ void BackMatcher::Run(uint32_t back_matches) {
           result_.stopped_by_deadline = true;
           break;
         }
+        // A coded index gives all of a point's views one descriptor: match each point once.
+        if (index_.coded() && !tried_points_.insert(index_.view_points()[view]).second) continue;
         if (const std::optional<FeatureMatch> match = MatchView(view))
           result_.matches.push_back(*match);
       }

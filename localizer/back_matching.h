@@ -3,6 +3,7 @@
 #include <cstdint>
 #include <optional>
 #include <span>
+#include <unordered_set>
 #include <vector>
 
 #include "format/base/deadline.h"
@@ -76,7 +77,9 @@ class BackMatcher {
   KdSearchOptions search_options_;
   std::vector<KdNeighbor> neighbors_;
   std::vector<uint32_t> track_clusters_;
-  bool started_ = false;  // the first Run builds the query forest
+  uint8_t decoded_[128];                       // a coded index's view descriptor
+  std::unordered_set<uint32_t> tried_points_;  // a coded index's points back-matched so far
+  bool started_ = false;                       // the first Run builds the query forest
 };
 
 // One BackMatcher run to options.back_matches.

@@ -8,6 +8,42 @@
 
 namespace cwloc {
 
+namespace {
+
+// A neighbour as a member of one cluster.
+struct ClusterMember {
+  uint32_t rank;  // position among the neighbours
+  uint32_t cluster;
+  uint32_t point;
+  uint32_t view;  // the neighbour's view in that cluster
+};
+
+// The neighbours' cluster memberships, in neighbour order: one per view neighbour; one per
+// cluster that sees a point neighbour (its first view there).
+void ListMembers(const Index& index, std::span<const KdNeighbor> neighbors,
+                 std::vector<ClusterMember>* members) {
+  members->clear();
+  for (uint32_t rank = 0; rank < neighbors.size(); ++rank) {
+    const uint32_t row = neighbors[rank].index;
+    const uint32_t point = index.PointOfRow(row);
+    if (!index.coded()) {
+      members->push_back({rank, ClusterOfView(index, row), point, row});
+      continue;
+    }
+    const size_t first = members->size();
+    for (const uint32_t view : index.TrackOf(point)) {
+      const uint32_t cluster = ClusterOfView(index, view);
+      if (cluster == UINT32_MAX) continue;
+      bool seen = false;
+      for (size_t m = first; m < members->size() && !seen; ++m)
+        seen = (*members)[m].cluster == cluster;
+      if (!seen) members->push_back({rank, cluster, point, view});
+    }
+  }
+}
+
+}  // namespace
+
 void ClusterWiseRatioTest(const Index& index, uint32_t feature,
                           std::span<const KdNeighbor> neighbors, double ratio,
                           std::vector<FeatureMatch>* accepted, ForwardMatchingStats* stats) {
@@ -18,40 +54,38 @@ void ClusterWiseRatioTest(const Index& index, uint32_t feature,
   }
   const size_t n = neighbors.size();
   if (n < 2) return;
-  uint32_t clusters[kMaxNeighbors];
-  uint32_t points[kMaxNeighbors];
-  for (size_t i = 0; i < n; ++i) {
-    clusters[i] = ClusterOfView(index, neighbors[i].index);
-    points[i] = neighbors[i].index < index.num_views() ? index.view_points()[neighbors[i].index]
-                                                       : UINT32_MAX;
-  }
-  const size_t k = n - 1;  // the last neighbour only serves as a local second neighbour
-  for (size_t i = 0; i < k; ++i) {
-    if (clusters[i] == UINT32_MAX) continue;
+  thread_local std::vector<ClusterMember> members;
+  ListMembers(index, neighbors, &members);
+  const uint32_t k = static_cast<uint32_t>(n - 1);  // the last only serves as a second neighbour
+  for (size_t i = 0; i < members.size() && members[i].rank < k; ++i) {
+    const ClusterMember& candidate = members[i];
+    if (candidate.cluster == UINT32_MAX) continue;
     bool seen_cluster = false;
-    for (size_t j = 0; j < i && !seen_cluster; ++j) seen_cluster = clusters[j] == clusters[i];
-    if (seen_cluster) continue;  // only the cluster's nearest view is a candidate
+    for (size_t j = 0; j < i && !seen_cluster; ++j)
+      seen_cluster = members[j].cluster == candidate.cluster;
+    if (seen_cluster) continue;  // only the cluster's nearest neighbour is a candidate
 
-    const float d1 = std::sqrt(static_cast<float>(neighbors[i].distance));
+    const KdNeighbor& nearest = neighbors[candidate.rank];
+    const float d1 = std::sqrt(static_cast<float>(nearest.distance));
     float alpha;
-    size_t second = n;
-    for (size_t j = i + 1; j < n; ++j) {
-      if (clusters[j] == clusters[i] && points[j] != points[i]) {
+    size_t second = members.size();
+    for (size_t j = i + 1; j < members.size(); ++j) {
+      if (members[j].cluster == candidate.cluster && members[j].point != candidate.point) {
         second = j;
         break;
       }
     }
-    if (second < n) {
+    if (second < members.size()) {
       ++stats->local_ratio_tests;
-      const float d2 = std::sqrt(static_cast<float>(neighbors[second].distance));
+      const float d2 = std::sqrt(static_cast<float>(neighbors[members[second].rank].distance));
       alpha = d2 > 0 ? d1 / d2 : 1.0f;
     } else {
       ++stats->t_ratio_tests;
-      const float neighbor_distance = index.view_neighbor_distances()[neighbors[i].index];
+      const float neighbor_distance = index.RowNeighborDistance(nearest.index);
       const float denominator = d1 + neighbor_distance;
       alpha = denominator > 0 ? d1 / denominator : 1.0f;  // inf v_NN gives 0: nothing competes
     }
-    if (alpha <= ratio) accepted->push_back({feature, neighbors[i].index, d1});
+    if (alpha <= ratio) accepted->push_back({feature, candidate.view, d1});
   }
 }
 

@@ -17,6 +17,9 @@ namespace cwloc {
 //    local 1-ratio; the (k+1)-th neighbour counts too, since everything closer was retrieved);
 //  - otherwise with the t-ratio ||q - v_c1|| / (||q - v_c1|| + ||v_c1 - v_NN||), v_NN from VNND.
 // Accepted (feature, v_c1) pairs are appended to `accepted`.
+// In a coded index the neighbours are 3D points, and a point belongs to every cluster that
+// sees it: it is the candidate of each such cluster (as its view in that cluster) at its
+// distance, and v_NN is the point's PVNN (docs/algorithm.md, "The compact index").
 void ClusterWiseRatioTest(const Index& index, uint32_t feature,
                           std::span<const KdNeighbor> neighbors, double ratio,
                           std::vector<FeatureMatch>* accepted, ForwardMatchingStats* stats);

@@ -48,10 +48,22 @@ std::vector<ClusterMatches> MatchEachClusterExhaustively(const Index& index,
   std::vector<uint32_t> distances(kBlockViews);
   block.reserve(kBlockViews);
 
+  // A coded index's block is decoded once, then compared like exact rows.
+  std::vector<uint8_t> decoded(index.coded() ? kBlockViews * kDescriptorBytes : 0);
+  std::vector<uint32_t> decoded_rows(index.coded() ? kBlockViews : 0);
+  for (uint32_t i = 0; i < decoded_rows.size(); ++i) decoded_rows[i] = i;
+
   auto compare_block = [&] {
+    const uint8_t* base = index.descriptors().data();
+    const uint32_t* rows = block.data();
+    if (index.coded()) {
+      for (size_t i = 0; i < block.size(); ++i)
+        index.ViewDescriptor(block[i], &decoded[i * kDescriptorBytes]);
+      base = decoded.data();
+      rows = decoded_rows.data();
+    }
     for (uint32_t feature = 0; feature < num_features; ++feature) {
-      distance.batch(query.Descriptor(feature), index.descriptors().data(), block.data(),
-                     block.size(), distances.data());
+      distance.batch(query.Descriptor(feature), base, rows, block.size(), distances.data());
       NearestTwo& two = nearest[feature];
       for (size_t i = 0; i < block.size(); ++i)
         two.Offer(distances[i], block[i], view_points[block[i]]);
@@ -66,8 +78,7 @@ std::vector<ClusterMatches> MatchEachClusterExhaustively(const Index& index,
       const uint64_t end =
           std::min<uint64_t>(uint64_t{image.first_view} + image.num_views, index.num_views());
       for (uint64_t view = image.first_view; view < end; ++view) {
-        if (view_points[view] >= index.points().size())
-          continue;  // a corrupt view; verify names it
+        if (view_points[view] >= index.num_points()) continue;  // a corrupt view; verify names it
         block.push_back(static_cast<uint32_t>(view));
         if (block.size() == kBlockViews) compare_block();
       }

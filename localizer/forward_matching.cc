@@ -23,6 +23,29 @@ void ThrowCorrupt(const Index& index) {
 // small batch searches few features past the stop for nothing.
 constexpr size_t kForwardBatch = 2;
 
+// What a coded index's (feature, point) correspondence counts towards N_F. At 2, N_F = 200
+// gives 100 correspondences: on the paper's city as accurate as the full index's 200 view
+// matches (about 40 correspondences) and as fast; at 1 forward matching searches 1.7-3.3x the
+// features, at 4 the guided pose hypothesis fails on repetitive cities (docs/algorithm.md).
+constexpr size_t kCodedMatchWeight = 2;
+
+// The 3D points among one feature's matches.
+size_t DistinctPoints(const Index& index, std::span<const FeatureMatch> matches) {
+  size_t count = 0;
+  for (size_t i = 0; i < matches.size(); ++i) {
+    const uint32_t point = index.view_points()[matches[i].view];
+    bool seen = false;
+    for (size_t j = 0; j < i && !seen; ++j) seen = index.view_points()[matches[j].view] == point;
+    count += !seen;
+  }
+  return count;
+}
+
+uint32_t FirstViewOfPoint(const Index& index, uint32_t point) {
+  const std::span<const uint32_t> track = index.TrackOf(point);
+  return track.empty() ? UINT32_MAX : track.front();
+}
+
 }  // namespace
 
 std::vector<FeatureMatch> MatchForward(const Index& index, const Query& query,
@@ -44,12 +67,16 @@ std::vector<FeatureMatch> MatchForward(const Index& index, const Query& query,
   std::vector<const uint8_t*> descriptors(kForwardBatch);
   // A position prior's region: the searches compare only its views (the ratio tests then
   // judge distinctiveness within the region), walking the leaves they would walk anyway.
-  const std::vector<uint64_t> region = AllowedViews(index, allowed);
+  const std::vector<uint64_t> region = AllowedRows(index, allowed);
   KdSearchOptions search_options;
   search_options.max_checks = options.checks;
   search_options.allowed_rows = region;
   std::vector<FeatureMatch> matches;
-  for (size_t next = 0; next < order.size() && matches.size() < options.forward_matches;) {
+  // N_F counts view matches. A coded index's point neighbour is a candidate in every cluster
+  // that sees it, so its matches there (votes) say little more than one; there each distinct
+  // 2D-3D correspondence counts kCodedMatchWeight.
+  size_t correspondences = 0;
+  for (size_t next = 0; next < order.size() && correspondences < options.forward_matches;) {
     if (stop.Passed()) {
       stats->stopped_by_deadline = true;
       break;
@@ -61,7 +88,7 @@ std::vector<FeatureMatch> MatchForward(const Index& index, const Query& query,
                          std::span<const std::span<KdNeighbor>>(outs).first(count),
                          std::span(results).first(count), kForwardBatch);
     stats->seconds_knn += knn.Seconds();
-    for (size_t i = 0; i < count && matches.size() < options.forward_matches; ++i) {
+    for (size_t i = 0; i < count && correspondences < options.forward_matches; ++i) {
       const uint32_t feature = order[next + i];
       const KdSearchResult& result = results[i];
       const std::span<const KdNeighbor> found = outs[i];
@@ -72,7 +99,12 @@ std::vector<FeatureMatch> MatchForward(const Index& index, const Query& query,
       if (!PassesRatioTest(found[0].distance, found[options.k].distance, options.ratio)) continue;
       ++stats->passed_k_ratio;
       const Stopwatch ratio_test;
+      const size_t before = matches.size();
       ClusterWiseRatioTest(index, feature, found, options.ratio, &matches, stats);
+      correspondences +=
+          index.coded()
+              ? kCodedMatchWeight * DistinctPoints(index, std::span(matches).subspan(before))
+              : matches.size() - before;
       stats->seconds_ratio_test += ratio_test.Seconds();
     }
     next += count;
@@ -84,7 +116,7 @@ std::vector<FeatureMatch> MatchGlobalRatio(const Index& index, const Query& quer
                                            const LocalizerOptions& options,
                                            KdForestSearcher& searcher, ForwardMatchingStats* stats,
                                            ClusterMask allowed, const Deadline& stop) {
-  const std::vector<uint64_t> region = AllowedViews(index, allowed);
+  const std::vector<uint64_t> region = AllowedRows(index, allowed);
   KdSearchOptions search_options;
   search_options.max_checks = options.checks;
   search_options.allowed_rows = region;
@@ -119,7 +151,10 @@ std::vector<FeatureMatch> MatchGlobalRatio(const Index& index, const Query& quer
     if (result.num_neighbors < 2) continue;
     if (!PassesRatioTest(found[0].distance, found[1].distance, options.ratio)) continue;
     ++stats->passed_k_ratio;
-    matches.push_back({feature, found[0].index, std::sqrt(static_cast<float>(found[0].distance))});
+    // A coded index's row is a point: its first view stands for it.
+    const uint32_t view = index.coded() ? FirstViewOfPoint(index, found[0].index) : found[0].index;
+    if (view == UINT32_MAX) continue;
+    matches.push_back({feature, view, std::sqrt(static_cast<float>(found[0].distance))});
   }
   return matches;
 }

@@ -12,15 +12,17 @@ uint32_t ClusterOfView(const Index& index, uint32_t view) {
   return image == UINT32_MAX ? UINT32_MAX : index.images()[image].cluster;
 }
 
-std::vector<uint64_t> AllowedViews(const Index& index, ClusterMask allowed) {
+std::vector<uint64_t> AllowedRows(const Index& index, ClusterMask allowed) {
   if (allowed.empty()) return {};
-  std::vector<uint64_t> bits((index.num_views() + 63) / 64, 0);
+  std::vector<uint64_t> bits((index.num_rows() + 63) / 64, 0);
   for (const IndexImage& image : index.images()) {
     if (!ClusterAllowed(allowed, image.cluster)) continue;
     const uint64_t end =
         std::min<uint64_t>(uint64_t{image.first_view} + image.num_views, index.num_views());
-    for (uint64_t view = image.first_view; view < end; ++view)
-      bits[view / 64] |= uint64_t{1} << (view % 64);
+    for (uint64_t view = image.first_view; view < end; ++view) {
+      const uint64_t row = index.coded() ? index.PointOfRow(index.view_points()[view]) : view;
+      if (row < index.num_rows()) bits[row / 64] |= uint64_t{1} << (row % 64);
+    }
   }
   return bits;
 }

@@ -44,9 +44,9 @@ inline bool ClusterAllowed(ClusterMask allowed, uint32_t cluster) {
   return allowed.empty() || (cluster < allowed.size() && allowed[cluster] != 0);
 }
 
-// The views of the allowed clusters as the kd-forest's row filter (KdSearchOptions::
-// allowed_rows); empty when every cluster is allowed.
-std::vector<uint64_t> AllowedViews(const Index& index, ClusterMask allowed);
+// The kd-forest rows seen in the allowed clusters (views; points of a coded index) as its row
+// filter (KdSearchOptions::allowed_rows); empty when every cluster is allowed.
+std::vector<uint64_t> AllowedRows(const Index& index, ClusterMask allowed);
 
 // The clusters of an index as lists of image rows, computed once per index.
 struct ClusterMembers {

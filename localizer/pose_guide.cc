@@ -42,8 +42,8 @@ PoseGuide::PoseGuide(const Query& query, PoseHypothesis hypothesis, double radiu
 std::optional<FeatureMatch> PoseGuide::Match(const Index& index, uint32_t view, double ratio) {
   if (view >= index.num_views()) return std::nullopt;
   const uint32_t point_index = index.view_points()[view];
-  if (point_index >= index.points().size()) return std::nullopt;
-  const double* xyz = index.points()[point_index].xyz;
+  if (point_index >= index.num_points()) return std::nullopt;
+  const std::array<double, 3> xyz = index.PointXyz(point_index);
   const Eigen::Vector3d in_camera =
       rotation_ * Eigen::Vector3d(xyz[0], xyz[1], xyz[2]) + hypothesis_.pose.translation;
   std::array<double, 2> pixel;
@@ -76,7 +76,7 @@ std::optional<FeatureMatch> PoseGuide::Match(const Index& index, uint32_t view, 
   }
   if (candidates_.size() < 2) return std::nullopt;
   distances_.resize(candidates_.size());
-  BestDistanceFunctions().batch(index.descriptor(view), query_.descriptors.data(),
+  BestDistanceFunctions().batch(index.ViewDescriptor(view, decoded_), query_.descriptors.data(),
                                 candidates_.data(), candidates_.size(), distances_.data());
   // Nearest and second nearest in descriptor space; ties go to the lower feature index.
   const auto closer = [&](uint32_t a, uint32_t b) {

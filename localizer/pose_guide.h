@@ -47,6 +47,7 @@ class PoseGuide {
   std::vector<uint32_t> features_;
   std::vector<uint32_t> candidates_;  // scratch
   std::vector<uint32_t> distances_;
+  uint8_t decoded_[128];  // a coded index's view descriptor
 };
 
 }  // namespace cwloc

@@ -18,7 +18,7 @@ std::vector<FeatureMatch> UniqueCorrespondences(const Index& index,
   std::vector<FeatureMatch> unique;
   for (const FeatureMatch& match : matches) {
     // Views come from range-checked searches; their point is checked here, where it is read.
-    if (match.view >= index.num_views() || index.view_points()[match.view] >= index.points().size())
+    if (match.view >= index.num_views() || index.view_points()[match.view] >= index.num_points())
       continue;
     if (!unique.empty() && unique.back().feature == match.feature) continue;
     unique.push_back(match);
@@ -49,9 +49,9 @@ QueryPose EstimateQueryPose(const Index& index, const Query& query,
     } else {
       point2D = {pixel[0] - center[0], pixel[1] - center[1]};
     }
-    const IndexPoint& point = index.points()[index.view_points()[match.view]];
+    const std::array<double, 3> xyz = index.PointXyz(index.view_points()[match.view]);
     points2D.push_back(point2D);
-    points3D.emplace_back(point.xyz[0], point.xyz[1], point.xyz[2]);
+    points3D.emplace_back(xyz[0], xyz[1], xyz[2]);
     result.used.push_back(i);
   }
 

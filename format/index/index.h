@@ -1,13 +1,16 @@
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <span>
 #include <string>
 #include <string_view>
+#include <utility>
 
 #include "format/index/index_file.h"
 #include "format/index/index_sections.h"
+#include "format/kdtree/descriptor_codes.h"
 #include "format/kdtree/kd_forest.h"
 
 namespace cwloc {
@@ -26,13 +29,23 @@ class Index {
 
   std::span<const IndexCamera> cameras() const { return cameras_; }
   std::span<const IndexImage> images() const { return images_; }
+  // PNTS of a full index; empty in a compact one, which keeps PORG + PNTF (use PointXyz).
   std::span<const IndexPoint> points() const { return points_; }
+  size_t num_points() const { return num_points_; }
+  // Point p's position (p < num_points()).
+  std::array<double, 3> PointXyz(uint32_t p) const;
   std::span<const uint32_t> tracks() const { return tracks_; }  // view indices
-  std::span<const uint8_t> descriptors() const { return descriptors_; }
+  // A full index: one 128-byte descriptor per view, and the kd-forest's rows are views.
+  // A compact one (coded()): one product-quantization code per 3D point, and its rows are points.
+  bool coded() const { return !codes_.empty(); }
+  std::span<const uint8_t> descriptors() const { return descriptors_; }  // empty when coded()
+  const DescriptorCodes& codes() const { return codes_; }
   std::span<const uint32_t> view_points() const { return view_points_; }
   // Empty unless the index was built with --keypoints.
   std::span<const ViewKeypoint> view_keypoints() const { return view_keypoints_; }
+  // v_NN per view (full) or per point (coded(): the nearest over the point's clusters).
   std::span<const float> view_neighbor_distances() const { return view_neighbor_distances_; }
+  std::span<const float> point_neighbor_distances() const { return point_neighbor_distances_; }
   std::span<const uint32_t> covisibility_offsets() const { return covisibility_offsets_; }
   std::span<const CovisibilityEdge> covisibility_edges() const { return covisibility_edges_; }
   // nullptr unless the index was georeferenced (format 1.1's optional GEOR section).
@@ -42,9 +55,17 @@ class Index {
   const KdForestView& kd_forest() const { return kd_forest_; }
 
   size_t num_views() const { return view_points_.size(); }
-  const uint8_t* descriptor(uint32_t view) const {
-    return descriptors_.data() + size_t{view} * kDescriptorBytes;
-  }
+  // Rows of the kd-forest: views, or points when coded().
+  size_t num_rows() const { return coded() ? num_points_ : num_views(); }
+  // The point a kd-forest row stands for; UINT32_MAX when out of range.
+  uint32_t PointOfRow(uint32_t row) const;
+  // The row's v_NN distance (VNND or PVNN); 0 when out of range.
+  float RowNeighborDistance(uint32_t row) const;
+  // The descriptor the localizer compares for a view (< num_views()) or a row (< num_rows()):
+  // a pointer into DESC (scratch unused, may be null), or the point's code decoded into
+  // `scratch` (128 bytes).
+  const uint8_t* ViewDescriptor(uint32_t view, uint8_t* scratch) const;
+  const uint8_t* RowDescriptor(uint32_t row, uint8_t* scratch) const;
 
   // Image name from the string pool; empty if the stored range is out of bounds.
   std::string_view ImageName(const IndexImage& image) const;
@@ -66,11 +87,19 @@ class Index {
   std::span<const IndexImage> images_;
   std::span<const char> strings_;
   std::span<const IndexPoint> points_;
+  const IndexPointOrigin* point_origin_ = nullptr;
+  std::span<const IndexPointOffset> point_offsets_;
+  size_t num_points_ = 0;
+  // Point p's stored track range, unchecked: PNTS's fields, or PNTF's first_track up to the
+  // next point's (TRKS's end for the last).
+  std::pair<uint64_t, uint64_t> StoredTrack(uint32_t p) const;
   std::span<const uint32_t> tracks_;
   std::span<const uint8_t> descriptors_;
   std::span<const uint32_t> view_points_;
   std::span<const ViewKeypoint> view_keypoints_;
   std::span<const float> view_neighbor_distances_;
+  std::span<const float> point_neighbor_distances_;
+  DescriptorCodes codes_;
   std::span<const uint32_t> covisibility_offsets_;
   std::span<const CovisibilityEdge> covisibility_edges_;
   const IndexGeoreference* georeference_ = nullptr;

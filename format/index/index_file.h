@@ -61,6 +61,10 @@ struct SectionData {
   std::span<const uint8_t> bytes;  // count * element_size bytes
 };
 
+// The format minor a file with these sections declares: the oldest 1.x that knows them all
+// (1.1 without the compact index's sections, 1.2 with them).
+uint16_t FormatMinorOf(std::span<const SectionData> sections);
+
 // Writes an index atomically through an AtomicFile (format/base/atomic_file.h: an unnamed
 // temporary file in the target directory, fsync, put in place). The output depends only on the
 // sections given (padding is zero), so equal input gives equal bytes.

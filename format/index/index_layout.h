@@ -18,7 +18,7 @@ static_assert(
 inline constexpr char kIndexMagic[8] = {'C', 'W', 'L', 'O', 'C', 'I', 'D', 'X'};
 inline constexpr uint32_t kByteOrderMark = 0x01020304;
 inline constexpr uint16_t kFormatMajor = 1;
-inline constexpr uint16_t kFormatMinor = 1;
+inline constexpr uint16_t kFormatMinor = 2;
 inline constexpr uint64_t kSectionAlignment = 64;
 
 // Feature bits: a reader refuses a file with a required bit it does not know.
@@ -84,10 +84,19 @@ inline constexpr uint32_t kKdRoots = SectionTag("KDRT");
 inline constexpr uint32_t kCovisOffsets = SectionTag("CVOF");  // CSR row offsets per image
 inline constexpr uint32_t kCovisEdges = SectionTag("CVED");    // (image, shared points)
 inline constexpr uint32_t kGeoreference = SectionTag("GEOR");  // optional, format 1.1
-inline constexpr uint32_t kAll[] = {kManifest,      kCameras,      kImages,      kStrings,
-                                    kPoints,        kTracks,       kDescriptors, kViewPoint,
-                                    kViewKeypoints, kViewNeighbor, kKdNodes,     kKdLeaves,
-                                    kKdRoots,       kCovisOffsets, kCovisEdges,  kGeoreference};
+// A compact index (format 1.2) has these three required sections instead of DESC and VNND:
+// one coded descriptor per 3D point, and the kd-forest's rows are points.
+inline constexpr uint32_t kCodebook = SectionTag("PQCB");       // 256 x 128 uint8 centroids
+inline constexpr uint32_t kPointCodes = SectionTag("PCOD");     // point descriptor codes
+inline constexpr uint32_t kPointNeighbor = SectionTag("PVNN");  // v_NN distance per point
+// ... and its points as float offsets from one double origin, instead of PNTS.
+inline constexpr uint32_t kPointOrigin = SectionTag("PORG");   // one IndexPointOrigin
+inline constexpr uint32_t kPointOffsets = SectionTag("PNTF");  // IndexPointOffset per point
+inline constexpr uint32_t kAll[] = {
+    kManifest,      kCameras,      kImages,        kStrings,      kPoints,   kTracks,
+    kDescriptors,   kViewPoint,    kViewKeypoints, kViewNeighbor, kKdNodes,  kKdLeaves,
+    kKdRoots,       kCovisOffsets, kCovisEdges,    kGeoreference, kCodebook, kPointCodes,
+    kPointNeighbor, kPointOrigin,  kPointOffsets};
 }  // namespace section
 
 // "DESC" for a tag, with non-printable bytes escaped, for messages.

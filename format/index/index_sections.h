@@ -51,6 +51,20 @@ struct IndexPoint {
 };
 static_assert(sizeof(IndexPoint) == 32 && std::is_trivially_copyable_v<IndexPoint>);
 
+// PORG and PNTF (format 1.2, a compact index, instead of PNTS): point p lies at
+// origin + offsets[p].offset, in doubles; floats keep 1 mm over a 10 km model even when its
+// frame is ECEF. A point's track ends where the next one's starts (the last: at TRKS's end).
+struct IndexPointOrigin {
+  double xyz[3];
+};
+static_assert(sizeof(IndexPointOrigin) == 24 && std::is_trivially_copyable_v<IndexPointOrigin>);
+
+struct IndexPointOffset {
+  float offset[3];
+  uint32_t first_track;
+};
+static_assert(sizeof(IndexPointOffset) == 16 && std::is_trivially_copyable_v<IndexPointOffset>);
+
 // VKXY: the view's keypoint in its model image (COLMAP pixel convention).
 struct ViewKeypoint {
   float x;

@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <cstring>
 #include <vector>
 
@@ -13,6 +14,17 @@ uint64_t AlignUp(uint64_t value) {
 }
 
 }  // namespace
+
+uint16_t FormatMinorOf(std::span<const SectionData> sections) {
+  uint16_t minor = 1;
+  for (const SectionData& section : sections) {
+    if (section.tag == section::kCodebook || section.tag == section::kPointCodes ||
+        section.tag == section::kPointNeighbor || section.tag == section::kPointOrigin ||
+        section.tag == section::kPointOffsets)
+      minor = std::max<uint16_t>(minor, 2);
+  }
+  return minor;
+}
 
 void WriteIndexFile(const std::filesystem::path& path, std::span<const SectionData> sections) {
   std::vector<SectionEntry> table(sections.size());
@@ -42,7 +54,7 @@ void WriteIndexFile(const std::filesystem::path& path, std::span<const SectionDa
   std::memcpy(header.magic, kIndexMagic, sizeof(kIndexMagic));
   header.byte_order_mark = kByteOrderMark;
   header.format_major = kFormatMajor;
-  header.format_minor = kFormatMinor;
+  header.format_minor = FormatMinorOf(sections);
   header.header_size = sizeof(FileHeader);
   header.section_entry_size = sizeof(SectionEntry);
   header.file_size = table_offset + table_bytes;

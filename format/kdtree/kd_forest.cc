@@ -29,6 +29,13 @@ bool ValidateKdForest(const KdForestView& forest, std::string* error) {
     return fail("kd-forest descriptors: " + std::to_string(forest.descriptors.size()) +
                 " bytes is not a multiple of 128");
   }
+  if (!forest.codes.empty() && (!IsValidCodeBytes(forest.codes.code_bytes) ||
+                                forest.codes.codebook.size() != DescriptorCodes::kCodebookBytes ||
+                                forest.codes.codes.size() % forest.codes.code_bytes != 0)) {
+    return fail("kd-forest codes: " + std::to_string(forest.codes.code_bytes) +
+                "-byte codes over " + std::to_string(forest.codes.codes.size()) + " bytes with a " +
+                std::to_string(forest.codes.codebook.size()) + "-byte codebook");
+  }
   const uint64_t n = forest.NumDescriptors();
   if (n > kMaxDescriptors)
     return fail("kd-forest: too many descriptors (" + std::to_string(n) + ")");
@@ -144,6 +151,10 @@ KdForestSearcher::KdForestSearcher(const KdForestView& forest, const DistanceFun
       states_(1) {
   states_[0].heap.reserve(4096);
   states_[0].cursor_rows.resize(size_t(kMaxInterleave) * 256);
+  if (!forest.codes.empty()) {
+    decoded_.resize(size_t{256} * kDescriptorDim);
+    for (uint32_t i = 0; i < 256; ++i) decoded_rows_[i] = i;
+  }
 }
 
 KdSearchResult KdForestSearcher::Search(const uint8_t* query, const KdSearchOptions& options,
@@ -317,9 +328,13 @@ bool KdForestSearcher::StepBucket(State& s, Cursor& c, uint32_t* rows) {
       ++s.checks;  // walked past, not compared
       continue;
     }
-    const uint8_t* p = descriptors + size_t(row) * kDescriptorDim;
-    Prefetch(p);
-    Prefetch(p + 64);
+    if (forest_.codes.empty()) {
+      const uint8_t* p = descriptors + size_t(row) * kDescriptorDim;
+      Prefetch(p);
+      Prefetch(p + 64);
+    } else {
+      Prefetch(forest_.codes.Code(row));
+    }
     rows[num_rows++] = row;
   }
   c.count = num_rows;
@@ -328,7 +343,13 @@ bool KdForestSearcher::StepBucket(State& s, Cursor& c, uint32_t* rows) {
 }
 
 void KdForestSearcher::StepRows(State& s, Cursor& c, const uint32_t* rows) {
-  distance_->batch(s.query, forest_.descriptors.data(), rows, c.count, leaf_distances_);
+  if (forest_.codes.empty()) {
+    distance_->batch(s.query, forest_.descriptors.data(), rows, c.count, leaf_distances_);
+  } else {
+    for (uint32_t i = 0; i < c.count; ++i)
+      forest_.codes.Decode(rows[i], decoded_.data() + size_t{i} * kDescriptorDim);
+    distance_->batch(s.query, decoded_.data(), decoded_rows_, c.count, leaf_distances_);
+  }
   for (uint32_t i = 0; i < c.count; ++i) {
     if (s.BudgetSpent()) break;
     ++s.checks;

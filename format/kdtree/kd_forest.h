@@ -13,7 +13,8 @@
 //   roots   uint32[]  the root node of each tree; tree t owns nodes [roots[t], roots[t+1]).
 //   leaves  uint32[]  for each tree, a permutation of the descriptor indices 0..N-1; a leaf
 //                     node owns a contiguous bucket of it (at most 255, normally <= 8).
-//   descriptors       N x 128 uint8, row-major.
+//   descriptors       N x 128 uint8, row-major; or N product-quantization codes
+//                     (descriptor_codes.h), decoded as the leaves compare them.
 
 #include <bit>
 #include <cstddef>
@@ -23,6 +24,7 @@
 #include <string>
 #include <vector>
 
+#include "format/kdtree/descriptor_codes.h"
 #include "format/kdtree/descriptor_distance.h"
 
 namespace cwloc {
@@ -55,9 +57,12 @@ struct KdForestView {
   std::span<const KdNode> nodes;
   std::span<const uint32_t> roots;
   std::span<const uint32_t> leaves;
-  std::span<const uint8_t> descriptors;  // N x 128
+  std::span<const uint8_t> descriptors;  // N x 128, or empty when `codes` holds the rows
+  DescriptorCodes codes;
 
-  size_t NumDescriptors() const { return descriptors.size() / kDescriptorDim; }
+  size_t NumDescriptors() const {
+    return codes.empty() ? descriptors.size() / kDescriptorDim : codes.NumRows();
+  }
   size_t NumTrees() const { return roots.size(); }
 };
 
@@ -210,6 +215,9 @@ class KdForestSearcher {
   std::vector<State> states_;
   // A bucket's distances, filled and consumed within one step.
   uint32_t leaf_distances_[256];
+  // Coded rows: a bucket's decoded descriptors, and the row numbers 0..255 into them.
+  std::vector<uint8_t> decoded_;
+  uint32_t decoded_rows_[256];
 };
 
 }  // namespace cwloc

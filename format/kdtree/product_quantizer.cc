@@ -5,6 +5,7 @@
 #include <string>
 
 #include "format/base/error.h"
+#include "format/base/parallel_for.h"
 #include "format/base/split_mix64.h"
 
 namespace cwloc {
@@ -110,16 +111,17 @@ ProductQuantizer ProductQuantizer::TrainOn(std::span<const T> descriptors,
   const size_t n = std::min<size_t>(total, std::max<uint32_t>(options.max_training, kCentroids));
   const uint32_t dims = kDims / m;
   std::vector<float> centroids(size_t{m} * kCentroids * dims);
-  std::vector<float> points(n * dims);
-  for (uint32_t s = 0; s < m; ++s) {
+  // Subspaces are independent (each seeded by its number), so threads do not change the result.
+  ParallelFor(m, options.threads, [&](size_t s) {
+    std::vector<float> points(n * dims);
     for (size_t i = 0; i < n; ++i) {
-      const T* descriptor = &descriptors[(i * total / n) * kDims + size_t{s} * dims];
+      const T* descriptor = &descriptors[(i * total / n) * kDims + s * dims];
       for (uint32_t d = 0; d < dims; ++d) points[i * dims + d] = descriptor[d];
     }
     SplitMix64 rng(options.seed + s);
     const std::vector<float> part = KMeans(points, n, dims, options.iterations, rng);
-    std::copy(part.begin(), part.end(), &centroids[size_t{s} * kCentroids * dims]);
-  }
+    std::copy(part.begin(), part.end(), &centroids[s * kCentroids * dims]);
+  });
   return ProductQuantizer(m, std::move(centroids));
 }
 

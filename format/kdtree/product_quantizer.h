@@ -20,6 +20,7 @@ struct ProductQuantizerOptions {
   uint32_t iterations = 15;       // Lloyd iterations per subspace
   uint32_t max_training = 50000;  // descriptors k-means sees (an evenly spaced sample)
   uint64_t seed = 0;              // k-means++ seeding and re-seeding of empty clusters
+  int threads = 1;                // subspaces trained at once (0 = all cores); same result
 };
 
 class ProductQuantizer {

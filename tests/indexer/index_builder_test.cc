@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <set>
 
 #include "format/index/index.h"
@@ -64,7 +65,7 @@ TEST_F(IndexBuilderTest, StoresEveryObservedViewWithItsDescriptorPointAndImage) 
       const colmap::Point2D& point2D = image.points2D[i];
       if (point2D.point3D_id == kInvalidPoint3DId) continue;
       ASSERT_LT(view, stored.first_view + stored.num_views);
-      EXPECT_EQ(0, std::memcmp(index.descriptor(view),
+      EXPECT_EQ(0, std::memcmp(index.ViewDescriptor(view, nullptr),
                                descriptors_[image_id].Row(static_cast<uint32_t>(i)), 128));
       const IndexPoint& point = index.points()[index.view_points()[view]];
       const auto& xyz = model_.points3D.at(point2D.point3D_id).xyz;
@@ -101,12 +102,96 @@ TEST_F(IndexBuilderTest, ViewNeighborDistanceIsTheExactNearestOtherPointInTheIma
       uint32_t best = UINT32_MAX;
       for (uint32_t u = image.first_view; u < image.first_view + image.num_views; ++u) {
         if (index.view_points()[u] == index.view_points()[v]) continue;
-        best = std::min(best, SquaredL2(index.descriptor(v), index.descriptor(u)));
+        best = std::min(
+            best, SquaredL2(index.ViewDescriptor(v, nullptr), index.ViewDescriptor(u, nullptr)));
       }
       const float expected = best == UINT32_MAX ? INFINITY : std::sqrt(static_cast<float>(best));
       EXPECT_EQ(index.view_neighbor_distances()[v], expected) << "view " << v;
     }
   }
+}
+
+TEST_F(IndexBuilderTest, CompactIndexCodesEachPointsMeanDescriptorInFormat1_2) {
+  IndexBuildOptions options = Options();
+  options.code_bytes = 16;
+  BuildIndex(options);
+  const Index index = Index::Open(index_path_);
+  EXPECT_NO_THROW(index.Validate());
+  EXPECT_NO_THROW(index.file().VerifyChecksums());
+  EXPECT_EQ(index.file().header().format_minor, 2);
+  EXPECT_EQ(nlohmann::json::parse(index.manifest_json()).at("format_version"), "1.2");
+  EXPECT_EQ(nlohmann::json::parse(index.manifest_json())
+                .at("build_parameters")
+                .at("descriptors")
+                .at("code_bytes"),
+            16);
+  ASSERT_TRUE(index.coded());
+  EXPECT_EQ(index.file().FindSection(section::kDescriptors), nullptr);
+  EXPECT_EQ(index.file().FindSection(section::kViewNeighbor), nullptr);
+  EXPECT_EQ(index.file().FindSection(section::kPoints), nullptr);
+  EXPECT_TRUE(index.points().empty());
+  EXPECT_EQ(index.num_views(), model_.NumObservations());
+  ASSERT_EQ(index.num_points(), model_.points3D.size());
+  EXPECT_EQ(index.codes().NumRows(), index.num_points());
+  EXPECT_EQ(index.kd_forest().NumDescriptors(), index.num_points());
+
+  // Each subspace's code is the stored centroid nearest the point's rounded mean descriptor
+  // (up to the centroids' rounding to bytes: at most sqrt(dims) / 2 each way).
+  const DescriptorCodes& codes = index.codes();
+  constexpr uint32_t kDims = 128 / 16;
+  size_t row = 0;
+  for (const auto& [point_id, point] : model_.points3D) {  // the index keeps id order
+    // PORG + PNTF: a float offset from the mean position keeps the point to float precision.
+    const std::array<double, 3> xyz = index.PointXyz(uint32_t(row));
+    for (int i = 0; i < 3; ++i)
+      EXPECT_NEAR(xyz[i], point.xyz[i], 1e-6 * (1 + std::abs(point.xyz[i]))) << point_id;
+    double mean[128] = {};
+    for (const colmap::TrackElement& element : point.track) {
+      const uint8_t* descriptor = descriptors_.at(element.image_id).Row(element.point2D_idx);
+      for (int d = 0; d < 128; ++d) mean[d] += descriptor[d];
+    }
+    for (double& value : mean) value = std::round(value / point.track.size());
+    auto distance = [&](uint32_t s, uint32_t c) {
+      double squared = 0;
+      for (uint32_t d = 0; d < kDims; ++d) {
+        const double diff = mean[s * kDims + d] - codes.codebook[(s * 256 + c) * kDims + d];
+        squared += diff * diff;
+      }
+      return std::sqrt(squared);
+    };
+    for (uint32_t s = 0; s < 16; ++s) {
+      double nearest = INFINITY;
+      for (uint32_t c = 0; c < 256; ++c) nearest = std::min(nearest, distance(s, c));
+      EXPECT_LE(distance(s, codes.Code(row)[s]), nearest + std::sqrt(kDims))
+          << "point " << point_id << " subspace " << s;
+    }
+    ++row;
+  }
+
+  // PVNN: per point, the nearest other point's decoded descriptor in any image (the default
+  // clusters) that sees it.
+  uint8_t a[128], b[128];
+  for (uint32_t p = 0; p < index.num_points(); ++p) {
+    uint32_t best = UINT32_MAX;
+    for (const uint32_t view : index.TrackOf(p)) {
+      const IndexImage& image = index.images()[index.ImageOfView(view)];
+      for (uint32_t u = image.first_view; u < image.first_view + image.num_views; ++u) {
+        if (index.view_points()[u] == p) continue;
+        best = std::min(best, SquaredL2(index.RowDescriptor(p, a),
+                                        index.RowDescriptor(index.view_points()[u], b)));
+      }
+    }
+    const float expected = best == UINT32_MAX ? INFINITY : std::sqrt(static_cast<float>(best));
+    EXPECT_EQ(index.point_neighbor_distances()[p], expected) << "point " << p;
+  }
+}
+
+TEST_F(IndexBuilderTest, CodeBytesThatDoNotSplitADescriptorAreRefused) {
+  IndexBuildOptions options = Options();
+  options.code_bytes = 12;
+  EXPECT_EQ(test::InputErrorOf([&] { BuildIndex(options); }),
+            "--code-bytes 12: expected 0 (full descriptors) or 4, 8, 16, 32 or 64");
+  EXPECT_FALSE(std::filesystem::exists(index_path_));
 }
 
 TEST_F(IndexBuilderTest, CovisibilityCountsSharedPointsSymmetrically) {
@@ -133,14 +218,17 @@ TEST_F(IndexBuilderTest, CovisibilityCountsSharedPointsSymmetrically) {
 }
 
 TEST_F(IndexBuilderTest, OutputIsByteIdenticalForTheSameInputAndAnyThreadCount) {
-  IndexBuildOptions options = Options();
-  options.threads = 1;
-  BuildIndex(options);
-  const auto first = test::ReadBytes(index_path_);
-  options.threads = 2;
-  options.output_path = dir_ / "second.cwl";
-  BuildIndex(options);
-  EXPECT_EQ(first, test::ReadBytes(options.output_path));
+  for (const uint32_t code_bytes : {0u, 16u}) {  // a compact index trains its codes on threads
+    IndexBuildOptions options = Options();
+    options.code_bytes = code_bytes;
+    options.threads = 1;
+    BuildIndex(options);
+    const auto first = test::ReadBytes(index_path_);
+    options.threads = 2;
+    options.output_path = dir_ / "second.cwl";
+    BuildIndex(options);
+    EXPECT_EQ(first, test::ReadBytes(options.output_path)) << code_bytes << "-byte codes";
+  }
 }
 
 TEST_F(IndexBuilderTest, ClusteringFromAFileGroupsImages) {

@@ -22,16 +22,29 @@ class IndexCliTest : public test::IndexerFixture {
     return test::RunCommand(test::ToolPath("cwloc-index").string() + " " + args, output);
   }
 
-  void Build() {
+  void Build(const std::string& extra = "") {
     std::string output;
     ASSERT_EQ(Run("build --model " + model_dir_.string() + " --database " +
-                      database_path_.string() + " -o " + index_path_.string(),
+                      database_path_.string() + " -o " + index_path_.string() + extra,
                   &output),
               0)
         << output;
   }
 
   std::vector<uint8_t> Bytes() const { return test::ReadBytes(index_path_); }
+
+  // `info --json` output against schemas/index-info.schema.json.
+  void ExpectValidInfoJson(const std::string& output) const {
+    std::ofstream(dir_ / "info.json") << output;
+    const auto schema = test::SourceDir() / "schemas" / "index-info.schema.json";
+    const auto validator = test::SourceDir() / "tools" / "validate_json.py";
+    std::string validation;
+    EXPECT_EQ(test::RunCommand("/usr/bin/python3 " + validator.string() + " " + schema.string() +
+                                   " " + (dir_ / "info.json").string(),
+                               &validation),
+              0)
+        << validation;
+  }
 
   void WriteCorrupt(const std::vector<uint8_t>& bytes) const {
     test::WriteBytes(dir_ / "corrupt.cwl", bytes);
@@ -55,15 +68,34 @@ TEST_F(IndexCliTest, InfoJsonValidatesAgainstItsSchema) {
   EXPECT_EQ(info["manifest"]["counts"]["images"], 10);
   EXPECT_EQ(info["manifest"]["build_parameters"]["kd_trees"], 4);
   EXPECT_EQ(info["manifest"]["build_parameters"]["clustering"]["method"], "image");
-  std::ofstream(dir_ / "info.json") << output;
-  const auto schema = test::SourceDir() / "schemas" / "index-info.schema.json";
-  const auto validator = test::SourceDir() / "tools" / "validate_json.py";
-  std::string validation;
-  EXPECT_EQ(test::RunCommand("/usr/bin/python3 " + validator.string() + " " + schema.string() +
-                                 " " + (dir_ / "info.json").string(),
-                             &validation),
-            0)
-      << validation;
+  ExpectValidInfoJson(output);
+}
+
+TEST_F(IndexCliTest, CompactBuildSaysHowItStoresDescriptorsInInfoAndItsSchema) {
+  ASSERT_NO_FATAL_FAILURE(Build(" --compact"));
+  std::string output;
+  EXPECT_EQ(Run("info " + index_path_.string(), &output), 0) << output;
+  EXPECT_THAT(output, HasSubstr(": cwloc index format 1.2, "));
+  EXPECT_THAT(output, testing::ContainsRegex(
+                          "descriptors: one 32-byte product-quantization code per 3D point "
+                          "\\([0-9.]+ views per point\\)"));
+  EXPECT_EQ(Run("verify " + index_path_.string(), &output), 0) << output;
+  EXPECT_THAT(output, HasSubstr(": OK: 16 section checksums and every stored index verified"));
+  ASSERT_EQ(Run("info --json " + index_path_.string(), &output), 0) << output;
+  const auto info = nlohmann::json::parse(output);
+  EXPECT_EQ(info["format_version"], "1.2");
+  EXPECT_EQ(info["manifest"]["build_parameters"]["descriptors"]["code_bytes"], 32);
+  EXPECT_DOUBLE_EQ(info["bytes_per_view"].get<double>(),
+                   double(info["file_bytes"].get<uint64_t>()) /
+                       info["manifest"]["counts"]["views"].get<double>());
+  ExpectValidInfoJson(output);
+  // A code size that does not split 128 is refused before any work, naming the value.
+  EXPECT_EQ(Run("build --model " + model_dir_.string() + " --database " + database_path_.string() +
+                    " -o " + (dir_ / "bad.cwl").string() + " --code-bytes 48",
+                &output),
+            2);
+  EXPECT_THAT(output, HasSubstr("--code-bytes 48: expected 0 (full descriptors) or 4, 8, 16, 32 "
+                                "or 64"));
 }
 
 TEST_F(IndexCliTest, VerifyReportsAFlippedByteInEverySection) {

@@ -29,7 +29,8 @@ class BackMatchingTest : public test::MatchingFixture {
     for (uint32_t view = 0; view < index_->num_views(); ++view) {
       std::vector<uint32_t> distances;
       for (uint32_t f = 0; f < randoms_.NumFeatures(); ++f) {
-        distances.push_back(SquaredL2(index_->descriptor(view), randoms_.Descriptor(f)));
+        distances.push_back(
+            SquaredL2(index_->ViewDescriptor(view, nullptr), randoms_.Descriptor(f)));
       }
       std::partial_sort(distances.begin(), distances.begin() + 2, distances.end());
       ASSERT_GT(distances[0], 0.6 * distances[1]) << "view " << view;

@@ -21,7 +21,8 @@ TEST_F(ExhaustiveMatchingTest, AModelDescriptorMatchesItsOwnPointInItsCluster) {
   const IndexImage& image = index_->images()[0];
   ASSERT_GE(image.num_views, 3u);
   Query query;
-  for (uint32_t i = 0; i < 3; ++i) AddFeature(&query, index_->descriptor(image.first_view + i));
+  for (uint32_t i = 0; i < 3; ++i)
+    AddFeature(&query, index_->ViewDescriptor(image.first_view + i, nullptr));
   ForwardMatchingStats stats;
   const std::vector<ClusterMatches> found =
       MatchEachClusterExhaustively(*index_, *clusters_, query, 0.7, &stats);
@@ -55,7 +56,8 @@ TEST_F(ExhaustiveMatchingTest, AFeatureBetweenTwoPointsOfOneClusterFailsTheRatio
   ASSERT_NE(index_->view_points()[a], index_->view_points()[b]);
   uint8_t midpoint[128];
   for (size_t d = 0; d < 128; ++d) {
-    midpoint[d] = static_cast<uint8_t>((index_->descriptor(a)[d] + index_->descriptor(b)[d]) / 2);
+    midpoint[d] = static_cast<uint8_t>(
+        (index_->ViewDescriptor(a, nullptr)[d] + index_->ViewDescriptor(b, nullptr)[d]) / 2);
   }
   Query query;
   AddFeature(&query, midpoint);

@@ -247,7 +247,8 @@ TEST_F(ForwardMatchingTest, TheLocalRatioDecidesWhenTheClusterHasAViewOfAnotherP
   for (const IndexImage& image : index_->images()) {
     for (uint32_t u = image.first_view; u < image.first_view + image.num_views; ++u) {
       for (uint32_t v = u + 1; v < image.first_view + image.num_views; ++v) {
-        const uint32_t distance = SquaredL2(index_->descriptor(u), index_->descriptor(v));
+        const uint32_t distance =
+            SquaredL2(index_->ViewDescriptor(u, nullptr), index_->ViewDescriptor(v, nullptr));
         if (PointOf(u) != PointOf(v) && distance < best) {
           std::tie(a, b, best) = std::tuple(u, v, distance);
         }
@@ -256,7 +257,8 @@ TEST_F(ForwardMatchingTest, TheLocalRatioDecidesWhenTheClusterHasAViewOfAnotherP
   }
   Descriptor midpoint;
   for (size_t d = 0; d < 128; ++d) {
-    midpoint[d] = static_cast<uint8_t>((index_->descriptor(a)[d] + index_->descriptor(b)[d]) / 2);
+    midpoint[d] = static_cast<uint8_t>(
+        (index_->ViewDescriptor(a, nullptr)[d] + index_->ViewDescriptor(b, nullptr)[d]) / 2);
   }
   const std::vector<KdNeighbor> nearest = NearestViews(midpoint);
   ASSERT_EQ(std::min(nearest[0].index, nearest[1].index), a);

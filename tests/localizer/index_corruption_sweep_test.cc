@@ -1,4 +1,5 @@
-// Issue #13's sweeps over the golden format 1.1 index (every section, the optional GEOR too):
+// Issue #13's sweeps over the golden format 1.1 index (every section, the optional GEOR too)
+// and the compact format 1.2 one (PQCB, PCOD, PVNN):
 // every byte of the header and the section table flipped, with the stored checksums and with
 // checksums recomputed over the flip; random flips inside every section; truncation at every
 // boundary and at random lengths. Open refuses, or verify (what `cwloc-index verify` runs)
@@ -32,7 +33,24 @@ namespace {
 using testing::HasSubstr;
 using testing::StartsWith;
 
-std::filesystem::path GoldenIndexPath() { return test::GoldenDir() / "index-1.1.cwl"; }
+// A golden file the sweeps damage, with the queries of its city.
+struct SweptIndex {
+  std::string name;  // test name suffix
+  std::string file;
+  std::string queries;
+  bool georeferenced = false;  // the second query then gets a GPS prior
+
+  std::filesystem::path path() const { return test::GoldenDir() / file; }
+};
+
+void PrintTo(const SweptIndex& swept, std::ostream* os) { *os << swept.file; }
+
+const SweptIndex kSweptIndexes[] = {
+    {"Format1_1", "index-1.1.cwl", "index-1.1-queries", true},
+    {"Format1_2Compact", "index-1.2.cwl", "index-1.0-queries", false},
+};
+
+class IndexCorruptionSweep : public testing::TestWithParam<SweptIndex> {};
 
 // Search budgets well below the defaults: the sweeps localize over a thousand damaged files,
 // through the same code paths.
@@ -46,10 +64,10 @@ LocalizerOptions SweepOptions() {
   return options;
 }
 
-// Two golden queries: one plain, one with a GPS prior around the city, so that a damaged GEOR
-// that Open accepts is used too.
-std::vector<Query> GoldenQueries() {
-  const auto dir = test::GoldenDir() / "index-1.1-queries";
+// Two golden queries: one plain, one (when georeferenced) with a GPS prior around the city, so
+// that a damaged GEOR that Open accepts is used too.
+std::vector<Query> GoldenQueries(const SweptIndex& swept) {
+  const auto dir = test::GoldenDir() / swept.queries;
   const auto truth = test::ReadGroundTruth(dir / "queries_gt.txt");
   std::vector<Query> queries;
   for (const std::string name : {"query_00001.jpg", "query_00002.jpg"}) {
@@ -59,8 +77,12 @@ std::vector<Query> GoldenQueries() {
     query.camera = ParseCameraSpec(truth.at(name).camera, name);
   }
   // The city's centre (cwloc-synth --geo "47.3779 8.5403 455", tests/data/README.md).
-  queries[1].position_prior = PositionPrior{
-      .latitude_deg = 47.3779, .longitude_deg = 8.5403, .height_m = std::nullopt, .radius_m = 300};
+  if (swept.georeferenced) {
+    queries[1].position_prior = PositionPrior{.latitude_deg = 47.3779,
+                                              .longitude_deg = 8.5403,
+                                              .height_m = std::nullopt,
+                                              .radius_m = 300};
+  }
   return queries;
 }
 
@@ -68,8 +90,8 @@ std::vector<Query> GoldenQueries() {
 // file per flip.
 class ScratchIndex {
  public:
-  explicit ScratchIndex(const test::TempDir& dir)
-      : path_(dir / "index.cwl"), original_(test::ReadBytes(GoldenIndexPath())) {
+  ScratchIndex(const test::TempDir& dir, const std::filesystem::path& golden)
+      : path_(dir / "index.cwl"), original_(test::ReadBytes(golden)) {
     test::WriteBytes(path_, original_);
   }
 
@@ -206,12 +228,13 @@ std::string ExpectedHeaderError(uint64_t offset) {
   return ": header checksum mismatch (stored ";
 }
 
-TEST(IndexCorruptionSweep, EveryFlippedHeaderAndSectionTableByteIsRefusedByOpen) {
+TEST_P(IndexCorruptionSweep, EveryFlippedHeaderAndSectionTableByteIsRefusedByOpen) {
   test::TempDir dir;
-  ScratchIndex file(dir);
+  ScratchIndex file(dir, GetParam().path());
   const std::string name = file.path().string();
   const Layout layout = LayoutOf(file.path());
-  ASSERT_EQ(layout.sections.size(), 16u);
+  // Every section of its format: 1.1's 16, 1.2's compact 17.
+  ASSERT_EQ(layout.sections.size(), GetParam().georeferenced ? 16u : 17u);
   ASSERT_EQ(layout.table_end, file.original().size());
 
   std::map<std::string, int> flips_by_error;
@@ -237,7 +260,7 @@ TEST(IndexCorruptionSweep, EveryFlippedHeaderAndSectionTableByteIsRefusedByOpen)
     std::cout << count << " flips refused by Open with '" << error << "'\n";
     flips += count;
   }
-  EXPECT_EQ(flips, 2 * (128 + 16 * 48));
+  EXPECT_EQ(flips, 2 * (128 + int(layout.sections.size()) * 48));
 }
 
 // Fields a 1.x reader does not read: flipped under valid checksums, the file means the same.
@@ -269,12 +292,12 @@ bool IsOptionalSectionTag(uint64_t offset, const Layout& layout) {
 // A writer's bug or a deliberate edit: one byte flipped, then both checksums recomputed. Open's
 // structural checks and verify must find all but the fields no reader reads, whose flips
 // change no result.
-TEST(IndexCorruptionSweep, FlippedHeaderAndTableBytesUnderValidChecksumsAreFoundOrIgnored) {
+TEST_P(IndexCorruptionSweep, FlippedHeaderAndTableBytesUnderValidChecksumsAreFoundOrIgnored) {
   test::TempDir dir;
-  ScratchIndex file(dir);
+  ScratchIndex file(dir, GetParam().path());
   const std::string name = file.path().string();
   const Layout layout = LayoutOf(file.path());
-  const std::vector<Query> queries = GoldenQueries();
+  const std::vector<Query> queries = GoldenQueries(GetParam());
   const Outcome intact = OpenLocalizeAndVerify(file.path(), queries);
   ASSERT_EQ(intact.results.size(), 2u);
   ASSERT_TRUE(intact.results[0].success && intact.results[1].success);
@@ -337,13 +360,13 @@ TEST(IndexCorruptionSweep, FlippedHeaderAndTableBytesUnderValidChecksumsAreFound
   refused_by_localizer.Print("files Open accepted refused by the localizer:");
 }
 
-TEST(IndexCorruptionSweep, RandomFlipsInEverySectionAreReportedAndNeverCrashTheLocalizer) {
+TEST_P(IndexCorruptionSweep, RandomFlipsInEverySectionAreReportedAndNeverCrashTheLocalizer) {
   constexpr int kFlipsPerSection = 24;
   test::TempDir dir;
-  ScratchIndex file(dir);
+  ScratchIndex file(dir, GetParam().path());
   const std::string name = file.path().string();
   const Layout layout = LayoutOf(file.path());
-  const std::vector<Query> queries = GoldenQueries();
+  const std::vector<Query> queries = GoldenQueries(GetParam());
   auto& rng = test::Rng();
   int flips = 0, reported_by_verify = 0, found_by_validate = 0, localizations = 0, localized = 0;
   ErrorTally refused_by_open(name), refused_by_localizer(name);
@@ -374,7 +397,7 @@ TEST(IndexCorruptionSweep, RandomFlipsInEverySectionAreReportedAndNeverCrashTheL
       found_by_validate += !outcome.validate_error.empty();
     }
   }
-  EXPECT_EQ(flips, kFlipsPerSection * 16);
+  EXPECT_EQ(flips, kFlipsPerSection * int(layout.sections.size()));
   EXPECT_EQ(refused_by_open.total() + reported_by_verify, flips);
   std::cout << flips << " flips: " << reported_by_verify << " reported by verify ("
             << found_by_validate << " of them by Validate without the checksums), " << localizations
@@ -393,12 +416,12 @@ std::string TruncationError(const std::string& name, uint64_t size, uint64_t ful
          " bytes, the file has " + std::to_string(size);
 }
 
-TEST(IndexCorruptionSweep, TruncationAtEveryBoundaryAndRandomLengthsIsNamed) {
+TEST_P(IndexCorruptionSweep, TruncationAtEveryBoundaryAndRandomLengthsIsNamed) {
   constexpr int kRandomLengths = 100;
   test::TempDir dir;
-  const std::vector<uint8_t> original = test::ReadBytes(GoldenIndexPath());
+  const std::vector<uint8_t> original = test::ReadBytes(GetParam().path());
   const uint64_t full = original.size();
-  const Layout layout = LayoutOf(GoldenIndexPath());
+  const Layout layout = LayoutOf(GetParam().path());
 
   // Empty, inside the header, just the header, every section's and the table's start and end,
   // each +-1.
@@ -432,6 +455,11 @@ TEST(IndexCorruptionSweep, TruncationAtEveryBoundaryAndRandomLengthsIsNamed) {
   std::cout << lengths.size() << " truncations (" << at_boundaries << " at boundaries, "
             << kRandomLengths << " random) and one extension refused by Open\n";
 }
+
+std::string TestName(const testing::TestParamInfo<SweptIndex>& swept) { return swept.param.name; }
+
+INSTANTIATE_TEST_SUITE_P(GoldenFiles, IndexCorruptionSweep, testing::ValuesIn(kSweptIndexes),
+                         TestName);
 
 }  // namespace
 }  // namespace cwloc

@@ -55,7 +55,7 @@ class MatchingFixture : public testing::Test {
 
   Descriptor ViewDescriptor(uint32_t view) const {
     Descriptor descriptor;
-    std::copy_n(index_->descriptor(view), 128, descriptor.begin());
+    std::copy_n(index_->ViewDescriptor(view, nullptr), 128, descriptor.begin());
     return descriptor;
   }
 
@@ -71,7 +71,7 @@ class MatchingFixture : public testing::Test {
   std::vector<KdNeighbor> NearestViews(const Descriptor& descriptor) const {
     std::vector<KdNeighbor> all(index_->num_views());
     for (uint32_t view = 0; view < all.size(); ++view) {
-      all[view] = {view, SquaredL2(descriptor.data(), index_->descriptor(view))};
+      all[view] = {view, SquaredL2(descriptor.data(), index_->ViewDescriptor(view, nullptr))};
     }
     std::sort(all.begin(), all.end(), [](const KdNeighbor& a, const KdNeighbor& b) {
       return a.distance != b.distance ? a.distance < b.distance : a.index < b.index;

@@ -27,6 +27,7 @@ struct GoldenIndex {
   size_t covisibility_edges = 0, kd_trees = 0;
   size_t keypoints = 0;         // rows of the optional VKXY section
   uint32_t georef_inliers = 0;  // of the optional GEOR section (format 1.1); 0: none
+  uint32_t code_bytes = 0;      // a compact index's point codes (format 1.2); 0: DESC
   size_t num_queries = 0;
   double max_position_m = 0, max_rotation_deg = 0;
 };
@@ -70,6 +71,25 @@ const GoldenIndex kGoldenIndexes[] = {
      .num_queries = 4,
      .max_position_m = 0.25,
      .max_rotation_deg = 0.7},
+    // Format 1.2 adds the compact index (PQCB, PCOD, PVNN, PORG, PNTF in place of DESC, VNND
+    // and PNTS): the 1.0 city built with --compact, localizing the 1.0 queries.
+    {.name = "Format1_2",
+     .file = "index-1.2.cwl",
+     .queries = "index-1.0-queries",
+     .format_major = 1,
+     .format_minor = 2,
+     .cameras = 1,
+     .images = 26,
+     .points = 718,
+     .views = 1707,
+     .clusters = 8,
+     .covisibility_edges = 76,
+     .kd_trees = 2,
+     .keypoints = 1707,
+     .code_bytes = 32,
+     .num_queries = 4,
+     .max_position_m = 0.25,
+     .max_rotation_deg = 0.7},
 };
 
 // Failure messages name the file instead of dumping the struct's bytes.
@@ -88,9 +108,18 @@ TEST_P(GoldenIndexTest, OpensValidatesAndHasTheExactVersionAndCounts) {
 
   EXPECT_EQ(index.cameras().size(), golden.cameras);
   EXPECT_EQ(index.images().size(), golden.images);
-  EXPECT_EQ(index.points().size(), golden.points);
+  EXPECT_EQ(index.num_points(), golden.points);
   EXPECT_EQ(index.num_views(), golden.views);
-  EXPECT_EQ(index.descriptors().size(), golden.views * kDescriptorBytes);
+  EXPECT_EQ(index.coded(), golden.code_bytes != 0);
+  if (golden.code_bytes == 0) {
+    EXPECT_EQ(index.descriptors().size(), golden.views * kDescriptorBytes);
+    EXPECT_EQ(index.view_neighbor_distances().size(), golden.views);
+  } else {
+    EXPECT_EQ(index.codes().code_bytes, golden.code_bytes);
+    EXPECT_EQ(index.codes().NumRows(), golden.points);
+    EXPECT_EQ(index.point_neighbor_distances().size(), golden.points);
+    EXPECT_EQ(index.kd_forest().NumDescriptors(), golden.points);
+  }
   EXPECT_EQ(index.view_keypoints().size(), golden.keypoints);
   EXPECT_EQ(index.covisibility_edges().size(), golden.covisibility_edges);
   EXPECT_EQ(index.kd_forest().NumTrees(), golden.kd_trees);

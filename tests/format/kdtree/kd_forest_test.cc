@@ -197,6 +197,58 @@ TEST(KdForest, ExhaustiveBudgetEqualsBruteForce) {
             BruteForce(small, queries.data(), 5));
 }
 
+// The compact index's rows: product-quantization codes the leaves decode. For every code size
+// and budget, a search over the codes returns exactly what a search over the decoded rows does.
+TEST(KdForest, CodedRowsSearchLikeTheirDecodedDescriptors) {
+  auto& rng = test::Rng();
+  std::vector<uint8_t> codebook(DescriptorCodes::kCodebookBytes);
+  for (auto& byte : codebook) byte = uint8_t(rng() % 3 == 0 ? 0 : rng() % 120);
+  const size_t n = 2000;
+  for (const uint32_t code_bytes : {4u, 8u, 16u, 32u, 64u}) {
+    SCOPED_TRACE(std::to_string(code_bytes) + "-byte codes");
+    std::vector<uint8_t> codes(n * code_bytes);
+    for (auto& byte : codes) byte = uint8_t(rng() % 256);
+    const DescriptorCodes coded{codebook, codes, code_bytes};
+    ASSERT_EQ(coded.NumRows(), n);
+    std::vector<uint8_t> decoded(n * kDescriptorDim);
+    for (size_t row = 0; row < n; ++row) coded.Decode(row, &decoded[row * kDescriptorDim]);
+    // Decoding is the centroid lookup, part by part.
+    const uint32_t dims = kDescriptorDim / code_bytes;
+    for (uint32_t s = 0; s < code_bytes; ++s) {
+      EXPECT_EQ(decoded[s * dims + dims - 1],
+                codebook[(size_t{s} * 256 + codes[s]) * dims + dims - 1]);
+    }
+    const KdForest forest = Build(decoded);
+    KdForestView with_codes = forest.View(decoded);
+    with_codes.descriptors = {};
+    with_codes.codes = coded;
+    std::string error;
+    ASSERT_TRUE(ValidateKdForest(with_codes, &error)) << error;
+    KdForestSearcher decoded_searcher(forest.View(decoded));
+    KdForestSearcher code_searcher(with_codes);
+    const std::vector<uint8_t> queries = NearbyQueries(decoded, 30, 10);
+    for (const uint32_t checks : {64u, 384u, 4000u}) {
+      KdSearchOptions options;
+      options.max_checks = checks;
+      std::vector<KdNeighbor> expected(6), got(6);
+      for (size_t q = 0; q < 30; ++q) {
+        const uint8_t* query = &queries[q * kDescriptorDim];
+        const KdSearchResult a = decoded_searcher.Search(query, options, expected);
+        const KdSearchResult b = code_searcher.Search(query, options, got);
+        ASSERT_EQ(a.num_neighbors, b.num_neighbors);
+        EXPECT_EQ(a.checks, b.checks);
+        EXPECT_EQ(expected, got) << "query " << q << ", " << checks << " checks";
+      }
+    }
+  }
+  // A codebook of the wrong size or a code size that does not split 128 is named.
+  std::vector<uint8_t> codes(100 * 12);
+  const KdForestView bad{{}, {}, {}, {}, DescriptorCodes{codebook, codes, 12}};
+  std::string error;
+  EXPECT_FALSE(ValidateKdForest(bad, &error));
+  EXPECT_EQ(error, "kd-forest codes: 12-byte codes over 1200 bytes with a 32768-byte codebook");
+}
+
 // A position prior's row filter: only allowed rows come back, exactly the brute-force nearest
 // among them with an exhaustive budget, and a small budget is never exceeded by skipped rows.
 TEST(KdForest, AllowedRowsFilterTheResultsWithinTheSameBudget) {
