@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Compact index trade-off (issue #26): for each data set, build the full index and compact ones
-# of every code size, localize the queries with each on one thread (photos when the data set
-# has query_images/, else the database's query features), and print bytes per view against
-# localized share, median position error and time, each as a ratio to the full index.
+# of every code size (--compact --code-bytes N), localize the queries with each on one thread
+# (photos when the data set has query_images/, else the database's query features), and print
+# bytes per view against localized share, median position error and time, each as a ratio to
+# the full index.
 #
 #   bench/compact_benchmark.sh WORKDIR DATASET...
 #   CODE_BYTES="64 32 16 8" ROUNDS=3 bench/compact_benchmark.sh /tmp/compact \
@@ -10,8 +11,8 @@
 #
 # A DATASET is a folder with mapping_model/bin, database.db, queries_with_intrinsics.txt,
 # queries_gt.txt and scale_to_metres.txt (the shared data sets and cwloc-synth cities). Indexes
-# are rebuilt only when missing. Writes WORKDIR/table.md and WORKDIR/tradeoff.json (the input
-# of `cwloc-plot compact`).
+# are rebuilt only when missing. Writes WORKDIR/table.md, WORKDIR/tradeoff.json and the
+# figure WORKDIR/compact.png (`cwloc-plot compact`, from each run's cwloc-eval report).
 set -euo pipefail
 top="$(cd "$(dirname "$0")/.." && pwd)"
 bin="${CWLOC_BIN:-$top/build/bin}"
@@ -27,7 +28,7 @@ for data in "$@"; do
   for code in 0 $codes; do
     index="$work/$name-$code.cwl"
     extra=""
-    [ "$code" != 0 ] && extra="--code-bytes $code"
+    [ "$code" != 0 ] && extra="--compact --code-bytes $code"
     if [ ! -f "$index" ]; then
       echo "## $name: building the index (code bytes $code)" >&2
       start=$(date +%s%N)
@@ -73,10 +74,12 @@ for data in sys.argv[4:]:
         rounds = sorted(f for f in os.listdir(work) if f.startswith(f"{name}-{code}.round"))
         records = [json.loads(line) for f in rounds for line in open(f"{work}/{f}")]
         first = f"{work}/{rounds[0]}"
-        report = json.loads(subprocess.run(
+        report_text = subprocess.run(
             [f"{bin_dir}/cwloc-eval", "--results", first, "--gt", f"{data}/queries_gt.txt",
              "--scale", f"{data}/scale_to_metres.txt", "--json"],
-            capture_output=True, text=True, check=True).stdout)["runs"][0]
+            capture_output=True, text=True, check=True).stdout
+        open(base + ".eval.json", "w").write(report_text)
+        report = json.loads(report_text)["runs"][0]
         after_extraction = [r["times_ms"]["total"] - r["times_ms"]["extraction"] for r in records]
         rss = [int(line) / 1024 for line in open(base + ".rss") if line.strip().isdigit()]
         row = {
@@ -107,4 +110,10 @@ for r in rows:
                  f"{r['median_ms']:.2f} | {r['time_ratio']:.2f} | {r['peak_rss_mb']:.0f} |")
 open(f"{work}/table.md", "w").write("\n".join(lines) + "\n")
 print("\n".join(lines))
+points = []
+for r in rows:
+    points += ["--point", f"{r['data_set']}:{r['bytes_per_view']:.2f}:"
+               f"{work}/{r['data_set']}-{r['code_bytes']}.eval.json"]
+subprocess.run([f"{bin_dir}/cwloc-plot", "compact", *points, "-o", f"{work}/compact.png"],
+               check=True, stdout=subprocess.DEVNULL)
 PY

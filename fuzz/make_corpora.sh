@@ -23,6 +23,10 @@ scene="$work/scene"
 "$bin/cwloc-index" build --model "$scene/mapping_model/bin" --database "$scene/database.db" \
   --keypoints -o "$corpus/index/with-keypoints.cwl" >/dev/null
 
+# A compact index (format 1.2: PORG, PNTF, PQCB, PCOD, PVNN) needs 256 points to learn its codes,
+# more than the scene has: the golden one.
+cp tests/data/golden/index-1.2.cwl "$corpus/index/compact.cwl"
+
 "$bin/cwloc-fuzz-make-model-seeds" "$scene/mapping_model/bin" "$corpus/colmap_model"
 
 # The database with 20 features per image, without matches, in 512-byte pages.

@@ -11,6 +11,7 @@
 #include "format/colmap/reconstruction_io.h"
 #include "format/index/index_file.h"
 #include "format/index/xxhash64.h"
+#include "format/kdtree/descriptor_codes.h"
 #include "format/kdtree/kd_forest_builder.h"
 #include "indexer/covisibility.h"
 #include "indexer/model_views.h"
@@ -74,6 +75,11 @@ IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
   if (views.num_views() == 0) {
     throw InputError(options.model_dir.string() +
                      ": the model has no 3D points with views; nothing to index");
+  }
+  if (coded && views.points.size() < DescriptorCodes::kCentroids) {
+    throw InputError(options.model_dir.string() + ": a compact index learns 256 codes per part " +
+                     "from the 3D points, and the model has " +
+                     std::to_string(views.points.size()) + "; build a full index (no --compact)");
   }
   if (views.num_views() >= UINT32_MAX)
     throw InputError("more than 2^32 - 1 views; split the model");

@@ -3,7 +3,7 @@
 # from the same index built on x86-64: the same localized set, the same inlier and
 # correspondence counts, poses and cameras within 1e-6 relative (tools/compare_results.py).
 # Data: herz_jesu_p25 from its photos and from its stored query features, and a generated city
-# from its query features.
+# from its query features; both also with a compact index (format 1.2, --compact).
 #
 # Usage: tools/check_arm64.sh NATIVE_BUILD X86_DEVICE_BUILD ARM64_DEVICE_BUILD
 #   NATIVE_BUILD: a full build (cwloc-index, cwloc-synth) that makes the indexes.
@@ -46,6 +46,10 @@ if [ -d "$data" ]; then
   compare herz_jesu_features --index "$work/herz_jesu.cwl" --query-list "$work/herz_features/list.txt"
   compare herz_jesu_photos --index "$work/herz_jesu.cwl" --image-list "$data/query_list.txt" \
     --image-dir "$data/query_images" --max-image-size 1600 --max-features 6000
+  "$native/bin/cwloc-index" build --model "$data/mapping_model/bin" --database "$data/database.db" \
+    --compact -o "$work/herz_jesu_compact.cwl" >/dev/null 2>&1
+  compare herz_jesu_compact --index "$work/herz_jesu_compact.cwl" \
+    --query-list "$work/herz_features/list.txt"
 else
   echo "check_arm64: ../shared/data/herz_jesu_p25 not found; generated city only" >&2
 fi
@@ -55,3 +59,6 @@ fi
   --database "$work/city/database.db" -o "$work/city.cwl" >/dev/null 2>&1
 feature_queries "$work/city/database.db" "$work/city/queries_with_intrinsics.txt" "$work/city_features"
 compare city_features --index "$work/city.cwl" --query-list "$work/city_features/list.txt"
+"$native/bin/cwloc-index" build --model "$work/city/mapping_model/bin" \
+  --database "$work/city/database.db" --compact -o "$work/city_compact.cwl" >/dev/null 2>&1
+compare city_compact --index "$work/city_compact.cwl" --query-list "$work/city_features/list.txt"

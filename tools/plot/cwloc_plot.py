@@ -13,6 +13,7 @@ import json
 import logging
 import math
 import os
+import statistics
 import sys
 import tempfile
 
@@ -510,6 +511,66 @@ def cmd_scale(args):
 
 
 # ---------------------------------------------------------------------------------------------
+# compact: the compact index's trade-off, error and localized share against bytes per view
+
+
+def _compact_point(text):
+    parts = text.split(":", 2)
+    try:
+        number = float(parts[1]) if len(parts) == 3 else None
+    except ValueError:
+        number = None
+    if len(parts) != 3 or not parts[0] or not parts[2] or number is None or not math.isfinite(number) \
+            or number <= 0:
+        raise argparse.ArgumentTypeError(f"'{text}': expected DATASET:BYTES_PER_VIEW:REPORT with a positive "
+                                         "number of bytes (e.g. herz:25.3:eval.json)")
+    return parts[0], number, parts[2]
+
+
+def cmd_compact(args):
+    series = {}  # data set -> [(bytes per view, median error, localized share)]
+    for name, bytes_per_view, path in args.point:
+        report = Report(path)
+        errors = report.position_errors(0)
+        median = statistics.median(errors) if errors else None
+        series.setdefault(name, []).append((bytes_per_view, median, 100.0 * report.localized_share(0)))
+    rows = [["data set", "bytes / view", "median error", "vs largest", "localized %"]]
+    for name, points in series.items():
+        points.sort()
+        reference = points[-1][1]  # the largest index of the data set: the full one
+        for b, median, share in points:
+            ratio = median / reference if median is not None and reference else None
+            rows.append([name, _number_text(b), _number_text(median), _number_text(ratio), _number_text(share)])
+    print(f"{TOOL} compact: median position error and localized share by bytes per view")
+    sys.stdout.write(_columns(rows))
+
+    fig = _matplotlib_figure(args.size)
+    error_ax, share_ax = fig.subplots(1, 2)
+    for name, points in series.items():
+        reference = points[-1][1]
+        xs = [b for b, median, _ in points if median is not None and reference]
+        ys = [median / reference for _, median, _ in points if median is not None and reference]
+        error_ax.plot(xs, ys, marker="o", linewidth=1.6, label=name)
+        share_ax.plot([b for b, _, _ in points], [share for _, _, share in points], marker="o", linewidth=1.6,
+                      label=name)
+    for ax in (error_ax, share_ax):
+        ax.set_xscale("log")
+        _plain_log_labels(ax.xaxis)
+        ax.set_xlabel("index bytes per view")
+        ax.grid(True, which="major", color="0.88")
+        ax.axvline(32, color="0.55", linewidth=0.8, linestyle=":")
+    error_ax.axhline(1.1, color="0.55", linewidth=0.8, linestyle=":")
+    error_ax.set_ylabel("median position error / the full index's")
+    share_ax.set_ylabel("queries localized (%)")
+    share_ax.set_ylim(0, 103)
+    error_ax.legend(loc="best", fontsize=9, framealpha=0.9)
+    fig.suptitle(args.title or "Compact index: accuracy against size")
+    _save_png(fig, args.output)
+    print(f"{TOOL}: wrote {args.output} ({_count(len(series), 'data set')})", file=sys.stderr)
+    return EXIT_OK
+
+
+# ---------------------------------------------------------------------------------------------
 # Command line
 
 
@@ -616,6 +677,21 @@ def build_parser():
                        help="name of the series in the title and the printed table (default: the run's label)")
     common(scale)
     scale.set_defaults(func=cmd_scale)
+
+    compact = commands.add_parser(
+        "compact", formatter_class=formatter, help="error and localized share against index bytes per view",
+        description="The compact index's trade-off (bench/compact_benchmark.sh): x = index bytes per view (log);\n"
+                    "left, the median position error over the data set's largest index (the full one);\n"
+                    "right, the share of queries localized; one line per data set, from the first run of\n"
+                    "each report. Prints the same numbers as a table.",
+        epilog="example:\n  cwloc-plot compact --point herz:174.3:full.json --point herz:22.5:c32.json \\\n"
+               "      --point herz:18.7:c16.json -o compact.png")
+    compact.add_argument("--point", action="append", required=True, type=_compact_point,
+                         metavar="DATASET:BYTES:JSON",
+                         help="a data set's name, an index's bytes per view and the cwloc-eval --json report "
+                              "of its run; repeat")
+    common(compact)
+    compact.set_defaults(func=cmd_compact)
     return parser
 
 

@@ -290,6 +290,39 @@ TEST(PlotCli, ScalePrintsTheGrowthExponent) {
   EXPECT_TRUE(TempFiles(dir.path()).empty());
 }
 
+TEST(PlotCli, CompactPrintsErrorAndShareByBytesPerView) {
+  test::TempDir dir;
+  WriteGroundTruth(dir / "gt.txt");
+  // Full index: errors 1, 2, 3, 9, 9 (median 3); 32 B: 2, 2, 3 and two lost (median 2); 16 B:
+  // 3, 4 and three lost (median 3.5). Ratios are to the data set's largest index.
+  WriteRun(dir / "full.jsonl", {{1, 5}, {2, 5}, {3, 5}, {9, 5}, {9, 5}});
+  WriteRun(dir / "c32.jsonl", {{2, 5}, {2, 5}, {3, 5}, {-1, 5}, {-1, 5}});
+  WriteRun(dir / "c16.jsonl", {{3, 5}, {4, 5}, {-1, 5}, {-1, 5}, {-1, 5}});
+  for (const std::string name : {"full", "c32", "c16"})
+    Evaluate(dir, dir / (name + ".json"), {{name, dir / (name + ".jsonl")}});
+  std::string out, err;
+  ASSERT_EQ(PlotSplit("compact --point city:16.5:" + Quote(dir / "c16.json") +
+                          " --point city:175:" + Quote(dir / "full.json") + " --point city:27.1:" +
+                          Quote(dir / "c32.json") + " -o " + Quote(dir / "compact.png"),
+                      dir, &out, &err),
+            0)
+      << err;
+  EXPECT_EQ(out,
+            "cwloc-plot compact: median position error and localized share by bytes per view\n"
+            "  data set  bytes / view  median error  vs largest  localized %\n"
+            "  city      16.5          3.500         1.167       40.0\n"
+            "  city      27.1          2.000         0.667       60.0\n"
+            "  city      175.0         3.000         1.000       100.0\n");
+  EXPECT_EQ(err, "cwloc-plot: wrote " + (dir / "compact.png").string() + " (1 data set)\n");
+  EXPECT_EQ(PngSize(dir / "compact.png"), std::make_pair(960u, 600u));
+  EXPECT_EQ(
+      PlotSplit("compact --point city:x:" + Quote(dir / "c16.json") + " -o " + Quote(dir / "x.png"),
+                dir, &out, &err),
+      2);
+  EXPECT_NE(err.find("expected DATASET:BYTES_PER_VIEW:REPORT"), std::string::npos) << err;
+  EXPECT_TRUE(TempFiles(dir.path()).empty());
+}
+
 TEST(PlotCli, BadInputNamesTheFileAndExits2) {
   test::TempDir dir;
   WriteGroundTruth(dir / "gt.txt");
