@@ -98,6 +98,29 @@ TEST_F(IndexCliTest, CompactBuildSaysHowItStoresDescriptorsInInfoAndItsSchema) {
                                 "or 64"));
 }
 
+TEST_F(IndexCliTest, CompactBuildOfAModelWithTooFewPointsSaysSoAndWritesNothing) {
+  std::string output;
+  const auto scene = dir_ / "tiny";
+  ASSERT_EQ(test::RunCommand(test::ToolPath("cwloc-synth").string() +
+                                 " --blocks 1 --queries 2 --camera-spacing 15 "
+                                 "--features-per-image 100 -o " +
+                                 scene.string(),
+                             &output),
+            0)
+      << output;
+  const auto model = scene / "mapping_model" / "bin";
+  EXPECT_EQ(
+      Run("build --model " + model.string() + " --database " + (scene / "database.db").string() +
+              " --compact -o " + (dir_ / "tiny.cwl").string(),
+          &output),
+      2);
+  EXPECT_THAT(output, testing::MatchesRegex(
+                          "cwloc-index: error: " + model.string() +
+                          ": a compact index learns 256 codes per part from the 3D points, and "
+                          "the model has [0-9]+; build a full index \\(no --compact\\)\n"));
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "tiny.cwl"));
+}
+
 TEST_F(IndexCliTest, VerifyReportsAFlippedByteInEverySection) {
   ASSERT_NO_FATAL_FAILURE(Build());
   const std::vector<uint8_t> original = Bytes();
