@@ -25,7 +25,7 @@ constexpr size_t kForwardBatch = 2;
 
 // What a coded index's (feature, point) correspondence counts towards N_F. At 2, N_F = 200
 // gives 100 correspondences: on the paper's city as accurate as the full index's 200 view
-// matches (about 40 correspondences) and as fast; at 1 forward matching searches 1.7-3.3x the
+// matches (about 40 correspondences) and as fast; at 1 forward matching searches 1.3-3.2x the
 // features, at 4 the guided pose hypothesis fails on repetitive cities (docs/algorithm.md).
 constexpr size_t kCodedMatchWeight = 2;
 
