@@ -207,12 +207,11 @@ IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
   sections.push_back(MakeSection(section::kViewPoint, Span(views.view_points)));
   sections.push_back(MakeSection(coded ? section::kPointNeighbor : section::kViewNeighbor,
                                  Span(neighbor_distances)));
-  for (SectionData section : {MakeSection(section::kKdNodes, Span(forest.nodes)),
-                              MakeSection(section::kKdRoots, Span(forest.roots)),
-                              MakeSection(section::kKdLeaves, Span(forest.leaves)),
-                              MakeSection(section::kCovisOffsets, Span(graph.offsets)),
-                              MakeSection(section::kCovisEdges, Span(graph.edges))})
-    sections.push_back(section);
+  sections.insert(sections.end(), {MakeSection(section::kKdNodes, Span(forest.nodes)),
+                                   MakeSection(section::kKdRoots, Span(forest.roots)),
+                                   MakeSection(section::kKdLeaves, Span(forest.leaves)),
+                                   MakeSection(section::kCovisOffsets, Span(graph.offsets)),
+                                   MakeSection(section::kCovisEdges, Span(graph.edges))});
   if (options.keypoints) {
     // Optional: the localizer does not read model keypoints; tools that draw matches do.
     sections.push_back(

@@ -20,7 +20,7 @@ std::vector<uint64_t> AllowedRows(const Index& index, ClusterMask allowed) {
     const uint64_t end =
         std::min<uint64_t>(uint64_t{image.first_view} + image.num_views, index.num_views());
     for (uint64_t view = image.first_view; view < end; ++view) {
-      const uint64_t row = index.coded() ? index.PointOfRow(index.view_points()[view]) : view;
+      const uint64_t row = index.coded() ? index.view_points()[view] : view;  // points or views
       if (row < index.num_rows()) bits[row / 64] |= uint64_t{1} << (row % 64);
     }
   }

@@ -182,8 +182,7 @@ const uint8_t* Index::ViewDescriptor(uint32_t view, uint8_t* scratch) const {
     std::fill_n(scratch, kDescriptorBytes, uint8_t{0});
     return scratch;
   }
-  codes_.Decode(point, scratch);
-  return scratch;
+  return RowDescriptor(point, scratch);  // a coded index's rows are its points
 }
 
 std::span<const uint32_t> Index::TrackOf(uint32_t point_index) const {
