@@ -12,6 +12,7 @@
 #include "format/index/index.h"
 #include "format/index/xxhash64.h"
 #include "indexer/index_builder.h"
+#include "indexer/index_extract.h"
 
 namespace cwloc {
 namespace {
@@ -73,6 +74,33 @@ int RunBuild(const IndexBuildOptions& options, bool json) {
       report.seconds_clustering, report.seconds_point_codes, report.seconds_neighbor_distances,
       report.seconds_kd_forest, report.seconds_write);
   if (!report.georeference.is_null()) PrintGeoreference(report.georeference);
+  return kExitOk;
+}
+
+int RunExtract(const IndexExtractOptions& options, bool json) {
+  const IndexExtractReport report = ExtractIndex(options);
+  if (json) {
+    nlohmann::ordered_json out = {
+        {"output", options.output_path.string()},
+        {"file_bytes", report.file_bytes},
+        {"bytes_per_view", double(report.file_bytes) / double(report.num_views)},
+        {"counts",
+         {{"cameras", report.num_cameras},
+          {"images", report.num_images},
+          {"points", report.num_points},
+          {"views", report.num_views},
+          {"clusters", report.num_clusters},
+          {"covisibility_edges", report.num_covisibility_edges}}},
+        {"parent", {{"images", report.parent_images}, {"views", report.parent_views}}},
+        {"seconds", report.seconds_total}};
+    std::cout << out.dump(2) << "\n";
+    return kExitOk;
+  }
+  std::printf("wrote %s: %zu of %zu images (%zu clusters), %zu points, %zu of %zu views\n",
+              options.output_path.c_str(), report.num_images, report.parent_images,
+              report.num_clusters, report.num_points, report.num_views, report.parent_views);
+  std::printf("%.1f MB, %.1f bytes per view; %.2f s\n", report.file_bytes / 1e6,
+              double(report.file_bytes) / double(report.num_views), report.seconds_total);
   return kExitOk;
 }
 
@@ -158,7 +186,8 @@ int RunVerify(const std::string& path) {
 
 int main(int argc, char** argv) {
   CLI::App app{
-      "cwloc-index: build a cwloc index from a COLMAP model and database, inspect or verify it"};
+      "cwloc-index: build a cwloc index from a COLMAP model and database, extract a region of one, "
+      "inspect or verify it"};
   app.set_version_flag("--version", std::string("cwloc-index ") + cwloc::kToolVersion);
   app.require_subcommand(1);
 
@@ -218,6 +247,28 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   build->add_flag("--json", json, "Print the build report as JSON");
 
+  cwloc::IndexExtractOptions extract_options;
+  std::string near;
+  auto* extract = app.add_subcommand(
+      "extract",
+      "Write the part of an index near a position, or around listed images, as an index");
+  extract->add_option("--index", extract_options.index_path, "Index file to extract from")
+      ->required();
+  auto* near_option = extract->add_option(
+      "--near", near,
+      "'LAT LON [HEIGHT] RADIUS_M': the clusters with a camera within RADIUS_M of this WGS84 "
+      "position (horizontally without HEIGHT), as --prior-position selects them");
+  extract
+      ->add_option("--images", extract_options.images_file,
+                   "File of image names, one per line: the clusters that hold them")
+      ->excludes(near_option);
+  extract
+      ->add_option("-o,--output", extract_options.output_path, "Index file to write (atomically)")
+      ->required();
+  extract->add_option("--threads", extract_options.threads, "Worker threads (0 = all cores)")
+      ->capture_default_str();
+  extract->add_flag("--json", json, "Print the report as JSON");
+
   std::string index_path;
   auto* info = app.add_subcommand("info", "Print an index's counts, sections and build parameters");
   info->add_option("index", index_path, "Index file")->required();
@@ -243,6 +294,10 @@ int main(int argc, char** argv) {
       if (compact && code_bytes_option->count() == 0) options.code_bytes = cwloc::kCompactCodeBytes;
       if (compact && build->count("--trees") == 0) options.forest.num_trees = cwloc::kCompactTrees;
       return cwloc::RunBuild(options, json);
+    }
+    if (extract->parsed()) {
+      if (!near.empty()) extract_options.near = cwloc::ParseGeoRegion(near, "--near");
+      return cwloc::RunExtract(extract_options, json);
     }
     if (info->parsed()) return cwloc::RunInfo(index_path, json);
     return cwloc::RunVerify(index_path);

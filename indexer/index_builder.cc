@@ -6,14 +6,13 @@
 #include "format/base/bounded_file.h"
 #include "format/base/error.h"
 #include "format/base/parallel_for.h"
-#include "format/base/progress.h"
 #include "format/base/stopwatch.h"
 #include "format/colmap/reconstruction_io.h"
-#include "format/index/index_file.h"
 #include "format/index/xxhash64.h"
 #include "format/kdtree/descriptor_codes.h"
 #include "format/kdtree/kd_forest_builder.h"
 #include "indexer/covisibility.h"
+#include "indexer/index_contents.h"
 #include "indexer/model_views.h"
 #include "indexer/neighbor_distances.h"
 #include "indexer/point_codes.h"
@@ -37,11 +36,6 @@ std::string FingerprintModel(const std::filesystem::path& dir) {
     hash = XxHash64(bytes, hash);
   }
   return "xxh64:" + HashHex(hash);
-}
-
-template <typename T>
-std::span<const T> Span(const std::vector<T>& v) {
-  return {v.data(), v.size()};
 }
 
 }  // namespace
@@ -117,22 +111,9 @@ IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
   report.seconds_neighbor_distances = stage.Seconds();
 
   stage.Restart();
-  KdForestBuildOptions forest_options = options.forest;
-  forest_options.seed = options.seed;
-  forest_options.num_threads = static_cast<uint32_t>(threads);
-  Progress forest_progress("kd-forest", 1000);
-  uint64_t permille_shown = 0;
-  forest_options.progress = [&](double fraction) {
-    const auto permille = static_cast<uint64_t>(fraction * 1000);
-    if (permille > permille_shown) {
-      forest_progress.Advance(permille - permille_shown);
-      permille_shown = permille;
-    }
-  };
   // The forest's rows: views, or the compact index's points (as the localizer decodes them).
-  const KdForest forest =
-      BuildKdForest(coded ? point_codes.decoded : views.descriptors, forest_options);
-  forest_progress.Finish();
+  const KdForest forest = BuildIndexForest(coded ? point_codes.decoded : views.descriptors,
+                                           options.forest, options.seed, threads);
   report.seconds_kd_forest = stage.Seconds();
 
   report.num_cameras = views.cameras.size();
@@ -144,7 +125,7 @@ IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
 
   nlohmann::ordered_json manifest;
   // Set once the sections are known (FormatMinorOf).
-  manifest["format_version"] = "";
+  manifest["format_version"] = "";  // set by WriteIndex
   manifest["tool"] = "cwloc-index";
   manifest["tool_version"] = kToolVersion;
   manifest["counts"] = CountsJson(report);
@@ -180,53 +161,30 @@ IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
   report.georeference = manifest["georeference"];
 
   stage.Restart();
-  std::string manifest_text;
-  std::vector<SectionData> sections = {
-      SectionData{section::kManifest},  // filled below, once the format version is known
-      MakeSection(section::kCameras, Span(views.cameras)),
-      MakeSection(section::kImages, Span(views.images)),
-      MakeSection<char>(section::kStrings, {views.strings.data(), views.strings.size()}),
-  };
   const PointOffsets point_offsets = coded ? OffsetPoints(views.points) : PointOffsets{};
+  IndexContents contents;
+  contents.cameras = views.cameras;
+  contents.images = views.images;
+  contents.strings = views.strings;
+  contents.tracks = views.tracks;
+  contents.view_points = views.view_points;
+  contents.neighbor_distances = neighbor_distances;
+  contents.forest = &forest;
+  contents.covisibility_offsets = graph.offsets;
+  contents.covisibility_edges = graph.edges;
   if (coded) {
-    sections.push_back(MakeSection(section::kPointOrigin,
-                                   std::span<const IndexPointOrigin>(&point_offsets.origin, 1)));
-    sections.push_back(MakeSection(section::kPointOffsets, Span(point_offsets.offsets)));
+    contents.point_origin = &point_offsets.origin;
+    contents.point_offsets = point_offsets.offsets;
+    contents.codebook = point_codes.codebook;
+    contents.codes = point_codes.codes;
+    contents.code_bytes = options.code_bytes;
   } else {
-    sections.push_back(MakeSection(section::kPoints, Span(views.points)));
+    contents.points = views.points;
+    contents.descriptors = views.descriptors;
   }
-  sections.push_back(MakeSection(section::kTracks, Span(views.tracks)));
-  if (coded) {
-    sections.push_back(MakeSection(section::kCodebook, Span(point_codes.codebook)));
-    sections.push_back(SectionData{section::kPointCodes, kSectionRequired, options.code_bytes,
-                                   views.points.size(), point_codes.codes});
-  } else {
-    sections.push_back(SectionData{section::kDescriptors, kSectionRequired, kDescriptorBytes,
-                                   views.num_views(), views.descriptors});
-  }
-  sections.push_back(MakeSection(section::kViewPoint, Span(views.view_points)));
-  sections.push_back(MakeSection(coded ? section::kPointNeighbor : section::kViewNeighbor,
-                                 Span(neighbor_distances)));
-  sections.insert(sections.end(), {MakeSection(section::kKdNodes, Span(forest.nodes)),
-                                   MakeSection(section::kKdRoots, Span(forest.roots)),
-                                   MakeSection(section::kKdLeaves, Span(forest.leaves)),
-                                   MakeSection(section::kCovisOffsets, Span(graph.offsets)),
-                                   MakeSection(section::kCovisEdges, Span(graph.edges))});
-  if (options.keypoints) {
-    // Optional: the localizer does not read model keypoints; tools that draw matches do.
-    sections.push_back(
-        MakeSection(section::kViewKeypoints, Span(views.view_keypoints), /*flags=*/0));
-  }
-  if (georeference) {
-    sections.push_back(MakeSection(section::kGeoreference,
-                                   std::span<const IndexGeoreference>(&georeference->section, 1),
-                                   /*flags=*/0));
-  }
-  manifest["format_version"] =
-      std::to_string(kFormatMajor) + "." + std::to_string(FormatMinorOf(sections));
-  manifest_text = manifest.dump(2) + "\n";
-  sections[0] = MakeSection<char>(section::kManifest, {manifest_text.data(), manifest_text.size()});
-  WriteIndexFile(options.output_path, sections);
+  if (options.keypoints) contents.view_keypoints = views.view_keypoints;
+  if (georeference) contents.georeference = &georeference->section;
+  WriteIndex(options.output_path, contents, std::move(manifest));
   report.seconds_write = stage.Seconds();
   report.file_bytes = std::filesystem::file_size(options.output_path);
   report.seconds_total = total.Seconds();

@@ -19,8 +19,8 @@ struct ClusterMember {
 };
 
 // The neighbours' cluster memberships, in neighbour order: one per view neighbour; one per
-// cluster that sees a point neighbour (its first view there).
-void ListMembers(const Index& index, std::span<const KdNeighbor> neighbors,
+// cluster that sees a point neighbour (its first view there) and is allowed.
+void ListMembers(const Index& index, std::span<const KdNeighbor> neighbors, ClusterMask allowed,
                  std::vector<ClusterMember>* members) {
   members->clear();
   for (uint32_t rank = 0; rank < neighbors.size(); ++rank) {
@@ -33,7 +33,7 @@ void ListMembers(const Index& index, std::span<const KdNeighbor> neighbors,
     const size_t first = members->size();
     for (const uint32_t view : index.TrackOf(point)) {
       const uint32_t cluster = ClusterOfView(index, view);
-      if (cluster == UINT32_MAX) continue;
+      if (cluster == UINT32_MAX || !ClusterAllowed(allowed, cluster)) continue;
       bool seen = false;
       for (size_t m = first; m < members->size() && !seen; ++m)
         seen = (*members)[m].cluster == cluster;
@@ -46,7 +46,8 @@ void ListMembers(const Index& index, std::span<const KdNeighbor> neighbors,
 
 void ClusterWiseRatioTest(const Index& index, uint32_t feature,
                           std::span<const KdNeighbor> neighbors, double ratio,
-                          std::vector<FeatureMatch>* accepted, ForwardMatchingStats* stats) {
+                          std::vector<FeatureMatch>* accepted, ForwardMatchingStats* stats,
+                          ClusterMask allowed) {
   constexpr size_t kMaxNeighbors = kMaxK + 1;
   if (neighbors.size() > kMaxNeighbors) {
     throw std::invalid_argument("cluster-wise ratio test: " + std::to_string(neighbors.size()) +
@@ -55,7 +56,7 @@ void ClusterWiseRatioTest(const Index& index, uint32_t feature,
   const size_t n = neighbors.size();
   if (n < 2) return;
   thread_local std::vector<ClusterMember> members;
-  ListMembers(index, neighbors, &members);
+  ListMembers(index, neighbors, allowed, &members);
   const uint32_t k = static_cast<uint32_t>(n - 1);  // the last only serves as a second neighbour
   for (size_t i = 0; i < members.size() && members[i].rank < k; ++i) {
     const ClusterMember& candidate = members[i];

@@ -20,8 +20,12 @@ namespace cwloc {
 // In a coded index the neighbours are 3D points, and a point belongs to every cluster that
 // sees it: it is the candidate of each such cluster (as its view in that cluster) at its
 // distance, and v_NN is the point's PVNN (docs/algorithm.md, "The compact index").
+// With `allowed` (a position prior), clusters outside it take no part: a coded index's point
+// in the region is not a candidate of its clusters elsewhere, so the test judges as it would in
+// a tile of the region (`cwloc-index extract`).
 void ClusterWiseRatioTest(const Index& index, uint32_t feature,
                           std::span<const KdNeighbor> neighbors, double ratio,
-                          std::vector<FeatureMatch>* accepted, ForwardMatchingStats* stats);
+                          std::vector<FeatureMatch>* accepted, ForwardMatchingStats* stats,
+                          ClusterMask allowed = {});
 
 }  // namespace cwloc

@@ -100,7 +100,7 @@ std::vector<FeatureMatch> MatchForward(const Index& index, const Query& query,
       ++stats->passed_k_ratio;
       const Stopwatch ratio_test;
       const size_t before = matches.size();
-      ClusterWiseRatioTest(index, feature, found, options.ratio, &matches, stats);
+      ClusterWiseRatioTest(index, feature, found, options.ratio, &matches, stats, allowed);
       correspondences +=
           index.coded()
               ? kCodedMatchWeight * DistinctPoints(index, std::span(matches).subspan(before))

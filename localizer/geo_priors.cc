@@ -1,5 +1,6 @@
 #include "localizer/geo_priors.h"
 
+#include "format/geo/geo_region.h"
 #include "format/geo/index_georeference.h"
 
 namespace cwloc {
@@ -16,16 +17,11 @@ std::optional<IndexGeo> IndexGeo::Of(const Index& index) {
 
 std::vector<char> IndexGeo::ClustersNear(const PositionPrior& prior,
                                          const ClusterMembers& clusters) const {
-  const Eigen::Vector3d at =
-      frame_.GeodeticToEnu({prior.latitude_deg, prior.longitude_deg, prior.height_m.value_or(0.0)});
+  const EnuRegion region(frame_, prior);
   std::vector<char> near(clusters.num_clusters(), 0);
   for (uint32_t c = 0; c < clusters.num_clusters(); ++c) {
-    for (uint32_t i = clusters.offsets[c]; i < clusters.offsets[c + 1] && !near[c]; ++i) {
-      Eigen::Vector3d offset = image_centers_enu_[clusters.images[i]] - at;
-      // Without a height, the ENU "up" offset of a distant fix is mostly the earth's curvature.
-      if (!prior.height_m) offset.z() = 0;
-      near[c] = offset.norm() <= prior.radius_m;
-    }
+    for (uint32_t i = clusters.offsets[c]; i < clusters.offsets[c + 1] && !near[c]; ++i)
+      near[c] = region.Contains(image_centers_enu_[clusters.images[i]]);
   }
   return near;
 }

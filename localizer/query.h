@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "format/camera/camera_models.h"
+#include "format/geo/geo_region.h"
 
 namespace cwloc {
 
@@ -79,13 +80,9 @@ enum class PriorSource { kOption, kPriorsFile, kExif };
 inline constexpr std::array<std::string_view, 3> kPriorSourceNames = {"option", "priors-file",
                                                                       "exif"};
 
-// A GPS fix: the query was taken within radius_m of this WGS84 position (horizontally when
-// the height is unknown). Localization then considers only clusters with a camera that near.
-struct PositionPrior {
-  double latitude_deg = 0;
-  double longitude_deg = 0;
-  std::optional<double> height_m;  // ellipsoidal
-  double radius_m = 0;
+// A GPS fix: the query was taken in this region. Localization then considers only clusters
+// with a camera in it.
+struct PositionPrior : GeoRegion {
   PriorSource source = PriorSource::kOption;
 };
 

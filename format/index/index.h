@@ -32,6 +32,11 @@ class Index {
   // PNTS of a full index; empty in a compact one, which keeps PORG + PNTF (use PointXyz).
   std::span<const IndexPoint> points() const { return points_; }
   size_t num_points() const { return num_points_; }
+  // PORG and PNTF of a compact index (empty / the zero origin in a full one).
+  std::span<const IndexPointOffset> point_offsets() const { return point_offsets_; }
+  IndexPointOrigin point_origin() const {
+    return point_origin_ != nullptr ? *point_origin_ : IndexPointOrigin{};
+  }
   // Point p's position (p < num_points()).
   std::array<double, 3> PointXyz(uint32_t p) const;
   std::span<const uint32_t> tracks() const { return tracks_; }  // view indices

@@ -78,10 +78,10 @@ std::vector<Query> GoldenQueries(const SweptIndex& swept) {
   }
   // The city's centre (cwloc-synth --geo "47.3779 8.5403 455", tests/data/README.md).
   if (swept.georeferenced) {
-    queries[1].position_prior = PositionPrior{.latitude_deg = 47.3779,
-                                              .longitude_deg = 8.5403,
-                                              .height_m = std::nullopt,
-                                              .radius_m = 300};
+    queries[1].position_prior = PositionPrior{{.latitude_deg = 47.3779,
+                                               .longitude_deg = 8.5403,
+                                               .height_m = std::nullopt,
+                                               .radius_m = 300}};
   }
   return queries;
 }

@@ -1,0 +1,281 @@
+#include "indexer/index_extract.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "cwloc/version.h"
+#include "format/base/bounded_file.h"
+#include "format/base/error.h"
+#include "format/base/parallel_for.h"
+#include "format/base/stopwatch.h"
+#include "format/geo/index_georeference.h"
+#include "format/index/index.h"
+#include "indexer/index_contents.h"
+
+namespace cwloc {
+namespace {
+
+// Per parent cluster, 1 when it has a camera in the region.
+std::vector<char> ClustersNear(const Index& parent, const GeoRegion& near) {
+  if (parent.georeference() == nullptr) {
+    throw InputError(parent.file().path().string() +
+                     ": --near needs a georeferenced index (cwloc-index build --georef, "
+                     "--georef-images or --model-frame)");
+  }
+  const GeoFrame frame(GeoreferenceOfSection(*parent.georeference()));
+  const EnuRegion region(frame, near);
+  std::vector<char> keep(parent.images().size(), 0);
+  for (const IndexImage& image : parent.images()) {
+    if (region.Contains(frame.georeference().ModelToEnu(CameraCenterOf(image))))
+      keep[image.cluster] = 1;
+  }
+  return keep;
+}
+
+// Per parent cluster, 1 when it holds an image the list names ('#' comments, blank lines).
+std::vector<char> ClustersOfListedImages(const Index& parent, const std::filesystem::path& list) {
+  CheckInputFile(list, kQueryListFile);
+  std::ifstream in(list);
+  if (!in) throw InputError(list.string() + ": cannot open the image list");
+  std::unordered_map<std::string_view, uint32_t> row_of_name;
+  for (uint32_t i = 0; i < parent.images().size(); ++i)
+    row_of_name.emplace(parent.ImageName(parent.images()[i]), i);
+  std::vector<char> keep(parent.images().size(), 0);
+  size_t listed = 0;
+  std::string line;
+  for (int number = 1; std::getline(in, line); ++number) {
+    const size_t first = line.find_first_not_of(" \t\r");
+    if (first == std::string::npos || line[first] == '#') continue;
+    const std::string name = line.substr(first, line.find_last_not_of(" \t\r") + 1 - first);
+    const auto found = row_of_name.find(name);
+    if (found == row_of_name.end()) {
+      throw InputError(list.string() + ":" + std::to_string(number) + ": image '" + name +
+                       "' is not in " + parent.file().path().string());
+    }
+    keep[parent.images()[found->second].cluster] = 1;
+    ++listed;
+  }
+  if (listed == 0) throw InputError(list.string() + ": no image names");
+  return keep;
+}
+
+// Every array of the tile, owned.
+struct Tile {
+  std::vector<IndexCamera> cameras;
+  std::vector<IndexImage> images;
+  std::string strings;
+  std::vector<IndexPoint> points;
+  std::vector<IndexPointOffset> point_offsets;
+  std::vector<uint32_t> tracks;
+  std::vector<uint8_t> descriptors;  // full: views x 128
+  std::vector<uint8_t> codes;        // compact: points x code bytes
+  std::vector<uint8_t> rows;         // the kd-forest's: views x 128, or decoded points
+  std::vector<uint32_t> view_points;
+  std::vector<float> neighbor_distances;
+  std::vector<ViewKeypoint> view_keypoints;
+  std::vector<uint32_t> covisibility_offsets;
+  std::vector<CovisibilityEdge> covisibility_edges;
+  uint32_t num_clusters = 0;
+};
+
+Tile CutTile(const Index& parent, const std::vector<char>& keep_cluster) {
+  Tile tile;
+  const auto parent_images = parent.images();
+  std::vector<uint32_t> cluster_of(keep_cluster.size(), UINT32_MAX);
+  for (size_t c = 0; c < keep_cluster.size(); ++c) {
+    if (keep_cluster[c]) cluster_of[c] = tile.num_clusters++;
+  }
+  std::vector<uint32_t> camera_of(parent.cameras().size(), UINT32_MAX);
+  std::vector<uint32_t> image_of(parent_images.size(), UINT32_MAX);
+  std::vector<uint32_t> view_of(parent.num_views(), UINT32_MAX);
+  std::vector<uint32_t> parent_views;  // the tile's views, as parent views
+  for (uint32_t i = 0; i < parent_images.size(); ++i) {
+    if (!keep_cluster[parent_images[i].cluster]) continue;
+    IndexImage image = parent_images[i];
+    if (camera_of[image.camera_index] == UINT32_MAX) {
+      camera_of[image.camera_index] = static_cast<uint32_t>(tile.cameras.size());
+      tile.cameras.push_back(parent.cameras()[image.camera_index]);
+    }
+    const std::string_view name = parent.ImageName(image);
+    image.camera_index = camera_of[image.camera_index];
+    image.name_offset = static_cast<uint32_t>(tile.strings.size());
+    tile.strings += name;
+    image.cluster = cluster_of[image.cluster];
+    image.first_view = static_cast<uint32_t>(parent_views.size());
+    for (uint32_t v = 0; v < image.num_views; ++v) {
+      view_of[parent_images[i].first_view + v] = static_cast<uint32_t>(parent_views.size());
+      parent_views.push_back(parent_images[i].first_view + v);
+    }
+    image_of[i] = static_cast<uint32_t>(tile.images.size());
+    tile.images.push_back(image);
+  }
+
+  // Points seen by a kept view, in the parent's order, with their kept views.
+  const bool coded = parent.coded();
+  tile.view_points.resize(parent_views.size());
+  std::vector<uint32_t> parent_points;
+  for (uint32_t p = 0; p < parent.num_points(); ++p) {
+    const size_t first_track = tile.tracks.size();
+    const auto point = static_cast<uint32_t>(parent_points.size());
+    for (const uint32_t view : parent.TrackOf(p)) {
+      if (view_of[view] == UINT32_MAX) continue;
+      tile.tracks.push_back(view_of[view]);
+      tile.view_points[view_of[view]] = point;
+    }
+    if (tile.tracks.size() == first_track) continue;
+    parent_points.push_back(p);
+    if (coded) {
+      IndexPointOffset offset = parent.point_offsets()[p];
+      offset.first_track = static_cast<uint32_t>(first_track);
+      tile.point_offsets.push_back(offset);
+    } else {
+      IndexPoint copy = parent.points()[p];
+      copy.first_track = static_cast<uint32_t>(first_track);
+      copy.track_length = static_cast<uint32_t>(tile.tracks.size() - first_track);
+      tile.points.push_back(copy);
+    }
+  }
+
+  if (coded) {
+    const DescriptorCodes& codes = parent.codes();
+    tile.rows.resize(parent_points.size() * kDescriptorBytes);
+    for (size_t i = 0; i < parent_points.size(); ++i) {
+      const uint8_t* code = codes.Code(parent_points[i]);
+      tile.codes.insert(tile.codes.end(), code, code + codes.code_bytes);
+      codes.Decode(parent_points[i], tile.rows.data() + i * kDescriptorBytes);
+      tile.neighbor_distances.push_back(parent.point_neighbor_distances()[parent_points[i]]);
+    }
+  } else {
+    tile.descriptors.reserve(parent_views.size() * kDescriptorBytes);
+    for (const uint32_t view : parent_views) {
+      const uint8_t* d = parent.descriptors().data() + size_t{view} * kDescriptorBytes;
+      tile.descriptors.insert(tile.descriptors.end(), d, d + kDescriptorBytes);
+      tile.neighbor_distances.push_back(parent.view_neighbor_distances()[view]);
+    }
+  }
+  if (!parent.view_keypoints().empty()) {
+    for (const uint32_t view : parent_views)
+      tile.view_keypoints.push_back(parent.view_keypoints()[view]);
+  }
+
+  // The parent's edges between kept images: the same shared-point counts (a point both see
+  // keeps both views), still sorted, since image rows keep their order.
+  tile.covisibility_offsets.push_back(0);
+  for (uint32_t i = 0; i < parent_images.size(); ++i) {
+    if (image_of[i] == UINT32_MAX) continue;
+    for (const CovisibilityEdge& edge : parent.CovisibleImages(i)) {
+      if (image_of[edge.image_index] != UINT32_MAX)
+        tile.covisibility_edges.push_back({image_of[edge.image_index], edge.shared_points});
+    }
+    tile.covisibility_offsets.push_back(static_cast<uint32_t>(tile.covisibility_edges.size()));
+  }
+  return tile;
+}
+
+nlohmann::ordered_json RegionJson(const IndexExtractOptions& options) {
+  if (!options.near) return {{"images", options.images_file.string()}};
+  nlohmann::ordered_json near = {{"latitude_deg", options.near->latitude_deg},
+                                 {"longitude_deg", options.near->longitude_deg}};
+  if (options.near->height_m) near["height_m"] = *options.near->height_m;
+  near["radius_m"] = options.near->radius_m;
+  return {{"near", near}};
+}
+
+}  // namespace
+
+IndexExtractReport ExtractIndex(const IndexExtractOptions& options) {
+  const Stopwatch total;
+  if (options.near.has_value() == !options.images_file.empty())
+    throw InputError("extract: give one of --near or --images");
+  std::error_code same_error;
+  if (std::filesystem::equivalent(options.index_path, options.output_path, same_error)) {
+    throw InputError(options.output_path.string() +
+                     ": the output is the index being extracted from; write the tile elsewhere");
+  }
+  const Index parent = Index::Open(options.index_path);
+  parent.file().VerifyChecksums();
+  parent.Validate();
+  auto manifest = nlohmann::ordered_json::parse(parent.manifest_json(), nullptr,
+                                                /*allow_exceptions=*/false);
+  if (manifest.is_discarded())
+    throw InputError(options.index_path.string() + ": section 'MANI' is not valid JSON");
+
+  const std::vector<char> keep = options.near ? ClustersNear(parent, *options.near)
+                                              : ClustersOfListedImages(parent, options.images_file);
+  if (std::find(keep.begin(), keep.end(), char{1}) == keep.end()) {
+    const GeoRegion& r = *options.near;  // a list always keeps a cluster
+    char where[160];
+    std::snprintf(where, sizeof(where), "no camera lies within %.10g m of %.10g, %.10g", r.radius_m,
+                  r.latitude_deg, r.longitude_deg);
+    throw InputError(options.index_path.string() + ": " + where + "; nothing to extract");
+  }
+  const Tile tile = CutTile(parent, keep);
+
+  const auto& parameters = manifest["build_parameters"];
+  KdForestBuildOptions forest_options;
+  forest_options.num_trees = parameters["kd_trees"].get<uint32_t>();
+  forest_options.max_leaf_size = parameters["kd_leaf_size"].get<uint32_t>();
+  const KdForest forest =
+      BuildIndexForest(parent.coded() ? tile.rows : tile.descriptors, forest_options,
+                       parameters["seed"].get<uint64_t>(), ResolveThreads(options.threads));
+
+  IndexExtractReport report;
+  report.num_cameras = tile.cameras.size();
+  report.num_images = tile.images.size();
+  report.num_points = parent.coded() ? tile.point_offsets.size() : tile.points.size();
+  report.num_views = tile.view_points.size();
+  report.num_clusters = tile.num_clusters;
+  report.num_covisibility_edges = tile.covisibility_edges.size();
+  report.parent_images = parent.images().size();
+  report.parent_views = parent.num_views();
+
+  const nlohmann::ordered_json parent_counts = manifest["counts"];
+  manifest["tool_version"] = kToolVersion;
+  manifest["counts"] = {
+      {"cameras", report.num_cameras},   {"images", report.num_images},
+      {"points", report.num_points},     {"views", report.num_views},
+      {"clusters", report.num_clusters}, {"covisibility_edges", report.num_covisibility_edges},
+      {"kd_nodes", forest.nodes.size()}};
+  manifest["build_parameters"]["clustering"]["num_clusters"] = tile.num_clusters;
+  manifest["extracted"] = {{"from",
+                            {{"path", options.index_path.string()},
+                             {"file_bytes", parent.file().header().file_size},
+                             {"counts", parent_counts}}},
+                           {"region", RegionJson(options)}};
+
+  IndexContents contents;
+  contents.cameras = tile.cameras;
+  contents.images = tile.images;
+  contents.strings = tile.strings;
+  contents.tracks = tile.tracks;
+  contents.view_points = tile.view_points;
+  contents.neighbor_distances = tile.neighbor_distances;
+  contents.forest = &forest;
+  contents.covisibility_offsets = tile.covisibility_offsets;
+  contents.covisibility_edges = tile.covisibility_edges;
+  contents.view_keypoints = tile.view_keypoints;
+  contents.georeference = parent.georeference();
+  IndexPointOrigin origin{};
+  if (parent.coded()) {
+    origin = parent.point_origin();
+    contents.point_origin = &origin;
+    contents.point_offsets = tile.point_offsets;
+    contents.codebook = parent.codes().codebook;
+    contents.codes = tile.codes;
+    contents.code_bytes = parent.codes().code_bytes;
+  } else {
+    contents.points = tile.points;
+    contents.descriptors = tile.descriptors;
+  }
+  WriteIndex(options.output_path, contents, std::move(manifest));
+  report.file_bytes = std::filesystem::file_size(options.output_path);
+  report.seconds_total = total.Seconds();
+  return report;
+}
+
+}  // namespace cwloc
