@@ -268,6 +268,23 @@ TEST_P(TileTest, BadRegionsListsAndOutputsAreRefusedAndWriteNothing) {
                 ": the output is the index being extracted from; write the tile elsewhere\n");
   EXPECT_NE(Index("extract --index " + whole + " -o " + tile.string(), &output), 0);
   EXPECT_FALSE(std::filesystem::exists(tile));
+
+  // A parent with a flipped byte is refused before anything is cut from it.
+  std::vector<uint8_t> bytes = test::ReadBytes(Whole(compact));
+  const auto parent = cwloc::Index::Open(Whole(compact));
+  const SectionEntry& tracks = *parent.file().FindSection(section::kTracks);
+  bytes[tracks.offset + tracks.size / 2] ^= 0x10;
+  const auto corrupt = *dir_ / "corrupt.cwl";
+  test::WriteBytes(corrupt, bytes);
+  EXPECT_EQ(
+      Index("extract --index " + corrupt.string() + " --near '" + kRegion + "' -o " + tile.string(),
+            &output),
+      2);
+  const std::string number = compact ? "6" : "5";  // PORG and PNTF stand for PNTS
+  EXPECT_EQ(output.substr(0, output.find(" (stored")), "cwloc-index: error: " + corrupt.string() +
+                                                           ": section " + number +
+                                                           " 'TRKS': checksum mismatch");
+  EXPECT_FALSE(std::filesystem::exists(tile));
 }
 
 TEST_F(ClusteredTileTest, NearNeedsAGeoreferencedIndex) {
