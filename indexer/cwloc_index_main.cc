@@ -104,6 +104,22 @@ int RunExtract(const IndexExtractOptions& options, bool json) {
   return kExitOk;
 }
 
+// One line on the index a tile was cut from, and the region.
+void PrintExtracted(const nlohmann::ordered_json& extracted) {
+  const auto& from = extracted["from"];
+  const auto& region = extracted["region"];
+  std::string where;
+  if (region.contains("near")) {
+    const auto& near = region["near"];
+    where = "cameras within " + near["radius_m"].dump() + " m of " + near["latitude_deg"].dump() +
+            ", " + near["longitude_deg"].dump();
+  } else {
+    where = "the clusters of the images in " + region["images"].get<std::string>();
+  }
+  std::printf("  a tile of %s (%s images): %s\n", from["path"].get<std::string>().c_str(),
+              from["counts"]["images"].dump().c_str(), where.c_str());
+}
+
 // What `info` says about how the descriptors are stored.
 std::string DescriptorStorage(const Index& index) {
   if (!index.coded()) return "one 128-byte SIFT descriptor per view";
@@ -154,6 +170,7 @@ int RunInfo(const std::string& path, bool json) {
   std::printf("  built by %s %s from %s\n", manifest["tool"].get<std::string>().c_str(),
               manifest["tool_version"].get<std::string>().c_str(),
               manifest["source"]["model"]["path"].get<std::string>().c_str());
+  if (manifest.contains("extracted")) PrintExtracted(manifest["extracted"]);
   if (manifest.contains("georeference") && manifest["georeference"].is_object())
     PrintGeoreference(manifest["georeference"]);
   std::printf("  descriptors: %s\n", DescriptorStorage(index).c_str());

@@ -166,6 +166,13 @@ TEST_P(TileTest, ATileOfListedImagesHoldsTheirClusters) {
   const auto manifest = nlohmann::json::parse(part.manifest_json());
   EXPECT_EQ(manifest["extracted"]["region"]["images"], list.string());
   EXPECT_EQ(manifest["counts"]["images"], 2);
+  ASSERT_EQ(Index("info " + tile.string(), &output), 0) << output;
+  const size_t parent_images = cwloc::Index::Open(Whole(compact)).images().size();
+  EXPECT_NE(output.find("\n  a tile of " + Whole(compact).string() + " (" +
+                        std::to_string(parent_images) + " images): the clusters of the images in " +
+                        list.string() + "\n"),
+            std::string::npos)
+      << output;
   ASSERT_EQ(Index("info --json " + tile.string(), &output), 0) << output;
   std::ofstream(*dir_ / "info.json") << output;
   EXPECT_EQ(test::RunCommand(
