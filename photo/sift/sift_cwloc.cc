@@ -30,6 +30,7 @@ extern "C" {
 #endif
 
 #include "format/base/parallel_for.h"
+#include "photo/sift/sift_kernels.h"
 #include "photo/sift/sift_levels.h"
 
 namespace cwloc::sift_internal {
@@ -172,38 +173,21 @@ void Smooth(const Plane& in, Plane* out, double sigma, int num_threads) {
   out->Resize(w, h);
   constexpr int kRowsPerTask = 16;
   const int num_tasks = (h + kRowsPerTask - 1) / kRowsPerTask;
+  const int taps = int(kernel.size());
   ParallelFor(size_t(num_tasks), num_threads, [&](size_t task) {
-    std::vector<float> column_pass(static_cast<size_t>(w + 2 * half));
-    std::vector<float> acc(static_cast<size_t>(w));
+    // The column pass lands in the middle of `padded`, which repeats its edge pixels `half`
+    // times on both sides for the row pass.
+    std::vector<float> padded(static_cast<size_t>(w + 2 * half));
+    std::vector<const float*> rows(kernel.size());
     const int y_end = std::min(h, int(task + 1) * kRowsPerTask);
     for (int y = int(task) * kRowsPerTask; y < y_end; ++y) {
-      // Along the column: taps from row y - half to y + half.
-      float* a = acc.data();
-      {
-        const float* src = in.Row(std::clamp(y - half, 0, h - 1));
-        const float c = kernel[0];
-        for (int x = 0; x < w; ++x) a[x] = src[x] * c;
-      }
-      for (int k = 1; k < int(kernel.size()); ++k) {
-        const float* src = in.Row(std::clamp(y - half + k, 0, h - 1));
-        const float c = kernel[size_t(k)];
-        for (int x = 0; x < w; ++x) a[x] += src[x] * c;
-      }
-      // Along the row, with `half` edge copies on both sides.
-      float* padded = column_pass.data();
-      std::fill(padded, padded + half, a[0]);
-      std::copy(a, a + w, padded + half);
-      std::fill(padded + half + w, padded + 2 * half + w, a[w - 1]);
-      float* dst = out->Row(y);
-      {
-        const float c = kernel[0];
-        for (int x = 0; x < w; ++x) dst[x] = padded[x] * c;
-      }
-      for (int k = 1; k < int(kernel.size()); ++k) {
-        const float* src = padded + k;
-        const float c = kernel[size_t(k)];
-        for (int x = 0; x < w; ++x) dst[x] += src[x] * c;
-      }
+      for (int k = 0; k < taps; ++k) rows[size_t(k)] = in.Row(std::clamp(y - half + k, 0, h - 1));
+      float* a = padded.data() + half;
+      ConvolveTaps(rows.data(), kernel.data(), taps, w, a);
+      std::fill(padded.data(), a, a[0]);
+      std::fill(a + w, a + w + half, a[w - 1]);
+      for (int k = 0; k < taps; ++k) rows[size_t(k)] = padded.data() + k;
+      ConvolveTaps(rows.data(), kernel.data(), taps, w, out->Row(y));
     }
   });
 }
@@ -396,33 +380,12 @@ struct GradientPlanes {
 };
 
 void Gradient(const Plane& level, GradientPlanes* grad, int num_threads) {
-  const int w = level.w, h = level.h;
+  const int h = level.h;
   ParallelFor(size_t(h), num_threads, [&](size_t row) {
     const int y = int(row);
-    const float* src = level.Row(y);
-    const float* up = y > 0 ? level.Row(y - 1) : nullptr;
-    const float* down = y < h - 1 ? level.Row(y + 1) : nullptr;
-    float* out_mod = grad->mod.Row(y);
-    float* out_angle = grad->angle.Row(y);
-    for (int x = 0; x < w; ++x) {
-      float gx, gy;
-      if (x == 0) {
-        gx = src[1] - src[0];
-      } else if (x == w - 1) {
-        gx = src[x] - src[x - 1];
-      } else {
-        gx = float(0.5 * (src[x + 1] - src[x - 1]));
-      }
-      if (y == 0) {
-        gy = down[x] - src[x];
-      } else if (y == h - 1) {
-        gy = src[x] - up[x];
-      } else {
-        gy = float(0.5 * (down[x] - up[x]));
-      }
-      out_mod[x] = vl_fast_sqrt_f(gx * gx + gy * gy);
-      out_angle[x] = vl_mod_2pi_f(float(vl_fast_atan2_f(gy, gx) + 2 * VL_PI));
-    }
+    GradientRow(y > 0 ? level.Row(y - 1) : nullptr, level.Row(y),
+                y < h - 1 ? level.Row(y + 1) : nullptr, level.w, grad->mod.Row(y),
+                grad->angle.Row(y));
   });
 }
 

@@ -1,0 +1,101 @@
+// The SIFT row kernels against their scalar references, bit for bit (photo/sift/sift_kernels.h).
+#include "photo/sift/sift_kernels.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <random>
+#include <vector>
+
+namespace cwloc::sift_internal {
+namespace {
+
+uint32_t Bits(float x) {
+  uint32_t b;
+  std::memcpy(&b, &x, sizeof(b));
+  return b;
+}
+
+// Rows of a level: smooth values in [0, 1] as a Gaussian level holds, with the values that
+// take the kernels' special branches mixed in (zero and tiny gradients, the fast sqrt's 1e-8
+// threshold on both sides, negative zero, vertical and horizontal edges).
+std::vector<float> TestRow(std::mt19937& rng, int w) {
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  std::vector<float> row(static_cast<size_t>(w));
+  for (float& v : row) v = unit(rng);
+  const float specials[] = {0.0f, -0.0f, 1e-4f, 1e-4f + 1e-8f, std::nextafter(1e-4f, 1.0f),
+                            0.5f, 0.5f,  1.0f,  7.0710678e-5f, 7.0710685e-5f};
+  for (int i = 0; i < w; i += 3) row[size_t(i)] = specials[size_t(i / 3) % std::size(specials)];
+  return row;
+}
+
+TEST(SiftKernels, GradientRowEqualsTheScalarReferenceBitForBit) {
+  std::mt19937 rng(7);
+  for (const int w : {2, 3, 8, 9, 10, 17, 31, 64, 1537}) {
+    const std::vector<float> up = TestRow(rng, w), src = TestRow(rng, w), down = TestRow(rng, w);
+    for (int border = 0; border < 3; ++border) {
+      const float* u = border == 1 ? nullptr : up.data();
+      const float* d = border == 2 ? nullptr : down.data();
+      const size_t n = static_cast<size_t>(w);
+      std::vector<float> mod(n), angle(n), mod_ref(n), angle_ref(n);
+      GradientRow(u, src.data(), d, w, mod.data(), angle.data());
+      GradientRowScalar(u, src.data(), d, w, mod_ref.data(), angle_ref.data());
+      for (int x = 0; x < w; ++x) {
+        SCOPED_TRACE("w " + std::to_string(w) + " border " + std::to_string(border) + " x " +
+                     std::to_string(x));
+        ASSERT_EQ(Bits(mod[size_t(x)]), Bits(mod_ref[size_t(x)]));
+        ASSERT_EQ(Bits(angle[size_t(x)]), Bits(angle_ref[size_t(x)]));
+      }
+    }
+  }
+}
+
+TEST(SiftKernels, GradientPixelsAtTheFastSqrtThresholdAndEveryDirection) {
+  // gx^2 + gy^2 on both sides of 1e-8, and every octant of the angle.
+  const float tiny = std::sqrt(1e-8f);
+  const float values[] = {
+      0.0f,  -0.0f,  tiny, std::nextafter(tiny, 0.0f), std::nextafter(tiny, 1.0f), 0.25f, -0.25f,
+      1e-3f, -1e-3f, 0.7f};
+  std::vector<float> src;
+  for (const float gx : values) {
+    // A row whose central difference is 2 gx at its second pixel.
+    src = {0.0f, 0.0f, 2 * gx, 0.0f};
+    for (const float gy : values) {
+      const std::vector<float> up = {0.0f, 0.0f, 0.0f, 0.0f}, down = {0.0f, 2 * gy, 0.0f, 0.0f};
+      float mod[4], angle[4], mod_ref[4], angle_ref[4];
+      GradientRow(up.data(), src.data(), down.data(), 4, mod, angle);
+      GradientRowScalar(up.data(), src.data(), down.data(), 4, mod_ref, angle_ref);
+      for (int x = 0; x < 4; ++x) {
+        EXPECT_EQ(Bits(mod[x]), Bits(mod_ref[x])) << gx << " " << gy << " x " << x;
+        EXPECT_EQ(Bits(angle[x]), Bits(angle_ref[x])) << gx << " " << gy << " x " << x;
+      }
+    }
+  }
+}
+
+TEST(SiftKernels, ConvolveTapsEqualsTheScalarReferenceBitForBit) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  for (const int taps : {3, 9, 13, 17, 25}) {
+    std::vector<float> kernel(static_cast<size_t>(taps));
+    for (float& k : kernel) k = unit(rng) / float(taps);
+    for (const int w : {1, 7, 8, 15, 16, 17, 33, 3072}) {
+      std::vector<std::vector<float>> data;
+      std::vector<const float*> rows;
+      for (int k = 0; k < taps; ++k) data.push_back(TestRow(rng, w));
+      for (const auto& row : data) rows.push_back(row.data());
+      std::vector<float> out(static_cast<size_t>(w)), ref(static_cast<size_t>(w));
+      ConvolveTaps(rows.data(), kernel.data(), taps, w, out.data());
+      ConvolveTapsScalar(rows.data(), kernel.data(), taps, w, ref.data());
+      for (int x = 0; x < w; ++x) {
+        ASSERT_EQ(Bits(out[size_t(x)]), Bits(ref[size_t(x)]))
+            << "taps " << taps << " w " << w << " x " << x;
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace cwloc::sift_internal
