@@ -39,7 +39,6 @@ namespace {
 constexpr int kNumBinsPerSide = 4;  // VLFeat's NBP
 constexpr int kNumAngleBins = 8;    // VLFeat's NBO
 constexpr double kMagnif = 3.0;
-constexpr double kWindowSize = kNumBinsPerSide / 2;
 
 // A single-channel float image, row-major. Resize keeps the storage when it is large enough
 // and never initializes pixels: each is written before it is read.
@@ -119,33 +118,6 @@ struct Key {
   int o, ix, iy, is;
   float x, y, s, sigma;
 };
-
-// exp(-x) by table lookup and linear interpolation, as VLFeat's fast_expn (256 entries
-// up to 25).
-class FastExpn {
- public:
-  FastExpn() {
-    for (int k = 0; k <= kSize; ++k) table_[size_t(k)] = std::exp(-double(k) * (kMax / kSize));
-  }
-  double operator()(double x) const {
-    if (x > kMax) return 0.0;
-    x *= kSize / kMax;
-    const int i = int(vl_floor_d(x));
-    const double r = x - i;
-    const double a = table_[size_t(i)], b = table_[size_t(i) + 1];
-    return a + r * (b - a);
-  }
-
- private:
-  static constexpr int kSize = 256;
-  static constexpr double kMax = 25.0;
-  std::array<double, kSize + 1> table_;
-};
-
-const FastExpn& Expn() {
-  static const FastExpn expn;
-  return expn;
-}
 
 // VLFeat's smoothing kernel: width max(ceil(4 sigma), 1), taps exp(-d^2/2) with d computed
 // in float, normalized by their float sum.
@@ -400,7 +372,7 @@ int Orientations(const Key& k, const GradientPlanes& grad, double angles[4]) {
   constexpr int nbins = 36;
   if (xi < 0 || xi > w - 1 || yi < 0 || yi > h - 1) return 0;
   double hist[nbins] = {};
-  const FastExpn& expn = Expn();
+  const FastExpn& expn = FastExpn::Get();
   const size_t centre = size_t(yi) * size_t(w) + size_t(xi);
   const float* pt_mod = grad.mod.data() + centre;
   const float* pt_angle = grad.angle.data() + centre;
@@ -457,8 +429,9 @@ float NormalizeHistogram(float* begin, float* end) {
   return norm;
 }
 
-// VLFeat's vl_sift_calc_keypoint_descriptor; pixels whose rotated position lies outside
-// every spatial bin (they would add nothing) are skipped before any other work.
+// VLFeat's vl_sift_calc_keypoint_descriptor: the per-pixel terms from DescribeSamples, added
+// in VLFeat's order; pixels whose rotated position lies outside every spatial bin (they would
+// add nothing) are skipped before any other work.
 void Descriptor(const Key& k, double angle0, const GradientPlanes& grad, float* descr) {
   const int w = grad.mod.w, h = grad.mod.h;
   const double xper = std::pow(2.0, k.o);
@@ -474,14 +447,12 @@ void Descriptor(const Key& k, double angle0, const GradientPlanes& grad, float* 
   const float* pt_mod = grad.mod.data() + centre;
   const float* pt_angle = grad.angle.data() + centre;
   float* dpt = descr + (kNumBinsPerSide / 2) * binyo + (kNumBinsPerSide / 2) * binxo;
-  const FastExpn& expn = Expn();
-  const float wsigma = float(kWindowSize);
-  // |n| >= 2.5 puts every one of a sample's bins outside [-2, 2): it adds nothing.
-  const float reach = 2.5f;
-  // Per row, the columns whose rotated position can fall inside |n| < 2.5, from the two
-  // slabs |ct0 dx + st0 dy| < R and |-st0 dx + ct0 dy| < R (R = 2.5 SBP), widened by a pixel:
-  // a cheap superset; the exact test below still decides.
-  const double R = reach * SBP;
+  // |n| >= 2.5 puts every one of a sample's bins outside [-2, 2): it adds nothing. Per row,
+  // the columns whose rotated position can fall inside |n| < 2.5, from the two slabs
+  // |ct0 dx + st0 dy| < R and |-st0 dx + ct0 dy| < R (R = 2.5 SBP), widened by a pixel: a
+  // cheap superset; DescribeSamples's exact test still decides.
+  const double R = 2.5 * SBP;
+  DescriptorSamples samples;
   auto slab = [](double a, double c, double r, double* lo, double* hi) {
     // {dx : |a dx + c| < r}
     if (std::abs(a) < 1e-9) {
@@ -500,34 +471,27 @@ void Descriptor(const Key& k, double angle0, const GradientPlanes& grad, float* 
     if (lo > hi) continue;
     const int first = std::max({-W, 1 - xi, int(std::floor(lo + x - xi)) - 1});
     const int last = std::min({W, w - xi - 2, int(std::ceil(hi + x - xi)) + 1});
-    for (int dxi = first; dxi <= last; ++dxi) {
-      const float dx = float(xi + dxi - x);
-      const float dy = float(yi + dyi - y);
-      const float nx = float((ct0 * dx + st0 * dy) / SBP);
-      const float ny = float((-st0 * dx + ct0 * dy) / SBP);
-      if (!(nx > -reach && nx < reach && ny > -reach && ny < reach)) continue;
+    DescriptorRow row{xi + first, x, float(yi + dyi - y), ct0, st0, SBP, angle0};
+    for (int dxi = first; dxi <= last; dxi += DescriptorSamples::kMax) {
+      const int count = std::min(last - dxi + 1, DescriptorSamples::kMax);
       const ptrdiff_t off = ptrdiff_t(dyi) * w + dxi;
-      const float mod = pt_mod[off];
-      const float angle = pt_angle[off];
-      const float theta = vl_mod_2pi_f(float(angle - angle0));
-      const float nt = float(kNumAngleBins * theta / (2 * VL_PI));
-      const float win = float(expn((nx * nx + ny * ny) / (2.0 * wsigma * wsigma)));
-      const int binx = int(vl_floor_f(float(nx - 0.5)));
-      const int biny = int(vl_floor_f(float(ny - 0.5)));
-      const int bint = int(vl_floor_f(nt));
-      const float rbinx = float(nx - (binx + 0.5));
-      const float rbiny = float(ny - (biny + 0.5));
-      const float rbint = nt - bint;
-      for (int dbinx = 0; dbinx < 2; ++dbinx) {
-        for (int dbiny = 0; dbiny < 2; ++dbiny) {
-          for (int dbint = 0; dbint < 2; ++dbint) {
-            if (binx + dbinx >= -(kNumBinsPerSide / 2) && binx + dbinx < (kNumBinsPerSide / 2) &&
-                biny + dbiny >= -(kNumBinsPerSide / 2) && biny + dbiny < (kNumBinsPerSide / 2)) {
-              const float weight = win * mod * vl_abs_f(1 - dbinx - rbinx) *
-                                   vl_abs_f(1 - dbiny - rbiny) * vl_abs_f(1 - dbint - rbint);
-              *(dpt + ((bint + dbint) % kNumAngleBins) * binto + (biny + dbiny) * binyo +
-                (binx + dbinx) * binxo) += weight;
-            }
+      row.first_x = xi + dxi;
+      DescribeSamples(row, pt_mod + off, pt_angle + off, count, &samples);
+      for (int p = 0; p < count; ++p) {
+        if (!samples.inside[p]) continue;
+        // VLFeat's loop over (dbinx, dbiny, dbint), skipping the spatial bins outside 4 x 4.
+        const int binx = samples.binx[p], biny = samples.biny[p], bint = samples.bint[p];
+        const int t0 = (bint % kNumAngleBins) * binto, t1 = ((bint + 1) % kNumAngleBins) * binto;
+        for (int dbinx = 0; dbinx < 2; ++dbinx) {
+          if (binx + dbinx < -(kNumBinsPerSide / 2) || binx + dbinx >= kNumBinsPerSide / 2)
+            continue;
+          for (int dbiny = 0; dbiny < 2; ++dbiny) {
+            if (biny + dbiny < -(kNumBinsPerSide / 2) || biny + dbiny >= kNumBinsPerSide / 2)
+              continue;
+            float* cell = dpt + (biny + dbiny) * binyo + (binx + dbinx) * binxo;
+            const int i = dbinx * 4 + dbiny * 2;
+            cell[t0] += samples.weight[i][p];
+            cell[t1] += samples.weight[i + 1][p];
           }
         }
       }

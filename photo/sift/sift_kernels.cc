@@ -4,6 +4,8 @@ extern "C" {
 #include <vl/mathop.h>
 }
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 
@@ -28,6 +30,27 @@ CWLOC_VECTOR_INLINE Floats Load(const float* p) {
 }
 CWLOC_VECTOR_INLINE void Store(float* p, Floats v) { std::memcpy(p, &v, sizeof(v)); }
 CWLOC_VECTOR_INLINE Floats Splat(float x) { return Floats{} + x; }
+CWLOC_VECTOR_INLINE void Store(int32_t* p, Ints v) { std::memcpy(p, &v, sizeof(v)); }
+
+// Lanes 4 * half .. 4 * half + 3 as doubles, and back.
+CWLOC_VECTOR_INLINE Doubles4 Widen(Floats v, int half) {
+  Floats4 part;
+  std::memcpy(&part, reinterpret_cast<const float*>(&v) + 4 * half, sizeof(part));
+  return __builtin_convertvector(part, Doubles4);
+}
+CWLOC_VECTOR_INLINE Floats Narrow(Doubles4 low, Doubles4 high) {
+  const Floats4 a = __builtin_convertvector(low, Floats4),
+                b = __builtin_convertvector(high, Floats4);
+  Floats v;
+  std::memcpy(&v, &a, sizeof(a));
+  std::memcpy(reinterpret_cast<float*>(&v) + 4, &b, sizeof(b));
+  return v;
+}
+// vl_floor_f: truncation, one less for a negative non-integer.
+CWLOC_VECTOR_INLINE Ints Floor(Floats v) {
+  const Ints t = __builtin_convertvector(v, Ints);
+  return t + ((v < 0.0f) & (__builtin_convertvector(t, Floats) != v));
+}
 CWLOC_VECTOR_INLINE Floats Select(Ints mask, Floats a, Floats b) {
   Ints ai, bi;
   std::memcpy(&ai, &a, sizeof(a));
@@ -37,6 +60,7 @@ CWLOC_VECTOR_INLINE Floats Select(Ints mask, Floats a, Floats b) {
   std::memcpy(&out, &r, sizeof(out));
   return out;
 }
+CWLOC_VECTOR_INLINE Floats Abs(Floats v) { return Select(v < 0.0f, -v, v); }
 
 // vl_fast_sqrt_f's test x < 1e-8 compares the float promoted to double: as a float
 // comparison, x <= the largest float below 1e-8 (float(1e-8) rounds below 1e-8).
@@ -64,24 +88,33 @@ CWLOC_VECTOR_INLINE Floats FastAtan2(Floats y, Floats x) {
   return Select(y < 0.0f, -angle, angle);
 }
 
+// vl_mod_2pi_f for |x| < 6 pi, where its loops never run more than twice.
+CWLOC_VECTOR_INLINE Floats Mod2Pi(Floats x) {
+  constexpr float kTwoPi = float(2 * VL_PI);
+  for (int i = 0; i < 2; ++i) x = Select(x > kTwoPi, x - kTwoPi, x);
+  for (int i = 0; i < 2; ++i) x = Select(x < 0.0f, x + kTwoPi, x);
+  return x;
+}
+
 // vl_mod_2pi_f(float(a + 2 pi)) for a fast atan2 angle (|a| < 4 pi): the sum in double, then
 // the loops, which never run twice for such a sum.
 CWLOC_VECTOR_INLINE Floats AngleFrom(Floats a) {
-  Floats sum;
-  for (int half = 0; half < 2; ++half) {
-    Floats4 part;
-    std::memcpy(&part, reinterpret_cast<const float*>(&a) + 4 * half, sizeof(part));
-    const Doubles4 wide = __builtin_convertvector(part, Doubles4) + 2 * VL_PI;
-    const Floats4 narrow = __builtin_convertvector(wide, Floats4);
-    std::memcpy(reinterpret_cast<float*>(&sum) + 4 * half, &narrow, sizeof(narrow));
-  }
-  constexpr float kTwoPi = float(2 * VL_PI);
-  for (int i = 0; i < 2; ++i) sum = Select(sum > kTwoPi, sum - kTwoPi, sum);
-  for (int i = 0; i < 2; ++i) sum = Select(sum < 0.0f, sum + kTwoPi, sum);
-  return sum;
+  return Mod2Pi(Narrow(Widen(a, 0) + 2 * VL_PI, Widen(a, 1) + 2 * VL_PI));
 }
 
+constexpr float kReach = 2.5f;        // |n| >= 2.5 puts all of a sample's bins outside [-2, 2)
+constexpr double kWindowSigma = 2.0;  // VLFeat's window size, NBP / 2
+
 }  // namespace
+
+FastExpn::FastExpn() {
+  for (int k = 0; k <= kSize; ++k) table_[size_t(k)] = std::exp(-double(k) * (kMax / kSize));
+}
+
+const FastExpn& FastExpn::Get() {
+  static const FastExpn expn;
+  return expn;
+}
 
 void GradientPixel(float gx, float gy, float* mod, float* angle) {
   *mod = vl_fast_sqrt_f(gx * gx + gy * gy);
@@ -172,6 +205,119 @@ void ConvolveTaps(const float* const* rows, const float* kernel, int taps, int w
     float sum = rows[0][x] * kernel[0];
     for (int k = 1; k < taps; ++k) sum += rows[k][x] * kernel[k];
     out[x] = sum;
+  }
+}
+
+void DescribeSamplesScalar(const DescriptorRow& row, const float* mod, const float* angle,
+                           int count, DescriptorSamples* out) {
+  const FastExpn& expn = FastExpn::Get();
+  for (int p = 0; p < count; ++p) {
+    const float dx = float(row.first_x + p - row.x);
+    const float dy = row.dy;
+    const float nx = float((row.ct0 * dx + row.st0 * dy) / row.sbp);
+    const float ny = float((-row.st0 * dx + row.ct0 * dy) / row.sbp);
+    out->inside[p] = nx > -kReach && nx < kReach && ny > -kReach && ny < kReach;
+    if (!out->inside[p]) continue;
+    const float theta = vl_mod_2pi_f(float(angle[p] - row.angle0));
+    const float nt = float(8 * theta / (2 * VL_PI));
+    const float win = float(expn((nx * nx + ny * ny) / (2.0 * kWindowSigma * kWindowSigma)));
+    const int binx = int(vl_floor_f(float(nx - 0.5)));
+    const int biny = int(vl_floor_f(float(ny - 0.5)));
+    const int bint = int(vl_floor_f(nt));
+    const float rbinx = float(nx - (binx + 0.5));
+    const float rbiny = float(ny - (biny + 0.5));
+    const float rbint = nt - bint;
+    out->binx[p] = binx;
+    out->biny[p] = biny;
+    out->bint[p] = bint;
+    for (int i = 0; i < 8; ++i) {
+      const int dbinx = i >> 2, dbiny = (i >> 1) & 1, dbint = i & 1;
+      out->weight[i][p] = win * mod[p] * vl_abs_f(1 - dbinx - rbinx) * vl_abs_f(1 - dbiny - rbiny) *
+                          vl_abs_f(1 - dbint - rbint);
+    }
+  }
+}
+
+#if defined(__x86_64__)
+__attribute__((target_clones("avx2", "default")))
+#endif
+void DescribeSamples(const DescriptorRow& row, const float* mod, const float* angle, int count,
+                     DescriptorSamples* out) {
+  const double* table = FastExpn::Get().table();
+  const Doubles4 lane = {0, 1, 2, 3};
+  // Lanes p .. p + 7 from mods[0..7] and angles[0..7]; inlined, so in the AVX2 clone too.
+  static_assert(DescriptorSamples::kMax % kLanes == 0);
+  auto block = [&](int p, const float* mods, const float* angles) __attribute__((always_inline)) {
+    // float(first_x + p + lane - x), each lane's int sum in double.
+    const Doubles4 x_low = (double(row.first_x + p) + lane) - row.x;
+    const Doubles4 x_high = (double(row.first_x + p + 4) + lane) - row.x;
+    const Floats dx = Narrow(x_low, x_high);
+    const double dy = row.dy;
+    Doubles4 n[2][2];  // [x or y][half]
+    for (int half = 0; half < 2; ++half) {
+      const Doubles4 dxd = Widen(dx, half);
+      n[0][half] = (row.ct0 * dxd + row.st0 * dy) / row.sbp;
+      n[1][half] = (-row.st0 * dxd + row.ct0 * dy) / row.sbp;
+    }
+    const Floats nx = Narrow(n[0][0], n[0][1]), ny = Narrow(n[1][0], n[1][1]);
+    const Ints inside = (nx > -kReach) & (nx < kReach) & (ny > -kReach) & (ny < kReach);
+    Store(out->inside + p, inside);
+    const Floats a = Load(angles);
+    const Floats theta = Mod2Pi(Narrow(Widen(a, 0) - row.angle0, Widen(a, 1) - row.angle0));
+    const Floats theta8 = Splat(8.0f) * theta;
+    const Floats nt = Narrow(Widen(theta8, 0) / (2 * VL_PI), Widen(theta8, 1) / (2 * VL_PI));
+    // fast_expn of (nx^2 + ny^2) / 8, the sum in float.
+    const Floats r2 = nx * nx + ny * ny;
+    Doubles4 win_half[2];
+    for (int half = 0; half < 2; ++half) {
+      const Doubles4 e = Widen(r2, half) / (2.0 * kWindowSigma * kWindowSigma);
+      const Doubles4 scaled = e * (FastExpn::kSize / FastExpn::kMax);
+      Doubles4 lo, hi, frac;
+      for (int l = 0; l < 4; ++l) {
+        // Outside the table (e > 25, or a sample outside the window) the value is unused.
+        const int i = e[l] >= FastExpn::kMax ? 0 : int(scaled[l]);
+        lo[l] = table[i];
+        hi[l] = table[i + 1];
+        frac[l] = scaled[l] - i;
+      }
+      const Doubles4 value = lo + frac * (hi - lo);
+      win_half[half] = value;
+      for (int l = 0; l < 4; ++l) {
+        if (e[l] > FastExpn::kMax) win_half[half][l] = 0.0;
+      }
+    }
+    const Floats win = Narrow(win_half[0], win_half[1]);
+    const Ints binx = Floor(Narrow(Widen(nx, 0) - 0.5, Widen(nx, 1) - 0.5));
+    const Ints biny = Floor(Narrow(Widen(ny, 0) - 0.5, Widen(ny, 1) - 0.5));
+    const Ints bint = Floor(nt);
+    Store(out->binx + p, binx);
+    Store(out->biny + p, biny);
+    Store(out->bint + p, bint);
+    auto offset = [](Floats v, Ints bin, int half) {  // v - (bin + 0.5), in double
+      Floats4 part;
+      std::memcpy(&part, reinterpret_cast<const float*>(&v) + 4 * half, sizeof(part));
+      typedef int32_t Ints4 __attribute__((vector_size(16)));
+      Ints4 b;
+      std::memcpy(&b, reinterpret_cast<const int32_t*>(&bin) + 4 * half, sizeof(b));
+      return __builtin_convertvector(part, Doubles4) - (__builtin_convertvector(b, Doubles4) + 0.5);
+    };
+    const Floats rbinx = Narrow(offset(nx, binx, 0), offset(nx, binx, 1));
+    const Floats rbiny = Narrow(offset(ny, biny, 0), offset(ny, biny, 1));
+    const Floats rbint = nt - __builtin_convertvector(bint, Floats);
+    const Floats wm = win * Load(mods);
+    const Floats ax[2] = {Abs(Splat(1.0f) - rbinx), Abs(Splat(0.0f) - rbinx)};
+    const Floats ay[2] = {Abs(Splat(1.0f) - rbiny), Abs(Splat(0.0f) - rbiny)};
+    const Floats at[2] = {Abs(Splat(1.0f) - rbint), Abs(Splat(0.0f) - rbint)};
+    for (int i = 0; i < 8; ++i)
+      Store(out->weight[i] + p, wm * ax[i >> 2] * ay[(i >> 1) & 1] * at[i & 1]);
+  };
+  int p = 0;
+  for (; p + kLanes <= count; p += kLanes) block(p, mod + p, angle + p);
+  if (p < count) {  // the last pixels, padded to a whole vector whose extra lanes are unused
+    float mods[kLanes] = {}, angles[kLanes] = {};
+    std::copy(mod + p, mod + count, mods);
+    std::copy(angle + p, angle + count, angles);
+    block(p, mods, angles);
   }
 }
 

@@ -7,7 +7,34 @@
 // (-ffp-contract=off), so every lane rounds as the scalar code does. The scalar references are
 // here too, and tests/photo/sift/sift_kernels_test.cc holds the kernels to them bit for bit.
 
+#include <array>
+#include <cstddef>
+#include <cstdint>
+
 namespace cwloc::sift_internal {
+
+// exp(-x) for x >= 0 by table lookup and linear interpolation, as VLFeat's fast_expn (256
+// entries up to 25).
+class FastExpn {
+ public:
+  static constexpr int kSize = 256;
+  static constexpr double kMax = 25.0;
+  static const FastExpn& Get();
+
+  double operator()(double x) const {
+    if (x > kMax) return 0.0;
+    x *= kSize / kMax;
+    const int i = int(x);  // vl_floor_d of x >= 0
+    const double r = x - i;
+    const double a = table_[size_t(i)], b = table_[size_t(i) + 1];
+    return a + r * (b - a);
+  }
+  const double* table() const { return table_.data(); }
+
+ private:
+  FastExpn();
+  std::array<double, kSize + 1> table_;
+};
 
 // VLFeat's gradient of one pixel from its central (or, at a border, one-sided) differences:
 // modulus by vl_fast_sqrt_f, angle by vl_fast_atan2_f moved into [0, 2 pi) by vl_mod_2pi_f.
@@ -27,5 +54,27 @@ void GradientRowScalar(const float* up, const float* src, const float* down, int
 // Along a column, rows[k] are the image rows the taps read; along a row, rows[k] = padded + k.
 void ConvolveTaps(const float* const* rows, const float* kernel, int taps, int w, float* out);
 void ConvolveTapsScalar(const float* const* rows, const float* kernel, int taps, int w, float* out);
+
+// The part of VLFeat's descriptor loop (vl_sift_calc_keypoint_descriptor) that depends on one
+// window pixel alone: where its rotated position falls among the 4 x 4 x 8 bins and the weights
+// it adds to its 8 trilinear neighbours. The caller adds them, pixel after pixel, in VLFeat's
+// order. One call covers up to kMax consecutive pixels of one window row.
+struct DescriptorRow {
+  int first_x;  // xi + dxi of the first pixel (octave coordinates)
+  double x;     // the keypoint's x in the octave
+  float dy;     // float(yi + dyi - y)
+  double ct0, st0, sbp, angle0;
+};
+struct DescriptorSamples {
+  static constexpr int kMax = 64;
+  int32_t inside[kMax];  // nonzero: |nx|, |ny| < 2.5; the other fields only then
+  int32_t binx[kMax], biny[kMax], bint[kMax];
+  // weight[i][p]: the neighbour (binx + (i >> 2), biny + ((i >> 1) & 1), bint + (i & 1)).
+  float weight[8][kMax];
+};
+void DescribeSamples(const DescriptorRow& row, const float* mod, const float* angle, int count,
+                     DescriptorSamples* out);
+void DescribeSamplesScalar(const DescriptorRow& row, const float* mod, const float* angle,
+                           int count, DescriptorSamples* out);
 
 }  // namespace cwloc::sift_internal

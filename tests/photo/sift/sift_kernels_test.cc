@@ -97,5 +97,46 @@ TEST(SiftKernels, ConvolveTapsEqualsTheScalarReferenceBitForBit) {
   }
 }
 
+TEST(SiftKernels, DescribeSamplesEqualsTheScalarReferenceBitForBit) {
+  std::mt19937 rng(13);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::uniform_real_distribution<float> angle_of(0.0f, float(2 * 3.14159265358979));
+  constexpr int kCount = DescriptorSamples::kMax;
+  int inside = 0;
+  for (int trial = 0; trial < 2000; ++trial) {
+    // A keypoint of scale 1 to 6 at a sub-pixel position, one of its window rows, any angle.
+    const double sigma = 1 + 5 * unit(rng), x = 40 + unit(rng), angle0 = 2 * 3.14159265 * unit(rng);
+    const double sbp = 3 * sigma + 2.220446049250313e-16;
+    const int half_width = int(sbp * 3.6);
+    DescriptorRow row{int(x + 0.5) - half_width,
+                      x,
+                      float(int((trial % (2 * half_width + 1)) - half_width) - 0.37 * unit(rng)),
+                      std::cos(angle0),
+                      std::sin(angle0),
+                      sbp,
+                      angle0};
+    std::vector<float> mod(kCount), angle(kCount);
+    for (int p = 0; p < kCount; ++p) {
+      mod[size_t(p)] = float(unit(rng));
+      angle[size_t(p)] = p % 7 == 0 ? float(angle0) : angle_of(rng);  // theta 0 and near 2 pi
+    }
+    const int count = 1 + trial % kCount;
+    DescriptorSamples fast, ref;
+    DescribeSamples(row, mod.data(), angle.data(), count, &fast);
+    DescribeSamplesScalar(row, mod.data(), angle.data(), count, &ref);
+    for (int p = 0; p < count; ++p) {
+      SCOPED_TRACE("trial " + std::to_string(trial) + " pixel " + std::to_string(p));
+      ASSERT_EQ(fast.inside[p] != 0, ref.inside[p] != 0);
+      if (!ref.inside[p]) continue;
+      ++inside;
+      ASSERT_EQ(fast.binx[p], ref.binx[p]);
+      ASSERT_EQ(fast.biny[p], ref.biny[p]);
+      ASSERT_EQ(fast.bint[p], ref.bint[p]);
+      for (int i = 0; i < 8; ++i) ASSERT_EQ(Bits(fast.weight[i][p]), Bits(ref.weight[i][p]));
+    }
+  }
+  EXPECT_GT(inside, 10000);  // the rows cross the window
+}
+
 }  // namespace
 }  // namespace cwloc::sift_internal
