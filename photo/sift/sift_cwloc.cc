@@ -243,9 +243,12 @@ void DetectLevel(const Plane* dogs[3], int s, int o, const Geometry& g, double t
     const ptrdiff_t so_up = dogs[2]->data() - dogs[1]->data();
     const ptrdiff_t so_down = dogs[0]->data() - dogs[1]->data();
     std::vector<Key>& out = row_keys[size_t(y0)];
-    for (int x0 = 1; x0 < w - 1; ++x0) {
+    thread_local std::vector<int32_t> candidates;
+    candidates.resize(size_t(w));
+    const int num_candidates = FindAtLeast(mid, 1, w - 1, prefilter, candidates.data());
+    for (int c = 0; c < num_candidates; ++c) {
+      const int x0 = candidates[size_t(c)];
       const float v = mid[x0];
-      if (!(std::abs(v) >= prefilter)) continue;
       const float* pt = mid + x0;
       auto extremum = [&](auto cmp) {
         for (ptrdiff_t ds : {ptrdiff_t(0), so_up, so_down}) {

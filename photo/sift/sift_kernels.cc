@@ -321,4 +321,27 @@ void DescribeSamples(const DescriptorRow& row, const float* mod, const float* an
   }
 }
 
+#if defined(__x86_64__)
+__attribute__((target_clones("avx2", "default")))
+#endif
+int FindAtLeast(const float* row, int begin, int end, float threshold, int32_t* out) {
+  int count = 0;
+  int x = begin;
+  for (; x + kLanes <= end; x += kLanes) {
+    const Ints hit = Abs(Load(row + x)) >= threshold;
+    uint64_t words[sizeof(hit) / sizeof(uint64_t)];
+    std::memcpy(words, &hit, sizeof(hit));
+    uint64_t any = 0;
+    for (const uint64_t word : words) any |= word;
+    if (any == 0) continue;
+    for (int l = 0; l < kLanes; ++l) {
+      if (hit[l]) out[count++] = x + l;
+    }
+  }
+  for (; x < end; ++x) {
+    if (std::abs(row[x]) >= threshold) out[count++] = x;
+  }
+  return count;
+}
+
 }  // namespace cwloc::sift_internal

@@ -49,6 +49,10 @@ void GradientRow(const float* up, const float* src, const float* down, int w, fl
 void GradientRowScalar(const float* up, const float* src, const float* down, int w, float* mod,
                        float* angle);
 
+// The x in [begin, end) with |row[x]| >= threshold (false for NaN), ascending, into `out`;
+// returns how many. The DoG scan's prefilter: most pixels fail it.
+int FindAtLeast(const float* row, int begin, int end, float threshold, int32_t* out);
+
 // One pass of VLFeat's separable Gaussian (vl_imconvcol_vf's order): out[x] is the sum over
 // taps k = 0, 1, ... of rows[k][x] * kernel[k], added from the first tap to the last.
 // Along a column, rows[k] are the image rows the taps read; along a row, rows[k] = padded + k.

@@ -75,6 +75,28 @@ TEST(SiftKernels, GradientPixelsAtTheFastSqrtThresholdAndEveryDirection) {
   }
 }
 
+TEST(SiftKernels, FindAtLeastFindsExactlyThePixelsThePrefilterPasses) {
+  std::mt19937 rng(17);
+  std::normal_distribution<float> dog(0.0f, 0.01f);
+  const float threshold = 0.0053f;
+  for (const int w : {3, 9, 16, 17, 100, 3072}) {
+    std::vector<float> row(static_cast<size_t>(w));
+    for (float& v : row) v = dog(rng);
+    row[size_t(w / 2)] = threshold;  // the boundary passes, on both sides of zero
+    row[size_t(w - 1)] = -threshold;
+    row[0] = std::nanf("");
+    for (const int begin : {0, 1}) {
+      std::vector<int32_t> found(static_cast<size_t>(w)), expected;
+      for (int x = begin; x < w - 1; ++x) {
+        if (std::abs(row[size_t(x)]) >= threshold) expected.push_back(x);
+      }
+      found.resize(size_t(FindAtLeast(row.data(), begin, w - 1, threshold, found.data())));
+      EXPECT_EQ(found, expected) << "w " << w;
+      EXPECT_FALSE(expected.empty());
+    }
+  }
+}
+
 TEST(SiftKernels, ConvolveTapsEqualsTheScalarReferenceBitForBit) {
   std::mt19937 rng(11);
   std::uniform_real_distribution<float> unit(0.0f, 1.0f);
