@@ -227,35 +227,43 @@ Geometry MakeGeometry(const SiftOptions& options) {
 
 int ShiftLeft(int x, int n) { return n >= 0 ? x << n : x >> -n; }
 
-// Candidates and refined keypoints of DoG level s (dogs: levels s-1, s, s+1), in VLFeat's
-// order (rows, then columns); appends to `keys`.
-void DetectLevel(const Plane* dogs[3], int s, int o, const Geometry& g, double tp, double te,
+// Candidates and refined keypoints of DoG level s, in VLFeat's order (rows, then columns);
+// appends to `keys`. gauss holds the Gaussian levels s-1 .. s+2: DoG level t is
+// G(t + 1) - G(t), computed where it is read (the same float subtraction VLFeat stores), so no
+// DoG plane is held.
+void DetectLevel(const Plane* gauss[4], int s, int o, const Geometry& g, double tp, double te,
                  int num_threads, std::vector<Key>* keys) {
-  const int w = dogs[1]->w, h = dogs[1]->h;
+  const int w = gauss[1]->w, h = gauss[1]->h;
   const double xper = std::pow(2.0, o);
   const float prefilter = float(0.8 * tp) * (1 - 1e-6f);
   const double low = 0.8 * tp;
   std::vector<std::vector<Key>> row_keys(size_t(std::max(h, 0)));
   const ptrdiff_t xo = 1, yo = w;
+  // DoG level s + ds (ds in -1, 0, 1) at pixel index i.
+  auto dog = [gauss](int ds, ptrdiff_t i) {
+    return gauss[ds + 2]->data()[i] - gauss[ds + 1]->data()[i];
+  };
   ParallelFor(size_t(std::max(h - 2, 0)), num_threads, [&](size_t task) {
     const int y0 = int(task) + 1;
-    const float* mid = dogs[1]->Row(y0);
-    const ptrdiff_t so_up = dogs[2]->data() - dogs[1]->data();
-    const ptrdiff_t so_down = dogs[0]->data() - dogs[1]->data();
     std::vector<Key>& out = row_keys[size_t(y0)];
+    thread_local std::vector<float> mid;
     thread_local std::vector<int32_t> candidates;
+    mid.resize(size_t(w));
     candidates.resize(size_t(w));
-    const int num_candidates = FindAtLeast(mid, 1, w - 1, prefilter, candidates.data());
+    const float* below = gauss[1]->Row(y0);
+    const float* above = gauss[2]->Row(y0);
+    for (int x = 0; x < w; ++x) mid[size_t(x)] = above[x] - below[x];
+    const int num_candidates = FindAtLeast(mid.data(), 1, w - 1, prefilter, candidates.data());
     for (int c = 0; c < num_candidates; ++c) {
       const int x0 = candidates[size_t(c)];
-      const float v = mid[x0];
-      const float* pt = mid + x0;
+      const float v = mid[size_t(x0)];
+      const ptrdiff_t centre = ptrdiff_t(y0) * yo + x0;
       auto extremum = [&](auto cmp) {
-        for (ptrdiff_t ds : {ptrdiff_t(0), so_up, so_down}) {
+        for (int ds : {0, 1, -1}) {
           for (ptrdiff_t dy : {-yo, ptrdiff_t(0), yo}) {
             for (ptrdiff_t dx : {-xo, ptrdiff_t(0), xo}) {
               if (ds == 0 && dy == 0 && dx == 0) continue;
-              if (!cmp(v, pt[ds + dy + dx])) return false;
+              if (!cmp(v, dog(ds, centre + dy + dx))) return false;
             }
           }
         }
@@ -270,15 +278,12 @@ void DetectLevel(const Plane* dogs[3], int s, int o, const Geometry& g, double t
       int x = x0, y = y0, dx = 0, dy = 0;
       double Dx = 0, Dy = 0, Ds = 0, Dxx = 0, Dyy = 0, Dss = 0, Dxy = 0, Dxs = 0, Dys = 0;
       double b[3] = {0, 0, 0};
-      const float* p = nullptr;
-      auto at = [&](int ddx, int ddy, int dds) {
-        const ptrdiff_t ds = dds == 0 ? 0 : (dds > 0 ? so_up : so_down);
-        return p[ddx * xo + ddy * yo + ds];
-      };
+      ptrdiff_t at_index = 0;
+      auto at = [&](int ddx, int ddy, int dds) { return dog(dds, at_index + ddx * xo + ddy * yo); };
       for (int iter = 0; iter < 5; ++iter) {
         x += dx;
         y += dy;
-        p = dogs[1]->Row(y) + x;
+        at_index = ptrdiff_t(y) * yo + x;
         Dx = 0.5 * (at(+1, 0, 0) - at(-1, 0, 0));
         Dy = 0.5 * (at(0, +1, 0) - at(0, -1, 0));
         Ds = 0.5 * (at(0, 0, +1) - at(0, 0, -1));
@@ -559,32 +564,23 @@ SiftFeatures ExtractSiftCwloc(const GreyImage& image, const SiftOptions& options
         base = std::move(smoothed);
       }
     }
+    // Gaussian levels as detection needs them: level s reads G(s - 1) .. G(s + 2). G(s_min) is
+    // given back once read, so at most five planes of the octave are held, and no DoG plane.
     levels[0] = std::move(base);
-    for (int s = g.s_min + 1; s <= g.s_max; ++s) {
+    int made = g.s_min;
+    auto make_level = [&](int s) {
       Plane& level = levels[size_t(s - g.s_min)];
       level = pool.Take(w, h);
       Smooth(levels[size_t(s - 1 - g.s_min)], &level, g.dsigma0 * std::pow(g.sigmak, s), threads);
-    }
-
-    // DoG level s = G(s + 1) - G(s), three at a time.
-    std::array<Plane, 3> dog_ring;
-    for (Plane& d : dog_ring) d = pool.Take(w, h);
-    auto dog = [&](int s) -> Plane& { return dog_ring[size_t((s - g.s_min) % 3)]; };
-    auto make_dog = [&](int s) {
-      float* d = dog(s).data();
-      const float* a = levels[size_t(s - g.s_min)].data();
-      const float* b = levels[size_t(s + 1 - g.s_min)].data();
-      const size_t n = size_t(w) * size_t(h);
-      for (size_t i = 0; i < n; ++i) d[i] = b[i] - a[i];
+      made = s;
     };
-    make_dog(g.s_min);
-    make_dog(g.s_min + 1);
     for (int s = g.s_min + 1; s <= g.s_max - 2; ++s) {
-      make_dog(s + 1);
-      const Plane* dogs[3] = {&dog(s - 1), &dog(s), &dog(s + 1)};
-      DetectLevel(dogs, s, o, g, tp, te, threads, &keys);
+      while (made < s + 2) make_level(made + 1);
+      const Plane* gauss[4] = {&levels[size_t(s - 1 - g.s_min)], &levels[size_t(s - g.s_min)],
+                               &levels[size_t(s + 1 - g.s_min)], &levels[size_t(s + 2 - g.s_min)]};
+      DetectLevel(gauss, s, o, g, tp, te, threads, &keys);
+      if (s - 1 == g.s_min) pool.Give(std::move(levels[0]));
     }
-    for (Plane& d : dog_ring) pool.Give(std::move(d));
     for (int s = g.s_min; s <= g.s_max; ++s) {
       Plane& level = levels[size_t(s - g.s_min)];
       if (s >= g.s_min + 1 && s <= g.s_max - 2) {
@@ -611,59 +607,53 @@ SiftFeatures ExtractSiftCwloc(const GreyImage& image, const SiftOptions& options
   const size_t first_run = FirstLevelToKeep(counts, options.max_num_features);
   const size_t first_key = runs.empty() ? 0 : runs[first_run].begin;
 
-  // Gradients of the levels that kept keypoints use.
-  std::vector<std::vector<GradientPlanes>> grads(kept.size());
-  for (size_t oi = 0; oi < kept.size(); ++oi) grads[oi].resize(kept[oi].size());
-  for (size_t i = first_key; i < keys.size(); ++i) {
-    const size_t oi = size_t(keys[i].o - g.o_min), si = size_t(keys[i].is - g.s_min - 1);
-    GradientPlanes& grad = grads[oi][si];
-    if (grad.mod.capacity == 0) {
-      const Plane& level = kept[oi][si];
-      grad.mod = pool.Take(level.w, level.h);
-      grad.angle = pool.Take(level.w, level.h);
-      Gradient(level, &grad, threads);
-    }
-  }
-
-  // Orientations, then one descriptor per kept orientation, in COLMAP's order.
-  const size_t num_kept = keys.size() - first_key;
-  struct Angles {
-    double angle[4];
-    int count;
-  };
-  std::vector<Angles> angles(num_kept);
-  ParallelFor(num_kept, threads, [&](size_t j) {
-    const Key& k = keys[first_key + j];
-    const size_t oi = size_t(k.o - g.o_min), si = size_t(k.is - g.s_min - 1);
-    if (options.upright) {
-      angles[j].count = 1;
-      angles[j].angle[0] = 0.0;
-    } else {
-      angles[j].count = Orientations(k, grads[oi][si], angles[j].angle);
-    }
-  });
-  std::vector<size_t> first_slot(num_kept + 1, 0);
-  for (size_t j = 0; j < num_kept; ++j) {
-    first_slot[j + 1] =
-        first_slot[j] + size_t(std::min(angles[j].count, options.max_num_orientations));
-  }
-  const size_t total = first_slot[num_kept];
-  std::vector<float> raw(total * kSiftDescriptorDim);
+  // Level by level, in COLMAP's order (keys are grouped by octave, then level): the level's
+  // gradient, its keypoints' orientations, then one descriptor per kept orientation. One
+  // level's gradient planes are held at a time, taken from and given back to the pool, and
+  // each level is given back once described.
   SiftFeatures features;
-  features.keypoints.resize(total);
-  features.descriptors.resize(total * kSiftDescriptorDim);
-  ParallelFor(num_kept, threads, [&](size_t j) {
-    const Key& k = keys[first_key + j];
-    const size_t oi = size_t(k.o - g.o_min), si = size_t(k.is - g.s_min - 1);
-    for (size_t slot = first_slot[j]; slot < first_slot[j + 1]; ++slot) {
-      const double angle = angles[j].angle[slot - first_slot[j]];
-      features.keypoints[slot] = {k.x + 0.5f, k.y + 0.5f, k.sigma, float(angle)};
-      float* d = raw.data() + slot * kSiftDescriptorDim;
-      Descriptor(k, angle, grads[oi][si], d);
-      FinishDescriptor(d, options.normalization,
-                       features.descriptors.data() + slot * kSiftDescriptorDim);
+  for (size_t begin = first_key, end; begin < keys.size(); begin = end) {
+    const int o = keys[begin].o, is = keys[begin].is;
+    for (end = begin; end < keys.size() && keys[end].o == o && keys[end].is == is;) ++end;
+    Plane& level = kept[size_t(o - g.o_min)][size_t(is - g.s_min - 1)];
+    GradientPlanes grad{pool.Take(level.w, level.h), pool.Take(level.w, level.h)};
+    Gradient(level, &grad, threads);
+    struct Angles {
+      double angle[4];
+      int count;
+    };
+    const size_t n = end - begin;
+    std::vector<Angles> angles(n);
+    ParallelFor(n, threads, [&](size_t j) {
+      if (options.upright) {
+        angles[j].count = 1;
+        angles[j].angle[0] = 0.0;
+      } else {
+        angles[j].count = Orientations(keys[begin + j], grad, angles[j].angle);
+      }
+    });
+    std::vector<size_t> first_slot(n + 1, features.keypoints.size());
+    for (size_t j = 0; j < n; ++j) {
+      first_slot[j + 1] =
+          first_slot[j] + size_t(std::min(angles[j].count, options.max_num_orientations));
     }
-  });
+    features.keypoints.resize(first_slot[n]);
+    features.descriptors.resize(first_slot[n] * kSiftDescriptorDim);
+    ParallelFor(n, threads, [&](size_t j) {
+      const Key& k = keys[begin + j];
+      for (size_t slot = first_slot[j]; slot < first_slot[j + 1]; ++slot) {
+        const double angle = angles[j].angle[slot - first_slot[j]];
+        features.keypoints[slot] = {k.x + 0.5f, k.y + 0.5f, k.sigma, float(angle)};
+        float raw[kSiftDescriptorDim];
+        Descriptor(k, angle, grad, raw);
+        FinishDescriptor(raw, options.normalization,
+                         features.descriptors.data() + slot * kSiftDescriptorDim);
+      }
+    });
+    pool.Give(std::move(grad.mod));
+    pool.Give(std::move(grad.angle));
+    pool.Give(std::move(level));
+  }
   return features;
 }
 
