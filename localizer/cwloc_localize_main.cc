@@ -102,7 +102,8 @@ std::vector<QuerySource> CollectQueries(const CliOptions& cli) {
 // Reads each query from its source and assembles it as libcwloc does (QueryAssembler).
 class QueryLoader {
  public:
-  explicit QueryLoader(const CliOptions& cli) : assembler_(cli.options, Cameras(cli), Priors(cli)) {
+  QueryLoader(const CliOptions& cli, const QueryOptions& options)
+      : assembler_(options, Cameras(cli), Priors(cli)) {
 #ifdef CWLOC_WITH_COLMAP_DB
     if (!cli.database_path.empty())
       database_ = std::make_unique<DatabaseQueries>(cli.database_path);
@@ -287,7 +288,12 @@ int Run(const CliOptions& cli) {
     index.Validate();
   }
   const std::vector<QuerySource> sources = CollectQueries(cli);
-  const QueryLoader loader(cli);
+  // --threads goes to queries first; a photo's SIFT gets the threads no other query uses (one
+  // photo and --threads 4: four threads inside it). Its features do not depend on them.
+  const int threads = std::max(1, std::min<int>(cli.threads, static_cast<int>(sources.size())));
+  QueryOptions query_options = cli.options;
+  query_options.photo.sift.num_threads = cli.threads / threads;
+  const QueryLoader loader(cli, query_options);
   ResultSink sink(cli);
   const Localizer localizer(index);
 
@@ -319,7 +325,6 @@ int Run(const CliOptions& cli) {
     }
   };
   StopOnInterrupt();
-  const int threads = std::min<int>(cli.threads, static_cast<int>(sources.size()));
   // The workers have threads of their own; this one waits for them to finish or for a stop,
   // after which the running queries get kStopGrace to finish and are abandoned after it.
   std::mutex done_mutex;
@@ -525,7 +530,10 @@ int main(int argc, char** argv) {
                  "is)")
       ->group(kOutput);
   app.add_flag("-q,--quiet", cli.quiet, "No summary or readable lines")->group(kOutput);
-  app.add_option("--threads", cli.threads, "Queries localized in parallel")->capture_default_str();
+  app.add_option("--threads", cli.threads,
+                 "Threads: queries localized in parallel, and a photo's SIFT gets those no other "
+                 "query uses")
+      ->capture_default_str();
   app.add_flag("--verify", cli.verify,
                "Verify the index's checksums and stored indices before localizing");
   cwloc::TableFlags table_flags;
