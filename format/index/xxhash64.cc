@@ -50,12 +50,14 @@ std::string HashHex(uint64_t hash) {
 }
 
 uint64_t XxHash64(std::span<const uint8_t> bytes, uint64_t seed) {
+  // Lengths are compared as remaining bytes, never as p + n <= end: an empty span may have a
+  // null data pointer, and null + n is undefined.
   const uint8_t* p = bytes.data();
   const uint8_t* const end = p + bytes.size();
   uint64_t h;
   if (bytes.size() >= 32) {
     uint64_t v1 = seed + kPrime1 + kPrime2, v2 = seed + kPrime2, v3 = seed, v4 = seed - kPrime1;
-    for (; p + 32 <= end; p += 32) {
+    for (; end - p >= 32; p += 32) {
       v1 = Round(v1, Load64(p));
       v2 = Round(v2, Load64(p + 8));
       v3 = Round(v3, Load64(p + 16));
@@ -70,8 +72,8 @@ uint64_t XxHash64(std::span<const uint8_t> bytes, uint64_t seed) {
     h = seed + kPrime5;
   }
   h += bytes.size();
-  for (; p + 8 <= end; p += 8) h = RotateLeft(h ^ Round(0, Load64(p)), 27) * kPrime1 + kPrime4;
-  if (p + 4 <= end) {
+  for (; end - p >= 8; p += 8) h = RotateLeft(h ^ Round(0, Load64(p)), 27) * kPrime1 + kPrime4;
+  if (end - p >= 4) {
     h = RotateLeft(h ^ (uint64_t{Load32(p)} * kPrime1), 23) * kPrime2 + kPrime3;
     p += 4;
   }
