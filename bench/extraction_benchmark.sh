@@ -46,7 +46,7 @@ pose() {  # PHOTO MAX_IMAGE_SIZE MAX_FEATURES: "median_ms peak_MB" of the whole 
   for ((r = 0; r < runs; r++)); do
     peaks+=("$(/usr/bin/time -f %M $command 2>&1 >/dev/null | tail -1)")
   done
-  printf '%s %s' "$(median_ms "$tmp/pose.json")" \
+  printf '%s %s\n' "$(median_ms "$tmp/pose.json")" \
     "$(printf '%s\n' "${peaks[@]}" | sort -n | awk '{a[NR]=$1} END {printf "%.0f", a[int((NR+1)/2)]/1024}')"
 }
 
