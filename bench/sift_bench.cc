@@ -27,6 +27,7 @@ int main(int argc, char** argv) {
   app.add_option("--implementation", implementation)->check(CLI::IsMember(ImplementationNames()));
   app.add_option("--repeat", repeat, "runs per photo; the median is printed");
   app.add_option("--max-num-features", options.max_num_features);
+  app.add_option("--first-octave", options.first_octave);
   app.add_option("--threads", options.num_threads, "threads inside one photo");
   app.add_option("photos", photos)->required();
   CLI11_PARSE(app, argc, argv);
