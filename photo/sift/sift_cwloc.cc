@@ -4,10 +4,13 @@
 // never what:
 //  - separable Gaussian smoothing streamed row by row, vectorized across pixels (VLFeat
 //    convolves one column at a time through a transposed temporary image);
-//  - DoG levels computed three at a time, the candidate scan rejecting on |DoG| first;
+//  - each octave's levels are made in bands of rows that slide down the image, so no whole
+//    level is held (a level of the doubled photo is 25 MB at 1536 x 1024); DoG values are
+//    computed where detection reads them;
 //  - detection runs over all octaves first; orientations and descriptors are computed only
 //    for the DoG levels COLMAP's max_num_features rule keeps (COLMAP describes every level
-//    and then drops the finest ones), and gradients only for the levels that need them;
+//    and then drops the finest ones), in a second pass that makes those octaves' levels again
+//    band by band, with the gradient of the rows their keypoints read;
 //  - the descriptor skips window pixels that fall outside the 4x4 spatial bins.
 // docs/sift.md has the measurements.
 #include "photo/sift/sift_cwloc.h"
@@ -25,10 +28,6 @@ extern "C" {
 #include <new>
 #include <stdexcept>
 
-#if defined(__linux__)
-#include <sys/mman.h>
-#endif
-
 #include "format/base/parallel_for.h"
 #include "photo/sift/sift_kernels.h"
 #include "photo/sift/sift_levels.h"
@@ -40,78 +39,77 @@ constexpr int kNumBinsPerSide = 4;  // VLFeat's NBP
 constexpr int kNumAngleBins = 8;    // VLFeat's NBO
 constexpr double kMagnif = 3.0;
 
-// A single-channel float image, row-major. Resize keeps the storage when it is large enough
-// and never initializes pixels: each is written before it is read.
+// Rows y0 .. y0 + rows - 1 of a w x h single-channel float image, row-major (the whole image
+// when y0 = 0 and rows = h). Storage is kept when large enough and never initialized: each
+// pixel is written before it is read.
 struct Plane {
-  int w = 0, h = 0;
+  int w = 0, h = 0, y0 = 0, rows = 0;
   size_t capacity = 0;
   struct Free {
     void operator()(float* p) const { std::free(p); }
   };
   std::unique_ptr<float[], Free> storage;
 
-  // Large planes are 2 MiB aligned and ask for transparent huge pages: one page fault per
-  // 2 MiB instead of per 4 KiB (page faults were a third of the time).
   static std::unique_ptr<float[], Free> Allocate(size_t n) {
-    constexpr size_t kHuge = size_t{2} << 20;
-    const size_t bytes = n * sizeof(float);
-    if (bytes < kHuge) return std::unique_ptr<float[], Free>(new_floats(bytes, 64));
-    const size_t rounded = (bytes + kHuge - 1) / kHuge * kHuge;
-    float* p = new_floats(rounded, kHuge);
-#ifdef MADV_HUGEPAGE
-    madvise(p, rounded, MADV_HUGEPAGE);
-#endif
-    return std::unique_ptr<float[], Free>(p);
-  }
-  static float* new_floats(size_t bytes, size_t alignment) {
-    void* p = std::aligned_alloc(alignment, (bytes + alignment - 1) / alignment * alignment);
+    constexpr size_t kAlignment = 64;
+    void* p = std::aligned_alloc(kAlignment,
+                                 (n * sizeof(float) + kAlignment - 1) / kAlignment * kAlignment);
     if (!p) throw std::bad_alloc();
-    return static_cast<float*>(p);
+    return std::unique_ptr<float[], Free>(static_cast<float*>(p));
   }
-  void Resize(int width, int height) {
+  void Resize(int width, int height) { Hold(width, height, 0, height); }
+  // Holds rows [first, first + count), forgetting what it held.
+  void Hold(int width, int height, int first, int count) {
     w = width;
     h = height;
+    y0 = first;
+    rows = count;
     if (size() > capacity) {
       storage = Allocate(size());
       capacity = size();
     }
   }
-  size_t size() const { return size_t(w) * size_t(h); }
+  size_t size() const { return size_t(w) * size_t(rows); }
+  int end() const { return y0 + rows; }
   float* data() { return storage.get(); }
   const float* data() const { return storage.get(); }
-  float* Row(int y) { return data() + size_t(y) * size_t(w); }
-  const float* Row(int y) const { return data() + size_t(y) * size_t(w); }
+  float* Row(int y) { return data() + size_t(y - y0) * size_t(w); }
+  const float* Row(int y) const { return data() + size_t(y - y0) * size_t(w); }
 };
 
-// Planes handed back for reuse: a photo touches fresh memory only for the planes alive at
-// the same time (fresh pages cost a page fault each and are zeroed by the kernel).
-class PlanePool {
- public:
-  Plane Take(int w, int h) {
-    const size_t n = size_t(w) * size_t(h);
-    size_t best = free_.size();
-    for (size_t i = 0; i < free_.size(); ++i) {
-      if (free_[i].capacity >= n &&
-          (best == free_.size() || free_[i].capacity < free_[best].capacity)) {
-        best = i;
-      }
-    }
-    Plane plane;
-    if (best < free_.size()) {
-      plane = std::move(free_[best]);
-      free_.erase(free_.begin() + ptrdiff_t(best));
-    }
-    plane.Resize(w, h);
-    return plane;
-  }
-  void Give(Plane&& plane) {
-    if (plane.capacity > 0) free_.push_back(std::move(plane));
-    plane = Plane();
-  }
-
- private:
-  std::vector<Plane> free_;
+// Rows [lo, hi) of an image; empty when lo >= hi.
+struct Rows {
+  int lo = 0, hi = 0;
+  bool empty() const { return lo >= hi; }
 };
+Rows Widen(Rows r, int by, int h) {
+  return r.empty() ? r : Rows{std::max(r.lo - by, 0), std::min(r.hi + by, h)};
+}
+Rows Union(Rows a, Rows b) {
+  if (a.empty()) return b;
+  if (b.empty()) return a;
+  return {std::min(a.lo, b.lo), std::max(a.hi, b.hi)};
+}
+
+// Makes `band` (a w x h image's rows) hold rows `want`, keeping the rows it already holds there;
+// returns the first row it still has to compute. Bands only slide down the image.
+int Slide(Plane* band, int w, int h, Rows want) {
+  const bool same = band->w == w && band->h == h;
+  const int kept = same && want.lo >= band->y0 && want.lo < band->end()
+                       ? std::min(want.hi, band->end()) - want.lo
+                       : 0;
+  const size_t n = size_t(w) * size_t(want.hi - want.lo);
+  if (n > band->capacity) {
+    Plane bigger;
+    bigger.Hold(w, h, want.lo, want.hi - want.lo);
+    if (kept > 0) std::memcpy(bigger.data(), band->Row(want.lo), size_t(kept) * size_t(w) * 4);
+    *band = std::move(bigger);
+  } else {
+    if (kept > 0) std::memmove(band->data(), band->Row(want.lo), size_t(kept) * size_t(w) * 4);
+    band->Hold(w, h, want.lo, want.hi - want.lo);
+  }
+  return want.lo + kept;
+}
 
 // VLFeat's keypoint fields (float position and scale, integer level).
 struct Key {
@@ -121,8 +119,10 @@ struct Key {
 
 // VLFeat's smoothing kernel: width max(ceil(4 sigma), 1), taps exp(-d^2/2) with d computed
 // in float, normalized by their float sum.
+int HalfWidth(double sigma) { return std::max(int(std::ceil(4.0 * sigma)), 1); }
+
 std::vector<float> GaussianKernel(double sigma) {
-  const int half = std::max(int(std::ceil(4.0 * sigma)), 1);
+  const int half = HalfWidth(sigma);
   std::vector<float> kernel(size_t(2 * half + 1));
   float sum = 0;
   for (int j = 0; j < 2 * half + 1; ++j) {
@@ -134,76 +134,74 @@ std::vector<float> GaussianKernel(double sigma) {
   return kernel;
 }
 
-// out = in smoothed with VLFeat's Gaussian: first along columns, then along rows, each output
-// pixel summing its taps from the first (top/left) to the last with the edge pixel repeated,
-// exactly VLFeat's vl_imconvcol_vf order; vectorized across the pixels of a row.
-void Smooth(const Plane& in, Plane* out, double sigma, int num_threads) {
-  // Callers hand in a plane from their pool; it is sized here.
+// Rows `rows` of `in` smoothed with VLFeat's Gaussian into `out` (which holds them): first
+// along columns, then along rows, each output pixel summing its taps from the first (top/left)
+// to the last with the edge pixel repeated, exactly VLFeat's vl_imconvcol_vf order; vectorized
+// across the pixels of a row. `in` holds rows `rows` widened by HalfWidth(sigma).
+void Smooth(const Plane& in, Plane* out, double sigma, Rows rows, int num_threads) {
   const std::vector<float> kernel = GaussianKernel(sigma);
   const int half = int(kernel.size() / 2);
   const int w = in.w, h = in.h;
-  out->Resize(w, h);
   constexpr int kRowsPerTask = 16;
-  const int num_tasks = (h + kRowsPerTask - 1) / kRowsPerTask;
+  const int num_tasks = (rows.hi - rows.lo + kRowsPerTask - 1) / kRowsPerTask;
   const int taps = int(kernel.size());
-  ParallelFor(size_t(num_tasks), num_threads, [&](size_t task) {
+  ParallelFor(size_t(std::max(num_tasks, 0)), num_threads, [&](size_t task) {
     // The column pass lands in the middle of `padded`, which repeats its edge pixels `half`
     // times on both sides for the row pass.
     std::vector<float> padded(static_cast<size_t>(w + 2 * half));
-    std::vector<const float*> rows(kernel.size());
-    const int y_end = std::min(h, int(task + 1) * kRowsPerTask);
-    for (int y = int(task) * kRowsPerTask; y < y_end; ++y) {
-      for (int k = 0; k < taps; ++k) rows[size_t(k)] = in.Row(std::clamp(y - half + k, 0, h - 1));
+    std::vector<const float*> taps_rows(kernel.size());
+    const int y_begin = rows.lo + int(task) * kRowsPerTask;
+    const int y_end = std::min(rows.hi, y_begin + kRowsPerTask);
+    for (int y = y_begin; y < y_end; ++y) {
+      for (int k = 0; k < taps; ++k) {
+        taps_rows[size_t(k)] = in.Row(std::clamp(y - half + k, 0, h - 1));
+      }
       float* a = padded.data() + half;
-      ConvolveTaps(rows.data(), kernel.data(), taps, w, a);
+      ConvolveTaps(taps_rows.data(), kernel.data(), taps, w, a);
       std::fill(padded.data(), a, a[0]);
       std::fill(a + w, a + w + half, a[w - 1]);
-      for (int k = 0; k < taps; ++k) rows[size_t(k)] = padded.data() + k;
-      ConvolveTaps(rows.data(), kernel.data(), taps, w, out->Row(y));
+      for (int k = 0; k < taps; ++k) taps_rows[size_t(k)] = padded.data() + k;
+      ConvolveTaps(taps_rows.data(), kernel.data(), taps, w, out->Row(y));
     }
   });
 }
 
-// VLFeat's copy_and_upsample_rows applied twice: doubles both sides, the new pixels the
-// means of their neighbours (along rows first), the last row and column repeated.
-Plane Upsample(const Plane& in, PlanePool* pool) {
+// Rows `rows` of `in` doubled in both sides, as VLFeat's copy_and_upsample_rows applied twice
+// makes them: the new pixels the means of their neighbours (along rows first), the last row and
+// column repeated.
+void UpsampleRows(const Plane& in, Plane* out, Rows rows) {
   const int w = in.w, h = in.h;
-  Plane rows = pool->Take(2 * w, h);  // each row upsampled
-  for (int y = 0; y < h; ++y) {
+  std::vector<float> a(size_t(2 * w)), b(size_t(2 * w));
+  auto double_row = [&](int y, float* dst) {
     const float* src = in.Row(y);
-    float* dst = rows.Row(y);
     for (int x = 0; x + 1 < w; ++x) {
       dst[2 * x] = src[x];
       dst[2 * x + 1] = float(0.5 * (src[x] + src[x + 1]));
     }
     dst[2 * w - 2] = dst[2 * w - 1] = src[w - 1];
-  }
-  Plane out = pool->Take(2 * w, 2 * h);
-  for (int y = 0; y < h; ++y) {
-    const float* a = rows.Row(y);
-    const float* b = rows.Row(std::min(y + 1, h - 1));
-    std::copy(a, a + 2 * w, out.Row(2 * y));
-    float* mid = out.Row(2 * y + 1);
-    if (y + 1 < h) {
-      for (int x = 0; x < 2 * w; ++x) mid[x] = float(0.5 * (a[x] + b[x]));
-    } else {
-      std::copy(a, a + 2 * w, mid);
+  };
+  for (int y2 = rows.lo; y2 < rows.hi; ++y2) {
+    const int y = y2 / 2;
+    float* dst = out->Row(y2);
+    if (y2 % 2 == 0 || y + 1 >= h) {
+      double_row(y, dst);
+      continue;
     }
+    double_row(y, a.data());
+    double_row(y + 1, b.data());
+    for (int x = 0; x < 2 * w; ++x) dst[x] = float(0.5 * (a[size_t(x)] + b[size_t(x)]));
   }
-  pool->Give(std::move(rows));
-  return out;
 }
 
-// Every 2^d-th pixel of every 2^d-th row, from (0, 0), into a w x h plane.
-Plane Downsample(const Plane& in, int d, int w, int h, PlanePool* pool) {
+// Every 2^d-th pixel of every 2^d-th row, from (0, 0), of `in`'s rows `rows` into the w x h
+// plane `out`.
+void DownsampleRows(const Plane& in, int d, Rows rows, Plane* out) {
   const int step = 1 << d;
-  Plane out = pool->Take(w, h);
-  for (int y = 0; y < h; ++y) {
+  for (int y = (rows.lo + step - 1) / step; y * step < rows.hi && y < out->h; ++y) {
     const float* src = in.Row(y * step);
-    float* dst = out.Row(y);
-    for (int x = 0; x < w; ++x) dst[x] = src[size_t(x) * size_t(step)];
+    float* dst = out->Row(y);
+    for (int x = 0; x < out->w; ++x) dst[x] = src[size_t(x) * size_t(step)];
   }
-  return out;
 }
 
 struct Geometry {
@@ -227,25 +225,35 @@ Geometry MakeGeometry(const SiftOptions& options) {
 
 int ShiftLeft(int x, int n) { return n >= 0 ? x << n : x >> -n; }
 
-// Candidates and refined keypoints of DoG level s, in VLFeat's order (rows, then columns);
-// appends to `keys`. gauss holds the Gaussian levels s-1 .. s+2: DoG level t is
-// G(t + 1) - G(t), computed where it is read (the same float subtraction VLFeat stores), so no
-// DoG plane is held.
+// Refinement moves a candidate by at most this many rows and reads one more either side.
+constexpr int kDetectionReach = 6;
+
+// Candidates on rows `rows` (within 1 .. h - 2) and their refined keypoints, of DoG level s, in
+// VLFeat's order (rows, then columns); appends to `keys`. gauss holds the Gaussian levels
+// s-1 .. s+2, each on rows `rows` widened by kDetectionReach: DoG level t is G(t + 1) - G(t),
+// computed where it is read (the same float subtraction VLFeat stores), so no DoG is held.
 void DetectLevel(const Plane* gauss[4], int s, int o, const Geometry& g, double tp, double te,
-                 int num_threads, std::vector<Key>* keys) {
+                 Rows rows, int num_threads, std::vector<Key>* keys) {
   const int w = gauss[1]->w, h = gauss[1]->h;
   const double xper = std::pow(2.0, o);
   const float prefilter = float(0.8 * tp) * (1 - 1e-6f);
   const double low = 0.8 * tp;
-  std::vector<std::vector<Key>> row_keys(size_t(std::max(h, 0)));
+  std::vector<std::vector<Key>> row_keys(size_t(std::max(rows.hi - rows.lo, 0)));
   const ptrdiff_t xo = 1, yo = w;
-  // DoG level s + ds (ds in -1, 0, 1) at pixel index i.
-  auto dog = [gauss](int ds, ptrdiff_t i) {
-    return gauss[ds + 2]->data()[i] - gauss[ds + 1]->data()[i];
+  // Level k's pixel at image index i is at[k][i - first[k]].
+  const float* at_level[4];
+  ptrdiff_t first[4];
+  for (int k = 0; k < 4; ++k) {
+    at_level[k] = gauss[k]->data();
+    first[k] = ptrdiff_t(gauss[k]->y0) * yo;
+  }
+  // DoG level s + ds (ds in -1, 0, 1) at image index i.
+  auto dog = [&](int ds, ptrdiff_t i) {
+    return at_level[ds + 2][i - first[ds + 2]] - at_level[ds + 1][i - first[ds + 1]];
   };
-  ParallelFor(size_t(std::max(h - 2, 0)), num_threads, [&](size_t task) {
-    const int y0 = int(task) + 1;
-    std::vector<Key>& out = row_keys[size_t(y0)];
+  ParallelFor(row_keys.size(), num_threads, [&](size_t task) {
+    const int y0 = rows.lo + int(task);
+    std::vector<Key>& out = row_keys[task];
     thread_local std::vector<float> mid;
     thread_local std::vector<int32_t> candidates;
     mid.resize(size_t(w));
@@ -359,31 +367,49 @@ struct GradientPlanes {
   Plane mod, angle;
 };
 
-void Gradient(const Plane& level, GradientPlanes* grad, int num_threads) {
+// Rows `rows` of the gradient (held by grad) from `level` (holding them widened by one).
+void Gradient(const Plane& level, Rows rows, GradientPlanes* grad, int num_threads) {
   const int h = level.h;
-  ParallelFor(size_t(h), num_threads, [&](size_t row) {
-    const int y = int(row);
+  ParallelFor(size_t(std::max(rows.hi - rows.lo, 0)), num_threads, [&](size_t row) {
+    const int y = rows.lo + int(row);
     GradientRow(y > 0 ? level.Row(y - 1) : nullptr, level.Row(y),
                 y < h - 1 ? level.Row(y + 1) : nullptr, level.w, grad->mod.Row(y),
                 grad->angle.Row(y));
   });
 }
 
-// VLFeat's vl_sift_calc_keypoint_orientations on the gradient of the keypoint's level.
+// The window radii (pixels of the keypoint's octave) of VLFeat's orientation histogram and
+// descriptor.
+int OrientationRadius(double sigma) { return std::max(int(std::floor(3.0 * 1.5 * sigma)), 1); }
+double DescriptorBinSize(double sigma) { return kMagnif * sigma + VL_EPSILON_D; }
+int DescriptorRadius(double sigma) {
+  return int(
+      std::floor(std::sqrt(2.0) * DescriptorBinSize(sigma) * (kNumBinsPerSide + 1) / 2.0 + 0.5));
+}
+
+// The keypoint's row in its octave, and how many rows either side its orientations and
+// descriptors read.
+int KeyRow(const Key& k) { return int(k.y / std::pow(2.0, k.o) + 0.5); }
+int KeyReach(const Key& k) {
+  const double sigma = k.sigma / std::pow(2.0, k.o);
+  return std::max(OrientationRadius(sigma), DescriptorRadius(sigma));
+}
+
+// VLFeat's vl_sift_calc_keypoint_orientations on the gradient of the keypoint's level, which
+// holds the rows KeyReach(k) either side of KeyRow(k).
 int Orientations(const Key& k, const GradientPlanes& grad, double angles[4]) {
   const int w = grad.mod.w, h = grad.mod.h;
   const double xper = std::pow(2.0, k.o);
   const double x = k.x / xper, y = k.y / xper, sigma = k.sigma / xper;
   const int xi = int(x + 0.5), yi = int(y + 0.5);
   const double sigmaw = 1.5 * sigma;
-  const int W = std::max(int(std::floor(3.0 * sigmaw)), 1);
+  const int W = OrientationRadius(sigma);
   constexpr int nbins = 36;
   if (xi < 0 || xi > w - 1 || yi < 0 || yi > h - 1) return 0;
   double hist[nbins] = {};
   const FastExpn& expn = FastExpn::Get();
-  const size_t centre = size_t(yi) * size_t(w) + size_t(xi);
-  const float* pt_mod = grad.mod.data() + centre;
-  const float* pt_angle = grad.angle.data() + centre;
+  const float* pt_mod = grad.mod.Row(yi) + xi;
+  const float* pt_angle = grad.angle.Row(yi) + xi;
   for (int ys = std::max(-W, -yi); ys <= std::min(W, h - 1 - yi); ++ys) {
     for (int xs = std::max(-W, -xi); xs <= std::min(W, w - 1 - xi); ++xs) {
       const double dx = double(xi + xs) - x;
@@ -446,14 +472,13 @@ void Descriptor(const Key& k, double angle0, const GradientPlanes& grad, float* 
   const double x = k.x / xper, y = k.y / xper, sigma = k.sigma / xper;
   const int xi = int(x + 0.5), yi = int(y + 0.5);
   const double st0 = std::sin(angle0), ct0 = std::cos(angle0);
-  const double SBP = kMagnif * sigma + VL_EPSILON_D;
-  const int W = int(std::floor(std::sqrt(2.0) * SBP * (kNumBinsPerSide + 1) / 2.0 + 0.5));
+  const double SBP = DescriptorBinSize(sigma);
+  const int W = DescriptorRadius(sigma);
   constexpr int binto = 1, binyo = kNumAngleBins * kNumBinsPerSide, binxo = kNumAngleBins;
   std::fill(descr, descr + kSiftDescriptorDim, 0.0f);
   if (xi < 0 || xi >= w || yi < 0 || yi >= h - 1) return;
-  const size_t centre = size_t(yi) * size_t(w) + size_t(xi);
-  const float* pt_mod = grad.mod.data() + centre;
-  const float* pt_angle = grad.angle.data() + centre;
+  const float* pt_mod = grad.mod.Row(yi) + xi;
+  const float* pt_angle = grad.angle.Row(yi) + xi;
   float* dpt = descr + (kNumBinsPerSide / 2) * binyo + (kNumBinsPerSide / 2) * binxo;
   // |n| >= 2.5 puts every one of a sample's bins outside [-2, 2): it adds nothing. Per row,
   // the columns whose rotated position can fall inside |n| < 2.5, from the two slabs
@@ -510,149 +535,245 @@ void Descriptor(const Key& k, double angle0, const GradientPlanes& grad, float* 
   NormalizeHistogram(descr, descr + kSiftDescriptorDim);
 }
 
-}  // namespace
+// One octave's Gaussian levels, computed in bands of rows that slide down the image, each row
+// once: level s_min from the octave's source (the photo, doubled or not, or the octave below's
+// level downsampled), smoothed by base_sigma when that is not 0; each next level smoothed from
+// the one before. A band of the doubled photo is 2 x 128 + ~100 rows, not the 2048 of a whole
+// level of a 1536 x 1024 photo.
+class OctaveLevels {
+ public:
+  OctaveLevels(const Geometry& g, const Plane& source, bool doubled, double base_sigma,
+               int num_threads)
+      : g_(g),
+        source_(source),
+        doubled_(doubled),
+        base_sigma_(base_sigma),
+        num_threads_(num_threads),
+        w(doubled ? 2 * source.w : source.w),
+        h(doubled ? 2 * source.h : source.h),
+        bands_(size_t(g.s_max - g.s_min + 1)) {}
 
-SiftFeatures ExtractSiftCwloc(const GreyImage& image, const SiftOptions& options) {
-  const Geometry g = MakeGeometry(options);
+  // Makes level s_min + i hold (at least) rows need[i], and every level below it the rows the
+  // smoothing reads.
+  void Cover(std::vector<Rows> need) {
+    const int top = g_.s_min + int(need.size()) - 1;
+    for (int s = top; s > g_.s_min; --s) {
+      Rows& below = need[size_t(s - 1 - g_.s_min)];
+      below = Union(below, Widen(need[size_t(s - g_.s_min)], HalfWidth(LevelSigma(s)), h));
+    }
+    const Rows first = need[0];
+    if (!first.empty() && doubled_) {
+      const Rows up = base_sigma_ > 0 ? Widen(first, HalfWidth(base_sigma_), h) : first;
+      UpsampleRows(source_, &doubled_band_, {Slide(&doubled_band_, w, h, up), up.hi});
+    }
+    if (!first.empty() && base_sigma_ > 0) {
+      const Plane& base = doubled_ ? doubled_band_ : source_;
+      Smooth(base, &bands_[0], base_sigma_, {Slide(&bands_[0], w, h, first), first.hi},
+             num_threads_);
+    }
+    for (int s = g_.s_min + 1; s <= top; ++s) {
+      const Rows rows = need[size_t(s - g_.s_min)];
+      if (rows.empty()) continue;
+      Plane* band = &bands_[size_t(s - g_.s_min)];
+      Smooth(Level(s - 1), band, LevelSigma(s), {Slide(band, w, h, rows), rows.hi}, num_threads_);
+    }
+  }
+
+  const Plane& Level(int s) const {
+    if (s > g_.s_min || base_sigma_ > 0) return bands_[size_t(s - g_.s_min)];
+    return doubled_ ? doubled_band_ : source_;
+  }
+
+ private:
+  // Level s is level s - 1 smoothed by this.
+  double LevelSigma(int s) const { return g_.dsigma0 * std::pow(g_.sigmak, s); }
+
+  const Geometry& g_;
+  const Plane& source_;
+  const bool doubled_;
+  const double base_sigma_;
+  const int num_threads_;
+
+ public:
+  const int w, h;
+
+ private:
+  Plane doubled_band_;
+  std::vector<Plane> bands_;  // [s - s_min]
+};
+
+// Rows per band: bands of 128 rows compute about 1.5x the rows of the band for the lowest level
+// (its halo), once each, and keep each ParallelFor a few tasks per thread.
+constexpr int kBandRows = 128;
+
+// What an octave's levels are made from.
+struct OctaveSource {
+  int o;
+  Plane plane;  // the photo (first octave) or the octave below's level s_min + S, downsampled
+  bool doubled;
+  double base_sigma;
+};
+
+// Every keypoint of every octave in VLFeat's order (octave, level, row, column), and each
+// octave's source for the description pass.
+void DetectAll(const GreyImage& image, const Geometry& g, const SiftOptions& options,
+               std::vector<Key>* keys, std::vector<OctaveSource>* sources) {
   const int threads = options.num_threads;
-  const double tp = options.peak_threshold, te = options.edge_threshold;
-  const int num_levels = g.s_max - g.s_min + 1;
-  PlanePool pool;
-
-  // Detection over every octave; the levels orientations may need (s_min+1 .. s_max-2) are
-  // kept for later.
-  std::vector<Key> keys;
-  std::vector<std::vector<Plane>> kept(size_t(g.O));           // [octave][s - s_min - 1]
-  std::vector<Plane> levels(static_cast<size_t>(num_levels));  // this octave's, index s - s_min
+  Plane input;
+  input.Resize(int(image.width), int(image.height));
+  for (size_t i = 0; i < image.pixels.size(); ++i) {
+    input.data()[i] = float(image.pixels[i]) / 255.0f;
+  }
+  OctaveSource source{g.o_min, std::move(input), g.o_min < 0, 0};
+  if (g.o_min > 0) {
+    const int w = ShiftLeft(source.plane.w, -g.o_min), h = ShiftLeft(source.plane.h, -g.o_min);
+    Plane smaller;
+    smaller.Resize(w, h);
+    DownsampleRows(source.plane, g.o_min, {0, source.plane.h}, &smaller);
+    source.plane = std::move(smaller);
+  }
+  {
+    const double sa = g.sigma0 * std::pow(g.sigmak, g.s_min);
+    const double sb = g.sigman * std::pow(2.0, -g.o_min);
+    if (sa > sb) source.base_sigma = std::sqrt(sa * sa - sb * sb);
+  }
+  const int s_best = std::min(g.s_min + g.S, g.s_max);
   for (int oi = 0; oi < g.O; ++oi) {
     const int o = g.o_min + oi;
     const int w = ShiftLeft(int(image.width), -o), h = ShiftLeft(int(image.height), -o);
     if (w < 3 || h < 3) break;  // no pixel with 8 neighbours: VLFeat finds nothing either
-    Plane base;
-    if (oi == 0) {
-      Plane input = pool.Take(int(image.width), int(image.height));
-      for (size_t i = 0; i < image.pixels.size(); ++i) {
-        input.data()[i] = float(image.pixels[i]) / 255.0f;
+    sources->push_back(std::move(source));
+    const OctaveSource& current = sources->back();
+    OctaveLevels levels(g, current.plane, current.doubled, current.base_sigma, threads);
+    const int wn = ShiftLeft(int(image.width), -(o + 1)),
+              hn = ShiftLeft(int(image.height), -(o + 1));
+    const bool next = oi + 1 < g.O && wn >= 3 && hn >= 3;
+    source = OctaveSource{o + 1, Plane(), false, 0};
+    if (next) source.plane.Resize(wn, hn);
+    std::vector<std::vector<Key>> level_keys(size_t(g.s_max - g.s_min - 2));
+    for (int d0 = 0; d0 < h; d0 += kBandRows) {
+      const Rows band{d0, std::min(h, d0 + kBandRows)};
+      levels.Cover(
+          std::vector<Rows>(size_t(g.s_max - g.s_min + 1), Widen(band, kDetectionReach, h)));
+      const Rows detect{std::max(band.lo, 1), std::min(band.hi, h - 1)};
+      for (int s = g.s_min + 1; s <= g.s_max - 2 && !detect.empty(); ++s) {
+        const Plane* gauss[4] = {&levels.Level(s - 1), &levels.Level(s), &levels.Level(s + 1),
+                                 &levels.Level(s + 2)};
+        DetectLevel(gauss, s, o, g, options.peak_threshold, options.edge_threshold, detect, threads,
+                    &level_keys[size_t(s - g.s_min - 1)]);
       }
-      if (o < 0) {
-        base = Upsample(input, &pool);  // first_octave < -1 runs VLFeat (sift_extractor.cc)
-        pool.Give(std::move(input));
-      } else if (o > 0) {
-        base = Downsample(input, o, w, h, &pool);
-        pool.Give(std::move(input));
-      } else {
-        base = std::move(input);
-      }
-      const double sa = g.sigma0 * std::pow(g.sigmak, g.s_min);
-      const double sb = g.sigman * std::pow(2.0, -o);
-      if (sa > sb) {
-        Plane smoothed = pool.Take(w, h);
-        Smooth(base, &smoothed, std::sqrt(sa * sa - sb * sb), threads);
-        pool.Give(std::move(base));
-        base = std::move(smoothed);
-      }
-    } else {
-      const int s_best = std::min(g.s_min + g.S, g.s_max);
-      // The level with twice the first level's sigma, moved into kept[oi - 1] by now.
-      base = Downsample(kept[size_t(oi - 1)][size_t(s_best - g.s_min - 1)], 1, w, h, &pool);
-      const double sa = g.sigma0 * std::pow(float(g.sigmak), float(g.s_min));
-      const double sb = g.sigma0 * std::pow(float(g.sigmak), float(s_best - g.S));
-      if (sa > sb) {
-        Plane smoothed = pool.Take(w, h);
-        Smooth(base, &smoothed, std::sqrt(sa * sa - sb * sb), threads);
-        pool.Give(std::move(base));
-        base = std::move(smoothed);
-      }
+      if (next) DownsampleRows(levels.Level(s_best), 1, band, &source.plane);
     }
-    // Gaussian levels as detection needs them: level s reads G(s - 1) .. G(s + 2). G(s_min) is
-    // given back once read, so at most five planes of the octave are held, and no DoG plane.
-    levels[0] = std::move(base);
-    int made = g.s_min;
-    auto make_level = [&](int s) {
-      Plane& level = levels[size_t(s - g.s_min)];
-      level = pool.Take(w, h);
-      Smooth(levels[size_t(s - 1 - g.s_min)], &level, g.dsigma0 * std::pow(g.sigmak, s), threads);
-      made = s;
-    };
-    for (int s = g.s_min + 1; s <= g.s_max - 2; ++s) {
-      while (made < s + 2) make_level(made + 1);
-      const Plane* gauss[4] = {&levels[size_t(s - 1 - g.s_min)], &levels[size_t(s - g.s_min)],
-                               &levels[size_t(s + 1 - g.s_min)], &levels[size_t(s + 2 - g.s_min)]};
-      DetectLevel(gauss, s, o, g, tp, te, threads, &keys);
-      if (s - 1 == g.s_min) pool.Give(std::move(levels[0]));
-    }
-    for (int s = g.s_min; s <= g.s_max; ++s) {
-      Plane& level = levels[size_t(s - g.s_min)];
-      if (s >= g.s_min + 1 && s <= g.s_max - 2) {
-        kept[size_t(oi)].push_back(std::move(level));
-      } else {
-        pool.Give(std::move(level));
-      }
-    }
+    for (const auto& level : level_keys) keys->insert(keys->end(), level.begin(), level.end());
+    const double sa = g.sigma0 * std::pow(float(g.sigmak), float(g.s_min));
+    const double sb = g.sigma0 * std::pow(float(g.sigmak), float(s_best - g.S));
+    if (sa > sb) source.base_sigma = std::sqrt(sa * sa - sb * sb);
   }
+}
+
+// Orientations and descriptors of keys[begin, end), all in octave `source.o`: the octave's
+// levels are made again, band by band, with the gradient of each level's rows its keypoints
+// read. Key j's orientations go to angles[j - begin] and its descriptors to
+// descriptors + (j - begin) * slots * 128.
+struct KeyAngles {
+  double angle[4];
+  int count;
+};
+void DescribeOctave(const std::vector<Key>& keys, size_t begin, size_t end,
+                    const OctaveSource& source, const Geometry& g, const SiftOptions& options,
+                    int slots, KeyAngles* angles, uint8_t* descriptors) {
+  const int threads = options.num_threads;
+  OctaveLevels levels(g, source.plane, source.doubled, source.base_sigma, threads);
+  const int h = levels.h;
+  const size_t num_levels = size_t(g.s_max - g.s_min - 2);  // s_min + 1 .. s_max - 2
+  std::vector<int> reach(num_levels, -1);                   // -1: no keypoint
+  std::vector<std::vector<size_t>> by_band(size_t((h + kBandRows - 1) / kBandRows));
+  for (size_t j = begin; j < end; ++j) {
+    int& r = reach[size_t(keys[j].is - g.s_min - 1)];
+    r = std::max(r, KeyReach(keys[j]));
+    by_band[size_t(std::clamp(KeyRow(keys[j]), 0, h - 1) / kBandRows)].push_back(j);
+  }
+  std::vector<GradientPlanes> grads(num_levels);
+  for (size_t b = 0; b < by_band.size(); ++b) {
+    const Rows band{int(b) * kBandRows, std::min(h, int(b + 1) * kBandRows)};
+    std::vector<Rows> need(num_levels + 1);  // levels s_min .. s_max - 2
+    std::vector<Rows> grad_rows(num_levels);
+    for (size_t l = 0; l < num_levels; ++l) {
+      if (reach[l] < 0) continue;
+      grad_rows[l] = Widen(band, reach[l], h);
+      need[l + 1] = Widen(grad_rows[l], 1, h);
+    }
+    levels.Cover(need);
+    for (size_t l = 0; l < num_levels; ++l) {
+      if (reach[l] < 0) continue;
+      const Rows rows = grad_rows[l];
+      const int from = Slide(&grads[l].mod, levels.w, h, rows);
+      Slide(&grads[l].angle, levels.w, h, rows);
+      Gradient(levels.Level(g.s_min + 1 + int(l)), {from, rows.hi}, &grads[l], threads);
+    }
+    const std::vector<size_t>& band_keys = by_band[b];
+    ParallelFor(band_keys.size(), threads, [&](size_t i) {
+      const size_t j = band_keys[i];
+      const Key& k = keys[j];
+      const GradientPlanes& grad = grads[size_t(k.is - g.s_min - 1)];
+      KeyAngles& a = angles[j - begin];
+      if (options.upright) {
+        a.count = 1;
+        a.angle[0] = 0.0;
+      } else {
+        a.count = Orientations(k, grad, a.angle);
+      }
+      for (int slot = 0; slot < std::min(a.count, slots); ++slot) {
+        float raw[kSiftDescriptorDim];
+        Descriptor(k, a.angle[slot], grad, raw);
+        FinishDescriptor(
+            raw, options.normalization,
+            descriptors + ((j - begin) * size_t(slots) + size_t(slot)) * kSiftDescriptorDim);
+      }
+    });
+  }
+}
+
+}  // namespace
+
+SiftFeatures ExtractSiftCwloc(const GreyImage& image, const SiftOptions& options) {
+  const Geometry g = MakeGeometry(options);
+  std::vector<Key> keys;
+  std::vector<OctaveSource> sources;
+  DetectAll(image, g, options, &keys, &sources);
 
   // COLMAP's levels: runs of equal level index (not reset between octaves).
-  struct Run {
-    size_t begin, end;
-  };
-  std::vector<Run> runs;
-  int prev_level = -1;
-  for (size_t i = 0; i < keys.size(); ++i) {
-    if (runs.empty() || keys[i].is != prev_level) runs.push_back({i, i});
-    prev_level = keys[i].is;
-    runs.back().end = i + 1;
-  }
   std::vector<size_t> counts;
-  for (const Run& run : runs) counts.push_back(run.end - run.begin);
+  for (size_t i = 0; i < keys.size(); ++i) {
+    if (i == 0 || keys[i].is != keys[i - 1].is) counts.push_back(0);
+    ++counts.back();
+  }
   const size_t first_run = FirstLevelToKeep(counts, options.max_num_features);
-  const size_t first_key = runs.empty() ? 0 : runs[first_run].begin;
+  size_t first_key = 0;
+  for (size_t run = 0; run < first_run; ++run) first_key += counts[run];
 
-  // Level by level, in COLMAP's order (keys are grouped by octave, then level): the level's
-  // gradient, its keypoints' orientations, then one descriptor per kept orientation. One
-  // level's gradient planes are held at a time, taken from and given back to the pool, and
-  // each level is given back once described.
-  SiftFeatures features;
+  // Octave by octave, the kept keypoints' orientations and descriptors, then the features in
+  // COLMAP's order: keypoint by keypoint, its first max_num_orientations orientations.
+  const int slots = std::min(options.max_num_orientations, 4);
+  const size_t n = keys.size() - first_key;
+  std::vector<KeyAngles> angles(n);
+  std::vector<uint8_t> descriptors(n * size_t(slots) * kSiftDescriptorDim);
   for (size_t begin = first_key, end; begin < keys.size(); begin = end) {
-    const int o = keys[begin].o, is = keys[begin].is;
-    for (end = begin; end < keys.size() && keys[end].o == o && keys[end].is == is;) ++end;
-    Plane& level = kept[size_t(o - g.o_min)][size_t(is - g.s_min - 1)];
-    GradientPlanes grad{pool.Take(level.w, level.h), pool.Take(level.w, level.h)};
-    Gradient(level, &grad, threads);
-    struct Angles {
-      double angle[4];
-      int count;
-    };
-    const size_t n = end - begin;
-    std::vector<Angles> angles(n);
-    ParallelFor(n, threads, [&](size_t j) {
-      if (options.upright) {
-        angles[j].count = 1;
-        angles[j].angle[0] = 0.0;
-      } else {
-        angles[j].count = Orientations(keys[begin + j], grad, angles[j].angle);
-      }
-    });
-    std::vector<size_t> first_slot(n + 1, features.keypoints.size());
-    for (size_t j = 0; j < n; ++j) {
-      first_slot[j + 1] =
-          first_slot[j] + size_t(std::min(angles[j].count, options.max_num_orientations));
+    const int o = keys[begin].o;
+    for (end = begin; end < keys.size() && keys[end].o == o;) ++end;
+    DescribeOctave(keys, begin, end, sources[size_t(o - g.o_min)], g, options, slots,
+                   angles.data() + (begin - first_key),
+                   descriptors.data() + (begin - first_key) * size_t(slots) * kSiftDescriptorDim);
+  }
+  SiftFeatures features;
+  for (size_t i = 0; i < n; ++i) {
+    const Key& k = keys[first_key + i];
+    for (int slot = 0; slot < std::min(angles[i].count, slots); ++slot) {
+      features.keypoints.push_back({k.x + 0.5f, k.y + 0.5f, k.sigma, float(angles[i].angle[slot])});
+      const uint8_t* d =
+          descriptors.data() + (i * size_t(slots) + size_t(slot)) * kSiftDescriptorDim;
+      features.descriptors.insert(features.descriptors.end(), d, d + kSiftDescriptorDim);
     }
-    features.keypoints.resize(first_slot[n]);
-    features.descriptors.resize(first_slot[n] * kSiftDescriptorDim);
-    ParallelFor(n, threads, [&](size_t j) {
-      const Key& k = keys[begin + j];
-      for (size_t slot = first_slot[j]; slot < first_slot[j + 1]; ++slot) {
-        const double angle = angles[j].angle[slot - first_slot[j]];
-        features.keypoints[slot] = {k.x + 0.5f, k.y + 0.5f, k.sigma, float(angle)};
-        float raw[kSiftDescriptorDim];
-        Descriptor(k, angle, grad, raw);
-        FinishDescriptor(raw, options.normalization,
-                         features.descriptors.data() + slot * kSiftDescriptorDim);
-      }
-    });
-    pool.Give(std::move(grad.mod));
-    pool.Give(std::move(grad.angle));
-    pool.Give(std::move(level));
   }
   return features;
 }
