@@ -2,12 +2,13 @@
 # Photo -> features -> pose, per photo, in one run (docs/sift.md, "Speed"):
 #  - COLMAP 3.8's CPU SIFT (colmap feature_extractor, one thread, the dataset's settings:
 #    max_image_size 1600, max_num_features 6000), one process per run (hyperfine median);
-#  - OpenCV's SIFT (Debian's python3-opencv, one thread) at COLMAP's thresholds, in process
-#    (bench/opencv_sift_time.py: decode + detectAndCompute, median);
+#  - OpenCV's SIFT (Debian's python3-opencv, one thread) at its defaults and at COLMAP's
+#    thresholds, in process (bench/opencv_sift_time.py: decode + detectAndCompute, median);
 #  - ours (cwloc-sift-bench: decode + ExtractSift, in process, median) at 6000 features and at
 #    the defaults (8192), on one thread and on two;
 #  - photo -> pose (cwloc-localize --image, one process, hyperfine median) at 6000 features and
-#    at the defaults, with its peak RSS (median of the runs).
+#    at the defaults, with its peak RSS (median of the runs), and in the fast mode
+#    (--first-octave 0, and 1) at 6000 features.
 #
 #   bench/extraction_benchmark.sh [BUILD_DIR] [PHOTO_DIR] [RUNS]
 #   defaults: build, ../shared/data/herz_jesu_p25/query_images, 3
@@ -37,9 +38,9 @@ sift_ms() {  # FEATURES THREADS PHOTO: in-process median of decode + extract
   "$bin/cwloc-sift-bench" --max-num-features "$1" --threads "$2" --repeat "$runs" "$3" |
     awk 'NR==2 {printf "%.0f", $5}'
 }
-pose() {  # PHOTO MAX_IMAGE_SIZE MAX_FEATURES: "median_ms peak_MB" of the whole command
+pose() {  # PHOTO MAX_IMAGE_SIZE MAX_FEATURES [FLAGS]: "median_ms peak_MB" of the whole command
   local command="$bin/cwloc-localize --index $tmp/index.cwl --image $1 --max-image-size $2 \
-    --max-features $3 --threads 1 -q -o $tmp/pose.jsonl"
+    --max-features $3 ${4:-} --threads 1 -q -o $tmp/pose.jsonl"
   hyperfine --runs "$runs" --warmup 1 --style none --export-json "$tmp/pose.json" "$command" \
     >/dev/null 2>&1
   local peaks=()
@@ -54,8 +55,8 @@ data="$(cd "$photos/.." && pwd)"
 "$bin/cwloc-index" build --model "$data/mapping_model/bin" --database "$data/database.db" \
   -o "$tmp/index.cwl" >/dev/null
 
-printf '| photo | COLMAP SIFT ms (6000) | OpenCV SIFT ms (features) | ours 1 thread ms, 6000 / 8192 | ours 2 threads ms, 6000 / 8192 | 2 threads speedup | photo -> pose ms, 6000 / defaults | peak MB, 6000 / defaults |\n'
-printf '|---|---|---|---|---|---|---|---|\n'
+printf '| photo | COLMAP SIFT ms (6000) | OpenCV SIFT ms (features), defaults / COLMAP thresholds | ours 1 thread ms, 6000 / 8192 | ours 2 threads ms, 6000 / 8192 | 2 threads speedup | photo -> pose ms, 6000 / defaults | peak MB, 6000 / defaults | fast photo -> pose ms, first octave 0 / 1 |\n'
+printf '|---|---|---|---|---|---|---|---|---|\n'
 for photo in "$photos"/*.jpg; do
   name="$(basename "$photo")"
   echo "$name" > "$tmp/list.txt"
@@ -69,8 +70,9 @@ for photo in "$photos"/*.jpg; do
     >/dev/null 2>&1
   opencv_cell="-"
   if [ "$opencv" = 1 ]; then
-    read -r cv_ms cv_features < <("$here/bench/opencv_sift_time.py" "$photo" "$runs" 0.02)
-    opencv_cell="$cv_ms ($cv_features)"
+    read -r cv_ms cv_features < <("$here/bench/opencv_sift_time.py" "$photo" "$runs" 0.04)
+    read -r cv2_ms cv2_features < <("$here/bench/opencv_sift_time.py" "$photo" "$runs" 0.02)
+    opencv_cell="$cv_ms ($cv_features) / $cv2_ms ($cv2_features)"
   fi
   one_6000="$(sift_ms 6000 1 "$photo")"
   one_8192="$(sift_ms 8192 1 "$photo")"
@@ -78,8 +80,11 @@ for photo in "$photos"/*.jpg; do
   two_8192="$(sift_ms 8192 2 "$photo")"
   read -r pose_6000 peak_6000 < <(pose "$photo" 1600 6000)
   read -r pose_default peak_default < <(pose "$photo" 3200 8192)
+  read -r pose_fast0 _ < <(pose "$photo" 1600 6000 "--first-octave 0")
+  read -r pose_fast1 _ < <(pose "$photo" 1600 6000 "--first-octave 1")
   speedup="$(awk -v a="$one_8192" -v b="$two_8192" 'BEGIN {printf "%.2f", a / b}')"
-  printf '| %s | %s | %s | %s / %s | %s / %s | %s | %s / %s | %s / %s |\n' "$name" \
+  printf '| %s | %s | %s | %s / %s | %s / %s | %s | %s / %s | %s / %s | %s / %s |\n' "$name" \
     "$(median_ms "$tmp/colmap.json")" "$opencv_cell" "$one_6000" "$one_8192" "$two_6000" \
-    "$two_8192" "$speedup" "$pose_6000" "$pose_default" "$peak_6000" "$peak_default"
+    "$two_8192" "$speedup" "$pose_6000" "$pose_default" "$peak_6000" "$peak_default" \
+    "$pose_fast0" "$pose_fast1"
 done

@@ -6,7 +6,8 @@
 #                                    (default 60), two at a time, from fuzz/corpus
 #   tools/check_sanitizers.sh tsan   ThreadSanitizer in build-tsan (the device configuration):
 #                                    a batch of queries on one index with 4 threads through
-#                                    cwloc-localize, and the library's concurrent-use tests
+#                                    cwloc-localize, the library's concurrent-use tests, and
+#                                    SIFT on several threads inside one photo
 set -euo pipefail
 cd "$(dirname "$0")/.."
 mode="${1:-}"
@@ -34,7 +35,7 @@ case "$mode" in
     cmake -S . -B build-tsan -G Ninja "${clang[@]}" -DCWLOC_SANITIZE=thread \
       -DCWLOC_WITH_COLMAP_DB=OFF -DCWLOC_BUILD_TOOLS=OFF -DCWLOC_WITH_VLFEAT=OFF \
       -DCWLOC_WITH_CERES=OFF -DCWLOC_BUILD_BENCHMARKS=OFF >/dev/null
-    cmake --build build-tsan -j "$jobs" --target cwloc_localize_exe api_tests \
+    cmake --build build-tsan -j "$jobs" --target cwloc_localize_exe api_tests sift_tests base_tests \
       >build-tsan/build.log 2>&1 || { tail -50 build-tsan/build.log; exit 1; }
     export TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1"
     # The golden index's queries, each 8 times, with their cameras from the ground truth.
@@ -51,6 +52,12 @@ case "$mode" in
     echo "ThreadSanitizer: $(wc -l <"$list") queries on 4 threads, $localized localized, no report"
     build-tsan/tests/api_tests >build-tsan/api_tests.log 2>&1 || { cat build-tsan/api_tests.log; exit 1; }
     grep -E '^\[  PASSED  \]' build-tsan/api_tests.log | sed 's/^/ThreadSanitizer: api_tests /'
+    for tests in "sift_tests:*Threads*" "base_tests:WorkerPool*"; do
+      binary="${tests%%:*}"
+      build-tsan/tests/"$binary" --gtest_filter="${tests#*:}" >build-tsan/"$binary".log 2>&1 ||
+        { cat build-tsan/"$binary".log; exit 1; }
+      grep -E '^\[  PASSED  \]' build-tsan/"$binary".log | sed "s/^/ThreadSanitizer: $binary /"
+    done
     ;;
   *)
     echo "usage: tools/check_sanitizers.sh asan|fuzz|tsan" >&2

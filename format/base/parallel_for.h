@@ -2,8 +2,11 @@
 
 #include <algorithm>
 #include <atomic>
+#include <condition_variable>
 #include <cstddef>
+#include <cstdint>
 #include <exception>
+#include <functional>
 #include <mutex>
 #include <thread>
 #include <type_traits>
@@ -17,6 +20,43 @@ inline int ResolveThreads(int requested) {
   return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
 }
 
+namespace parallel_internal {
+
+// Items [0, n) handed out one at a time to body(i) or body(i, worker); the first exception is
+// kept and stops the handing out.
+template <typename Body>
+class Items {
+ public:
+  Items(size_t n, Body& body) : n_(n), body_(body) {}
+  void Work(int worker) {
+    for (size_t i; (i = next_.fetch_add(1)) < n_;) {
+      try {
+        if constexpr (std::is_invocable_v<Body&, size_t, int>) {
+          body_(i, worker);
+        } else {
+          body_(i);
+        }
+      } catch (...) {
+        std::lock_guard lock(error_mutex_);
+        if (!error_) error_ = std::current_exception();
+        next_ = n_;
+      }
+    }
+  }
+  void RethrowError() {
+    if (error_) std::rethrow_exception(error_);
+  }
+
+ private:
+  const size_t n_;
+  Body& body_;
+  std::atomic<size_t> next_{0};
+  std::exception_ptr error_;
+  std::mutex error_mutex_;
+};
+
+}  // namespace parallel_internal
+
 // Runs body(i) or body(i, worker) for i in [0, n) on up to `threads` threads (0 = all cores);
 // worker in [0, threads) identifies the thread, for per-thread scratch. Items are handed out
 // one at a time because they vary a lot in size, so results must depend on i only, never on
@@ -25,29 +65,86 @@ template <typename Body>
 void ParallelFor(size_t n, int threads, Body&& body) {
   const int workers =
       static_cast<int>(std::min<size_t>(size_t(ResolveThreads(threads)), std::max<size_t>(n, 1)));
-  std::atomic<size_t> next{0};
-  std::exception_ptr error;
-  std::mutex error_mutex;
-  auto work = [&](int worker) {
-    for (size_t i; (i = next.fetch_add(1)) < n;) {
-      try {
-        if constexpr (std::is_invocable_v<Body&, size_t, int>) {
-          body(i, worker);
-        } else {
-          body(i);
-        }
-      } catch (...) {
-        std::lock_guard lock(error_mutex);
-        if (!error) error = std::current_exception();
-        next = n;
-      }
-    }
-  };
+  parallel_internal::Items<Body> items(n, body);
   std::vector<std::thread> pool;
-  for (int t = 1; t < workers; ++t) pool.emplace_back(work, t);
-  work(0);
+  for (int t = 1; t < workers; ++t) pool.emplace_back([&items, t] { items.Work(t); });
+  items.Work(0);
   for (auto& thread : pool) thread.join();
-  if (error) std::rethrow_exception(error);
+  items.RethrowError();
 }
+
+// ParallelFor on threads started once and kept: for work made of many short parallel passes
+// (a photo's SIFT makes hundreds), where starting threads for each would cost more than some
+// passes. The calling thread is worker 0; For is called from one thread at a time.
+class WorkerPool {
+ public:
+  explicit WorkerPool(int threads) {
+    for (int t = 1; t < ResolveThreads(threads); ++t)
+      workers_.emplace_back([this, t] { Serve(t); });
+  }
+  ~WorkerPool() {
+    {
+      std::lock_guard lock(mutex_);
+      stop_ = true;
+    }
+    wake_.notify_all();
+    for (auto& worker : workers_) worker.join();
+  }
+  WorkerPool(const WorkerPool&) = delete;
+  WorkerPool& operator=(const WorkerPool&) = delete;
+
+  int threads() const { return int(workers_.size()) + 1; }
+
+  // As ParallelFor(n, threads(), body).
+  template <typename Body>
+  void For(size_t n, Body&& body) {
+    parallel_internal::Items<Body> items(n, body);
+    if (n > 1 && !workers_.empty()) {
+      Run([&items](int worker) { items.Work(worker); });
+    } else {
+      items.Work(0);
+    }
+    items.RethrowError();
+  }
+
+ private:
+  // Every worker runs `job` once, as the caller does; returns when all have.
+  void Run(const std::function<void(int)>& job) {
+    {
+      std::lock_guard lock(mutex_);
+      job_ = &job;
+      unfinished_ = workers_.size();
+      ++generation_;
+    }
+    wake_.notify_all();
+    job(0);
+    std::unique_lock lock(mutex_);
+    finished_.wait(lock, [this] { return unfinished_ == 0; });
+    job_ = nullptr;
+  }
+
+  void Serve(int worker) {
+    uint64_t seen = 0;
+    std::unique_lock lock(mutex_);
+    for (;;) {
+      wake_.wait(lock, [&] { return stop_ || generation_ != seen; });
+      if (stop_) return;
+      seen = generation_;
+      const std::function<void(int)>* job = job_;
+      lock.unlock();
+      (*job)(worker);
+      lock.lock();
+      if (--unfinished_ == 0) finished_.notify_one();
+    }
+  }
+
+  std::vector<std::thread> workers_;
+  std::mutex mutex_;
+  std::condition_variable wake_, finished_;
+  const std::function<void(int)>* job_ = nullptr;
+  size_t unfinished_ = 0;
+  uint64_t generation_ = 0;
+  bool stop_ = false;
+};
 
 }  // namespace cwloc

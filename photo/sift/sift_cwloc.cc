@@ -138,14 +138,14 @@ std::vector<float> GaussianKernel(double sigma) {
 // along columns, then along rows, each output pixel summing its taps from the first (top/left)
 // to the last with the edge pixel repeated, exactly VLFeat's vl_imconvcol_vf order; vectorized
 // across the pixels of a row. `in` holds rows `rows` widened by HalfWidth(sigma).
-void Smooth(const Plane& in, Plane* out, double sigma, Rows rows, int num_threads) {
+void Smooth(const Plane& in, Plane* out, double sigma, Rows rows, WorkerPool& pool) {
   const std::vector<float> kernel = GaussianKernel(sigma);
   const int half = int(kernel.size() / 2);
   const int w = in.w, h = in.h;
   constexpr int kRowsPerTask = 16;
   const int num_tasks = (rows.hi - rows.lo + kRowsPerTask - 1) / kRowsPerTask;
   const int taps = int(kernel.size());
-  ParallelFor(size_t(std::max(num_tasks, 0)), num_threads, [&](size_t task) {
+  pool.For(size_t(std::max(num_tasks, 0)), [&](size_t task) {
     // The column pass lands in the middle of `padded`, which repeats its edge pixels `half`
     // times on both sides for the row pass.
     std::vector<float> padded(static_cast<size_t>(w + 2 * half));
@@ -169,9 +169,8 @@ void Smooth(const Plane& in, Plane* out, double sigma, Rows rows, int num_thread
 // Rows `rows` of `in` doubled in both sides, as VLFeat's copy_and_upsample_rows applied twice
 // makes them: the new pixels the means of their neighbours (along rows first), the last row and
 // column repeated.
-void UpsampleRows(const Plane& in, Plane* out, Rows rows) {
+void UpsampleRows(const Plane& in, Plane* out, Rows rows, WorkerPool& pool) {
   const int w = in.w, h = in.h;
-  std::vector<float> a(size_t(2 * w)), b(size_t(2 * w));
   auto double_row = [&](int y, float* dst) {
     const float* src = in.Row(y);
     for (int x = 0; x + 1 < w; ++x) {
@@ -180,17 +179,23 @@ void UpsampleRows(const Plane& in, Plane* out, Rows rows) {
     }
     dst[2 * w - 2] = dst[2 * w - 1] = src[w - 1];
   };
-  for (int y2 = rows.lo; y2 < rows.hi; ++y2) {
-    const int y = y2 / 2;
-    float* dst = out->Row(y2);
-    if (y2 % 2 == 0 || y + 1 >= h) {
-      double_row(y, dst);
-      continue;
-    }
-    double_row(y, a.data());
-    double_row(y + 1, b.data());
-    for (int x = 0; x < 2 * w; ++x) dst[x] = float(0.5 * (a[size_t(x)] + b[size_t(x)]));
-  }
+  constexpr int kRowsPerTask = 16;
+  pool.For(size_t(std::max(rows.hi - rows.lo + kRowsPerTask - 1, 0) / kRowsPerTask),
+           [&](size_t task) {
+             std::vector<float> a(size_t(2 * w)), b(size_t(2 * w));
+             const int y_begin = rows.lo + int(task) * kRowsPerTask;
+             for (int y2 = y_begin; y2 < std::min(rows.hi, y_begin + kRowsPerTask); ++y2) {
+               const int y = y2 / 2;
+               float* dst = out->Row(y2);
+               if (y2 % 2 == 0 || y + 1 >= h) {
+                 double_row(y, dst);
+                 continue;
+               }
+               double_row(y, a.data());
+               double_row(y + 1, b.data());
+               for (int x = 0; x < 2 * w; ++x) dst[x] = float(0.5 * (a[size_t(x)] + b[size_t(x)]));
+             }
+           });
 }
 
 // Every 2^d-th pixel of every 2^d-th row, from (0, 0), of `in`'s rows `rows` into the w x h
@@ -233,7 +238,7 @@ constexpr int kDetectionReach = 6;
 // s-1 .. s+2, each on rows `rows` widened by kDetectionReach: DoG level t is G(t + 1) - G(t),
 // computed where it is read (the same float subtraction VLFeat stores), so no DoG is held.
 void DetectLevel(const Plane* gauss[4], int s, int o, const Geometry& g, double tp, double te,
-                 Rows rows, int num_threads, std::vector<Key>* keys) {
+                 Rows rows, WorkerPool& pool, std::vector<Key>* keys) {
   const int w = gauss[1]->w, h = gauss[1]->h;
   const double xper = std::pow(2.0, o);
   const float prefilter = float(0.8 * tp) * (1 - 1e-6f);
@@ -251,7 +256,7 @@ void DetectLevel(const Plane* gauss[4], int s, int o, const Geometry& g, double 
   auto dog = [&](int ds, ptrdiff_t i) {
     return at_level[ds + 2][i - first[ds + 2]] - at_level[ds + 1][i - first[ds + 1]];
   };
-  ParallelFor(row_keys.size(), num_threads, [&](size_t task) {
+  pool.For(row_keys.size(), [&](size_t task) {
     const int y0 = rows.lo + int(task);
     std::vector<Key>& out = row_keys[task];
     thread_local std::vector<float> mid;
@@ -368,9 +373,9 @@ struct GradientPlanes {
 };
 
 // Rows `rows` of the gradient (held by grad) from `level` (holding them widened by one).
-void Gradient(const Plane& level, Rows rows, GradientPlanes* grad, int num_threads) {
+void Gradient(const Plane& level, Rows rows, GradientPlanes* grad, WorkerPool& pool) {
   const int h = level.h;
-  ParallelFor(size_t(std::max(rows.hi - rows.lo, 0)), num_threads, [&](size_t row) {
+  pool.For(size_t(std::max(rows.hi - rows.lo, 0)), [&](size_t row) {
     const int y = rows.lo + int(row);
     GradientRow(y > 0 ? level.Row(y - 1) : nullptr, level.Row(y),
                 y < h - 1 ? level.Row(y + 1) : nullptr, level.w, grad->mod.Row(y),
@@ -543,12 +548,12 @@ void Descriptor(const Key& k, double angle0, const GradientPlanes& grad, float* 
 class OctaveLevels {
  public:
   OctaveLevels(const Geometry& g, const Plane& source, bool doubled, double base_sigma,
-               int num_threads)
+               WorkerPool& pool)
       : g_(g),
         source_(source),
         doubled_(doubled),
         base_sigma_(base_sigma),
-        num_threads_(num_threads),
+        pool_(pool),
         w(doubled ? 2 * source.w : source.w),
         h(doubled ? 2 * source.h : source.h),
         bands_(size_t(g.s_max - g.s_min + 1)) {}
@@ -564,18 +569,17 @@ class OctaveLevels {
     const Rows first = need[0];
     if (!first.empty() && doubled_) {
       const Rows up = base_sigma_ > 0 ? Widen(first, HalfWidth(base_sigma_), h) : first;
-      UpsampleRows(source_, &doubled_band_, {Slide(&doubled_band_, w, h, up), up.hi});
+      UpsampleRows(source_, &doubled_band_, {Slide(&doubled_band_, w, h, up), up.hi}, pool_);
     }
     if (!first.empty() && base_sigma_ > 0) {
       const Plane& base = doubled_ ? doubled_band_ : source_;
-      Smooth(base, &bands_[0], base_sigma_, {Slide(&bands_[0], w, h, first), first.hi},
-             num_threads_);
+      Smooth(base, &bands_[0], base_sigma_, {Slide(&bands_[0], w, h, first), first.hi}, pool_);
     }
     for (int s = g_.s_min + 1; s <= top; ++s) {
       const Rows rows = need[size_t(s - g_.s_min)];
       if (rows.empty()) continue;
       Plane* band = &bands_[size_t(s - g_.s_min)];
-      Smooth(Level(s - 1), band, LevelSigma(s), {Slide(band, w, h, rows), rows.hi}, num_threads_);
+      Smooth(Level(s - 1), band, LevelSigma(s), {Slide(band, w, h, rows), rows.hi}, pool_);
     }
   }
 
@@ -592,7 +596,7 @@ class OctaveLevels {
   const Plane& source_;
   const bool doubled_;
   const double base_sigma_;
-  const int num_threads_;
+  WorkerPool& pool_;
 
  public:
   const int w, h;
@@ -603,7 +607,7 @@ class OctaveLevels {
 };
 
 // Rows per band: bands of 128 rows compute about 1.5x the rows of the band for the lowest level
-// (its halo), once each, and keep each ParallelFor a few tasks per thread.
+// (its halo), once each, and give each parallel pass a few tasks per thread.
 constexpr int kBandRows = 128;
 
 // What an octave's levels are made from.
@@ -617,8 +621,7 @@ struct OctaveSource {
 // Every keypoint of every octave in VLFeat's order (octave, level, row, column), and each
 // octave's source for the description pass.
 void DetectAll(const GreyImage& image, const Geometry& g, const SiftOptions& options,
-               std::vector<Key>* keys, std::vector<OctaveSource>* sources) {
-  const int threads = options.num_threads;
+               WorkerPool& pool, std::vector<Key>* keys, std::vector<OctaveSource>* sources) {
   Plane input;
   input.Resize(int(image.width), int(image.height));
   for (size_t i = 0; i < image.pixels.size(); ++i) {
@@ -644,7 +647,7 @@ void DetectAll(const GreyImage& image, const Geometry& g, const SiftOptions& opt
     if (w < 3 || h < 3) break;  // no pixel with 8 neighbours: VLFeat finds nothing either
     sources->push_back(std::move(source));
     const OctaveSource& current = sources->back();
-    OctaveLevels levels(g, current.plane, current.doubled, current.base_sigma, threads);
+    OctaveLevels levels(g, current.plane, current.doubled, current.base_sigma, pool);
     const int wn = ShiftLeft(int(image.width), -(o + 1)),
               hn = ShiftLeft(int(image.height), -(o + 1));
     const bool next = oi + 1 < g.O && wn >= 3 && hn >= 3;
@@ -659,7 +662,7 @@ void DetectAll(const GreyImage& image, const Geometry& g, const SiftOptions& opt
       for (int s = g.s_min + 1; s <= g.s_max - 2 && !detect.empty(); ++s) {
         const Plane* gauss[4] = {&levels.Level(s - 1), &levels.Level(s), &levels.Level(s + 1),
                                  &levels.Level(s + 2)};
-        DetectLevel(gauss, s, o, g, options.peak_threshold, options.edge_threshold, detect, threads,
+        DetectLevel(gauss, s, o, g, options.peak_threshold, options.edge_threshold, detect, pool,
                     &level_keys[size_t(s - g.s_min - 1)]);
       }
       if (next) DownsampleRows(levels.Level(s_best), 1, band, &source.plane);
@@ -681,9 +684,8 @@ struct KeyAngles {
 };
 void DescribeOctave(const std::vector<Key>& keys, size_t begin, size_t end,
                     const OctaveSource& source, const Geometry& g, const SiftOptions& options,
-                    int slots, KeyAngles* angles, uint8_t* descriptors) {
-  const int threads = options.num_threads;
-  OctaveLevels levels(g, source.plane, source.doubled, source.base_sigma, threads);
+                    WorkerPool& pool, int slots, KeyAngles* angles, uint8_t* descriptors) {
+  OctaveLevels levels(g, source.plane, source.doubled, source.base_sigma, pool);
   const int h = levels.h;
   const size_t num_levels = size_t(g.s_max - g.s_min - 2);  // s_min + 1 .. s_max - 2
   std::vector<int> reach(num_levels, -1);                   // -1: no keypoint
@@ -709,10 +711,10 @@ void DescribeOctave(const std::vector<Key>& keys, size_t begin, size_t end,
       const Rows rows = grad_rows[l];
       const int from = Slide(&grads[l].mod, levels.w, h, rows);
       Slide(&grads[l].angle, levels.w, h, rows);
-      Gradient(levels.Level(g.s_min + 1 + int(l)), {from, rows.hi}, &grads[l], threads);
+      Gradient(levels.Level(g.s_min + 1 + int(l)), {from, rows.hi}, &grads[l], pool);
     }
     const std::vector<size_t>& band_keys = by_band[b];
-    ParallelFor(band_keys.size(), threads, [&](size_t i) {
+    pool.For(band_keys.size(), [&](size_t i) {
       const size_t j = band_keys[i];
       const Key& k = keys[j];
       const GradientPlanes& grad = grads[size_t(k.is - g.s_min - 1)];
@@ -740,7 +742,8 @@ SiftFeatures ExtractSiftCwloc(const GreyImage& image, const SiftOptions& options
   const Geometry g = MakeGeometry(options);
   std::vector<Key> keys;
   std::vector<OctaveSource> sources;
-  DetectAll(image, g, options, &keys, &sources);
+  WorkerPool pool(options.num_threads);
+  DetectAll(image, g, options, pool, &keys, &sources);
 
   // COLMAP's levels: runs of equal level index (not reset between octaves).
   std::vector<size_t> counts;
@@ -761,7 +764,7 @@ SiftFeatures ExtractSiftCwloc(const GreyImage& image, const SiftOptions& options
   for (size_t begin = first_key, end; begin < keys.size(); begin = end) {
     const int o = keys[begin].o;
     for (end = begin; end < keys.size() && keys[end].o == o;) ++end;
-    DescribeOctave(keys, begin, end, sources[size_t(o - g.o_min)], g, options, slots,
+    DescribeOctave(keys, begin, end, sources[size_t(o - g.o_min)], g, options, pool, slots,
                    angles.data() + (begin - first_key),
                    descriptors.data() + (begin - first_key) * size_t(slots) * kSiftDescriptorDim);
   }
