@@ -30,9 +30,10 @@ TEST(WorkerPool, RunsEveryItemOnceInEveryPass) {
 
 TEST(WorkerPool, RethrowsTheFirstErrorAndStaysUsable) {
   WorkerPool pool(2);
-  EXPECT_THROW(pool.For(100, [](size_t i) {
-    if (i == 10) throw std::runtime_error("item 10");
-  }),
+  EXPECT_THROW(pool.For(100,
+                        [](size_t i) {
+                          if (i == 10) throw std::runtime_error("item 10");
+                        }),
                std::runtime_error);
   std::atomic<size_t> sum{0};
   pool.For(100, [&](size_t i) { sum += i; });

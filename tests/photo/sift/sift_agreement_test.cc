@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "photo/image_resize.h"
 #include "photo/sift/sift_extractor.h"
 #include "tests/photo/sift/sift_agreement_util.h"
 #include "tests/test_util.h"
@@ -54,6 +55,39 @@ TEST_P(SiftAgreementTest, AgreesWithColmapBothWays) {
       }
       EXPECT_EQ(off, 0u);
     }
+}
+
+// sceaux_castle's 2832 x 2128 photos, shrunk to 1600 x 1202 for SIFT as COLMAP shrank them
+// (its README: max_image_size 1600, max_num_features 6000); COLMAP stored the keypoints scaled
+// back to the photo in float (FeatureKeypoint::Rescale). Ours on one thread and on two.
+TEST(SiftAgreementTest, ShrunkPhotosEqualColmaps) {
+  CWLOC_REQUIRE_SHARED_DATA(data, "sceaux_castle");
+  for (const char* name : {"100_7101.JPG", "100_7105.JPG", "100_7109.JPG"}) {
+    GreyImage image = sift_bench::DecodeJpegLikeColmap(data / "query_images" / name);
+    const uint32_t width = image.width, height = image.height;
+    const ImageSize size = ExtractionSize(width, height, 1600);
+    ASSERT_EQ(size.width, 1600u) << name;
+    image = ResizeBilinear(image, size.width, size.height);
+    const float scale_x = float(double(width) / double(size.width));
+    const float scale_y = float(double(height) / double(size.height));
+    const SiftFeatures colmap = sift_bench::ReadColmapFeatures(data / "database.db", name);
+    for (int threads : {1, 2}) {
+      SCOPED_TRACE(std::string(name) + " on " + std::to_string(threads) + " thread(s)");
+      SiftOptions options;
+      options.max_num_features = 6000;
+      options.num_threads = threads;
+      const SiftFeatures ours = ExtractSift(image, options);
+      ASSERT_EQ(ours.size(), colmap.size());
+      EXPECT_EQ(ours.descriptors, colmap.descriptors);
+      size_t off = 0;
+      for (size_t i = 0; i < ours.size(); ++i) {
+        const SiftKeypoint& a = ours.keypoints[i];
+        const SiftKeypoint& b = colmap.keypoints[i];
+        if (a.x * scale_x != b.x || a.y * scale_y != b.y) ++off;
+      }
+      EXPECT_EQ(off, 0u);
+    }
+  }
 }
 
 std::vector<SiftOptions::Implementation> Implementations() {
