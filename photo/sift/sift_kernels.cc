@@ -203,16 +203,19 @@ void ConvolveTaps(const float* const* rows, const float* kernel, int taps, int w
   ConvolveTapsScalar(rows, kernel, taps, w, out);
 #else
   int x = 0;
-  // Two vectors at a time keep more multiplies in flight; each lane still adds in tap order.
-  for (; x + 2 * kLanes <= w; x += 2 * kLanes) {
-    Floats a = Load(rows[0] + x) * kernel[0];
-    Floats b = Load(rows[0] + x + kLanes) * kernel[0];
+  // Each lane adds in tap order, so a lane's sum is a chain of dependent adds; several vectors
+  // at a time keep enough chains in flight to hide the add latency.
+  constexpr int kChains = 4;
+  for (; x + kChains * kLanes <= w; x += kChains * kLanes) {
+    Floats sum[kChains];
+#pragma GCC unroll 8
+    for (int c = 0; c < kChains; ++c) sum[c] = Load(rows[0] + x + c * kLanes) * kernel[0];
     for (int k = 1; k < taps; ++k) {
-      a += Load(rows[k] + x) * kernel[k];
-      b += Load(rows[k] + x + kLanes) * kernel[k];
+#pragma GCC unroll 8
+      for (int c = 0; c < kChains; ++c) sum[c] += Load(rows[k] + x + c * kLanes) * kernel[k];
     }
-    Store(out + x, a);
-    Store(out + x + kLanes, b);
+#pragma GCC unroll 8
+    for (int c = 0; c < kChains; ++c) Store(out + x + c * kLanes, sum[c]);
   }
   for (; x + kLanes <= w; x += kLanes) {
     Floats a = Load(rows[0] + x) * kernel[0];

@@ -103,7 +103,7 @@ TEST(SiftKernels, ConvolveTapsEqualsTheScalarReferenceBitForBit) {
   for (const int taps : {3, 9, 13, 17, 25}) {
     std::vector<float> kernel(static_cast<size_t>(taps));
     for (float& k : kernel) k = unit(rng) / float(taps);
-    for (const int w : {1, 7, 8, 15, 16, 17, 33, 3072}) {
+    for (const int w : {1, 7, 8, 15, 16, 17, 33, 47, 3072, 3079}) {
       std::vector<std::vector<float>> data;
       std::vector<const float*> rows;
       for (int k = 0; k < taps; ++k) data.push_back(TestRow(rng, w));
