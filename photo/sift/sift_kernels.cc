@@ -35,6 +35,7 @@ typedef float Floats __attribute__((vector_size(kLanes * sizeof(float))));
 typedef int32_t Ints __attribute__((vector_size(kLanes * sizeof(int32_t))));
 typedef float Floats4 __attribute__((vector_size(4 * sizeof(float))));
 typedef double Doubles4 __attribute__((vector_size(4 * sizeof(double))));
+typedef int64_t Longs4 __attribute__((vector_size(4 * sizeof(int64_t))));
 
 CWLOC_VECTOR_INLINE Floats Load(const float* p) {
   Floats v;
@@ -45,19 +46,19 @@ CWLOC_VECTOR_INLINE void Store(float* p, Floats v) { std::memcpy(p, &v, sizeof(v
 CWLOC_VECTOR_INLINE Floats Splat(float x) { return Floats{} + x; }
 CWLOC_VECTOR_INLINE void Store(int32_t* p, Ints v) { std::memcpy(p, &v, sizeof(v)); }
 
-// Lanes 4 * half .. 4 * half + 3 as doubles, and back.
+// Lanes 4 * half .. 4 * half + 3 as doubles, and back. Shuffles, not copies through memory:
+// two 16-byte stores read back as one 32-byte load stall store forwarding.
+CWLOC_VECTOR_INLINE Floats4 Half(Floats v, int half) {
+  return half == 0 ? __builtin_shufflevector(v, v, 0, 1, 2, 3)
+                   : __builtin_shufflevector(v, v, 4, 5, 6, 7);
+}
 CWLOC_VECTOR_INLINE Doubles4 Widen(Floats v, int half) {
-  Floats4 part;
-  std::memcpy(&part, reinterpret_cast<const float*>(&v) + 4 * half, sizeof(part));
-  return __builtin_convertvector(part, Doubles4);
+  return __builtin_convertvector(Half(v, half), Doubles4);
 }
 CWLOC_VECTOR_INLINE Floats Narrow(Doubles4 low, Doubles4 high) {
   const Floats4 a = __builtin_convertvector(low, Floats4),
                 b = __builtin_convertvector(high, Floats4);
-  Floats v;
-  std::memcpy(&v, &a, sizeof(a));
-  std::memcpy(reinterpret_cast<float*>(&v) + 4, &b, sizeof(b));
-  return v;
+  return __builtin_shufflevector(a, b, 0, 1, 2, 3, 4, 5, 6, 7);
 }
 // vl_floor_f: truncation, one less for a negative non-integer.
 CWLOC_VECTOR_INLINE Ints Floor(Floats v) {
@@ -295,19 +296,13 @@ void DescribeSamples(const DescriptorRow& row, const float* mod, const float* an
     for (int half = 0; half < 2; ++half) {
       const Doubles4 e = Widen(r2, half) / (2.0 * kWindowSigma * kWindowSigma);
       const Doubles4 scaled = e * (FastExpn::kSize / FastExpn::kMax);
-      Doubles4 lo, hi, frac;
-      for (int l = 0; l < 4; ++l) {
-        // Outside the table (e > 25, or a sample outside the window) the value is unused.
-        const int i = e[l] >= FastExpn::kMax ? 0 : int(scaled[l]);
-        lo[l] = table[i];
-        hi[l] = table[i + 1];
-        frac[l] = scaled[l] - i;
-      }
-      const Doubles4 value = lo + frac * (hi - lo);
-      win_half[half] = value;
-      for (int l = 0; l < 4; ++l) {
-        if (e[l] > FastExpn::kMax) win_half[half][l] = 0.0;
-      }
+      // Outside the table (e > 25, or a sample outside the window) the value is unused.
+      const Longs4 index = __builtin_convertvector(scaled, Longs4) & ~Longs4(e >= FastExpn::kMax);
+      const Doubles4 lo = {table[index[0]], table[index[1]], table[index[2]], table[index[3]]};
+      const Doubles4 hi = {table[index[0] + 1], table[index[1] + 1], table[index[2] + 1],
+                           table[index[3] + 1]};
+      const Doubles4 value = lo + (scaled - __builtin_convertvector(index, Doubles4)) * (hi - lo);
+      win_half[half] = Doubles4(Longs4(value) & ~Longs4(e > FastExpn::kMax));
     }
     const Floats win = Narrow(win_half[0], win_half[1]);
     const Ints binx = Floor(Narrow(Widen(nx, 0) - 0.5, Widen(nx, 1) - 0.5));
@@ -317,12 +312,10 @@ void DescribeSamples(const DescriptorRow& row, const float* mod, const float* an
     Store(out->biny + p, biny);
     Store(out->bint + p, bint);
     auto offset = [](Floats v, Ints bin, int half) {  // v - (bin + 0.5), in double
-      Floats4 part;
-      std::memcpy(&part, reinterpret_cast<const float*>(&v) + 4 * half, sizeof(part));
       typedef int32_t Ints4 __attribute__((vector_size(16)));
-      Ints4 b;
-      std::memcpy(&b, reinterpret_cast<const int32_t*>(&bin) + 4 * half, sizeof(b));
-      return __builtin_convertvector(part, Doubles4) - (__builtin_convertvector(b, Doubles4) + 0.5);
+      const Ints4 b = half == 0 ? __builtin_shufflevector(bin, bin, 0, 1, 2, 3)
+                                : __builtin_shufflevector(bin, bin, 4, 5, 6, 7);
+      return Widen(v, half) - (__builtin_convertvector(b, Doubles4) + 0.5);
     };
     const Floats rbinx = Narrow(offset(nx, binx, 0), offset(nx, binx, 1));
     const Floats rbiny = Narrow(offset(ny, biny, 0), offset(ny, biny, 1));
