@@ -259,17 +259,16 @@ void DetectLevel(const Plane* gauss[4], int s, int o, const Geometry& g, double 
   pool.For(row_keys.size(), [&](size_t task) {
     const int y0 = rows.lo + int(task);
     std::vector<Key>& out = row_keys[task];
-    thread_local std::vector<float> mid;
     thread_local std::vector<int32_t> candidates;
-    mid.resize(size_t(w));
     candidates.resize(size_t(w));
-    const float* below = gauss[1]->Row(y0);
-    const float* above = gauss[2]->Row(y0);
-    for (int x = 0; x < w; ++x) mid[size_t(x)] = above[x] - below[x];
-    const int num_candidates = FindAtLeast(mid.data(), 1, w - 1, prefilter, candidates.data());
+    const float* around[4][3];  // levels s - 1 .. s + 2, rows y0 - 1 .. y0 + 1
+    for (int t = 0; t < 4; ++t) {
+      for (int r = 0; r < 3; ++r) around[t][r] = gauss[t]->Row(y0 - 1 + r);
+    }
+    const int num_candidates = FindExtremumCandidates(around, w, prefilter, candidates.data());
     for (int c = 0; c < num_candidates; ++c) {
       const int x0 = candidates[size_t(c)];
-      const float v = mid[size_t(x0)];
+      const float v = around[2][1][x0] - around[1][1][x0];
       const ptrdiff_t centre = ptrdiff_t(y0) * yo + x0;
       auto extremum = [&](auto cmp) {
         for (int ds : {0, 1, -1}) {

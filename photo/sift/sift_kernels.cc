@@ -8,6 +8,7 @@ extern "C" {
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <limits>
 
 // The helpers pass 32-byte vectors by value; they are always inlined into the kernels, and
 // into the AVX2 clones with them, so no call crosses the ABI GCC warns about. Clang makes that
@@ -338,27 +339,77 @@ void DescribeSamples(const DescriptorRow& row, const float* mod, const float* an
 #endif
 }
 
-CWLOC_SIFT_CLONES
-int FindAtLeast(const float* row, int begin, int end, float threshold, int32_t* out) {
+int FindExtremumCandidatesScalar(const float* const gauss[4][3], int w, float threshold,
+                                 int32_t* out) {
   int count = 0;
-  int x = begin;
-#if CWLOC_SIFT_VECTORS
-  for (; x + kLanes <= end; x += kLanes) {
-    const Ints hit = Abs(Load(row + x)) >= threshold;
-    uint64_t words[sizeof(hit) / sizeof(uint64_t)];
-    std::memcpy(words, &hit, sizeof(hit));
-    uint64_t any = 0;
-    for (const uint64_t word : words) any |= word;
-    if (any == 0) continue;
+  for (int x = 1; x < w - 1; ++x) {
+    const float v = gauss[2][1][x] - gauss[1][1][x];
+    if (!(std::abs(v) >= threshold)) continue;
+    bool above = true, below = true;
+    for (int l = 0; l < 3; ++l) {
+      for (int r = 0; r < 3; ++r) {
+        for (int dx = -1; dx <= 1; ++dx) {
+          if (l == 1 && r == 1 && dx == 0) continue;
+          const float n = gauss[l + 1][r][x + dx] - gauss[l][r][x + dx];
+          above = above && v > n;
+          below = below && v < n;
+        }
+      }
+    }
+    if (above || below) out[count++] = x;
+  }
+  return count;
+}
+
+CWLOC_SIFT_CLONES
+int FindExtremumCandidates(const float* const gauss[4][3], int w, float threshold, int32_t* out) {
+#if !CWLOC_SIFT_VECTORS
+  return FindExtremumCandidatesScalar(gauss, w, threshold, out);
+#else
+  int count = 0;
+  int x = 1;
+  auto any = [](Ints mask) {
+    uint64_t words[sizeof(mask) / sizeof(uint64_t)];
+    std::memcpy(words, &mask, sizeof(mask));
+    uint64_t bits = 0;
+    for (const uint64_t word : words) bits |= word;
+    return bits != 0;
+  };
+  for (; x + kLanes <= w - 1; x += kLanes) {
+    const Floats v = Load(gauss[2][1] + x) - Load(gauss[1][1] + x);
+    const Ints strong = Abs(v) >= threshold;
+    if (!any(strong)) continue;
+    // The largest and smallest of the 26 neighbours: v above (below) all of them is v above
+    // (below) the largest (smallest), exactly, for the finite values DoG levels hold.
+    Floats hi = Splat(-std::numeric_limits<float>::infinity());
+    Floats lo = Splat(std::numeric_limits<float>::infinity());
+    for (int l = 0; l < 3; ++l) {
+      for (int r = 0; r < 3; ++r) {
+        for (int dx = -1; dx <= 1; ++dx) {
+          if (l == 1 && r == 1 && dx == 0) continue;
+          const Floats n = Load(gauss[l + 1][r] + x + dx) - Load(gauss[l][r] + x + dx);
+          hi = Select(n > hi, n, hi);
+          lo = Select(n < lo, n, lo);
+        }
+      }
+    }
+    const Ints hit = strong & ((v > hi) | (v < lo));
+    if (!any(hit)) continue;
     for (int l = 0; l < kLanes; ++l) {
       if (hit[l]) out[count++] = x + l;
     }
   }
-#endif
-  for (; x < end; ++x) {
-    if (std::abs(row[x]) >= threshold) out[count++] = x;
+  for (; x < w - 1; ++x) {
+    const float* const rows[4][3] = {
+        {gauss[0][0] + x - 1, gauss[0][1] + x - 1, gauss[0][2] + x - 1},
+        {gauss[1][0] + x - 1, gauss[1][1] + x - 1, gauss[1][2] + x - 1},
+        {gauss[2][0] + x - 1, gauss[2][1] + x - 1, gauss[2][2] + x - 1},
+        {gauss[3][0] + x - 1, gauss[3][1] + x - 1, gauss[3][2] + x - 1}};
+    int32_t found;
+    if (FindExtremumCandidatesScalar(rows, 3, threshold, &found) == 1) out[count++] = x;
   }
   return count;
+#endif
 }
 
 }  // namespace cwloc::sift_internal

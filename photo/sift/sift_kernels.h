@@ -49,9 +49,14 @@ void GradientRow(const float* up, const float* src, const float* down, int w, fl
 void GradientRowScalar(const float* up, const float* src, const float* down, int w, float* mod,
                        float* angle);
 
-// The x in [begin, end) with |row[x]| >= threshold (false for NaN), ascending, into `out`;
-// returns how many. The DoG scan's prefilter: most pixels fail it.
-int FindAtLeast(const float* row, int begin, int end, float threshold, int32_t* out);
+// The DoG scan's candidates on one row: the x in [1, w - 1), ascending, into `out` (returns
+// how many), whose DoG value v passes |v| >= threshold and is above all 26 neighbours or below
+// all of them. gauss[t][r] is Gaussian level t (0..3) on row r (0..2); DoG level l on row r is
+// gauss[l + 1][r] - gauss[l][r] in float, and v is level 1, row 1. VLFeat's extremum test
+// implies this one, so the candidates hold every extremum VLFeat finds; most pixels fail it.
+int FindExtremumCandidates(const float* const gauss[4][3], int w, float threshold, int32_t* out);
+int FindExtremumCandidatesScalar(const float* const gauss[4][3], int w, float threshold,
+                                 int32_t* out);
 
 // One pass of VLFeat's separable Gaussian (vl_imconvcol_vf's order): out[x] is the sum over
 // taps k = 0, 1, ... of rows[k][x] * kernel[k], added from the first tap to the last.

@@ -75,24 +75,36 @@ TEST(SiftKernels, GradientPixelsAtTheFastSqrtThresholdAndEveryDirection) {
   }
 }
 
-TEST(SiftKernels, FindAtLeastFindsExactlyThePixelsThePrefilterPasses) {
+// Gaussian rows whose DoG values straddle the threshold, with ties: plateaus (equal
+// neighbours never make an extremum) and values exactly at the threshold.
+TEST(SiftKernels, FindExtremumCandidatesEqualsTheScalarReference) {
   std::mt19937 rng(17);
-  std::normal_distribution<float> dog(0.0f, 0.01f);
+  std::normal_distribution<float> step(0.0f, 0.01f);
+  std::uniform_real_distribution<float> unit(0.2f, 0.8f);
   const float threshold = 0.0053f;
-  for (const int w : {3, 9, 16, 17, 100, 3072}) {
-    std::vector<float> row(static_cast<size_t>(w));
-    for (float& v : row) v = dog(rng);
-    row[size_t(w / 2)] = threshold;  // the boundary passes, on both sides of zero
-    row[size_t(w - 1)] = -threshold;
-    row[0] = std::nanf("");
-    for (const int begin : {0, 1}) {
-      std::vector<int32_t> found(static_cast<size_t>(w)), expected;
-      for (int x = begin; x < w - 1; ++x) {
-        if (std::abs(row[size_t(x)]) >= threshold) expected.push_back(x);
+  for (const int w : {3, 9, 10, 16, 17, 100, 3072, 3079}) {
+    std::vector<float> data[4][3];
+    for (int r = 0; r < 3; ++r) {
+      for (int t = 0; t < 4; ++t) data[t][r].resize(size_t(w));
+      for (int x = 0; x < w; ++x) {
+        float g = unit(rng);
+        for (int t = 0; t < 4; ++t) {
+          data[t][r][size_t(x)] = g;
+          g += (x % 11 == 5) ? 0.0f : step(rng);  // a flat DoG column now and then
+        }
       }
-      found.resize(size_t(FindAtLeast(row.data(), begin, w - 1, threshold, found.data())));
-      EXPECT_EQ(found, expected) << "w " << w;
-      EXPECT_FALSE(expected.empty());
+    }
+    data[2][1][size_t(w / 2)] = data[1][1][size_t(w / 2)] + threshold;
+    const float* rows[4][3];
+    for (int t = 0; t < 4; ++t) {
+      for (int r = 0; r < 3; ++r) rows[t][r] = data[t][r].data();
+    }
+    std::vector<int32_t> found(static_cast<size_t>(w)), expected(static_cast<size_t>(w));
+    found.resize(size_t(FindExtremumCandidates(rows, w, threshold, found.data())));
+    expected.resize(size_t(FindExtremumCandidatesScalar(rows, w, threshold, expected.data())));
+    EXPECT_EQ(found, expected) << "w " << w;
+    if (w >= 100) {
+      EXPECT_GT(expected.size(), 5u) << "w " << w;
     }
   }
 }
