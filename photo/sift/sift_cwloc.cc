@@ -673,14 +673,16 @@ void DetectAll(const GreyImage& image, const Geometry& g, const SiftOptions& opt
   }
 }
 
-// Orientations and descriptors of keys[begin, end), all in octave `source.o`: the octave's
-// levels are made again, band by band, with the gradient of each level's rows its keypoints
-// read. Key j's orientations go to angles[j - begin] and its descriptors to
-// descriptors + (j - begin) * slots * 128.
+// A keypoint's orientations (VLFeat finds up to four).
 struct KeyAngles {
   double angle[4];
   int count;
 };
+
+// Orientations and descriptors of keys[begin, end), all in octave `source.o`: the octave's
+// levels are made again, band by band, with the gradient of each level's rows its keypoints
+// read. Key j's orientations go to angles[j - begin] and its descriptors (the first `slots`
+// orientations') to descriptors + (j - begin) * slots * 128.
 void DescribeOctave(const std::vector<Key>& keys, size_t begin, size_t end,
                     const OctaveSource& source, const Geometry& g, const SiftOptions& options,
                     WorkerPool& pool, int slots, KeyAngles* angles, uint8_t* descriptors) {
