@@ -71,6 +71,8 @@ struct GpsFix {
 struct PhotoInfo {
   uint32_t extraction_width = 0;  // the image SIFT ran on, after --max-image-size
   uint32_t extraction_height = 0;
+  int first_octave = -1;          // SIFT's, as --first-octave set it
+  uint32_t max_features = 0;      // SIFT's cap, as --max-features set it
   double extraction_seconds = 0;  // decoding, EXIF, resizing and SIFT
   std::optional<GpsFix> exif_gps;
 };

@@ -109,6 +109,14 @@ int RunCommand(const std::string& command, std::string* output) {
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
+int ValidateJson(const std::string& schema, const std::filesystem::path& file, bool lines,
+                 std::string* output) {
+  return RunCommand("/usr/bin/python3 " + Quote(SourceDir() / "tools" / "validate_json.py") + " " +
+                        Quote(SourceDir() / "schemas" / schema) + " " + Quote(file) +
+                        (lines ? " --lines" : ""),
+                    output);
+}
+
 std::string UnderMemoryLimit(uint64_t kib, const std::string& command) {
 #if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
   return command;

@@ -69,6 +69,11 @@ std::string Quote(const std::filesystem::path& path);
 // Runs a shell command, captures stdout+stderr, returns the exit code.
 int RunCommand(const std::string& command, std::string* output);
 
+// tools/validate_json.py's exit code for `file` against schemas/`schema` (JSON lines when
+// `lines`); its report in *output.
+int ValidateJson(const std::string& schema, const std::filesystem::path& file, bool lines,
+                 std::string* output);
+
 // `command` for RunCommand under `ulimit -v kib` (the address space a small device leaves a
 // tool). Sanitizer builds reserve terabytes of address space, so there it runs without one.
 std::string UnderMemoryLimit(uint64_t kib, const std::string& command);

@@ -75,7 +75,12 @@ void ExtractPhotoFeatures(GreyImage image, const PhotoOptions& options, Query* q
   query->descriptors = features.descriptors;
   if (query->NumFeatures() == 0)
     throw InputError(query->Source() + ": no SIFT features found in the photo");
-  query->photo = PhotoInfo{size.width, size.height, time.Seconds(), std::nullopt};
+  query->photo = PhotoInfo{size.width,
+                           size.height,
+                           options.sift.first_octave,
+                           uint32_t(options.sift.max_num_features),
+                           time.Seconds(),
+                           std::nullopt};
 }
 
 }  // namespace cwloc

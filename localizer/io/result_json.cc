@@ -99,7 +99,9 @@ nlohmann::ordered_json ResultToJson(const LocalizationResult& result,
   const StageTimes& t = result.times;
   if (result.photo) {
     out["photo"] = {{"extraction_width", result.photo->extraction_width},
-                    {"extraction_height", result.photo->extraction_height}};
+                    {"extraction_height", result.photo->extraction_height},
+                    {"first_octave", result.photo->first_octave},
+                    {"max_features", result.photo->max_features}};
   }
   out["times_ms"] = {{"extraction", t.extraction * 1e3},
                      {"forward_knn", t.forward_knn * 1e3},

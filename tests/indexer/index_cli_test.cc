@@ -36,12 +36,8 @@ class IndexCliTest : public test::IndexerFixture {
   // `info --json` output against schemas/index-info.schema.json.
   void ExpectValidInfoJson(const std::string& output) const {
     std::ofstream(dir_ / "info.json") << output;
-    const auto schema = test::SourceDir() / "schemas" / "index-info.schema.json";
-    const auto validator = test::SourceDir() / "tools" / "validate_json.py";
     std::string validation;
-    EXPECT_EQ(test::RunCommand("/usr/bin/python3 " + validator.string() + " " + schema.string() +
-                                   " " + (dir_ / "info.json").string(),
-                               &validation),
+    EXPECT_EQ(test::ValidateJson("index-info.schema.json", dir_ / "info.json", false, &validation),
               0)
         << validation;
   }

@@ -95,13 +95,7 @@ class GeoLocalizationTest : public testing::Test {
   static void ExpectValid(const std::string& schema, const std::filesystem::path& file,
                           bool lines) {
     std::string output;
-    EXPECT_EQ(test::RunCommand("/usr/bin/python3 " +
-                                   (test::SourceDir() / "tools" / "validate_json.py").string() +
-                                   " " + (test::SourceDir() / "schemas" / schema).string() + " " +
-                                   file.string() + (lines ? " --lines" : ""),
-                               &output),
-              0)
-        << output;
+    EXPECT_EQ(test::ValidateJson(schema, file, lines, &output), 0) << output;
   }
 
   static inline test::TempDir* dir_ = nullptr;

@@ -36,11 +36,7 @@ std::vector<nlohmann::json> JsonLines(const std::string& text) {
 }
 
 int ValidateAgainstSchema(const std::filesystem::path& json_lines, std::string* output) {
-  return test::RunCommand(
-      "/usr/bin/python3 " + (test::SourceDir() / "tools" / "validate_json.py").string() + " " +
-          (test::SourceDir() / "schemas" / "localization-result.schema.json").string() + " " +
-          json_lines.string() + " --lines",
-      output);
+  return test::ValidateJson("localization-result.schema.json", json_lines, true, output);
 }
 
 class LocalizeCliTest : public test::IndexerFixture {

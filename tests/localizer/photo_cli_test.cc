@@ -225,7 +225,16 @@ TEST_F(SharedPhotoTest, HerzJesuFastModeSkipsTheDoubledOctave) {
     const size_t features = compatible[i]["matches"]["features"];
     EXPECT_LT(fast_features, features * 3 / 4) << fast[i]["name"];
     EXPECT_GT(fast_features, 1000u) << fast[i]["name"];
+    // The record says which SIFT made its features.
+    EXPECT_EQ(fast[i]["photo"]["first_octave"], 0) << fast[i]["name"];
+    EXPECT_EQ(compatible[i]["photo"]["first_octave"], -1) << fast[i]["name"];
+    EXPECT_EQ(fast[i]["photo"]["max_features"], 6000) << fast[i]["name"];
   }
+  std::string validation;
+  EXPECT_EQ(test::ValidateJson("localization-result.schema.json", dir_ / "photos.jsonl", true,
+                               &validation),
+            0)
+      << validation;
   EXPECT_LE(MedianDistance(), 0.01);
 }
 

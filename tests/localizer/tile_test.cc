@@ -175,12 +175,7 @@ TEST_P(TileTest, ATileOfListedImagesHoldsTheirClusters) {
       << output;
   ASSERT_EQ(Index("info --json " + tile.string(), &output), 0) << output;
   std::ofstream(*dir_ / "info.json") << output;
-  EXPECT_EQ(test::RunCommand(
-                "/usr/bin/python3 " + (test::SourceDir() / "tools" / "validate_json.py").string() +
-                    " " + (test::SourceDir() / "schemas" / "index-info.schema.json").string() +
-                    " " + (*dir_ / "info.json").string(),
-                &output),
-            0)
+  EXPECT_EQ(test::ValidateJson("index-info.schema.json", *dir_ / "info.json", false, &output), 0)
       << output;
 }
 

@@ -32,11 +32,7 @@ int EvalStdout(const std::string& args, const fs::path& out_file) {
 }
 
 int ValidateReport(const fs::path& report, std::string* output) {
-  const fs::path source = cwloc::test::SourceDir();
-  return cwloc::test::RunCommand(
-      "/usr/bin/python3 " + Quote(source / "tools" / "validate_json.py") + " " +
-          Quote(source / "schemas" / "eval-report.schema.json") + " " + Quote(report),
-      output);
+  return cwloc::test::ValidateJson("eval-report.schema.json", report, false, output);
 }
 
 nlohmann::json ReadJson(const fs::path& path) { return nlohmann::json::parse(std::ifstream(path)); }

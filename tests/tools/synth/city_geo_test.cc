@@ -602,12 +602,8 @@ TEST(SynthGeoCliTest, GeoRunWritesTheFilesAndItsSummaryValidates) {
   EXPECT_EQ(summary["geo"]["prior_gravity_error_deg"], 2.0);
   const size_t images = summary["counts"]["mapping_images"];
   EXPECT_EQ(summary["geo"]["gps_outlier_images"], std::lround(0.1 * double(images)));
-  const fs::path schema = test::SourceDir() / "schemas" / "synth-summary.schema.json";
-  const fs::path validator = test::SourceDir() / "tools" / "validate_json.py";
   std::string validation;
-  EXPECT_EQ(test::RunCommand("/usr/bin/python3 " + validator.string() + " " + schema.string() +
-                                 " " + (out / "stats.json").string(),
-                             &validation),
+  EXPECT_EQ(test::ValidateJson("synth-summary.schema.json", out / "stats.json", false, &validation),
             0)
       << validation;
   for (const char* file :
