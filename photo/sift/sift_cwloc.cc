@@ -384,7 +384,8 @@ void Gradient(const Plane& level, Rows rows, GradientPlanes* grad, WorkerPool& p
 
 // The window radii (pixels of the keypoint's octave) of VLFeat's orientation histogram and
 // descriptor.
-int OrientationRadius(double sigma) { return std::max(int(std::floor(3.0 * 1.5 * sigma)), 1); }
+// VLFeat's floor(3 * sigmaw), sigmaw = 1.5 sigma rounded first.
+int OrientationRadius(double sigma) { return std::max(int(std::floor(3.0 * (1.5 * sigma))), 1); }
 double DescriptorBinSize(double sigma) { return kMagnif * sigma + VL_EPSILON_D; }
 int DescriptorRadius(double sigma) {
   return int(
@@ -542,7 +543,7 @@ void Descriptor(const Key& k, double angle0, const GradientPlanes& grad, float* 
 // One octave's Gaussian levels, computed in bands of rows that slide down the image, each row
 // once: level s_min from the octave's source (the photo, doubled or not, or the octave below's
 // level downsampled), smoothed by base_sigma when that is not 0; each next level smoothed from
-// the one before. A band of the doubled photo is 2 x 128 + ~100 rows, not the 2048 of a whole
+// the one before. A band of the doubled photo is 128 + ~100 rows, not the 2048 of a whole
 // level of a 1536 x 1024 photo.
 class OctaveLevels {
  public:

@@ -35,6 +35,7 @@ constexpr int kLanes = 8;
 typedef float Floats __attribute__((vector_size(kLanes * sizeof(float))));
 typedef int32_t Ints __attribute__((vector_size(kLanes * sizeof(int32_t))));
 typedef float Floats4 __attribute__((vector_size(4 * sizeof(float))));
+typedef int32_t Ints4 __attribute__((vector_size(4 * sizeof(int32_t))));
 typedef double Doubles4 __attribute__((vector_size(4 * sizeof(double))));
 typedef int64_t Longs4 __attribute__((vector_size(4 * sizeof(int64_t))));
 
@@ -50,6 +51,10 @@ CWLOC_VECTOR_INLINE void Store(int32_t* p, Ints v) { std::memcpy(p, &v, sizeof(v
 // Lanes 4 * half .. 4 * half + 3 as doubles, and back. Shuffles, not copies through memory:
 // two 16-byte stores read back as one 32-byte load stall store forwarding.
 CWLOC_VECTOR_INLINE Floats4 Half(Floats v, int half) {
+  return half == 0 ? __builtin_shufflevector(v, v, 0, 1, 2, 3)
+                   : __builtin_shufflevector(v, v, 4, 5, 6, 7);
+}
+CWLOC_VECTOR_INLINE Ints4 Half(Ints v, int half) {
   return half == 0 ? __builtin_shufflevector(v, v, 0, 1, 2, 3)
                    : __builtin_shufflevector(v, v, 4, 5, 6, 7);
 }
@@ -313,10 +318,7 @@ void DescribeSamples(const DescriptorRow& row, const float* mod, const float* an
     Store(out->biny + p, biny);
     Store(out->bint + p, bint);
     auto offset = [](Floats v, Ints bin, int half) {  // v - (bin + 0.5), in double
-      typedef int32_t Ints4 __attribute__((vector_size(16)));
-      const Ints4 b = half == 0 ? __builtin_shufflevector(bin, bin, 0, 1, 2, 3)
-                                : __builtin_shufflevector(bin, bin, 4, 5, 6, 7);
-      return Widen(v, half) - (__builtin_convertvector(b, Doubles4) + 0.5);
+      return Widen(v, half) - (__builtin_convertvector(Half(bin, half), Doubles4) + 0.5);
     };
     const Floats rbinx = Narrow(offset(nx, binx, 0), offset(nx, binx, 1));
     const Floats rbiny = Narrow(offset(ny, biny, 0), offset(ny, biny, 1));
