@@ -340,4 +340,42 @@ cwloc_status cwloc_result_gravity_error(const cwloc_result* result, double* degr
   return CWLOC_OK;
 }
 
+cwloc_status cwloc_result_covariance(const cwloc_result* result, double pose[36],
+                                     double* position_radius95) {
+  if (result == nullptr) return Fail(CWLOC_ERROR_INVALID_ARGUMENT, "result is NULL");
+  const auto& covariance = result->result.covariance;
+  if (!covariance) {
+    return NotAvailable("covariance", result->result.success
+                                          ? "the pose's refinement problem is singular"
+                                          : "the query was not localized");
+  }
+  if (pose != nullptr) std::copy(covariance->pose.begin(), covariance->pose.end(), pose);
+  if (position_radius95 != nullptr) *position_radius95 = covariance->position_radius95;
+  last_error.clear();
+  return CWLOC_OK;
+}
+
+cwloc_status cwloc_result_enu_covariance(const cwloc_result* result, double enu_position[9],
+                                         double* position_radius95_m) {
+  if (result == nullptr) return Fail(CWLOC_ERROR_INVALID_ARGUMENT, "result is NULL");
+  if (!result->georeferenced)
+    return NotAvailable("ENU covariance", "the index is not georeferenced");
+  const auto& covariance = result->result.covariance;
+  if (!covariance || !covariance->enu_position) {
+    return NotAvailable("ENU covariance", result->result.success
+                                              ? "the pose's refinement problem is singular"
+                                              : "the query was not localized");
+  }
+  if (enu_position != nullptr) {
+    std::copy(covariance->enu_position->begin(), covariance->enu_position->end(), enu_position);
+  }
+  if (position_radius95_m != nullptr) *position_radius95_m = *covariance->position_radius95_m;
+  last_error.clear();
+  return CWLOC_OK;
+}
+
+const char* cwloc_result_json(const cwloc_result* result) {
+  return result == nullptr ? "" : result->result.json.c_str();
+}
+
 }  // extern "C"

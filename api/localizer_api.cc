@@ -13,6 +13,7 @@
 #include "localizer/io/option_table.h"
 #include "localizer/io/photo_query.h"
 #include "localizer/io/query_assembly.h"
+#include "localizer/io/result_json.h"
 #include "localizer/localizer.h"
 
 namespace cwloc::api {
@@ -113,8 +114,10 @@ PriorInputs ToPriorInputs(const Options& options) {
   return priors;
 }
 
-Result ToResult(const LocalizationResult& r, const Query& query, const Index& index) {
+Result ToResult(const LocalizationResult& r, const Query& query, const Index& index,
+                const LocalizerOptions& options) {
   Result result;
+  result.json = ResultToJson(r, options).dump();
   result.success = r.success;
   result.failure_reason = r.failure_reason;
   result.rotation = r.rotation;
@@ -147,6 +150,17 @@ Result ToResult(const LocalizationResult& r, const Query& query, const Index& in
     result.position_prior =
         PositionPrior{p->latitude_deg, p->longitude_deg, p->height_m, p->radius_m};
   result.clusters_in_radius = r.priors.clusters_in_radius;
+  if (const auto& c = r.covariance) {
+    PoseCovariance& covariance = result.covariance.emplace();
+    Eigen::Map<Eigen::Matrix<double, 6, 6, Eigen::RowMajor>>(covariance.pose.data()) = c->pose;
+    covariance.position_radius95 = Radius95(c->Position());
+    covariance.focal_std_px = c->focal_std_px;
+    if (const auto& enu = r.enu_position_covariance) {
+      Eigen::Map<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(
+          covariance.enu_position.emplace().data()) = *enu;
+      covariance.position_radius95_m = Radius95(*enu);
+    }
+  }
   result.gravity = r.priors.gravity;
   result.gravity_error_deg = r.priors.gravity_error_deg;
   return result;
@@ -215,7 +229,8 @@ struct Localizer::Impl {
   // A complete query.
   Result Localize(const Query& query, const CallOptions& call) const {
     ValidateOrThrowInvalidArgument([&] { localizer.ValidatePriors(query); });
-    return ToResult(localizer.Localize(query, call.options.localizer), query, index);
+    return ToResult(localizer.Localize(query, call.options.localizer), query, index,
+                    call.options.localizer);
   }
 
   std::string path;

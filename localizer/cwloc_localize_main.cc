@@ -169,6 +169,20 @@ std::string EstimatedFocalText(const LocalizationResult& result) {
   return text;
 }
 
+// " position +- 0.8 m (95 %)," in metres for a georeferenced index, else in model units.
+std::string PositionRadiusText(const LocalizationResult& result) {
+  if (!result.covariance) return "";
+  char text[96];
+  if (result.enu_position_covariance) {
+    std::snprintf(text, sizeof(text), " position +- %.3g m (95 %%),",
+                  Radius95(*result.enu_position_covariance));
+  } else {
+    std::snprintf(text, sizeof(text), " position +- %.3g model units (95 %%),",
+                  Radius95(result.covariance->Position()));
+  }
+  return text;
+}
+
 // Writes each finished query's record: JSON lines to --output (stdout by default), a pose line
 // to --poses, a readable line to stdout when the JSON goes to a file. Files get whole records
 // only and keep their previous content until the first checkpoint (CheckpointedFile). The first
@@ -188,9 +202,10 @@ class ResultSink {
     // With the JSON in a file, stdout gets a readable line per query.
     if (json_file_ && !cli_.quiet) {
       if (result.success) {
-        std::printf("%s: localized, %u inliers / %u correspondences,%s %.1f ms\n",
+        std::printf("%s: localized, %u inliers / %u correspondences,%s%s %.1f ms\n",
                     result.name.c_str(), result.num_inliers, result.correspondences,
-                    EstimatedFocalText(result).c_str(), result.times.total * 1e3);
+                    PositionRadiusText(result).c_str(), EstimatedFocalText(result).c_str(),
+                    result.times.total * 1e3);
       } else {
         std::printf("%s: not localized: %s\n", result.name.c_str(), result.failure_reason.c_str());
       }

@@ -35,6 +35,13 @@ Eigen::Vector3d IndexGeo::GravityInModel(const std::optional<PositionPrior>& pri
   return frame_.GravityInModel(at);
 }
 
+Eigen::Matrix3d IndexGeo::LocalEnuCovariance(const Eigen::Vector3d& model_point,
+                                             const Eigen::Matrix3d& model_covariance) const {
+  const Eigen::Matrix3d enu_from_model =
+      frame_.georeference().scale * frame_.LocalEnuFromModel(model_point);
+  return enu_from_model * model_covariance * enu_from_model.transpose();
+}
+
 GeoPose IndexGeo::PoseOnGlobe(const Eigen::Quaterniond& cam_from_model_rotation,
                               const Eigen::Vector3d& center_model) const {
   GeoPose pose;

@@ -31,6 +31,10 @@ class IndexGeo {
   // position when there is one, else at the ENU origin.
   Eigen::Vector3d GravityInModel(const std::optional<PositionPrior>& prior) const;
 
+  // A covariance of a model point, in square metres in the local east-north-up frame there.
+  Eigen::Matrix3d LocalEnuCovariance(const Eigen::Vector3d& model_point,
+                                     const Eigen::Matrix3d& model_covariance) const;
+
   GeoPose PoseOnGlobe(const Eigen::Quaterniond& cam_from_model_rotation,
                       const Eigen::Vector3d& center_model) const;
 

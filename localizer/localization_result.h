@@ -82,6 +82,10 @@ struct LocalizationResult {
   std::vector<InlierMatch> inliers;  // on success, in feature order
   std::vector<RankedImage> ranked_images;
   std::optional<GeoPose> geo;  // on success with a georeferenced index
+  // On success (refine_pose.h), and with a georeferenced index the centre's covariance in
+  // square metres in the local east-north-up frame at the camera.
+  std::optional<PoseCovariance> covariance;
+  std::optional<Eigen::Matrix3d> enu_position_covariance;
   PriorUse priors;
   std::optional<PhotoInfo> photo;
   StageTimes times;

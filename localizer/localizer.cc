@@ -368,6 +368,11 @@ LocalizationResult Localizer::Localize(const Query& query, const LocalizerOption
     const Eigen::Vector3d center = p.Center();
     result.center = {center.x(), center.y(), center.z()};
     if (geo_) result.geo = geo_->PoseOnGlobe(p.rotation, center);
+    result.covariance = pose.covariance;
+    if (geo_ && pose.covariance) {
+      result.enu_position_covariance =
+          geo_->LocalEnuCovariance(center, pose.covariance->Position());
+    }
     if (query.gravity) priors.gravity_error_deg = pose.gravity_angle_deg;
     for (size_t i = 0; i < pose.inliers.size(); ++i) {
       if (!pose.inliers[i]) continue;

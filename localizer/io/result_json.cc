@@ -31,6 +31,33 @@ nlohmann::ordered_json OptionsToJson(const LocalizerOptions& options) {
           {"seed", options.seed}};
 }
 
+namespace {
+
+nlohmann::ordered_json Rows(const Eigen::MatrixXd& matrix) {
+  nlohmann::ordered_json rows = nlohmann::ordered_json::array();
+  for (Eigen::Index r = 0; r < matrix.rows(); ++r) {
+    nlohmann::ordered_json row = nlohmann::ordered_json::array();
+    for (Eigen::Index c = 0; c < matrix.cols(); ++c) row.push_back(matrix(r, c));
+    rows.push_back(std::move(row));
+  }
+  return rows;
+}
+
+nlohmann::ordered_json CovarianceToJson(const PoseCovariance& covariance,
+                                        const std::optional<Eigen::Matrix3d>& enu_position) {
+  nlohmann::ordered_json out;
+  out["pose"] = Rows(covariance.pose);
+  out["position_radius95"] = Radius95(covariance.Position());
+  if (covariance.focal_std_px) out["focal_std_px"] = *covariance.focal_std_px;
+  if (enu_position) {
+    out["enu_position"] = Rows(*enu_position);
+    out["position_radius95_m"] = Radius95(*enu_position);
+  }
+  return out;
+}
+
+}  // namespace
+
 nlohmann::ordered_json ResultToJson(const LocalizationResult& result,
                                     const LocalizerOptions& options) {
   nlohmann::ordered_json out;
@@ -54,6 +81,9 @@ nlohmann::ordered_json ResultToJson(const LocalizationResult& result,
         {"focal_std_px", coupling->focal_std_px},
         {"depth_std", coupling->depth_std},
         {"weakly_constrained", WeaklyConstrained(*coupling, result.camera.params.at(0))}};
+  }
+  if (const auto& covariance = result.covariance) {
+    out["covariance"] = CovarianceToJson(*covariance, result.enu_position_covariance);
   }
   if (result.geo) {
     const GeoPose& g = *result.geo;

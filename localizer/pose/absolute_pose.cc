@@ -232,19 +232,25 @@ void RefineUncalibrated(std::span<const Eigen::Vector2d> pixels,
   }
 }
 
-// After Finish: how well the refined focal length is told apart from the depth, on the final
-// inliers.
-void ReportFocalDepth(std::span<const Eigen::Vector2d> pixels,
-                      std::span<const Eigen::Vector3d> points3D, const AbsolutePoseOptions& options,
-                      const std::optional<GravityPrior>& gravity, AbsolutePoseResult* result) {
-  if (!result->refined || !result->success) return;
+// After Finish, on success: the pose's covariance on the final inliers under the final
+// refinement's problem and, for a refined uncalibrated camera, how well its focal length is told
+// apart from the depth.
+void ReportUncertainty(std::span<const Eigen::Vector2d> pixels,
+                       std::span<const Eigen::Vector3d> points3D,
+                       const PoseRefinementOptions& refinement, bool uncalibrated,
+                       AbsolutePoseResult* result) {
+  if (!result->success) return;
   std::vector<uint32_t> inliers;
   for (uint32_t i = 0; i < result->inliers.size(); ++i) {
     if (result->inliers[i]) inliers.push_back(i);
   }
-  result->focal_depth = FocalDepthUncertaintyAt(
-      pixels, points3D, inliers, UncalibratedRefinement(options, gravity), result->pose,
-      RadialCamera{result->focal_length_px, result->radial_distortion});
+  const RadialCamera camera{result->focal_length_px, result->radial_distortion};
+  result->covariance =
+      PoseCovarianceAt(pixels, points3D, inliers, refinement, result->pose, camera, uncalibrated);
+  if (uncalibrated && result->refined) {
+    result->focal_depth =
+        FocalDepthUncertaintyAt(pixels, points3D, inliers, refinement, result->pose, camera);
+  }
 }
 
 }  // namespace
@@ -316,13 +322,13 @@ AbsolutePoseResult EstimateAbsolutePose(std::span<const Eigen::Vector2d> normali
   // Errors in pixels from here on.
   std::vector<Eigen::Vector2d> pixels(normalized_points.size());
   for (size_t i = 0; i < pixels.size(); ++i) pixels[i] = focal_length_px * normalized_points[i];
+  PoseRefinementOptions refine;
+  refine.loss_scale_px = options.loss_scale_px;
+  refine.refiner = options.refiner;
+  refine.gravity = SoftGravity(gravity, options, 1.0);
   if (options.refine && !SkipsRefinement(options, &result)) {
     std::vector<uint32_t> inliers;
     p3p.Inliers(result.pose, &inliers);
-    PoseRefinementOptions refine;
-    refine.loss_scale_px = options.loss_scale_px;
-    refine.refiner = options.refiner;
-    refine.gravity = SoftGravity(gravity, options, 1.0);
     CameraPose refined = result.pose;
     double f = focal_length_px;
     const double max_sq = options.max_error_px * options.max_error_px;
@@ -333,6 +339,7 @@ AbsolutePoseResult EstimateAbsolutePose(std::span<const Eigen::Vector2d> normali
     }
   }
   Finish(pixels, points3D, options, &result);
+  ReportUncertainty(pixels, points3D, refine, /*uncalibrated=*/false, &result);
   return result;
 }
 
@@ -374,7 +381,8 @@ AbsolutePoseResult EstimateAbsolutePoseUnknownFocal(
                        &result);
   }
   Finish(centered_pixels, points3D, options, &result);
-  ReportFocalDepth(centered_pixels, points3D, options, gravity, &result);
+  ReportUncertainty(centered_pixels, points3D, UncalibratedRefinement(options, gravity),
+                    /*uncalibrated=*/true, &result);
   return result;
 }
 
@@ -423,7 +431,8 @@ AbsolutePoseResult EstimateAbsolutePoseFocalPrior(std::span<const Eigen::Vector2
                        &result);
   }
   Finish(centered_pixels, points3D, options, &result);
-  ReportFocalDepth(centered_pixels, points3D, options, gravity, &result);
+  ReportUncertainty(centered_pixels, points3D, UncalibratedRefinement(options, gravity),
+                    /*uncalibrated=*/true, &result);
   return result;
 }
 

@@ -1,5 +1,6 @@
 #include "localizer/pose/refine_pose.h"
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
@@ -124,22 +125,97 @@ bool RefinePoseAndCamera(std::span<const Eigen::Vector2d> centered_pixels,
   return true;
 }
 
+namespace {
+
+// The covariance of the refinement's parameters at x, by Huber's formula for an M-estimator
+// with the pixel noise's variance estimated from the residuals: H^-1 (K^2 tau^2 D + P) H^-1
+// with H = kappa D + P, kappa the mean curvature of the loss over the points, tau^2 = sum
+// rho'^2 |r|^2 / (m - p) over the m point residuals, and K = 1 + p / N var(curvature) /
+// kappa^2 Huber's correction for N points. With `per_point_noise` instead the empirical
+// sandwich H^-1 S H^-1 of the exact Hessian and each point's own score, which allows noise
+// that differs between points: larger on real photos, whose keypoints' noise grows with their
+// scale, but on synthetic problems it put 11-16 % too few truths inside the 95 % region
+// (100-1000 points estimate S's fourth moments poorly). Empty when the problem cannot be
+// evaluated at x, has no more residuals than parameters, or H is singular.
+std::optional<Eigen::MatrixXd> ParameterCovarianceAt(const RefinementProblem& problem,
+                                                     const RefinementParameters& x,
+                                                     bool per_point_noise) {
+  Linearization at;
+  if (!LinearizeWithBuiltin(problem, x, &at)) return std::nullopt;
+  const Eigen::Index n = at.design.rows();
+  const double points = double(at.points);
+  if (2 * Eigen::Index(at.points) <= n) return std::nullopt;
+  if (per_point_noise) {
+    const Eigen::FullPivLU<Eigen::MatrixXd> lu(at.hessian);
+    if (!lu.isInvertible()) return std::nullopt;
+    const Eigen::MatrixXd inverse = lu.inverse();
+    return inverse * at.scores * inverse;
+  }
+  const double kappa = at.curvature / points;
+  if (!(kappa > 0.0)) return std::nullopt;
+  const double tau2 = at.squared_scores / double(2 * Eigen::Index(at.points) - n);
+  const double spread = std::max(0.0, at.squared_curvature / points - kappa * kappa);
+  const double huber = 1.0 + double(n) / points * spread / (kappa * kappa);
+  const Eigen::FullPivLU<Eigen::MatrixXd> lu(kappa * at.design + at.prior);
+  if (!lu.isInvertible()) return std::nullopt;
+  const Eigen::MatrixXd inverse = lu.inverse();
+  Eigen::MatrixXd covariance = inverse * (huber * huber * tau2 * at.design + at.prior) * inverse;
+  if (!covariance.allFinite()) return std::nullopt;
+  return covariance;
+}
+
+}  // namespace
+
+double Radius95(const Eigen::Matrix3d& covariance) {
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(covariance, Eigen::EigenvaluesOnly);
+  return std::sqrt(kChiSquare3Dof95 * std::max(solver.eigenvalues().maxCoeff(), 0.0));
+}
+
+std::optional<PoseCovariance> PoseCovarianceAt(std::span<const Eigen::Vector2d> centered_pixels,
+                                               std::span<const Eigen::Vector3d> points3D,
+                                               std::span<const uint32_t> indices,
+                                               const PoseRefinementOptions& options,
+                                               const CameraPose& pose, const RadialCamera& camera,
+                                               bool radial) {
+  const RefinementProblem problem =
+      radial ? MakeCameraProblem(centered_pixels, points3D, indices, options)
+             : MakeProblem(centered_pixels, points3D, indices, options);
+  const std::optional<Eigen::MatrixXd> covariance = ParameterCovarianceAt(
+      problem, MakeParameters(pose, camera.focal_length_px, radial ? camera.k : 0.0),
+      /*per_point_noise=*/false);
+  if (!covariance) return std::nullopt;
+  const Eigen::Index n = covariance->rows();
+  // Parameters: the rotation increment d (R' = (I + 2 [d]x) R, so R'^T = exp(-2 [R^T d]x) R^T:
+  // theta = -2 R^T d), t, then f and k. C = -R^T t moves by dC = -2 R^T [t]x d - R^T dt.
+  // theta and dC are both the estimate's offset from the truth: their signs agree.
+  const Eigen::Matrix3d rt = pose.rotation.toRotationMatrix().transpose();
+  const Eigen::Vector3d& t = pose.translation;
+  Eigen::Matrix3d t_cross;
+  t_cross << 0.0, -t.z(), t.y(), t.z(), 0.0, -t.x(), -t.y(), t.x(), 0.0;
+  Eigen::MatrixXd to_pose = Eigen::MatrixXd::Zero(6, n);
+  to_pose.block<3, 3>(0, 0) = -2.0 * rt;
+  to_pose.block<3, 3>(3, 0) = -2.0 * rt * t_cross;
+  to_pose.block<3, 3>(3, 3) = -rt;
+  PoseCovariance out;
+  out.pose = to_pose * *covariance * to_pose.transpose();
+  out.pose = 0.5 * (out.pose + out.pose.transpose()).eval();
+  if (!out.pose.allFinite() || !(out.pose.diagonal().array() > 0.0).all()) return std::nullopt;
+  if (problem.refine_focal_length) out.focal_std_px = std::sqrt((*covariance)(6, 6));
+  return out;
+}
+
 std::optional<FocalDepthUncertainty> FocalDepthUncertaintyAt(
     std::span<const Eigen::Vector2d> centered_pixels, std::span<const Eigen::Vector3d> points3D,
     std::span<const uint32_t> indices, const PoseRefinementOptions& options, const CameraPose& pose,
     const RadialCamera& camera) {
   RefinementProblem problem = MakeCameraProblem(centered_pixels, points3D, indices, options);
   problem.refine_focal_length = true;
-  Linearization linear;
-  if (!LinearizeWithBuiltin(problem, MakeParameters(pose, camera.focal_length_px, camera.k),
-                            &linear)) {
-    return std::nullopt;
-  }
-  const Eigen::Index n = linear.hessian.rows();
-  const Eigen::FullPivLU<Eigen::MatrixXd> lu(linear.hessian);
-  if (2 * Eigen::Index(indices.size()) <= n || !lu.isInvertible()) return std::nullopt;
-  const Eigen::MatrixXd inverse = lu.inverse();
-  const Eigen::MatrixXd covariance = inverse * linear.scores * inverse;
+  const std::optional<Eigen::MatrixXd> parameters =
+      ParameterCovarianceAt(problem, MakeParameters(pose, camera.focal_length_px, camera.k),
+                            /*per_point_noise=*/true);
+  if (!parameters) return std::nullopt;
+  const Eigen::MatrixXd& covariance = *parameters;
+  const Eigen::Index n = covariance.rows();
   // Parameters: rotation increment d (R' = (I + 2 [d]x) R), t, f, k. The centre C = -R^T t
   // moves along the optical axis a = R^T e_z by a^T dC = -dt_z - 2 e_z^T [t]x d.
   const Eigen::Vector3d& t = pose.translation;

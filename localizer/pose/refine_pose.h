@@ -8,6 +8,7 @@
 #include <span>
 #include <string_view>
 
+#include "format/base/chi_square.h"
 #include "format/base/enum_names.h"
 #include "localizer/pose/camera_pose.h"
 #include "localizer/pose/gravity_prior.h"
@@ -103,7 +104,9 @@ bool RefinePoseAndCamera(std::span<const Eigen::Vector2d> centered_pixels,
 // camera does: the pixels fix f / depth, so a longer focal length and a camera further back
 // explain them nearly as well, and the two estimates are strongly correlated. From the
 // covariance of the refinement's parameters at its solution, H^-1 S H^-1 with H the robust
-// cost's Hessian and S the sum of the points' gradient outer products (Huber's sandwich).
+// cost's Hessian and S the sum of the points' gradient outer products (Huber's empirical
+// sandwich: each point's noise its own, which on real photos gives f a larger spread than
+// PoseCovariance's; the weak-constraint rule below was measured with it).
 struct FocalDepthUncertainty {
   double focal_std_px = 0.0;
   double depth_std = 0.0;    // of the camera centre along its optical axis, model units
@@ -122,6 +125,34 @@ inline bool WeaklyConstrained(const FocalDepthUncertainty& uncertainty, double f
   return uncertainty.focal_std_px > kWeakRelativeFocalStd * focal_length_px &&
          std::abs(uncertainty.correlation) >= kWeakFocalDepthCorrelation;
 }
+
+// How well a refined pose is known: the covariance of the refinement's parameters (Huber's
+// for an M-estimator with one pixel noise variance estimated from the residuals, calibrated on
+// synthetic problems; refine_pose.cc) with the focal length and k marginalised out, over (theta,
+// C): theta the rotation vector, radians in the model frame, of the camera orientation's error
+// (world_from_cam_estimate = exp([theta]x) world_from_cam_true) and C the camera centre, model
+// units.
+struct PoseCovariance {
+  Eigen::Matrix<double, 6, 6> pose = Eigen::Matrix<double, 6, 6>::Zero();
+  std::optional<double> focal_std_px;  // when the focal length was refined
+
+  Eigen::Matrix3d Position() const { return pose.bottomRightCorner<3, 3>(); }
+};
+
+// The radius of the smallest sphere around the estimate that holds the 95 % ellipsoid of a
+// position covariance: sqrt(kChiSquare3Dof95 * its largest eigenvalue).
+double Radius95(const Eigen::Matrix3d& covariance);
+
+// The pose covariance of the problem RefinePose (radial false; camera.k is then unused) or
+// RefinePoseAndCamera (radial) solves with these options, at `pose` and `camera`; empty when
+// the problem cannot be evaluated there, has no more residuals than parameters, or its Hessian
+// is singular.
+std::optional<PoseCovariance> PoseCovarianceAt(std::span<const Eigen::Vector2d> centered_pixels,
+                                               std::span<const Eigen::Vector3d> points3D,
+                                               std::span<const uint32_t> indices,
+                                               const PoseRefinementOptions& options,
+                                               const CameraPose& pose, const RadialCamera& camera,
+                                               bool radial);
 
 // The focal length and depth above for the problem RefinePoseAndCamera solves (options as
 // given to it, with refine_focal_length), at `pose` and `camera`; empty when the problem cannot

@@ -107,11 +107,15 @@ struct Normal {
   double g[kMaxParams] = {};  // J^T W r, the gradient
 };
 
-// What the covariance of the solution needs (LinearizeWithBuiltin): the robust cost's exact
-// Hessian and the sum of the points' gradient outer products.
+// What the covariance of the solution needs (LinearizeWithBuiltin, refine_pose_solver.h).
 struct Sandwich {
-  Matrix hessian = {};
-  Matrix scores = {};
+  Matrix hessian = {};          // of the robust cost, exact
+  Matrix scores = {};           // sum of the points' gradient outer products
+  Matrix design = {};           // the points' J^T J, without loss weights
+  Matrix prior = {};            // the gravity prior's information
+  double squared_scores = 0.0;  // sum of rho'^2 |r|^2 over the points
+  double curvature = 0.0;       // sum of rho' + rho'' |r|^2 over the points
+  double squared_curvature = 0.0;
 };
 
 template <typename Model>
@@ -193,8 +197,10 @@ class Evaluator {
       // A prior of unit-variance residuals: its information is curvature and score alike.
       for (int a = 0; sandwich != nullptr && a < n; ++a) {
         for (int col = 0; col <= a; ++col) {
-          sandwich->hessian[a][col] += out->h[a][col] - before[a][col];
-          sandwich->scores[a][col] += out->h[a][col] - before[a][col];
+          const double information = out->h[a][col] - before[a][col];
+          sandwich->hessian[a][col] += information;
+          sandwich->scores[a][col] += information;
+          sandwich->prior[a][col] += information;
         }
       }
     }
@@ -209,19 +215,26 @@ class Evaluator {
   }
 
  private:
-  // One point's share of the exact Hessian of 0.5 rho(|r|^2), rho' J^T J + 2 rho'' (J^T r)(J^T
-  // r)^T, and of the scores' outer products, rho'^2 (J^T r)(J^T r)^T (lower triangles).
+  // One point's share of the sums: its exact Hessian of 0.5 rho(|r|^2), rho' J^T J + 2 rho''
+  // (J^T r)(J^T r)^T, its score's outer product rho'^2 (J^T r)(J^T r)^T (lower triangles), and
+  // rho' + rho'' |r|^2, that Hessian's mean curvature over the residual's two directions.
   void AddSandwich(const double (&jac)[2][kMaxParams], const double (&r)[2], double rho1,
                    double rho2, Sandwich* sandwich) const {
     double jr[kMaxParams];
     for (int a = 0; a < num_params_; ++a) jr[a] = jac[0][a] * r[0] + jac[1][a] * r[1];
     for (int a = 0; a < num_params_; ++a) {
       for (int col = 0; col <= a; ++col) {
-        sandwich->hessian[a][col] += rho1 * (jac[0][a] * jac[0][col] + jac[1][a] * jac[1][col]) +
-                                     2.0 * rho2 * jr[a] * jr[col];
+        const double jj = jac[0][a] * jac[0][col] + jac[1][a] * jac[1][col];
+        sandwich->hessian[a][col] += rho1 * jj + 2.0 * rho2 * jr[a] * jr[col];
         sandwich->scores[a][col] += rho1 * rho1 * jr[a] * jr[col];
+        sandwich->design[a][col] += jj;
       }
     }
+    const double squared = r[0] * r[0] + r[1] * r[1];
+    const double curvature = rho1 + rho2 * squared;
+    sandwich->squared_scores += rho1 * rho1 * squared;
+    sandwich->curvature += curvature;
+    sandwich->squared_curvature += curvature * curvature;
   }
 
   // The gravity block w (R g_w - g_c) with R = I + 2 M: no loss (weight 1), and only the rotation
@@ -497,15 +510,23 @@ bool Linearize(const RefinementProblem& problem, const RefinementParameters& par
   Sandwich sandwich;
   if (!evaluator.Evaluate(parameters, &normal, /*linearize=*/true, &sandwich)) return false;
   const int n = evaluator.num_params();
-  out->hessian.resize(n, n);
-  out->scores.resize(n, n);
-  for (int i = 0; i < n; ++i) {
-    for (int j = 0; j <= i; ++j) {
-      out->hessian(i, j) = out->hessian(j, i) = sandwich.hessian[i][j];
-      out->scores(i, j) = out->scores(j, i) = sandwich.scores[i][j];
+  const auto to_eigen = [n](const Matrix& lower, Eigen::MatrixXd* full) {
+    full->resize(n, n);
+    for (int i = 0; i < n; ++i) {
+      for (int j = 0; j <= i; ++j) (*full)(i, j) = (*full)(j, i) = lower[i][j];
     }
-  }
-  return out->hessian.allFinite() && out->scores.allFinite();
+  };
+  to_eigen(sandwich.hessian, &out->hessian);
+  to_eigen(sandwich.scores, &out->scores);
+  to_eigen(sandwich.design, &out->design);
+  to_eigen(sandwich.prior, &out->prior);
+  out->points = problem.indices.size();
+  out->squared_scores = sandwich.squared_scores;
+  out->curvature = sandwich.curvature;
+  out->squared_curvature = sandwich.squared_curvature;
+  return out->hessian.allFinite() && out->scores.allFinite() && out->design.allFinite() &&
+         out->prior.allFinite() && std::isfinite(out->squared_scores) &&
+         std::isfinite(out->squared_curvature);
 }
 
 }  // namespace

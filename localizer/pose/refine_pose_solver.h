@@ -44,13 +44,22 @@ bool RefineWithBuiltin(const RefinementProblem& problem, RefinementParameters* p
                        PoseRefinementSummary* summary);
 
 // The problem at `parameters` (a solution), in the builtin refiner's tangent space (rotation
-// increment, t, then f and k when refined): the exact Hessian H of the robust cost and the sum
-// S of the points' gradient outer products, whose sandwich H^-1 S H^-1 is the M-estimator's
-// covariance (Huber's; it holds whatever the pixel noise's scale against the loss's). False
-// where the problem cannot be evaluated (a point behind the camera, a non-finite value).
+// increment, t, then f and k when refined), as the two covariances of refine_pose.cc need it:
+// the robust cost's exact Hessian H and the sum S of the points' gradient outer products
+// (Huber's empirical sandwich H^-1 S H^-1); D the points' J^T J without loss weights, P the
+// gravity prior's information, and over the points the sums of rho'^2 |r|^2 and of the mean
+// curvature rho' + rho'' |r|^2 of 0.5 rho(|r|^2) and its square (Huber's covariance with one
+// noise variance). False where the problem cannot be evaluated (a point behind the camera, a
+// non-finite value).
 struct Linearization {
   Eigen::MatrixXd hessian;
   Eigen::MatrixXd scores;
+  Eigen::MatrixXd design;
+  Eigen::MatrixXd prior;
+  size_t points = 0;
+  double squared_scores = 0.0;
+  double curvature = 0.0;
+  double squared_curvature = 0.0;
 };
 bool LinearizeWithBuiltin(const RefinementProblem& problem, const RefinementParameters& parameters,
                           Linearization* out);

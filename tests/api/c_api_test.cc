@@ -334,6 +334,29 @@ TEST_F(CApiGeoTest, GeoPoseAndPriorsAreTheCppApis) {
   cwloc_result_destroy(result);
 }
 
+TEST_F(CApiGeoTest, CovarianceIsNotAvailableWithoutAPose) {
+  // Two features cannot localize: no pose, so no covariance.
+  const float keypoints[4] = {10, 10, 20, 20};
+  const uint8_t descriptors[256] = {};
+  const double params[3] = {500, 320, 240};
+  const cwloc_camera camera = {"SIMPLE_PINHOLE", 640, 480, params, 3, CWLOC_CALIBRATION_KNOWN};
+  cwloc_result* result = nullptr;
+  ASSERT_EQ(
+      cwloc_localize_features(localizer_, keypoints, descriptors, 2, &camera, options_, &result),
+      CWLOC_OK)
+      << cwloc_last_error();
+  ASSERT_EQ(cwloc_result_success(result), 0);
+  double pose[36], radius = 0;
+  EXPECT_EQ(cwloc_result_covariance(result, pose, &radius), CWLOC_ERROR_NOT_AVAILABLE);
+  EXPECT_STREQ(cwloc_last_error(), "covariance: the query was not localized");
+  EXPECT_EQ(cwloc_result_enu_covariance(result, nullptr, &radius), CWLOC_ERROR_NOT_AVAILABLE);
+  EXPECT_STREQ(cwloc_last_error(), "ENU covariance: the query was not localized");
+  EXPECT_EQ(cwloc_result_covariance(nullptr, pose, &radius), CWLOC_ERROR_INVALID_ARGUMENT);
+  EXPECT_STREQ(cwloc_result_json(nullptr), "");
+  EXPECT_NE(std::string(cwloc_result_json(result)).find("\"success\":false"), std::string::npos);
+  cwloc_result_destroy(result);
+}
+
 TEST_F(CApiGeoTest, MissingValuesAreNotAvailableSayingWhy) {
   // Not localized: a position prior 7.5 km east of the city.
   const cwloc_position_prior far = {47.3779, 8.6403, NAN, 100.0};

@@ -245,6 +245,7 @@ TEST_F(LocalizerApiGeoToolsTest, GeoPosesAndPriorsAreCwlocLocalizesBitForBit) {
   const auto queries = Queries();
   ASSERT_EQ(queries.size(), 20u);
   ASSERT_EQ(cli.size(), queries.size());
+  double first_scale = 0;  // metres per model unit, from the first query's covariance
   for (const auto& [name, camera] : queries) {
     SCOPED_TRACE(name);
     const api::Options& options = priors.at(name);
@@ -266,6 +267,27 @@ TEST_F(LocalizerApiGeoToolsTest, GeoPosesAndPriorsAreCwlocLocalizesBitForBit) {
     EXPECT_EQ(result.geo->heading_deg, geo["heading_deg"].get<double>());
     EXPECT_EQ(result.geo->pitch_deg, geo["pitch_deg"].get<double>());
     EXPECT_EQ(result.geo->roll_deg, geo["roll_deg"].get<double>());
+
+    // The covariance, in the model frame and in metres on the ground.
+    ASSERT_TRUE(result.covariance);
+    const api::PoseCovariance& covariance = *result.covariance;
+    const nlohmann::json& json_covariance = json.at("covariance");
+    for (int r = 0; r < 6; ++r) {
+      for (int c = 0; c < 6; ++c)
+        EXPECT_EQ(covariance.pose[6 * r + c], json_covariance["pose"][r][c].get<double>());
+    }
+    EXPECT_EQ(covariance.position_radius95, json_covariance["position_radius95"].get<double>());
+    ASSERT_TRUE(covariance.enu_position && covariance.position_radius95_m);
+    EXPECT_EQ(*covariance.position_radius95_m,
+              json_covariance["position_radius95_m"].get<double>());
+    for (int i = 0; i < 9; ++i)
+      EXPECT_EQ((*covariance.enu_position)[i], json_covariance["enu_position"][i / 3][i % 3]);
+    // The ENU frame is the model's rotated and scaled by the georeference: the radius in metres
+    // is the one in model units times the city's scale, the same for every query.
+    const double scale = *covariance.position_radius95_m / covariance.position_radius95;
+    if (first_scale == 0) first_scale = scale;
+    EXPECT_NEAR(scale, first_scale, 1e-6 * first_scale);
+    EXPECT_FALSE(covariance.focal_std_px);  // a known camera
 
     const nlohmann::json& position = json.at("priors").at("position");
     ASSERT_TRUE(result.position_prior);
@@ -306,6 +328,24 @@ TEST_F(LocalizerApiGeoToolsTest, GeoPosesAndPriorsAreCwlocLocalizesBitForBit) {
     double c_error = 0;
     ASSERT_EQ(cwloc_result_gravity_error(c_result, &c_error), CWLOC_OK);
     EXPECT_EQ(c_error, *result.gravity_error_deg);
+    std::array<double, 36> c_pose{};
+    std::array<double, 9> c_enu{};
+    double c_radius = 0, c_radius_m = 0;
+    ASSERT_EQ(cwloc_result_covariance(c_result, c_pose.data(), &c_radius), CWLOC_OK);
+    ASSERT_EQ(cwloc_result_enu_covariance(c_result, c_enu.data(), &c_radius_m), CWLOC_OK);
+    EXPECT_EQ(c_pose, covariance.pose);
+    EXPECT_EQ(c_enu, *covariance.enu_position);
+    EXPECT_EQ(c_radius, covariance.position_radius95);
+    EXPECT_EQ(c_radius_m, *covariance.position_radius95_m);
+    // The record is cwloc-localize's but for the query's name, the times and the priors' source.
+    nlohmann::json c_json = nlohmann::json::parse(cwloc_result_json(c_result));
+    EXPECT_EQ(c_json["name"], "query");
+    EXPECT_EQ(c_json["pose"], json["pose"]);
+    EXPECT_EQ(c_json["covariance"], json["covariance"]);
+    EXPECT_EQ(c_json["geo"], json["geo"]);
+    EXPECT_EQ(c_json["priors"]["gravity"], json["priors"]["gravity"]);
+    EXPECT_EQ(c_json["priors"]["position"]["source"], "option");  // the tool's came from a file
+    EXPECT_EQ(c_json["matches"], json["matches"]);
     cwloc_result_destroy(c_result);
     cwloc_options_destroy(c_options);
   }

@@ -343,10 +343,12 @@ TEST(LocalizeCliHerzJesu, DatabaseCameraWithoutPriorIsAnUnknownFocal) {
       << output;
   std::string validation;
   EXPECT_EQ(ValidateAgainstSchema(dir / "out.jsonl", &validation), 0) << validation;
-  // The readable lines give the estimated focal length with its standard deviation.
+  // The readable lines give the 95 % position radius (herz_jesu_p25's model is not
+  // georeferenced: model units) and the estimated focal length with its standard deviation.
   EXPECT_THAT(output,
-              testing::ContainsRegex("0002.jpg: localized, [0-9]+ inliers / [0-9]+ "
-                                     "correspondences, f 137[0-9].[0-9] \\+- 0.[0-9] px, "));
+              testing::ContainsRegex(
+                  "0002.jpg: localized, [0-9]+ inliers / [0-9]+ correspondences, position "
+                  "\\+- 0.00[0-9]+ model units \\(95 %\\), f 137[0-9].[0-9] \\+- 0.[0-9] px, "));
   EXPECT_THAT(output, testing::Not(testing::HasSubstr("weakly constrained")));
   const auto truth = test::ReadGroundTruth(data / "queries_gt.txt");
   const double metres_per_unit = test::ReadMetresPerUnit(data / "scale_to_metres.txt");

@@ -1,5 +1,6 @@
 #include "tools/eval/report.h"
 
+#include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -8,6 +9,7 @@
 #include <unordered_map>
 
 #include "cwloc/version.h"
+#include "format/base/chi_square.h"
 
 namespace cwloc::eval {
 namespace {
@@ -163,6 +165,12 @@ RunReport EvaluateRun(const std::vector<NamedPose>& ground_truth, const RunResul
         }
       }
       ++report.localized;
+      if (const auto& covariance = it->second->position_covariance) {
+        const Eigen::Vector3d offset = it->second->pose->Center() - truth.pose.Center();
+        outcome.inside95 = offset.dot(covariance->ldlt().solve(offset)) <= kChiSquare3Dof95;
+        ++report.with_covariance;
+        report.inside95 += *outcome.inside95;
+      }
       if (geo.georeference) {
         outcome.enu_error = ErrorInIndexFrame(*geo.georeference, *it->second->pose, truth.pose);
         ground_errors.push_back(outcome.enu_error->ground);
@@ -285,6 +293,10 @@ nlohmann::ordered_json ReportToJson(const EvalReport& report) {
                     {"count", geo.within},
                     {"share", run.queries ? double(geo.within) / run.queries : 0.0}}}};
     }
+    r["coverage95"] = {
+        {"with_covariance", run.with_covariance},
+        {"inside", run.inside95},
+        {"share", run.with_covariance ? double(run.inside95) / run.with_covariance : 0.0}};
     r["timed_records"] = run.timed_records;
     if (run.times_ms) {
       ordered_json times;
@@ -300,6 +312,7 @@ nlohmann::ordered_json ReportToJson(const EvalReport& report) {
       if (q.status == QueryStatus::kLocalized) {
         entry["position_error"] = q.position_error;
         entry["rotation_error_deg"] = q.rotation_error_deg;
+        if (q.inside95) entry["inside95"] = *q.inside95;
         if (q.enu_error) {
           entry["ground_error"] = q.enu_error->ground;
           entry["height_error"] = q.enu_error->height;
@@ -379,6 +392,13 @@ std::string FormatTable(const EvalReport& report) {
       out << "  warning: " << run.label << ": " << run.unknown_names
           << " result(s) for names not in the ground truth (ignored)\n";
     }
+  }
+
+  // How often the truth lies where the covariance says it should (docs/algorithm.md).
+  for (const RunReport& run : report.runs) {
+    if (run.with_covariance == 0) continue;
+    out << "  " << run.label << ": true position inside the 95 % ellipsoid: " << run.inside95 << "/"
+        << run.with_covariance << " (" << Percent(run.inside95, run.with_covariance) << ")\n";
   }
 
   bool any_enu = false, any_geo = false;

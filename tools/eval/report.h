@@ -62,6 +62,8 @@ struct QueryOutcome {
   std::optional<GroundError> enu_error;
   // With true positions (--gt-geo), when localized and the result has "geo".
   std::optional<GroundError> geo_error;
+  // When localized with a covariance: whether the true centre lies in its 95 % ellipsoid.
+  std::optional<bool> inside95;
 };
 
 // A run's "geo" positions against the true positions (--gt-geo), metres.
@@ -96,6 +98,10 @@ struct RunReport {
   std::optional<Quartiles> ground_error;
   std::optional<Quartiles> height_error;
   std::optional<GeoComparison> geo;  // with true positions (--gt-geo)
+  // Localized queries whose result has a covariance, and those whose true centre lies inside
+  // the 95 % ellipsoid it gives: the covariance's coverage.
+  int with_covariance = 0;
+  int inside95 = 0;
 };
 
 struct EvalReport {

@@ -83,6 +83,22 @@ QueryResult ParseJsonLine(const std::string& line, const std::string& where) {
     ValidateGeodetic(*result.geo, where + "\"geo\"");
   }
 
+  if (const auto covariance = record.find("covariance"); covariance != record.end()) {
+    const auto pose = covariance->is_object() ? covariance->find("pose") : covariance->end();
+    Eigen::Matrix3d position;
+    bool valid = pose != covariance->end() && pose->is_array() && pose->size() == 6;
+    for (int r = 0; valid && r < 6; ++r) {
+      const json& row = (*pose)[r];
+      valid = row.is_array() && row.size() == 6;
+      for (int c = 0; valid && c < 6; ++c) {
+        valid = row[c].is_number() && std::isfinite(row[c].get<double>());
+        if (valid && r >= 3 && c >= 3) position(r - 3, c - 3) = row[c].get<double>();
+      }
+    }
+    if (!valid) throw InputError(where + "\"covariance.pose\" must be 6 x 6 finite numbers");
+    result.position_covariance = position;
+  }
+
   if (const auto times = record.find("times_ms"); times != record.end()) {
     if (!times->is_object()) throw InputError(where + "\"times_ms\" must be an object");
     StageTimes stage_times{};

@@ -28,6 +28,8 @@ struct QueryResult {
   // cwloc-localize writes when its index is georeferenced; never from a poses file.
   std::optional<Geodetic> geo;
   std::optional<StageTimes> times_ms;
+  // The camera centre's covariance (the lower-right 3 x 3 of "covariance.pose"), model units.
+  std::optional<Eigen::Matrix3d> position_covariance;
   std::vector<uint32_t> ranked_image_ids;  // "ranked_images", best first (JSON lines only)
   int line = 0;
 };

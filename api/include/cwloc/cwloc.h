@@ -165,6 +165,20 @@ CWLOC_C_API cwloc_status cwloc_result_position_prior(const cwloc_result* result,
 /* Degrees between the gravity prior and the localized pose's gravity; CWLOC_ERROR_NOT_AVAILABLE
  * without a gravity prior or when the query was not localized. */
 CWLOC_C_API cwloc_status cwloc_result_gravity_error(const cwloc_result* result, double* degrees);
+/* The pose's 6 x 6 covariance, row-major (the C++ PoseCovariance::pose) and its 95 % position
+ * radius, model units; CWLOC_ERROR_NOT_AVAILABLE when the query was not localized. Either output
+ * may be NULL. */
+CWLOC_C_API cwloc_status cwloc_result_covariance(const cwloc_result* result, double pose[36],
+                                                 double* position_radius95);
+/* A georeferenced index: the centre's 3 x 3 covariance in square metres in the local
+ * east-north-up frame at the camera, row-major, and its 95 % radius in metres;
+ * CWLOC_ERROR_NOT_AVAILABLE otherwise. Either output may be NULL. */
+CWLOC_C_API cwloc_status cwloc_result_enu_covariance(const cwloc_result* result,
+                                                     double enu_position[9],
+                                                     double* position_radius95_m);
+/* The JSON record cwloc-localize writes for this query (schemas/localization-result.schema.json).
+ */
+CWLOC_C_API const char* cwloc_result_json(const cwloc_result* result);
 
 #ifdef __cplusplus
 }

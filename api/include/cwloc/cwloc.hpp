@@ -137,6 +137,22 @@ struct GeoPose {
   double roll_deg = 0;          // about the optical axis, (-180, 180]
 };
 
+// How well the refined pose is known (docs/algorithm.md, "Pose uncertainty"): from the final
+// refinement's Jacobian and its inliers' reprojection residuals; an estimated focal length and
+// distortion are marginalised out.
+struct PoseCovariance {
+  // 6 x 6, row-major, over (theta, C): theta the rotation vector (radians, model frame) of the
+  // error of the camera's orientation, world_from_cam_estimate = exp([theta]x) world_from_cam_true, and
+  // C the camera centre (model units).
+  std::array<double, 36> pose{};
+  double position_radius95 = 0;        // model units: C's 95 % ellipsoid lies within it
+  std::optional<double> focal_std_px;  // when the focal length was estimated
+  // A georeferenced index: C's 3 x 3 covariance in square metres, row-major, in the local
+  // east-north-up frame at the camera, and its 95 % radius in metres.
+  std::optional<std::array<double, 9>> enu_position;
+  std::optional<double> position_radius95_m;
+};
+
 struct Result {
   bool success = false;
   std::string failure_reason;  // why not, when success is false
@@ -161,6 +177,9 @@ struct Result {
   std::optional<std::array<double, 3>> gravity;  // the gravity prior used (Options::gravity)
   // The angle between the gravity prior and the localized pose's gravity; on success with one.
   std::optional<double> gravity_error_deg;
+  std::optional<PoseCovariance> covariance;  // on success
+  // The JSON record cwloc-localize writes for this query (schemas/localization-result.schema.json).
+  std::string json;
 };
 
 struct IndexInfo {

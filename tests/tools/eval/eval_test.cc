@@ -1,4 +1,5 @@
 // cwloc-eval's library: quartiles, pose errors, readers and the run report.
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -142,6 +143,53 @@ TEST(Report, KnownErrorsGiveKnownQuartilesAndShares) {
   EXPECT_STREQ(kStageNames[0], "extraction");
   EXPECT_DOUBLE_EQ((*r.times_ms)[0].p90, 0.0);
   EXPECT_EQ(r.per_query[4].status, QueryStatus::kMissing);
+}
+
+// Offsets 0.1, 0.3, 1 and 6 against isotropic position sigmas 0.5, 0.5, 0.2, 0.5: squared
+// normalised errors 0.04, 0.36, 25, 144, of which the first two lie within 7.81.
+TEST(Report, CoverageCountsTruthsInsideTheCovariancesEllipsoid) {
+  cwloc::test::TempDir dir;
+  const Scenario s;
+  s.WriteGroundTruth(dir / "gt.txt");
+  const double sigmas[] = {0.5, 0.5, 0.2, 0.5};
+  {
+    std::ofstream out(dir / "run.jsonl");
+    for (size_t i = 0; i < s.estimates.size(); ++i) {
+      nlohmann::json record = Scenario::JsonRecord(s.names[i], s.estimates[i], 10.0);
+      nlohmann::json pose = nlohmann::json::array();
+      for (int r = 0; r < 6; ++r) {
+        pose.push_back(nlohmann::json::array());
+        for (int c = 0; c < 6; ++c) {
+          pose[r].push_back(r != c ? 0.0 : r < 3 ? 1e-4 : sigmas[i] * sigmas[i]);
+        }
+      }
+      // The rotation block and its coupling are not part of the position's ellipsoid.
+      pose[0][3] = pose[3][0] = 5e-5;
+      if (i != 1) record["covariance"] = {{"pose", pose}, {"position_radius95", 1.0}};
+      out << record.dump() << "\n";
+    }
+  }
+  const RunReport r =
+      EvaluateRun(ReadGroundTruth(dir / "gt.txt"), ReadResults(dir / "run.jsonl"), 1.0, "run");
+  EXPECT_EQ(r.with_covariance, 3);  // q1's record has none
+  EXPECT_EQ(r.inside95, 1);
+  EXPECT_EQ(r.per_query[0].inside95, std::optional<bool>(true));
+  EXPECT_FALSE(r.per_query[1].inside95.has_value());
+  EXPECT_EQ(r.per_query[2].inside95, std::optional<bool>(false));
+  EXPECT_EQ(r.per_query[3].inside95, std::optional<bool>(false));
+  EvalReport report;
+  report.runs.push_back(r);
+  const auto json = ReportToJson(report);
+  EXPECT_EQ(json["runs"][0]["coverage95"]["inside"], 1);
+  EXPECT_EQ(json["runs"][0]["coverage95"]["with_covariance"], 3);
+  EXPECT_THAT(FormatTable(report),
+              testing::HasSubstr("run: true position inside the 95 % ellipsoid: 1/3 (33.3%)"));
+
+  std::ofstream(dir / "bad.jsonl")
+      << R"({"name": "q0.jpg", "success": false, "covariance": {"pose": [[1, 2]]}})"
+      << "\n";
+  EXPECT_EQ(InputErrorOf([&] { ReadResults(dir / "bad.jsonl"); }),
+            (dir / "bad.jsonl").string() + ":1: \"covariance.pose\" must be 6 x 6 finite numbers");
 }
 
 TEST(Report, ScaleMultipliesDistancesOnly) {
