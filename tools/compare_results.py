@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Compares two cwloc-localize JSON-lines outputs of the same queries, e.g. from an x86-64 and
-an aarch64 build: the same localized set, the same inlier and correspondence counts, and poses
-(qvec, tvec) and estimated cameras within a relative tolerance.
+an aarch64 build: the same localized set, the same inlier and correspondence counts, poses
+(qvec, tvec) and estimated cameras within a relative tolerance, and 95 % position radii of the
+pose covariances within 100 times it (they square the residuals the poses leave).
 
 Usage: compare_results.py A.jsonl B.jsonl [--rel 1e-6]
 Exit 0 when they agree, 1 with one line per difference otherwise.
@@ -57,6 +58,11 @@ def main():
         else:
             worst = max([worst] + [abs(x - y) / max(abs(x), abs(y), 1.0)
                                    for x, y in zip(values_a, values_b)])
+        radius_a = ra.get("covariance", {}).get("position_radius95")
+        radius_b = rb.get("covariance", {}).get("position_radius95")
+        if (radius_a is None) != (radius_b is None) or (
+                radius_a is not None and abs(radius_a - radius_b) > 100 * args.rel * max(radius_a, radius_b)):
+            problems.append(f"{name}: position_radius95 {radius_a} vs {radius_b}")
     for line in problems:
         print(line)
     localized = sum(1 for r in a.values() if r.get("success"))
