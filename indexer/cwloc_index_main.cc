@@ -11,6 +11,7 @@
 #include "format/base/tool_main.h"
 #include "format/index/index.h"
 #include "format/index/xxhash64.h"
+#include "indexer/index_build_flags.h"
 #include "indexer/index_builder.h"
 #include "indexer/index_extract.h"
 
@@ -44,22 +45,7 @@ void PrintGeoreference(const nlohmann::ordered_json& georeference) {
 int RunBuild(const IndexBuildOptions& options, bool json) {
   const IndexBuildReport report = BuildIndex(options);
   if (json) {
-    nlohmann::ordered_json out = {
-        {"output", options.output_path.string()},
-        {"file_bytes", report.file_bytes},
-        {"bytes_per_view", double(report.file_bytes) / double(report.num_views)},
-        {"counts", CountsJson(report)},
-        {"seconds",
-         {{"read", report.seconds_read},
-          {"covisibility", report.seconds_covisibility},
-          {"clustering", report.seconds_clustering},
-          {"point_codes", report.seconds_point_codes},
-          {"view_neighbors", report.seconds_neighbor_distances},
-          {"kd_forest", report.seconds_kd_forest},
-          {"write", report.seconds_write},
-          {"total", report.seconds_total}}},
-        {"georeference", report.georeference}};
-    std::cout << out.dump(2) << "\n";
+    std::cout << BuildReportJson(options, report).dump(2) << "\n";
     return kExitOk;
   }
   std::printf(
@@ -209,7 +195,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
 
   cwloc::IndexBuildOptions options;
-  std::string cluster_file;
+  cwloc::IndexBuildFlags flags;
   uint32_t clusters = 0;
   bool json = false;
   auto* build =
@@ -223,7 +209,7 @@ int main(int argc, char** argv) {
   build->add_option("-o,--output", options.output_path, "Index file to write (atomically)")
       ->required();
   auto* cluster_file_option = build->add_option(
-      "--cluster-file", cluster_file,
+      "--cluster-file", flags.cluster_file,
       "Clustering: lines 'IMAGE_NAME CLUSTER_ID' (default: one cluster per image)");
   build
       ->add_option(
@@ -241,8 +227,7 @@ int main(int argc, char** argv) {
   build->add_flag(
       "--keypoints", options.keypoints,
       "Also store each view's keypoint (8 bytes per view; the localizer does not need them)");
-  bool compact = false;
-  build->add_flag("--compact", compact,
+  build->add_flag("--compact", flags.compact,
                   "A device-sized index: one " + std::to_string(cwloc::kCompactCodeBytes) +
                       "-byte code per 3D point instead of each view's 128-byte descriptor "
                       "(--code-bytes " +
@@ -301,15 +286,10 @@ int main(int argc, char** argv) {
   }
   return cwloc::RunTool("cwloc-index", [&]() -> int {
     if (build->parsed()) {
-      if (!cluster_file.empty()) {
-        options.clustering.method = cwloc::ClusteringMethod::kFile;
-        options.clustering.file = cluster_file;
-      } else if (build->count("--clusters") > 0) {
-        options.clustering.method = cwloc::ClusteringMethod::kCovisibility;
-        options.clustering.target_clusters = clusters;
-      }
-      if (compact && code_bytes_option->count() == 0) options.code_bytes = cwloc::kCompactCodeBytes;
-      if (compact && build->count("--trees") == 0) options.forest.num_trees = cwloc::kCompactTrees;
+      if (build->count("--clusters") > 0) flags.clusters = clusters;
+      flags.code_bytes_given = code_bytes_option->count() > 0;
+      flags.trees_given = build->count("--trees") > 0;
+      cwloc::ApplyBuildFlags(flags, &options);
       return cwloc::RunBuild(options, json);
     }
     if (extract->parsed()) {

@@ -2,8 +2,8 @@
 """Checks that every project header a target includes belongs to a library it links, and that
 docs/architecture.md's library table lists exactly the CMake libraries, folders and links.
 
-Reads the cwloc_add_library / cwloc_add_executable / cwloc_add_test calls of every
-CMakeLists.txt, assigns each header to the library that compiles the source files of its
+Reads the cwloc_add_library / cwloc_add_executable / cwloc_add_test / cwloc_add_python_module
+calls of every CMakeLists.txt, assigns each header to the library that compiles the source files of its
 folder, and follows PUBLIC links transitively (PRIVATE links count for the target itself
 only). Prints one line per violation and exits 1; exits 0 when the layering holds.
 
@@ -13,7 +13,7 @@ import re
 import sys
 from pathlib import Path
 
-CALL = re.compile(r"\b(cwloc_add_library|cwloc_add_executable|cwloc_add_test)\(\s*([A-Za-z0-9_]+)(.*?)\)\s*$",
+CALL = re.compile(r"\b(cwloc_add_library|cwloc_add_executable|cwloc_add_test|cwloc_add_python_module)\(\s*([A-Za-z0-9_]+)(.*?)\)\s*$",
                   re.S | re.M)
 SET = re.compile(r"\bset\(\s*([A-Z0-9_]+)\s+([^)]*)\)")
 APPEND = re.compile(r"\blist\(\s*APPEND\s+([A-Z0-9_]+)\s+([^)]*)\)")
@@ -66,11 +66,11 @@ def main():
             "private": args.get("PRIVATE_LINK", []),
         }
 
-    # A header belongs to the library whose source of the same stem, else of the same folder,
-    # it sits beside.
+    # A header belongs to the library (or Python module: python/src/) whose source of the same
+    # stem, else of the same folder, it sits beside.
     owner_by_stem, owner_by_folder = {}, {}
     for name, target in targets.items():
-        if target["kind"] != "cwloc_add_library":
+        if target["kind"] not in ("cwloc_add_library", "cwloc_add_python_module"):
             continue
         for src in target["sources"]:
             owner_by_stem[src.with_suffix("")] = name

@@ -17,7 +17,7 @@ clang=(-DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=
 case "$mode" in
   asan)
     cmake -S . -B build-asan -G Ninja "${clang[@]}" -DCWLOC_SANITIZE=address,undefined \
-      -DCWLOC_BUILD_FUZZERS=ON -DCWLOC_BUILD_BENCHMARKS=OFF >/dev/null
+      -DCWLOC_WITH_PYTHON=OFF -DCWLOC_BUILD_FUZZERS=ON -DCWLOC_BUILD_BENCHMARKS=OFF >/dev/null
     cmake --build build-asan -j "$jobs" >build-asan/build.log 2>&1 || { tail -50 build-asan/build.log; exit 1; }
     # A test that spawns our tools runs them sanitized too; any report fails the test.
     if ! ASAN_OPTIONS=abort_on_error=1:detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
@@ -32,7 +32,7 @@ case "$mode" in
     fuzz/run.sh build-asan --seconds "${FUZZ_SECONDS:-60}" --jobs "$jobs"
     ;;
   tsan)
-    cmake -S . -B build-tsan -G Ninja "${clang[@]}" -DCWLOC_SANITIZE=thread \
+    cmake -S . -B build-tsan -G Ninja "${clang[@]}" -DCWLOC_SANITIZE=thread -DCWLOC_WITH_PYTHON=OFF \
       -DCWLOC_WITH_COLMAP_DB=OFF -DCWLOC_BUILD_TOOLS=OFF -DCWLOC_WITH_VLFEAT=OFF \
       -DCWLOC_WITH_CERES=OFF -DCWLOC_BUILD_BENCHMARKS=OFF >/dev/null
     cmake --build build-tsan -j "$jobs" --target cwloc_localize_exe api_tests sift_tests base_tests \

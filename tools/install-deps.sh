@@ -10,6 +10,10 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev libvlfeat-dev libstb-dev
   libjpeg62-turbo-dev libpng-dev libexif-dev
   colmap hyperfine valgrind time python3 python3-jsonschema python3-matplotlib clang-format
+  # The Python module (docs/python.md): pybind11 and Python's headers, numpy, its tests, pip's
+  # offline build in a venv; Dask.
+  pybind11-dev python3-pybind11 python3-dev python3-numpy python3-pytest python3-setuptools
+  python3-wheel python3-venv python3-distributed
   # The sanitizer and fuzz builds (docs/reliability.md): clang, its sanitizer and libFuzzer
   # runtimes, and llvm-symbolizer for readable reports.
   clang libclang-rt-14-dev llvm
