@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import cwloc
-from conftest import HERZ_FLAGS, HERZ_OPTIONS, read_jsonl, run, tool
+from conftest import GOLDEN, HERZ_FLAGS, HERZ_OPTIONS, read_jsonl, run, tool
 
 
 def test_version_is_the_librarys():
@@ -87,13 +87,39 @@ def test_covariance_when_the_library_gives_one(golden, golden_localizer):
     _, camera, features = queries[0]
     result = golden_localizer.localize_features(*cwloc.read_feature_file(features), camera)
     cov = result.covariance
-    if cov is None:
-        pytest.skip("this libcwloc.so gives no pose covariance yet")
+    assert cov is not None  # every localized result has one
     assert cov.pose.shape == (6, 6)
     np.testing.assert_array_equal(cov.position, cov.pose[3:, 3:])
     np.testing.assert_allclose(cov.pose, cov.pose.T, rtol=1e-9, atol=1e-15)
     assert cov.position_radius95 > 0
     assert cov.enu_position is None  # the golden 1.0 city is not georeferenced
+
+
+def test_covariance_in_metres_on_a_georeferenced_index():
+    """On the georeferenced golden city the centre's covariance comes in metres east-north-up
+    too: the model's block rotated and scaled by the georeference, so every query's radius in
+    metres is its radius in model units times the same scale, near the city's true one."""
+    folder = GOLDEN / "index-1.1-queries"
+    localizer = cwloc.Localizer.open(GOLDEN / "index-1.1.cwl")
+    true_scale = float(next(line.split()[1] for line in
+                            (folder / "scale_to_metres.txt").read_text().splitlines()
+                            if line.startswith("scale ")))
+    scales = []
+    for line in (folder / "queries_gt.txt").read_text().splitlines():
+        if line.startswith("#") or not line.strip():
+            continue
+        fields = line.split()
+        result = localizer.localize_features(
+            *cwloc.read_feature_file(folder / (fields[0] + ".txt")), " ".join(fields[8:]))
+        assert result.success, result.failure_reason
+        cov = result.covariance
+        assert cov.enu_position.shape == (3, 3)
+        np.testing.assert_allclose(cov.enu_position, cov.enu_position.T, rtol=1e-9)
+        assert result.to_dict()["covariance"]["position_radius95_m"] == cov.position_radius95_m
+        scales.append(cov.position_radius95_m / cov.position_radius95)
+    assert len(scales) == 4
+    np.testing.assert_allclose(scales, scales[0], rtol=1e-9)
+    assert abs(scales[0] / true_scale - 1) < 0.05  # the fit to 3 m GPS noise
 
 
 def test_options(golden, golden_localizer):
