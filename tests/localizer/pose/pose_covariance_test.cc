@@ -92,7 +92,10 @@ void ExpectCalibrated(const Calibration& c) {
   EXPECT_NEAR(c.position_inside95, 0.95, 0.045);
   double mean = 0;
   for (const double x : c.pose_d2) mean += x / c.trials;
-  EXPECT_NEAR(mean, 6.0, 0.6);  // the standard error of the mean is sqrt(12 / 400) = 0.17
+  // Over seeds, on x86-64 and aarch64 (whose standard library draws other problems from the
+  // same seed), the mean was 5.39-6.49: more spread than a known covariance's sqrt(12 / 400) =
+  // 0.17, as each covariance is estimated from its own residuals.
+  EXPECT_NEAR(mean, 6.0, 0.9);
 }
 
 test::SyntheticPoseOptions Scene(double noise_px) {
