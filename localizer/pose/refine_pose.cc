@@ -143,8 +143,9 @@ std::optional<Eigen::MatrixXd> ParameterCovarianceAt(const RefinementProblem& pr
   Linearization at;
   if (!LinearizeWithBuiltin(problem, x, &at)) return std::nullopt;
   const Eigen::Index n = at.design.rows();
-  const double points = double(at.points);
-  if (2 * Eigen::Index(at.points) <= n) return std::nullopt;
+  const Eigen::Index residuals = 2 * Eigen::Index(problem.indices.size());
+  const double points = double(problem.indices.size());
+  if (residuals <= n) return std::nullopt;
   if (per_point_noise) {
     const Eigen::FullPivLU<Eigen::MatrixXd> lu(at.hessian);
     if (!lu.isInvertible()) return std::nullopt;
@@ -153,7 +154,7 @@ std::optional<Eigen::MatrixXd> ParameterCovarianceAt(const RefinementProblem& pr
   }
   const double kappa = at.curvature / points;
   if (!(kappa > 0.0)) return std::nullopt;
-  const double tau2 = at.squared_scores / double(2 * Eigen::Index(at.points) - n);
+  const double tau2 = at.squared_scores / double(residuals - n);
   const double spread = std::max(0.0, at.squared_curvature / points - kappa * kappa);
   const double huber = 1.0 + double(n) / points * spread / (kappa * kappa);
   const Eigen::FullPivLU<Eigen::MatrixXd> lu(kappa * at.design + at.prior);

@@ -520,7 +520,6 @@ bool Linearize(const RefinementProblem& problem, const RefinementParameters& par
   to_eigen(sandwich.scores, &out->scores);
   to_eigen(sandwich.design, &out->design);
   to_eigen(sandwich.prior, &out->prior);
-  out->points = problem.indices.size();
   out->squared_scores = sandwich.squared_scores;
   out->curvature = sandwich.curvature;
   out->squared_curvature = sandwich.squared_curvature;

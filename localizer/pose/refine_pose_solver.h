@@ -56,7 +56,6 @@ struct Linearization {
   Eigen::MatrixXd scores;
   Eigen::MatrixXd design;
   Eigen::MatrixXd prior;
-  size_t points = 0;
   double squared_scores = 0.0;
   double curvature = 0.0;
   double squared_curvature = 0.0;
