@@ -145,23 +145,31 @@ void Smooth(const Plane& in, Plane* out, double sigma, Rows rows, WorkerPool& po
   constexpr int kRowsPerTask = 16;
   const int num_tasks = (rows.hi - rows.lo + kRowsPerTask - 1) / kRowsPerTask;
   const int taps = int(kernel.size());
+  constexpr int kGroup = kConvolveRowsAtOnce;
+  static_assert(kRowsPerTask % kGroup == 0);
   pool.For(size_t(std::max(num_tasks, 0)), [&](size_t task) {
-    // The column pass lands in the middle of `padded`, which repeats its edge pixels `half`
-    // times on both sides for the row pass.
-    std::vector<float> padded(static_cast<size_t>(w + 2 * half));
-    std::vector<const float*> taps_rows(kernel.size());
+    // The column pass of kGroup rows at once lands in the middle of `padded`, which repeats
+    // each row's edge pixels `half` times on both sides for the row pass.
+    const size_t padded_w = size_t(w + 2 * half);
+    std::vector<float> padded(kGroup * padded_w);
+    std::vector<const float*> taps_rows(kernel.size() + kGroup - 1);
     const int y_begin = rows.lo + int(task) * kRowsPerTask;
     const int y_end = std::min(rows.hi, y_begin + kRowsPerTask);
-    for (int y = y_begin; y < y_end; ++y) {
-      for (int k = 0; k < taps; ++k) {
+    for (int y = y_begin; y < y_end; y += kGroup) {
+      const int n = std::min(kGroup, y_end - y);
+      for (int k = 0; k < taps + n - 1; ++k) {
         taps_rows[size_t(k)] = in.Row(std::clamp(y - half + k, 0, h - 1));
       }
-      float* a = padded.data() + half;
-      ConvolveTaps(taps_rows.data(), kernel.data(), taps, w, a);
-      std::fill(padded.data(), a, a[0]);
-      std::fill(a + w, a + w + half, a[w - 1]);
-      for (int k = 0; k < taps; ++k) taps_rows[size_t(k)] = padded.data() + k;
-      ConvolveTaps(taps_rows.data(), kernel.data(), taps, w, out->Row(y));
+      float* columns[kGroup];
+      for (int j = 0; j < n; ++j) columns[j] = padded.data() + size_t(j) * padded_w + half;
+      ConvolveTapsRows(taps_rows.data(), kernel.data(), taps, w, n, columns);
+      for (int j = 0; j < n; ++j) {
+        float* a = columns[j];
+        std::fill(a - half, a, a[0]);
+        std::fill(a + w, a + w + half, a[w - 1]);
+        for (int k = 0; k < taps; ++k) taps_rows[size_t(k)] = a - half + k;
+        ConvolveTaps(taps_rows.data(), kernel.data(), taps, w, out->Row(y + j));
+      }
     }
   });
 }

@@ -212,7 +212,7 @@ void ConvolveTaps(const float* const* rows, const float* kernel, int taps, int w
   int x = 0;
   // Each lane adds in tap order, so a lane's sum is a chain of dependent adds; several vectors
   // at a time keep enough chains in flight to hide the add latency.
-  constexpr int kChains = 4;
+  constexpr int kChains = 8;
   for (; x + kChains * kLanes <= w; x += kChains * kLanes) {
     Floats sum[kChains];
 #pragma GCC unroll 8
@@ -233,6 +233,72 @@ void ConvolveTaps(const float* const* rows, const float* kernel, int taps, int w
     float sum = rows[0][x] * kernel[0];
     for (int k = 1; k < taps; ++k) sum += rows[k][x] * kernel[k];
     out[x] = sum;
+  }
+#endif
+}
+
+void ConvolveTapsRowsScalar(const float* const* rows, const float* kernel, int taps, int w,
+                            int num_out, float* const* out) {
+  for (int j = 0; j < num_out; ++j) ConvolveTapsScalar(rows + j, kernel, taps, w, out[j]);
+}
+
+CWLOC_SIFT_CLONES
+void ConvolveTapsRows(const float* const* rows, const float* kernel, int taps, int w, int num_out,
+                      float* const* out) {
+#if !CWLOC_SIFT_VECTORS
+  ConvolveTapsRowsScalar(rows, kernel, taps, w, num_out, out);
+#else
+  constexpr int kRows = kConvolveRowsAtOnce;
+  if (num_out != kRows || taps <= kRows) {
+    for (int j = 0; j < num_out; ++j) ConvolveTaps(rows + j, kernel, taps, w, out[j]);
+    return;
+  }
+  // Input row r is tap r - j of output j. Every output still adds its taps in order: the first
+  // kRows input rows start the outputs one by one, the last kRows - 1 finish them.
+  constexpr int kChains = 2;
+  int x = 0;
+  for (; x + kChains * kLanes <= w; x += kChains * kLanes) {
+    Floats sum[kRows][kChains];
+#pragma GCC unroll 4
+    for (int r = 0; r < kRows; ++r) {
+#pragma GCC unroll 2
+      for (int c = 0; c < kChains; ++c) {
+        const Floats v = Load(rows[r] + x + c * kLanes);
+#pragma GCC unroll 4
+        for (int j = 0; j < r; ++j) sum[j][c] += v * kernel[r - j];
+        sum[r][c] = v * kernel[0];
+      }
+    }
+    for (int r = kRows; r < taps; ++r) {
+#pragma GCC unroll 2
+      for (int c = 0; c < kChains; ++c) {
+        const Floats v = Load(rows[r] + x + c * kLanes);
+#pragma GCC unroll 4
+        for (int j = 0; j < kRows; ++j) sum[j][c] += v * kernel[r - j];
+      }
+    }
+#pragma GCC unroll 4
+    for (int t = 1; t < kRows; ++t) {
+      const int r = taps - 1 + t;
+#pragma GCC unroll 2
+      for (int c = 0; c < kChains; ++c) {
+        const Floats v = Load(rows[r] + x + c * kLanes);
+#pragma GCC unroll 4
+        for (int j = t; j < kRows; ++j) sum[j][c] += v * kernel[r - j];
+      }
+    }
+#pragma GCC unroll 4
+    for (int j = 0; j < kRows; ++j) {
+#pragma GCC unroll 2
+      for (int c = 0; c < kChains; ++c) Store(out[j] + x + c * kLanes, sum[j][c]);
+    }
+  }
+  for (; x < w; ++x) {
+    for (int j = 0; j < kRows; ++j) {
+      float sum = rows[j][x] * kernel[0];
+      for (int k = 1; k < taps; ++k) sum += rows[j + k][x] * kernel[k];
+      out[j][x] = sum;
+    }
   }
 #endif
 }

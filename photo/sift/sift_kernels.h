@@ -64,6 +64,15 @@ int FindExtremumCandidatesScalar(const float* const gauss[4][3], int w, float th
 void ConvolveTaps(const float* const* rows, const float* kernel, int taps, int w, float* out);
 void ConvolveTapsScalar(const float* const* rows, const float* kernel, int taps, int w, float* out);
 
+// `num_out` ConvolveTaps along columns for consecutive output rows at once: out[j] reads rows
+// rows[j] .. rows[j + taps - 1] (so `rows` holds taps + num_out - 1 rows). Each loaded input
+// vector feeds every output it is a tap of, so the column pass reads its rows a quarter as often.
+constexpr int kConvolveRowsAtOnce = 4;
+void ConvolveTapsRows(const float* const* rows, const float* kernel, int taps, int w, int num_out,
+                      float* const* out);
+void ConvolveTapsRowsScalar(const float* const* rows, const float* kernel, int taps, int w,
+                            int num_out, float* const* out);
+
 // The part of VLFeat's descriptor loop (vl_sift_calc_keypoint_descriptor) that depends on one
 // window pixel alone: where its rotated position falls among the 4 x 4 x 8 bins and the weights
 // it adds to its 8 trilinear neighbours. The caller adds them, pixel after pixel, in VLFeat's

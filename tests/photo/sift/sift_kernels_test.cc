@@ -115,7 +115,7 @@ TEST(SiftKernels, ConvolveTapsEqualsTheScalarReferenceBitForBit) {
   for (const int taps : {3, 9, 13, 17, 25}) {
     std::vector<float> kernel(static_cast<size_t>(taps));
     for (float& k : kernel) k = unit(rng) / float(taps);
-    for (const int w : {1, 7, 8, 15, 16, 17, 33, 47, 3072, 3079}) {
+    for (const int w : {1, 7, 8, 15, 16, 17, 33, 47, 64, 71, 130, 3072, 3079}) {
       std::vector<std::vector<float>> data;
       std::vector<const float*> rows;
       for (int k = 0; k < taps; ++k) data.push_back(TestRow(rng, w));
@@ -126,6 +126,45 @@ TEST(SiftKernels, ConvolveTapsEqualsTheScalarReferenceBitForBit) {
       for (int x = 0; x < w; ++x) {
         ASSERT_EQ(Bits(out[size_t(x)]), Bits(ref[size_t(x)]))
             << "taps " << taps << " w " << w << " x " << x;
+      }
+    }
+  }
+}
+
+TEST(SiftKernels, ConvolveTapsRowsEqualsTheScalarReferenceBitForBit) {
+  std::mt19937 rng(12);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  for (const int taps : {3, 4, 5, 11, 27}) {
+    std::vector<float> kernel(static_cast<size_t>(taps));
+    for (float& k : kernel) k = unit(rng) / float(taps);
+    for (const int w : {1, 15, 16, 17, 33, 3079}) {
+      for (int num_out = 1; num_out <= kConvolveRowsAtOnce; ++num_out) {
+        std::vector<std::vector<float>> data;
+        std::vector<const float*> rows;
+        for (int k = 0; k < taps + num_out - 1; ++k) data.push_back(TestRow(rng, w));
+        for (const auto& row : data) rows.push_back(row.data());
+        std::vector<std::vector<float>> out, ref;
+        std::vector<float*> out_rows, ref_rows;
+        for (int j = 0; j < num_out; ++j) {
+          out.emplace_back(static_cast<size_t>(w), -1.0f);
+          ref.emplace_back(static_cast<size_t>(w), -2.0f);
+        }
+        for (int j = 0; j < num_out; ++j) {
+          out_rows.push_back(out[size_t(j)].data());
+          ref_rows.push_back(ref[size_t(j)].data());
+        }
+        ConvolveTapsRows(rows.data(), kernel.data(), taps, w, num_out, out_rows.data());
+        ConvolveTapsRowsScalar(rows.data(), kernel.data(), taps, w, num_out, ref_rows.data());
+        for (int j = 0; j < num_out; ++j) {
+          for (int x = 0; x < w; ++x) {
+            ASSERT_EQ(Bits(out[size_t(j)][size_t(x)]), Bits(ref[size_t(j)][size_t(x)]))
+                << "taps " << taps << " w " << w << " out " << j << " x " << x;
+          }
+        }
+        // Output j is ConvolveTaps on the rows shifted by j.
+        std::vector<float> single(static_cast<size_t>(w));
+        ConvolveTapsScalar(rows.data() + num_out - 1, kernel.data(), taps, w, single.data());
+        ASSERT_EQ(single, ref[size_t(num_out - 1)]);
       }
     }
   }
