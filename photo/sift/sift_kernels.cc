@@ -369,7 +369,9 @@ void DescribeSamples(const DescriptorRow& row, const float* mod, const float* an
       const Doubles4 e = Widen(r2, half) / (2.0 * kWindowSigma * kWindowSigma);
       const Doubles4 scaled = e * (FastExpn::kSize / FastExpn::kMax);
       // Outside the table (e > 25, or a sample outside the window) the value is unused.
-      const Longs4 index = __builtin_convertvector(scaled, Longs4) & ~Longs4(e >= FastExpn::kMax);
+      // int32 lanes: AVX2 converts doubles to int32 in one instruction, not to int64.
+      const Ints4 index = __builtin_convertvector(
+          Doubles4(Longs4(scaled) & ~Longs4(e >= FastExpn::kMax)), Ints4);
       const Doubles4 lo = {table[index[0]], table[index[1]], table[index[2]], table[index[3]]};
       const Doubles4 hi = {table[index[0] + 1], table[index[1] + 1], table[index[2] + 1],
                            table[index[3] + 1]};
