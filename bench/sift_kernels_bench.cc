@@ -41,10 +41,11 @@ void BM_ConvolveTaps(benchmark::State& state, bool vector, bool along_row) {
     }
   }
   std::vector<float> kernel(kTaps), out(kWidth);
-  for (int k = 0; k < kTaps; ++k) kernel[size_t(k)] = std::exp(-0.5f * float((k - 13) * (k - 13)) / 9.5f);
+  for (int k = 0; k < kTaps; ++k)
+    kernel[size_t(k)] = std::exp(-0.5f * float((k - 13) * (k - 13)) / 9.5f);
   for (auto _ : state) {
     (vector ? ConvolveTaps : ConvolveTapsScalar)(rows.data(), kernel.data(), kTaps, kWidth,
-                                                  out.data());
+                                                 out.data());
     benchmark::DoNotOptimize(out.data());
   }
   state.SetItemsProcessed(state.iterations() * kWidth);
@@ -61,7 +62,8 @@ void BM_ConvolveTapsRows(benchmark::State& state) {
     rows.push_back(images.back().data());
   }
   std::vector<float> kernel(kTaps);
-  for (int k = 0; k < kTaps; ++k) kernel[size_t(k)] = std::exp(-0.5f * float((k - 13) * (k - 13)) / 9.5f);
+  for (int k = 0; k < kTaps; ++k)
+    kernel[size_t(k)] = std::exp(-0.5f * float((k - 13) * (k - 13)) / 9.5f);
   std::vector<std::vector<float>> out(kOut, std::vector<float>(kWidth));
   float* out_rows[kOut];
   for (int j = 0; j < kOut; ++j) out_rows[j] = out[size_t(j)].data();
@@ -97,9 +99,8 @@ void BM_FindExtremumCandidates(benchmark::State& state, bool vector) {
   }
   std::vector<int32_t> out(kWidth);
   for (auto _ : state) {
-    benchmark::DoNotOptimize(
-        (vector ? FindExtremumCandidates : FindExtremumCandidatesScalar)(gauss, kWidth, 0.0053f,
-                                                                         out.data()));
+    benchmark::DoNotOptimize((vector ? FindExtremumCandidates : FindExtremumCandidatesScalar)(
+        gauss, kWidth, 0.0053f, out.data()));
   }
   state.SetItemsProcessed(state.iterations() * kWidth);
 }
@@ -116,13 +117,37 @@ void BM_DescribeSamples(benchmark::State& state, bool vector) {
     angle[size_t(p)] = float(2 * M_PI) * unit(rng);
   }
   const double x = 100.3, sbp = 3 * 2.5, angle0 = 0.7;
-  const DescriptorRow row{100 - kCount / 2, x, 1.6f, std::cos(angle0), std::sin(angle0), sbp,
-                          angle0};
+  const DescriptorRow row{100 - kCount / 2, x,   1.6f,  std::cos(angle0),
+                          std::sin(angle0), sbp, angle0};
   DescriptorSamples samples;
   for (auto _ : state) {
     (vector ? DescribeSamples : DescribeSamplesScalar)(row, mod.data(), angle.data(), kCount,
                                                        &samples);
     benchmark::DoNotOptimize(&samples);
+  }
+  state.SetItemsProcessed(state.iterations() * kCount);
+}
+
+// The same row's samples added to a histogram.
+void BM_AccumulateSamples(benchmark::State& state, bool vector) {
+  std::mt19937 rng(4);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  constexpr int kCount = DescriptorSamples::kMax;
+  std::vector<float> mod(kCount), angle(kCount);
+  for (int p = 0; p < kCount; ++p) {
+    mod[size_t(p)] = unit(rng);
+    angle[size_t(p)] = float(2 * M_PI) * unit(rng);
+  }
+  const double angle0 = 0.7;
+  const DescriptorRow row{100 - kCount / 2, 100.3,   1.6f,  std::cos(angle0),
+                          std::sin(angle0), 3 * 2.5, angle0};
+  DescriptorSamples samples;
+  DescribeSamplesScalar(row, mod.data(), angle.data(), kCount, &samples);
+  DescriptorHistogram hist;
+  hist.Clear();
+  for (auto _ : state) {
+    (vector ? AccumulateSamples : AccumulateSamplesScalar)(samples, kCount, &hist);
+    benchmark::DoNotOptimize(&hist);
   }
   state.SetItemsProcessed(state.iterations() * kCount);
 }
@@ -136,6 +161,8 @@ BENCHMARK_CAPTURE(BM_GradientRow, scalar, false);
 BENCHMARK_CAPTURE(BM_GradientRow, vector, true);
 BENCHMARK_CAPTURE(BM_FindExtremumCandidates, scalar, false);
 BENCHMARK_CAPTURE(BM_FindExtremumCandidates, vector, true);
+BENCHMARK_CAPTURE(BM_AccumulateSamples, scalar, false);
+BENCHMARK_CAPTURE(BM_AccumulateSamples, vector, true);
 BENCHMARK_CAPTURE(BM_DescribeSamples, scalar, false);
 BENCHMARK_CAPTURE(BM_DescribeSamples, vector, true);
 

@@ -487,12 +487,12 @@ void Descriptor(const Key& k, double angle0, const GradientPlanes& grad, float* 
   const double st0 = std::sin(angle0), ct0 = std::cos(angle0);
   const double SBP = DescriptorBinSize(sigma);
   const int W = DescriptorRadius(sigma);
-  constexpr int binto = 1, binyo = kNumAngleBins * kNumBinsPerSide, binxo = kNumAngleBins;
   std::fill(descr, descr + kSiftDescriptorDim, 0.0f);
   if (xi < 0 || xi >= w || yi < 0 || yi >= h - 1) return;
   const float* pt_mod = grad.mod.Row(yi) + xi;
   const float* pt_angle = grad.angle.Row(yi) + xi;
-  float* dpt = descr + (kNumBinsPerSide / 2) * binyo + (kNumBinsPerSide / 2) * binxo;
+  DescriptorHistogram hist;
+  hist.Clear();
   // |n| >= 2.5 puts every one of a sample's bins outside [-2, 2): it adds nothing. Per row,
   // the columns whose rotated position can fall inside |n| < 2.5, from the two slabs
   // |ct0 dx + st0 dy| < R and |-st0 dx + ct0 dy| < R (R = 2.5 SBP), widened by a pixel: a
@@ -523,26 +523,10 @@ void Descriptor(const Key& k, double angle0, const GradientPlanes& grad, float* 
       const ptrdiff_t off = ptrdiff_t(dyi) * w + dxi;
       row.first_x = xi + dxi;
       DescribeSamples(row, pt_mod + off, pt_angle + off, count, &samples);
-      for (int p = 0; p < count; ++p) {
-        if (!samples.inside[p]) continue;
-        // VLFeat's loop over (dbinx, dbiny, dbint), skipping the spatial bins outside 4 x 4.
-        const int binx = samples.binx[p], biny = samples.biny[p], bint = samples.bint[p];
-        const int t0 = (bint % kNumAngleBins) * binto, t1 = ((bint + 1) % kNumAngleBins) * binto;
-        for (int dbinx = 0; dbinx < 2; ++dbinx) {
-          if (binx + dbinx < -(kNumBinsPerSide / 2) || binx + dbinx >= kNumBinsPerSide / 2)
-            continue;
-          for (int dbiny = 0; dbiny < 2; ++dbiny) {
-            if (biny + dbiny < -(kNumBinsPerSide / 2) || biny + dbiny >= kNumBinsPerSide / 2)
-              continue;
-            float* cell = dpt + (biny + dbiny) * binyo + (binx + dbinx) * binxo;
-            const int i = dbinx * 4 + dbiny * 2;
-            cell[t0] += samples.weight[i][p];
-            cell[t1] += samples.weight[i + 1][p];
-          }
-        }
-      }
+      AccumulateSamples(samples, count, &hist);
     }
   }
+  hist.CopyInnerTo(descr);
   NormalizeHistogram(descr, descr + kSiftDescriptorDim);
   for (int bin = 0; bin < kSiftDescriptorDim; ++bin) descr[bin] = std::min(descr[bin], 0.2f);
   NormalizeHistogram(descr, descr + kSiftDescriptorDim);

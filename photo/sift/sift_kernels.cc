@@ -325,11 +325,13 @@ void DescribeSamplesScalar(const DescriptorRow& row, const float* mod, const flo
     out->binx[p] = binx;
     out->biny[p] = biny;
     out->bint[p] = bint;
-    for (int i = 0; i < 8; ++i) {
-      const int dbinx = i >> 2, dbiny = (i >> 1) & 1, dbint = i & 1;
-      out->weight[i][p] = win * mod[p] * vl_abs_f(1 - dbinx - rbinx) * vl_abs_f(1 - dbiny - rbiny) *
-                          vl_abs_f(1 - dbint - rbint);
+    for (int i = 0; i < 4; ++i) {
+      const int dbinx = i >> 1, dbiny = i & 1;
+      out->cell_weight[i][p] =
+          win * mod[p] * vl_abs_f(1 - dbinx - rbinx) * vl_abs_f(1 - dbiny - rbiny);
     }
+    for (int dbint = 0; dbint < 2; ++dbint)
+      out->angle_weight[dbint][p] = vl_abs_f(1 - dbint - rbint);
   }
 }
 
@@ -370,8 +372,8 @@ void DescribeSamples(const DescriptorRow& row, const float* mod, const float* an
       const Doubles4 scaled = e * (FastExpn::kSize / FastExpn::kMax);
       // Outside the table (e > 25, or a sample outside the window) the value is unused.
       // int32 lanes: AVX2 converts doubles to int32 in one instruction, not to int64.
-      const Ints4 index = __builtin_convertvector(
-          Doubles4(Longs4(scaled) & ~Longs4(e >= FastExpn::kMax)), Ints4);
+      const Ints4 index =
+          __builtin_convertvector(Doubles4(Longs4(scaled) & ~Longs4(e >= FastExpn::kMax)), Ints4);
       const Doubles4 lo = {table[index[0]], table[index[1]], table[index[2]], table[index[3]]};
       const Doubles4 hi = {table[index[0] + 1], table[index[1] + 1], table[index[2] + 1],
                            table[index[3] + 1]};
@@ -395,8 +397,8 @@ void DescribeSamples(const DescriptorRow& row, const float* mod, const float* an
     const Floats ax[2] = {Abs(Splat(1.0f) - rbinx), Abs(Splat(0.0f) - rbinx)};
     const Floats ay[2] = {Abs(Splat(1.0f) - rbiny), Abs(Splat(0.0f) - rbiny)};
     const Floats at[2] = {Abs(Splat(1.0f) - rbint), Abs(Splat(0.0f) - rbint)};
-    for (int i = 0; i < 8; ++i)
-      Store(out->weight[i] + p, wm * ax[i >> 2] * ay[(i >> 1) & 1] * at[i & 1]);
+    for (int i = 0; i < 4; ++i) Store(out->cell_weight[i] + p, wm * ax[i >> 1] * ay[i & 1]);
+    for (int dbint = 0; dbint < 2; ++dbint) Store(out->angle_weight[dbint] + p, at[dbint]);
   };
   int p = 0;
   for (; p + kLanes <= count; p += kLanes) block(p, mod + p, angle + p);
@@ -406,6 +408,64 @@ void DescribeSamples(const DescriptorRow& row, const float* mod, const float* an
     std::copy(angle + p, angle + count, angles);
     block(p, mods, angles);
   }
+#endif
+}
+
+void DescriptorHistogram::Clear() { std::memset(cell, 0, sizeof(cell)); }
+
+void DescriptorHistogram::CopyInnerTo(float* descriptor) const {
+  for (int y = 0; y < 4; ++y) {
+    for (int x = 0; x < 4; ++x) std::memcpy(descriptor + 32 * y + 8 * x, cell[y + 1][x + 1], 32);
+  }
+}
+
+void AccumulateSamplesScalar(const DescriptorSamples& samples, int count,
+                             DescriptorHistogram* hist) {
+  for (int p = 0; p < count; ++p) {
+    if (!samples.inside[p]) continue;
+    const int binx = samples.binx[p], biny = samples.biny[p], bint = samples.bint[p];
+    const int t0 = bint % 8, t1 = (bint + 1) % 8;
+    for (int dbinx = 0; dbinx < 2; ++dbinx) {
+      for (int dbiny = 0; dbiny < 2; ++dbiny) {
+        float* cell = hist->cell[biny + dbiny + 3][binx + dbinx + 3];
+        const float w = samples.cell_weight[2 * dbinx + dbiny][p];
+        cell[t0] += w * samples.angle_weight[0][p];
+        cell[t1] += w * samples.angle_weight[1][p];
+      }
+    }
+  }
+}
+
+CWLOC_SIFT_CLONES
+void AccumulateSamples(const DescriptorSamples& samples, int count, DescriptorHistogram* hist) {
+#if !CWLOC_SIFT_VECTORS
+  AccumulateSamplesScalar(samples, count, hist);
+#else
+  // A cell's 8 angle bins are one vector; a sample adds w * wt0 to bin t0, w * wt1 to bin t1
+  // and w * 0 = +0 to the others, which leaves them as they are (the bins are >= +0).
+  const Ints lanes = {0, 1, 2, 3, 4, 5, 6, 7};
+  int cached_x = -1, cached_y = -1;
+  float* cells[4] = {};
+  Floats sums[4] = {};
+  for (int p = 0; p < count; ++p) {
+    if (!samples.inside[p]) continue;
+    const int x = samples.binx[p] + 3, y = samples.biny[p] + 3;
+    if (x != cached_x || y != cached_y) {
+      for (int i = 0; i < 4 && cached_x >= 0; ++i) Store(cells[i], sums[i]);
+      cached_x = x;
+      cached_y = y;
+      for (int i = 0; i < 4; ++i) {
+        cells[i] = hist->cell[y + (i & 1)][x + (i >> 1)];
+        sums[i] = Load(cells[i]);
+      }
+    }
+    const int t0 = samples.bint[p] & 7;  // bint is in 0 .. 8
+    const Floats angle_weights =
+        Select(lanes == t0, Splat(samples.angle_weight[0][p]),
+               Select(lanes == ((t0 + 1) & 7), Splat(samples.angle_weight[1][p]), Splat(0.0f)));
+    for (int i = 0; i < 4; ++i) sums[i] += Splat(samples.cell_weight[i][p]) * angle_weights;
+  }
+  for (int i = 0; i < 4 && cached_x >= 0; ++i) Store(cells[i], sums[i]);
 #endif
 }
 

@@ -75,8 +75,8 @@ void ConvolveTapsRowsScalar(const float* const* rows, const float* kernel, int t
 
 // The part of VLFeat's descriptor loop (vl_sift_calc_keypoint_descriptor) that depends on one
 // window pixel alone: where its rotated position falls among the 4 x 4 x 8 bins and the weights
-// it adds to its 8 trilinear neighbours. The caller adds them, pixel after pixel, in VLFeat's
-// order. One call covers up to kMax consecutive pixels of one window row.
+// it adds to its 8 trilinear neighbours. AccumulateSamples adds them, pixel after pixel, in
+// VLFeat's order. One call covers up to kMax consecutive pixels of one window row.
 struct DescriptorRow {
   int first_x;  // xi + dxi of the first pixel (octave coordinates)
   double x;     // the keypoint's x in the octave
@@ -87,12 +87,32 @@ struct DescriptorSamples {
   static constexpr int kMax = 64;
   int32_t inside[kMax];  // nonzero: |nx|, |ny| < 2.5; the other fields only then
   int32_t binx[kMax], biny[kMax], bint[kMax];
-  // weight[i][p]: the neighbour (binx + (i >> 2), biny + ((i >> 1) & 1), bint + (i & 1)).
-  float weight[8][kMax];
+  // VLFeat's weight of the neighbour (binx + dbinx, biny + dbiny, bint + dbint) is
+  // cell_weight[2 * dbinx + dbiny][p] * angle_weight[dbint][p], that float product (VLFeat's
+  // win * mod * wx * wy * wt, multiplied left to right).
+  float cell_weight[4][kMax];
+  float angle_weight[2][kMax];
 };
 void DescribeSamples(const DescriptorRow& row, const float* mod, const float* angle, int count,
                      DescriptorSamples* out);
 void DescribeSamplesScalar(const DescriptorRow& row, const float* mod, const float* angle,
                            int count, DescriptorSamples* out);
+
+// The histogram VLFeat's descriptor adds into, with a border of one spatial bin on every side
+// that takes the additions VLFeat skips (bins outside the 4 x 4), so no sample needs a test.
+struct DescriptorHistogram {
+  static constexpr int kSide = 6;           // spatial bins -3 .. 2
+  alignas(32) float cell[kSide][kSide][8];  // [biny + 3][binx + 3][angle bin]
+  void Clear();
+  // The 4 x 4 x 8 bins in VLFeat's order (y bin, x bin, angle bin).
+  void CopyInnerTo(float* descriptor) const;
+};
+
+// Adds the inside samples' weights to their 8 neighbours, sample after sample, as VLFeat's
+// loop does: every bin receives its additions in the same order. The kernel keeps the four
+// spatial bins of the current samples in registers while consecutive samples share them.
+void AccumulateSamples(const DescriptorSamples& samples, int count, DescriptorHistogram* hist);
+void AccumulateSamplesScalar(const DescriptorSamples& samples, int count,
+                             DescriptorHistogram* hist);
 
 }  // namespace cwloc::sift_internal

@@ -205,10 +205,65 @@ TEST(SiftKernels, DescribeSamplesEqualsTheScalarReferenceBitForBit) {
       ASSERT_EQ(fast.binx[p], ref.binx[p]);
       ASSERT_EQ(fast.biny[p], ref.biny[p]);
       ASSERT_EQ(fast.bint[p], ref.bint[p]);
-      for (int i = 0; i < 8; ++i) ASSERT_EQ(Bits(fast.weight[i][p]), Bits(ref.weight[i][p]));
+      for (int i = 0; i < 4; ++i) {
+        ASSERT_EQ(Bits(fast.cell_weight[i][p]), Bits(ref.cell_weight[i][p]));
+      }
+      for (int i = 0; i < 2; ++i) {
+        ASSERT_EQ(Bits(fast.angle_weight[i][p]), Bits(ref.angle_weight[i][p]));
+      }
     }
   }
   EXPECT_GT(inside, 10000);  // the rows cross the window
+}
+
+// Samples as a descriptor row gives them: runs of equal spatial bins (the kernel keeps them in
+// registers), every bin of the padded grid, angle bin 8 (VLFeat's nt can round up to 8), and
+// some samples outside.
+TEST(SiftKernels, AccumulateSamplesEqualsTheScalarReferenceBitForBit) {
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  DescriptorHistogram fast, ref;
+  fast.Clear();
+  ref.Clear();
+  int added = 0;
+  for (int call = 0; call < 300; ++call) {
+    DescriptorSamples samples;
+    const int count = 1 + call % DescriptorSamples::kMax;
+    int binx = int(rng() % 5) - 3, biny = int(rng() % 5) - 3;
+    for (int p = 0; p < count; ++p) {
+      if (rng() % 6 == 0) binx = int(rng() % 5) - 3;
+      if (rng() % 9 == 0) biny = int(rng() % 5) - 3;
+      samples.inside[p] = rng() % 10 != 0;
+      samples.binx[p] = binx;
+      samples.biny[p] = biny;
+      samples.bint[p] = int(rng() % 9);
+      for (auto& w : samples.cell_weight) w[p] = unit(rng);
+      for (auto& w : samples.angle_weight) w[p] = p % 11 == 0 ? 0.0f : unit(rng);
+      added += samples.inside[p] != 0;
+    }
+    AccumulateSamples(samples, count, &fast);
+    AccumulateSamplesScalar(samples, count, &ref);
+  }
+  EXPECT_GT(added, 8000);
+  int nonzero = 0;
+  for (int y = 0; y < DescriptorHistogram::kSide; ++y) {
+    for (int x = 0; x < DescriptorHistogram::kSide; ++x) {
+      for (int t = 0; t < 8; ++t) {
+        SCOPED_TRACE("bin " + std::to_string(y) + " " + std::to_string(x) + " " +
+                     std::to_string(t));
+        ASSERT_EQ(Bits(fast.cell[y][x][t]), Bits(ref.cell[y][x][t]));
+        nonzero += ref.cell[y][x][t] != 0;
+      }
+    }
+  }
+  // Spatial bins -3 .. 1 plus 0 or 1 reach every bin of the padded grid.
+  EXPECT_EQ(nonzero, DescriptorHistogram::kSide * DescriptorHistogram::kSide * 8);
+  float inner[128];
+  ref.CopyInnerTo(inner);
+  // VLFeat's bins -2 .. 1 are the grid's 1 .. 4.
+  EXPECT_EQ(Bits(inner[0]), Bits(ref.cell[1][1][0]));
+  EXPECT_EQ(Bits(inner[127]), Bits(ref.cell[4][4][7]));
+  EXPECT_EQ(Bits(inner[32 * 1 + 8 * 2 + 3]), Bits(ref.cell[2][3][3]));
 }
 
 }  // namespace
