@@ -518,8 +518,8 @@ int FindExtremumCandidates(const float* const gauss[4][3], int w, float threshol
         for (int dx = -1; dx <= 1; ++dx) {
           if (l == 1 && r == 1 && dx == 0) continue;
           const Floats n = Load(gauss[l + 1][r] + x + dx) - Load(gauss[l][r] + x + dx);
-          hi = Select(n > hi, n, hi);
-          lo = Select(n < lo, n, lo);
+          hi = n > hi ? n : hi;  // maxps and minps on x86
+          lo = n < lo ? n : lo;
         }
       }
     }
