@@ -550,6 +550,12 @@ class OctaveLevels {
         h(doubled ? 2 * source.h : source.h),
         bands_(size_t(g.s_max - g.s_min + 1)) {}
 
+  // Level s is `whole` (the whole level, made before): Cover then makes no level up to s.
+  void Give(int s, const Plane* whole) {
+    given_s_ = s;
+    given_ = whole;
+  }
+
   // Makes level s_min + i hold (at least) rows need[i], and every level below it the rows the
   // smoothing reads.
   void Cover(std::vector<Rows> need) {
@@ -557,6 +563,10 @@ class OctaveLevels {
     for (int s = top; s > g_.s_min; --s) {
       Rows& below = need[size_t(s - 1 - g_.s_min)];
       below = Union(below, Widen(need[size_t(s - g_.s_min)], HalfWidth(LevelSigma(s)), h));
+    }
+    if (given_) {
+      for (int s = given_s_ + 1; s <= top; ++s) SmoothLevel(s, need[size_t(s - g_.s_min)]);
+      return;
     }
     const Rows first = need[0];
     if (!first.empty() && doubled_) {
@@ -567,20 +577,23 @@ class OctaveLevels {
       const Plane& base = doubled_ ? doubled_band_ : source_;
       Smooth(base, &bands_[0], base_sigma_, {Slide(&bands_[0], w, h, first), first.hi}, pool_);
     }
-    for (int s = g_.s_min + 1; s <= top; ++s) {
-      const Rows rows = need[size_t(s - g_.s_min)];
-      if (rows.empty()) continue;
-      Plane* band = &bands_[size_t(s - g_.s_min)];
-      Smooth(Level(s - 1), band, LevelSigma(s), {Slide(band, w, h, rows), rows.hi}, pool_);
-    }
+    for (int s = g_.s_min + 1; s <= top; ++s) SmoothLevel(s, need[size_t(s - g_.s_min)]);
   }
 
   const Plane& Level(int s) const {
+    if (given_ && s == given_s_) return *given_;
     if (s > g_.s_min || base_sigma_ > 0) return bands_[size_t(s - g_.s_min)];
     return doubled_ ? doubled_band_ : source_;
   }
 
  private:
+  // Level s's rows `rows` from level s - 1's.
+  void SmoothLevel(int s, Rows rows) {
+    if (rows.empty()) return;
+    Plane* band = &bands_[size_t(s - g_.s_min)];
+    Smooth(Level(s - 1), band, LevelSigma(s), {Slide(band, w, h, rows), rows.hi}, pool_);
+  }
+
   // Level s is level s - 1 smoothed by this.
   double LevelSigma(int s) const { return g_.dsigma0 * std::pow(g_.sigmak, s); }
 
@@ -596,6 +609,8 @@ class OctaveLevels {
  private:
   Plane doubled_band_;
   std::vector<Plane> bands_;  // [s - s_min]
+  int given_s_ = 0;
+  const Plane* given_ = nullptr;
 };
 
 // Rows per band: bands of 128 rows compute about 1.5x the rows of the band for the lowest level
@@ -608,7 +623,17 @@ struct OctaveSource {
   Plane plane;  // the photo (first octave) or the octave below's level s_min + S, downsampled
   bool doubled;
   double base_sigma;
+  // The first octave's level kKeptLevel, whole, when it fits kMaxKeptLevelBytes: describing
+  // keypoints of that level or above then makes their levels from it, not from the photo.
+  Plane kept_level;
 };
+
+// Describing the first octave's keypoints needs its levels again, and COLMAP's cap keeps its
+// finer levels only for small photos or large caps: for 1536 x 1024 photos at 6000 and 8192
+// features, levels 2 and 1 (of -1 .. 4). Keeping level 1 of the doubled photo (25 MB) spares
+// the second pass the upsampling and three of its four smoothings.
+constexpr int kKeptLevel = 1;  // = s_min + 2
+constexpr size_t kMaxKeptLevelBytes = size_t(32) << 20;
 
 // Every keypoint of every octave in VLFeat's order (octave, level, row, column), and each
 // octave's source for the description pass.
@@ -619,7 +644,7 @@ void DetectAll(const GreyImage& image, const Geometry& g, const SiftOptions& opt
   for (size_t i = 0; i < image.pixels.size(); ++i) {
     input.data()[i] = float(image.pixels[i]) / 255.0f;
   }
-  OctaveSource source{g.o_min, std::move(input), g.o_min < 0, 0};
+  OctaveSource source{g.o_min, std::move(input), g.o_min < 0, 0, Plane()};
   if (g.o_min > 0) {
     const int w = ShiftLeft(source.plane.w, -g.o_min), h = ShiftLeft(source.plane.h, -g.o_min);
     Plane smaller;
@@ -638,12 +663,15 @@ void DetectAll(const GreyImage& image, const Geometry& g, const SiftOptions& opt
     const int w = ShiftLeft(int(image.width), -o), h = ShiftLeft(int(image.height), -o);
     if (w < 3 || h < 3) break;  // no pixel with 8 neighbours: VLFeat finds nothing either
     sources->push_back(std::move(source));
-    const OctaveSource& current = sources->back();
+    OctaveSource& current = sources->back();
+    const bool keep_level = oi == 0 && g.s_min < kKeptLevel && kKeptLevel <= g.s_max - 2 &&
+                            size_t(w) * size_t(h) * sizeof(float) <= kMaxKeptLevelBytes;
+    if (keep_level) current.kept_level.Resize(w, h);
     OctaveLevels levels(g, current.plane, current.doubled, current.base_sigma, pool);
     const int wn = ShiftLeft(int(image.width), -(o + 1)),
               hn = ShiftLeft(int(image.height), -(o + 1));
     const bool next = oi + 1 < g.O && wn >= 3 && hn >= 3;
-    source = OctaveSource{o + 1, Plane(), false, 0};
+    source = OctaveSource{o + 1, Plane(), false, 0, Plane()};
     if (next) source.plane.Resize(wn, hn);
     std::vector<std::vector<Key>> level_keys(size_t(g.s_max - g.s_min - 2));
     for (int d0 = 0; d0 < h; d0 += kBandRows) {
@@ -658,6 +686,10 @@ void DetectAll(const GreyImage& image, const Geometry& g, const SiftOptions& opt
                     &level_keys[size_t(s - g.s_min - 1)]);
       }
       if (next) DownsampleRows(levels.Level(s_best), 1, band, &source.plane);
+      if (keep_level) {
+        std::memcpy(current.kept_level.Row(band.lo), levels.Level(kKeptLevel).Row(band.lo),
+                    size_t(band.hi - band.lo) * size_t(w) * sizeof(float));
+      }
     }
     for (const auto& level : level_keys) keys->insert(keys->end(), level.begin(), level.end());
     const double sa = g.sigma0 * std::pow(float(g.sigmak), float(g.s_min));
@@ -684,10 +716,15 @@ void DescribeOctave(const std::vector<Key>& keys, size_t begin, size_t end,
   const size_t num_levels = size_t(g.s_max - g.s_min - 2);  // s_min + 1 .. s_max - 2
   std::vector<int> reach(num_levels, -1);                   // -1: no keypoint
   std::vector<std::vector<size_t>> by_band(size_t((h + kBandRows - 1) / kBandRows));
+  int lowest_level = g.s_max;
   for (size_t j = begin; j < end; ++j) {
     int& r = reach[size_t(keys[j].is - g.s_min - 1)];
     r = std::max(r, KeyReach(keys[j]));
     by_band[size_t(std::clamp(KeyRow(keys[j]), 0, h - 1) / kBandRows)].push_back(j);
+    lowest_level = std::min(lowest_level, keys[j].is);
+  }
+  if (source.kept_level.size() > 0 && lowest_level >= kKeptLevel) {
+    levels.Give(kKeptLevel, &source.kept_level);
   }
   std::vector<GradientPlanes> grads(num_levels);
   for (size_t b = 0; b < by_band.size(); ++b) {

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <functional>
 #include <numeric>
 #include <stdexcept>
@@ -241,6 +242,31 @@ TEST(SiftCwlocTest, EqualsVlfeatForVariousOptions) {
       EXPECT_EQ(ours.keypoints[i].scale, vlfeat.keypoints[i].scale);
       EXPECT_EQ(ours.keypoints[i].orientation, vlfeat.keypoints[i].orientation);
     }
+  }
+}
+
+// COLMAP's cap decides which levels are described, and ours describes the first octave's from
+// a level it kept whole when the cap keeps none below it: every cap, on a real photo, from
+// the coarsest levels only to all of them, gives VLFeat's features.
+TEST(SiftCwlocTest, EqualsVlfeatAtEveryCap) {
+  if (!SiftVlfeatAvailable()) GTEST_SKIP() << "built without VLFeat";
+  CWLOC_REQUIRE_SHARED_DATA(data, "herz_jesu_p25");
+  const std::filesystem::path path = data / "query_images" / "0007.jpg";
+  GreyImage image = DecodeGreyImage(ReadPhotoFile(path), path);
+  const ImageSize size = ExtractionSize(image.width, image.height, 480);
+  image = ResizeBilinear(image, size.width, size.height);
+  for (const int cap : {100, 600, 1000, 8192}) {  // octave -1: none, level 2, 1-2, all
+    SCOPED_TRACE("cap " + std::to_string(cap));
+    SiftOptions options;
+    options.max_num_features = cap;
+    options.implementation = SiftOptions::Implementation::kVlfeat;
+    const SiftFeatures vlfeat = ExtractSift(image, options);
+    options.implementation = SiftOptions::Implementation::kCwloc;
+    const SiftFeatures ours = ExtractSift(image, options);
+    ASSERT_EQ(ours.size(), vlfeat.size());
+    EXPECT_EQ(ours.descriptors, vlfeat.descriptors);
+    EXPECT_EQ(0, std::memcmp(ours.keypoints.data(), vlfeat.keypoints.data(),
+                             ours.size() * sizeof(SiftKeypoint)));
   }
 }
 
