@@ -91,9 +91,25 @@ Rows Union(Rows a, Rows b) {
   return {std::min(a.lo, b.lo), std::max(a.hi, b.hi)};
 }
 
+// Copies `rows` rows of `w` floats from src to dst; in parallel when the two do not overlap.
+void MoveRows(float* dst, const float* src, int rows, int w, WorkerPool& pool) {
+  const size_t row_bytes = size_t(w) * sizeof(float);
+  if (rows <= 0) return;
+  if (dst + size_t(rows) * size_t(w) > src && src + size_t(rows) * size_t(w) > dst) {
+    std::memmove(dst, src, size_t(rows) * row_bytes);
+    return;
+  }
+  constexpr int kRowsPerTask = 16;
+  pool.For(size_t((rows + kRowsPerTask - 1) / kRowsPerTask), [&](size_t task) {
+    const int first = int(task) * kRowsPerTask, count = std::min(kRowsPerTask, rows - first);
+    std::memcpy(dst + size_t(first) * size_t(w), src + size_t(first) * size_t(w),
+                size_t(count) * row_bytes);
+  });
+}
+
 // Makes `band` (a w x h image's rows) hold rows `want`, keeping the rows it already holds there;
 // returns the first row it still has to compute. Bands only slide down the image.
-int Slide(Plane* band, int w, int h, Rows want) {
+int Slide(Plane* band, int w, int h, Rows want, WorkerPool& pool) {
   const bool same = band->w == w && band->h == h;
   const int kept = same && want.lo >= band->y0 && want.lo < band->end()
                        ? std::min(want.hi, band->end()) - want.lo
@@ -102,10 +118,10 @@ int Slide(Plane* band, int w, int h, Rows want) {
   if (n > band->capacity) {
     Plane bigger;
     bigger.Hold(w, h, want.lo, want.hi - want.lo);
-    if (kept > 0) std::memcpy(bigger.data(), band->Row(want.lo), size_t(kept) * size_t(w) * 4);
+    MoveRows(bigger.data(), band->Row(want.lo), kept, w, pool);
     *band = std::move(bigger);
   } else {
-    if (kept > 0) std::memmove(band->data(), band->Row(want.lo), size_t(kept) * size_t(w) * 4);
+    MoveRows(band->data(), band->Row(want.lo), kept, w, pool);
     band->Hold(w, h, want.lo, want.hi - want.lo);
   }
   return want.lo + kept;
@@ -571,11 +587,11 @@ class OctaveLevels {
     const Rows first = need[0];
     if (!first.empty() && doubled_) {
       const Rows up = base_sigma_ > 0 ? Widen(first, HalfWidth(base_sigma_), h) : first;
-      UpsampleRows(source_, &doubled_band_, {Slide(&doubled_band_, w, h, up), up.hi}, pool_);
+      UpsampleRows(source_, &doubled_band_, {Slide(&doubled_band_, w, h, up, pool_), up.hi}, pool_);
     }
     if (!first.empty() && base_sigma_ > 0) {
       const Plane& base = doubled_ ? doubled_band_ : source_;
-      Smooth(base, &bands_[0], base_sigma_, {Slide(&bands_[0], w, h, first), first.hi}, pool_);
+      Smooth(base, &bands_[0], base_sigma_, {Slide(&bands_[0], w, h, first, pool_), first.hi}, pool_);
     }
     for (int s = g_.s_min + 1; s <= top; ++s) SmoothLevel(s, need[size_t(s - g_.s_min)]);
   }
@@ -591,7 +607,7 @@ class OctaveLevels {
   void SmoothLevel(int s, Rows rows) {
     if (rows.empty()) return;
     Plane* band = &bands_[size_t(s - g_.s_min)];
-    Smooth(Level(s - 1), band, LevelSigma(s), {Slide(band, w, h, rows), rows.hi}, pool_);
+    Smooth(Level(s - 1), band, LevelSigma(s), {Slide(band, w, h, rows, pool_), rows.hi}, pool_);
   }
 
   // Level s is level s - 1 smoothed by this.
@@ -687,8 +703,8 @@ void DetectAll(const GreyImage& image, const Geometry& g, const SiftOptions& opt
       }
       if (next) DownsampleRows(levels.Level(s_best), 1, band, &source.plane);
       if (keep_level) {
-        std::memcpy(current.kept_level.Row(band.lo), levels.Level(kKeptLevel).Row(band.lo),
-                    size_t(band.hi - band.lo) * size_t(w) * sizeof(float));
+        MoveRows(current.kept_level.Row(band.lo), levels.Level(kKeptLevel).Row(band.lo),
+                 band.hi - band.lo, w, pool);
       }
     }
     for (const auto& level : level_keys) keys->insert(keys->end(), level.begin(), level.end());
@@ -740,8 +756,8 @@ void DescribeOctave(const std::vector<Key>& keys, size_t begin, size_t end,
     for (size_t l = 0; l < num_levels; ++l) {
       if (reach[l] < 0) continue;
       const Rows rows = grad_rows[l];
-      const int from = Slide(&grads[l].mod, levels.w, h, rows);
-      Slide(&grads[l].angle, levels.w, h, rows);
+      const int from = Slide(&grads[l].mod, levels.w, h, rows, pool);
+      Slide(&grads[l].angle, levels.w, h, rows, pool);
       Gradient(levels.Level(g.s_min + 1 + int(l)), {from, rows.hi}, &grads[l], pool);
     }
     const std::vector<size_t>& band_keys = by_band[b];
