@@ -591,7 +591,8 @@ class OctaveLevels {
     }
     if (!first.empty() && base_sigma_ > 0) {
       const Plane& base = doubled_ ? doubled_band_ : source_;
-      Smooth(base, &bands_[0], base_sigma_, {Slide(&bands_[0], w, h, first, pool_), first.hi}, pool_);
+      Smooth(base, &bands_[0], base_sigma_, {Slide(&bands_[0], w, h, first, pool_), first.hi},
+             pool_);
     }
     for (int s = g_.s_min + 1; s <= top; ++s) SmoothLevel(s, need[size_t(s - g_.s_min)]);
   }

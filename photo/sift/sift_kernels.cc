@@ -381,17 +381,18 @@ void DescribeSamples(const DescriptorRow& row, const float* mod, const float* an
       win_half[half] = Doubles4(Longs4(value) & ~Longs4(e > FastExpn::kMax));
     }
     const Floats win = Narrow(win_half[0], win_half[1]);
-    const Ints binx = Floor(Narrow(Widen(nx, 0) - 0.5, Widen(nx, 1) - 0.5));
-    const Ints biny = Floor(Narrow(Widen(ny, 0) - 0.5, Widen(ny, 1) - 0.5));
+    // VLFeat's float(n - 0.5) and float(n - (bin + 0.5)) subtract in double and round to
+    // float; in float they give the same value: the double difference is exact unless |n| <
+    // 2^-27, and then it lies within 2^-27 of -c (c = 0.5 or bin + 0.5), nearer than any point
+    // halfway between two floats there (2^-26 or more), so rounding it twice cannot differ.
+    const Ints binx = Floor(nx - 0.5f);
+    const Ints biny = Floor(ny - 0.5f);
     const Ints bint = Floor(nt);
     Store(out->binx + p, binx);
     Store(out->biny + p, biny);
     Store(out->bint + p, bint);
-    auto offset = [](Floats v, Ints bin, int half) {  // v - (bin + 0.5), in double
-      return Widen(v, half) - (__builtin_convertvector(Half(bin, half), Doubles4) + 0.5);
-    };
-    const Floats rbinx = Narrow(offset(nx, binx, 0), offset(nx, binx, 1));
-    const Floats rbiny = Narrow(offset(ny, biny, 0), offset(ny, biny, 1));
+    const Floats rbinx = nx - (__builtin_convertvector(binx, Floats) + 0.5f);
+    const Floats rbiny = ny - (__builtin_convertvector(biny, Floats) + 0.5f);
     const Floats rbint = nt - __builtin_convertvector(bint, Floats);
     const Floats wm = win * Load(mods);
     const Floats ax[2] = {Abs(Splat(1.0f) - rbinx), Abs(Splat(0.0f) - rbinx)};

@@ -170,6 +170,34 @@ TEST(SiftKernels, ConvolveTapsRowsEqualsTheScalarReferenceBitForBit) {
   }
 }
 
+// DescribeSamples computes VLFeat's float(n - 0.5) and float(n - (bin + 0.5)), which subtract
+// in double, by float subtractions (sift_kernels.cc says why they agree): every 61st float
+// below 2.5 in magnitude, and every float near the values where rounding twice could differ.
+TEST(SiftKernels, BinOffsetsInFloatEqualVlfeatsDoubleOnes) {
+  auto check = [](float n) {
+    ASSERT_EQ(Bits(float(double(n) - 0.5)), Bits(n - 0.5f)) << n;
+    for (int bin = -3; bin <= 1; ++bin) {
+      ASSERT_EQ(Bits(float(double(n) - (bin + 0.5))), Bits(n - (float(bin) + 0.5f)))
+          << n << " bin " << bin;
+    }
+  };
+  const uint32_t limit = Bits(2.5f);
+  for (uint32_t bits = 0; bits < limit; bits += 61) {
+    float n;
+    std::memcpy(&n, &bits, sizeof(n));
+    check(n);
+    check(-n);
+  }
+  for (const float centre : {0.0f, 1e-30f, 1.0f / (1 << 27), 1.0f / (1 << 26), 1.0f / (1 << 25),
+                             0.5f, 1.0f, 1.5f, 2.0f}) {
+    for (const float sign : {1.0f, -1.0f}) {
+      float n = sign * centre;
+      for (int i = 0; i < 20000; ++i) n = std::nextafter(n, 10.0f);
+      for (int i = 0; i < 40000; ++i, n = std::nextafter(n, -10.0f)) check(n);
+    }
+  }
+}
+
 TEST(SiftKernels, DescribeSamplesEqualsTheScalarReferenceBitForBit) {
   std::mt19937 rng(13);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
