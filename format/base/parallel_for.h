@@ -86,7 +86,7 @@ class WorkerPool {
     {
       std::lock_guard lock(mutex_);
       stop_ = true;
-      published_.fetch_add(1, std::memory_order_release);  // ends the workers' spinning
+      generation_.fetch_add(1, std::memory_order_release);  // ends the workers' spinning
     }
     wake_.notify_all();
     for (auto& worker : workers_) worker.join();
@@ -115,8 +115,7 @@ class WorkerPool {
       std::lock_guard lock(mutex_);
       job_ = &job;
       unfinished_.store(workers_.size(), std::memory_order_relaxed);
-      ++generation_;
-      published_.store(generation_, std::memory_order_release);
+      generation_.fetch_add(1, std::memory_order_release);
     }
     wake_.notify_all();
     job(0);
@@ -129,11 +128,12 @@ class WorkerPool {
   void Serve(int worker) {
     uint64_t seen = 0;
     for (;;) {
-      SpinUntil([&] { return published_.load(std::memory_order_acquire) != seen; });
+      SpinUntil([&] { return generation_.load(std::memory_order_acquire) != seen; });
       std::unique_lock lock(mutex_);
-      wake_.wait(lock, [&] { return stop_ || generation_ != seen; });
+      wake_.wait(lock,
+                 [&] { return stop_ || generation_.load(std::memory_order_relaxed) != seen; });
       if (stop_) return;
-      seen = generation_;
+      seen = generation_.load(std::memory_order_relaxed);
       const std::function<void(int)>* job = job_;
       lock.unlock();
       (*job)(worker);
@@ -162,8 +162,8 @@ class WorkerPool {
   std::condition_variable wake_, finished_;
   const std::function<void(int)>* job_ = nullptr;
   std::atomic<size_t> unfinished_{0};
-  uint64_t generation_ = 0;
-  std::atomic<uint64_t> published_{0};  // generation_, read without the lock by spinning workers
+  // Changed under the lock; spinning workers also read it without the lock.
+  std::atomic<uint64_t> generation_{0};
   bool stop_ = false;
 };
 
