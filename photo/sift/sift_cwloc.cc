@@ -37,8 +37,9 @@ struct OctaveSource {
   Plane plane;  // the photo (first octave) or the octave below's level s_min + S, downsampled
   bool doubled;
   double base_sigma;
-  // The first octave's level kKeptLevel, whole, when it fits kMaxKeptLevelBytes: describing
-  // keypoints of that level or above then makes their levels from it, not from the photo.
+  // The first octave's level kKeptLevel, made whole (not in a band) during detection when it
+  // fits kMaxKeptLevelBytes: describing keypoints of that level or above then makes their
+  // levels from it, not from the photo.
   Plane kept_level;
 };
 
@@ -80,8 +81,11 @@ void DetectAll(const GreyImage& image, const Geometry& g, const SiftOptions& opt
     OctaveSource& current = sources->back();
     const bool keep_level = oi == 0 && g.s_min < kKeptLevel && kKeptLevel <= g.s_max - 2 &&
                             size_t(w) * size_t(h) * sizeof(float) <= kMaxKeptLevelBytes;
-    if (keep_level) current.kept_level.Resize(w, h);
     OctaveLevels levels(g, current.plane, current.doubled, current.base_sigma, pool);
+    if (keep_level) {
+      current.kept_level.Resize(w, h);
+      levels.KeepWhole(kKeptLevel, &current.kept_level, 0);
+    }
     const int wn = ShiftLeft(int(image.width), -(o + 1)),
               hn = ShiftLeft(int(image.height), -(o + 1));
     const bool next = oi + 1 < g.O && wn >= 3 && hn >= 3;
@@ -100,10 +104,6 @@ void DetectAll(const GreyImage& image, const Geometry& g, const SiftOptions& opt
                     &level_keys[size_t(s - g.s_min - 1)]);
       }
       if (next) DownsampleRows(levels.Level(s_best), 1, band, &source.plane);
-      if (keep_level) {
-        MoveRows(current.kept_level.Row(band.lo), levels.Level(kKeptLevel).Row(band.lo),
-                 band.hi - band.lo, w, pool);
-      }
     }
     for (const auto& level : level_keys) keys->insert(keys->end(), level.begin(), level.end());
     const double sa = g.sigma0 * std::pow(float(g.sigmak), float(g.s_min));
@@ -122,9 +122,9 @@ struct KeyAngles {
 // levels are made again, band by band, with the gradient of each level's rows its keypoints
 // read. Key j's orientations go to angles[j - begin] and its descriptors (the first `slots`
 // orientations') to descriptors + (j - begin) * slots * 128.
-void DescribeOctave(const std::vector<Key>& keys, size_t begin, size_t end,
-                    const OctaveSource& source, const Geometry& g, const SiftOptions& options,
-                    WorkerPool& pool, int slots, KeyAngles* angles, uint8_t* descriptors) {
+void DescribeOctave(const std::vector<Key>& keys, size_t begin, size_t end, OctaveSource& source,
+                    const Geometry& g, const SiftOptions& options, WorkerPool& pool, int slots,
+                    KeyAngles* angles, uint8_t* descriptors) {
   OctaveLevels levels(g, source.plane, source.doubled, source.base_sigma, pool);
   const int h = levels.h;
   const size_t num_levels = size_t(g.s_max - g.s_min - 2);  // s_min + 1 .. s_max - 2
@@ -138,7 +138,7 @@ void DescribeOctave(const std::vector<Key>& keys, size_t begin, size_t end,
     lowest_level = std::min(lowest_level, keys[j].is);
   }
   if (source.kept_level.size() > 0 && lowest_level >= kKeptLevel) {
-    levels.Give(kKeptLevel, &source.kept_level);
+    levels.KeepWhole(kKeptLevel, &source.kept_level, h);
   }
   std::vector<GradientPlanes> grads(num_levels);
   for (size_t b = 0; b < by_band.size(); ++b) {

@@ -124,10 +124,13 @@ class OctaveLevels {
         h(doubled ? 2 * source.h : source.h),
         bands_(size_t(g.s_max - g.s_min + 1)) {}
 
-  // Level s is `whole` (the whole level, made before): Cover then makes no level up to s.
-  void Give(int s, const Plane* whole) {
-    given_s_ = s;
-    given_ = whole;
+  // Level s lives in `whole`, a w x h plane whose rows [0, rows_made) are made: Cover makes
+  // its other rows there, not in a band (bands slide down and overlap, so the rows it makes
+  // follow on). Once `whole` is complete, Cover makes no level below s.
+  void KeepWhole(int s, Plane* whole, int rows_made) {
+    whole_s_ = s;
+    whole_ = whole;
+    whole_made_ = rows_made;
   }
 
   // Makes level s_min + i hold (at least) rows need[i], and every level below it the rows the
@@ -138,8 +141,8 @@ class OctaveLevels {
       Rows& below = need[size_t(s - 1 - g_.s_min)];
       below = Union(below, Widen(need[size_t(s - g_.s_min)], HalfWidth(LevelSigma(s)), h));
     }
-    if (given_) {
-      for (int s = given_s_ + 1; s <= top; ++s) SmoothLevel(s, need[size_t(s - g_.s_min)]);
+    if (whole_ && whole_made_ == h) {
+      for (int s = whole_s_ + 1; s <= top; ++s) SmoothLevel(s, need[size_t(s - g_.s_min)]);
       return;
     }
     const Rows first = need[0];
@@ -156,7 +159,7 @@ class OctaveLevels {
   }
 
   const Plane& Level(int s) const {
-    if (given_ && s == given_s_) return *given_;
+    if (whole_ && s == whole_s_) return *whole_;
     if (s > g_.s_min || base_sigma_ > 0) return bands_[size_t(s - g_.s_min)];
     return doubled_ ? doubled_band_ : source_;
   }
@@ -165,6 +168,12 @@ class OctaveLevels {
   // Level s's rows `rows` from level s - 1's.
   void SmoothLevel(int s, Rows rows) {
     if (rows.empty()) return;
+    if (whole_ && s == whole_s_) {
+      const int from = std::max(rows.lo, whole_made_);
+      if (from < rows.hi) Smooth(Level(s - 1), whole_, LevelSigma(s), {from, rows.hi}, pool_);
+      whole_made_ = std::max(whole_made_, rows.hi);
+      return;
+    }
     Plane* band = &bands_[size_t(s - g_.s_min)];
     Smooth(Level(s - 1), band, LevelSigma(s), {Slide(band, w, h, rows, pool_), rows.hi}, pool_);
   }
@@ -184,8 +193,9 @@ class OctaveLevels {
  private:
   Plane doubled_band_;
   std::vector<Plane> bands_;  // [s - s_min]
-  int given_s_ = 0;
-  const Plane* given_ = nullptr;
+  int whole_s_ = 0;
+  Plane* whole_ = nullptr;
+  int whole_made_ = 0;
 };
 
 // Rows per band: bands of 128 rows compute about 1.5x the rows of the band for the lowest level
