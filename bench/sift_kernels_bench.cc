@@ -107,42 +107,43 @@ void BM_FindExtremumCandidates(benchmark::State& state, bool vector) {
 
 // A row through the middle of a descriptor window of a keypoint of scale 2.5 (octave pixels),
 // the typical kept keypoint, kMax pixels at a time.
-void BM_DescribeSamples(benchmark::State& state, bool vector) {
+struct DescriptorRowInput {
+  DescriptorRow row;
+  std::vector<float> mod, angle;
+};
+DescriptorRowInput TypicalDescriptorRow() {
   std::mt19937 rng(4);
   std::uniform_real_distribution<float> unit(0.0f, 1.0f);
   constexpr int kCount = DescriptorSamples::kMax;
-  std::vector<float> mod(kCount), angle(kCount);
+  const double angle0 = 0.7;
+  DescriptorRowInput in{
+      {100 - kCount / 2, 100.3, 1.6f, std::cos(angle0), std::sin(angle0), 3 * 2.5, angle0},
+      std::vector<float>(kCount),
+      std::vector<float>(kCount)};
   for (int p = 0; p < kCount; ++p) {
-    mod[size_t(p)] = unit(rng);
-    angle[size_t(p)] = float(2 * M_PI) * unit(rng);
+    in.mod[size_t(p)] = unit(rng);
+    in.angle[size_t(p)] = float(2 * M_PI) * unit(rng);
   }
-  const double x = 100.3, sbp = 3 * 2.5, angle0 = 0.7;
-  const DescriptorRow row{100 - kCount / 2, x,   1.6f,  std::cos(angle0),
-                          std::sin(angle0), sbp, angle0};
+  return in;
+}
+
+void BM_DescribeSamples(benchmark::State& state, bool vector) {
+  const DescriptorRowInput in = TypicalDescriptorRow();
   DescriptorSamples samples;
   for (auto _ : state) {
-    (vector ? DescribeSamples : DescribeSamplesScalar)(row, mod.data(), angle.data(), kCount,
-                                                       &samples);
+    (vector ? DescribeSamples : DescribeSamplesScalar)(in.row, in.mod.data(), in.angle.data(),
+                                                       DescriptorSamples::kMax, &samples);
     benchmark::DoNotOptimize(&samples);
   }
-  state.SetItemsProcessed(state.iterations() * kCount);
+  state.SetItemsProcessed(state.iterations() * DescriptorSamples::kMax);
 }
 
 // The same row's samples added to a histogram.
 void BM_AccumulateSamples(benchmark::State& state, bool vector) {
-  std::mt19937 rng(4);
-  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  const DescriptorRowInput in = TypicalDescriptorRow();
   constexpr int kCount = DescriptorSamples::kMax;
-  std::vector<float> mod(kCount), angle(kCount);
-  for (int p = 0; p < kCount; ++p) {
-    mod[size_t(p)] = unit(rng);
-    angle[size_t(p)] = float(2 * M_PI) * unit(rng);
-  }
-  const double angle0 = 0.7;
-  const DescriptorRow row{100 - kCount / 2, 100.3,   1.6f,  std::cos(angle0),
-                          std::sin(angle0), 3 * 2.5, angle0};
   DescriptorSamples samples;
-  DescribeSamplesScalar(row, mod.data(), angle.data(), kCount, &samples);
+  DescribeSamplesScalar(in.row, in.mod.data(), in.angle.data(), kCount, &samples);
   DescriptorHistogram hist;
   hist.Clear();
   for (auto _ : state) {
