@@ -127,12 +127,11 @@ DescriptorRowInput TypicalDescriptorRow() {
   return in;
 }
 
-void BM_DescribeSamples(benchmark::State& state, bool vector) {
+void BM_DescribeSamples(benchmark::State& state, decltype(&DescribeSamples) describe) {
   const DescriptorRowInput in = TypicalDescriptorRow();
   DescriptorSamples samples;
   for (auto _ : state) {
-    (vector ? DescribeSamples : DescribeSamplesScalar)(in.row, in.mod.data(), in.angle.data(),
-                                                       DescriptorSamples::kMax, &samples);
+    describe(in.row, in.mod.data(), in.angle.data(), DescriptorSamples::kMax, &samples);
     benchmark::DoNotOptimize(&samples);
   }
   state.SetItemsProcessed(state.iterations() * DescriptorSamples::kMax);
@@ -164,8 +163,9 @@ BENCHMARK_CAPTURE(BM_FindExtremumCandidates, scalar, false);
 BENCHMARK_CAPTURE(BM_FindExtremumCandidates, vector, true);
 BENCHMARK_CAPTURE(BM_AccumulateSamples, scalar, false);
 BENCHMARK_CAPTURE(BM_AccumulateSamples, vector, true);
-BENCHMARK_CAPTURE(BM_DescribeSamples, scalar, false);
-BENCHMARK_CAPTURE(BM_DescribeSamples, vector, true);
+BENCHMARK_CAPTURE(BM_DescribeSamples, scalar, &DescribeSamplesScalar);
+BENCHMARK_CAPTURE(BM_DescribeSamples, eight_lanes, &DescribeSamplesEightLanes);
+BENCHMARK_CAPTURE(BM_DescribeSamples, vector, &DescribeSamples);
 
 }  // namespace
 }  // namespace cwloc::sift_internal

@@ -1,26 +1,14 @@
 #include "photo/sift/sift_kernels.h"
 
-extern "C" {
-#include <vl/mathop.h>
-}
-
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <limits>
 
-// The helpers pass 32-byte vectors by value; they are always inlined into the kernels, and
-// into the AVX2 clones with them, so no call crosses the ABI GCC warns about. Clang makes that
-// warning an error outside AVX code, so a clang build (the sanitizer jobs) runs the scalar
-// references instead: the same output, slower.
-#if defined(__clang__)
-#define CWLOC_SIFT_VECTORS 0
-#else
-#define CWLOC_SIFT_VECTORS 1
-#pragma GCC diagnostic ignored "-Wpsabi"
-#endif
-#define CWLOC_VECTOR_INLINE inline __attribute__((always_inline))
+#include "photo/sift/sift_describe_samples.h"
+#include "photo/sift/sift_vectors.h"
+
 #if defined(__x86_64__) && CWLOC_SIFT_VECTORS
 #define CWLOC_SIFT_CLONES __attribute__((target_clones("avx2", "default")))
 #else
@@ -32,55 +20,14 @@ namespace {
 #if CWLOC_SIFT_VECTORS
 
 constexpr int kLanes = 8;
-typedef float Floats __attribute__((vector_size(kLanes * sizeof(float))));
-typedef int32_t Ints __attribute__((vector_size(kLanes * sizeof(int32_t))));
-typedef float Floats4 __attribute__((vector_size(4 * sizeof(float))));
-typedef int32_t Ints4 __attribute__((vector_size(4 * sizeof(int32_t))));
-typedef double Doubles4 __attribute__((vector_size(4 * sizeof(double))));
-typedef int64_t Longs4 __attribute__((vector_size(4 * sizeof(int64_t))));
+typedef Lanes<kLanes>::Floats Floats;
+typedef Lanes<kLanes>::Ints Ints;
+typedef Lanes<kLanes>::HalfInts Ints4;
+typedef Lanes<kLanes>::Doubles Doubles4;
+typedef Lanes<kLanes>::Longs Longs4;
 
-CWLOC_VECTOR_INLINE Floats Load(const float* p) {
-  Floats v;
-  std::memcpy(&v, p, sizeof(v));
-  return v;
-}
-CWLOC_VECTOR_INLINE void Store(float* p, Floats v) { std::memcpy(p, &v, sizeof(v)); }
+CWLOC_VECTOR_INLINE Floats Load(const float* p) { return Load<kLanes>(p); }
 CWLOC_VECTOR_INLINE Floats Splat(float x) { return Floats{} + x; }
-CWLOC_VECTOR_INLINE void Store(int32_t* p, Ints v) { std::memcpy(p, &v, sizeof(v)); }
-
-// Lanes 4 * half .. 4 * half + 3 as doubles, and back. Shuffles, not copies through memory:
-// two 16-byte stores read back as one 32-byte load stall store forwarding.
-CWLOC_VECTOR_INLINE Floats4 Half(Floats v, int half) {
-  return half == 0 ? __builtin_shufflevector(v, v, 0, 1, 2, 3)
-                   : __builtin_shufflevector(v, v, 4, 5, 6, 7);
-}
-CWLOC_VECTOR_INLINE Ints4 Half(Ints v, int half) {
-  return half == 0 ? __builtin_shufflevector(v, v, 0, 1, 2, 3)
-                   : __builtin_shufflevector(v, v, 4, 5, 6, 7);
-}
-CWLOC_VECTOR_INLINE Doubles4 Widen(Floats v, int half) {
-  return __builtin_convertvector(Half(v, half), Doubles4);
-}
-CWLOC_VECTOR_INLINE Floats Narrow(Doubles4 low, Doubles4 high) {
-  const Floats4 a = __builtin_convertvector(low, Floats4),
-                b = __builtin_convertvector(high, Floats4);
-  return __builtin_shufflevector(a, b, 0, 1, 2, 3, 4, 5, 6, 7);
-}
-// vl_floor_f: truncation, one less for a negative non-integer.
-CWLOC_VECTOR_INLINE Ints Floor(Floats v) {
-  const Ints t = __builtin_convertvector(v, Ints);
-  return t + ((v < 0.0f) & (__builtin_convertvector(t, Floats) != v));
-}
-CWLOC_VECTOR_INLINE Floats Select(Ints mask, Floats a, Floats b) {
-  Ints ai, bi;
-  std::memcpy(&ai, &a, sizeof(a));
-  std::memcpy(&bi, &b, sizeof(b));
-  const Ints r = (ai & mask) | (bi & ~mask);
-  Floats out;
-  std::memcpy(&out, &r, sizeof(out));
-  return out;
-}
-CWLOC_VECTOR_INLINE Floats Abs(Floats v) { return Select(v < 0.0f, -v, v); }
 
 // vl_fast_sqrt_f's test x < 1e-8 compares the float promoted to double: as a float
 // comparison, x <= the largest float below 1e-8 (float(1e-8) rounds below 1e-8).
@@ -108,14 +55,6 @@ CWLOC_VECTOR_INLINE Floats FastAtan2(Floats y, Floats x) {
   return Select(y < 0.0f, -angle, angle);
 }
 
-// vl_mod_2pi_f for |x| < 6 pi, where its loops never run more than twice.
-CWLOC_VECTOR_INLINE Floats Mod2Pi(Floats x) {
-  constexpr float kTwoPi = float(2 * VL_PI);
-  for (int i = 0; i < 2; ++i) x = Select(x > kTwoPi, x - kTwoPi, x);
-  for (int i = 0; i < 2; ++i) x = Select(x < 0.0f, x + kTwoPi, x);
-  return x;
-}
-
 // vl_mod_2pi_f(float(a + 2 pi)) for a fast atan2 angle (|a| < 4 pi): the sum in double, then
 // the loops, which never run twice for such a sum.
 CWLOC_VECTOR_INLINE Floats AngleFrom(Floats a) {
@@ -123,9 +62,6 @@ CWLOC_VECTOR_INLINE Floats AngleFrom(Floats a) {
 }
 
 #endif  // CWLOC_SIFT_VECTORS
-
-constexpr float kReach = 2.5f;        // |n| >= 2.5 puts all of a sample's bins outside [-2, 2)
-constexpr double kWindowSigma = 2.0;  // VLFeat's window size, NBP / 2
 
 }  // namespace
 
@@ -336,80 +272,24 @@ void DescribeSamplesScalar(const DescriptorRow& row, const float* mod, const flo
 }
 
 CWLOC_SIFT_CLONES
-void DescribeSamples(const DescriptorRow& row, const float* mod, const float* angle, int count,
-                     DescriptorSamples* out) {
+void DescribeSamplesEightLanes(const DescriptorRow& row, const float* mod, const float* angle,
+                               int count, DescriptorSamples* out) {
 #if !CWLOC_SIFT_VECTORS
   DescribeSamplesScalar(row, mod, angle, count, out);
 #else
-  const double* table = FastExpn::Get().table();
-  const Doubles4 lane = {0, 1, 2, 3};
-  // Lanes p .. p + 7 from mods[0..7] and angles[0..7]; inlined, so in the AVX2 clone too.
-  static_assert(DescriptorSamples::kMax % kLanes == 0);
-  auto block = [&](int p, const float* mods, const float* angles) __attribute__((always_inline)) {
-    // float(first_x + p + lane - x), each lane's int sum in double.
-    const Doubles4 x_low = (double(row.first_x + p) + lane) - row.x;
-    const Doubles4 x_high = (double(row.first_x + p + 4) + lane) - row.x;
-    const Floats dx = Narrow(x_low, x_high);
-    const double dy = row.dy;
-    Doubles4 n[2][2];  // [x or y][half]
-    for (int half = 0; half < 2; ++half) {
-      const Doubles4 dxd = Widen(dx, half);
-      n[0][half] = (row.ct0 * dxd + row.st0 * dy) / row.sbp;
-      n[1][half] = (-row.st0 * dxd + row.ct0 * dy) / row.sbp;
-    }
-    const Floats nx = Narrow(n[0][0], n[0][1]), ny = Narrow(n[1][0], n[1][1]);
-    const Ints inside = (nx > -kReach) & (nx < kReach) & (ny > -kReach) & (ny < kReach);
-    Store(out->inside + p, inside);
-    const Floats a = Load(angles);
-    const Floats theta = Mod2Pi(Narrow(Widen(a, 0) - row.angle0, Widen(a, 1) - row.angle0));
-    const Floats theta8 = Splat(8.0f) * theta;
-    const Floats nt = Narrow(Widen(theta8, 0) / (2 * VL_PI), Widen(theta8, 1) / (2 * VL_PI));
-    // fast_expn of (nx^2 + ny^2) / 8, the sum in float.
-    const Floats r2 = nx * nx + ny * ny;
-    Doubles4 win_half[2];
-    for (int half = 0; half < 2; ++half) {
-      const Doubles4 e = Widen(r2, half) / (2.0 * kWindowSigma * kWindowSigma);
-      const Doubles4 scaled = e * (FastExpn::kSize / FastExpn::kMax);
-      // Outside the table (e > 25, or a sample outside the window) the value is unused.
-      // int32 lanes: AVX2 converts doubles to int32 in one instruction, not to int64.
-      const Ints4 index =
-          __builtin_convertvector(Doubles4(Longs4(scaled) & ~Longs4(e >= FastExpn::kMax)), Ints4);
-      const Doubles4 lo = {table[index[0]], table[index[1]], table[index[2]], table[index[3]]};
-      const Doubles4 hi = {table[index[0] + 1], table[index[1] + 1], table[index[2] + 1],
-                           table[index[3] + 1]};
-      const Doubles4 value = lo + (scaled - __builtin_convertvector(index, Doubles4)) * (hi - lo);
-      win_half[half] = Doubles4(Longs4(value) & ~Longs4(e > FastExpn::kMax));
-    }
-    const Floats win = Narrow(win_half[0], win_half[1]);
-    // VLFeat's float(n - 0.5) and float(n - (bin + 0.5)) subtract in double and round to
-    // float; in float they give the same value: the double difference is exact unless |n| <
-    // 2^-27, and then it lies within 2^-27 of -c (c = 0.5 or bin + 0.5), nearer than any point
-    // halfway between two floats there (2^-26 or more), so rounding it twice cannot differ.
-    const Ints binx = Floor(nx - 0.5f);
-    const Ints biny = Floor(ny - 0.5f);
-    const Ints bint = Floor(nt);
-    Store(out->binx + p, binx);
-    Store(out->biny + p, biny);
-    Store(out->bint + p, bint);
-    const Floats rbinx = nx - (__builtin_convertvector(binx, Floats) + 0.5f);
-    const Floats rbiny = ny - (__builtin_convertvector(biny, Floats) + 0.5f);
-    const Floats rbint = nt - __builtin_convertvector(bint, Floats);
-    const Floats wm = win * Load(mods);
-    const Floats ax[2] = {Abs(Splat(1.0f) - rbinx), Abs(Splat(0.0f) - rbinx)};
-    const Floats ay[2] = {Abs(Splat(1.0f) - rbiny), Abs(Splat(0.0f) - rbiny)};
-    const Floats at[2] = {Abs(Splat(1.0f) - rbint), Abs(Splat(0.0f) - rbint)};
-    for (int i = 0; i < 4; ++i) Store(out->cell_weight[i] + p, wm * ax[i >> 1] * ay[i & 1]);
-    for (int dbint = 0; dbint < 2; ++dbint) Store(out->angle_weight[dbint] + p, at[dbint]);
-  };
-  int p = 0;
-  for (; p + kLanes <= count; p += kLanes) block(p, mod + p, angle + p);
-  if (p < count) {  // the last pixels, padded to a whole vector whose extra lanes are unused
-    float mods[kLanes] = {}, angles[kLanes] = {};
-    std::copy(mod + p, mod + count, mods);
-    std::copy(angle + p, angle + count, angles);
-    block(p, mods, angles);
-  }
+  DescribeSamplesIn<8>(row, mod, angle, count, 0, true, out);
 #endif
+}
+
+void DescribeSamples(const DescriptorRow& row, const float* mod, const float* angle, int count,
+                     DescriptorSamples* out) {
+#if CWLOC_SIFT_AVX512
+  static const bool avx512 =
+      __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&
+      __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512bw");
+  if (avx512) return DescribeSamplesAvx512(row, mod, angle, count, out);
+#endif
+  DescribeSamplesEightLanes(row, mod, angle, count, out);
 }
 
 void DescriptorHistogram::Clear() { std::memset(cell, 0, sizeof(cell)); }

@@ -97,6 +97,13 @@ void DescribeSamples(const DescriptorRow& row, const float* mod, const float* an
                      DescriptorSamples* out);
 void DescribeSamplesScalar(const DescriptorRow& row, const float* mod, const float* angle,
                            int count, DescriptorSamples* out);
+// The kernels DescribeSamples picks from: 8 lanes (AVX2, SSE2 or NEON), or 16 where the CPU has
+// AVX-512 (x86-64 builds with GCC; sift_kernels_avx512.cc). The tests hold both to the
+// reference.
+void DescribeSamplesEightLanes(const DescriptorRow& row, const float* mod, const float* angle,
+                               int count, DescriptorSamples* out);
+void DescribeSamplesAvx512(const DescriptorRow& row, const float* mod, const float* angle,
+                           int count, DescriptorSamples* out);
 
 // The histogram VLFeat's descriptor adds into, with a border of one spatial bin on every side
 // that takes the additions VLFeat skips (bins outside the 4 x 4), so no sample needs a test.

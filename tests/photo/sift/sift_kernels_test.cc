@@ -198,7 +198,16 @@ TEST(SiftKernels, BinOffsetsInFloatEqualVlfeatsDoubleOnes) {
   }
 }
 
-TEST(SiftKernels, DescribeSamplesEqualsTheScalarReferenceBitForBit) {
+// DescribeSamples (16 lanes on a CPU with AVX-512) and the 8-lane kernel it runs elsewhere.
+class DescribeSamplesKernel
+    : public ::testing::TestWithParam<std::pair<const char*, decltype(&DescribeSamples)>> {};
+INSTANTIATE_TEST_SUITE_P(
+    SiftKernels, DescribeSamplesKernel,
+    ::testing::Values(std::make_pair("picked", &DescribeSamples),
+                      std::make_pair("eight_lanes", &DescribeSamplesEightLanes)),
+    [](const auto& param_info) { return std::string(param_info.param.first); });
+
+TEST_P(DescribeSamplesKernel, EqualsTheScalarReferenceBitForBit) {
   std::mt19937 rng(13);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   std::uniform_real_distribution<float> angle_of(0.0f, float(2 * 3.14159265358979));
@@ -223,7 +232,7 @@ TEST(SiftKernels, DescribeSamplesEqualsTheScalarReferenceBitForBit) {
     }
     const int count = 1 + trial % kCount;
     DescriptorSamples fast, ref;
-    DescribeSamples(row, mod.data(), angle.data(), count, &fast);
+    GetParam().second(row, mod.data(), angle.data(), count, &fast);
     DescribeSamplesScalar(row, mod.data(), angle.data(), count, &ref);
     for (int p = 0; p < count; ++p) {
       SCOPED_TRACE("trial " + std::to_string(trial) + " pixel " + std::to_string(p));
