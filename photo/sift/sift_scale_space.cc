@@ -4,9 +4,29 @@
 #include <cmath>
 #include <cstring>
 
+#if defined(__unix__)
+#include <sys/mman.h>
+#endif
+
 #include "photo/sift/sift_kernels.h"
 
 namespace cwloc::sift_internal {
+
+std::unique_ptr<float[], Plane::Free> Plane::Allocate(size_t n) {
+  // Linux's default transparent-huge-page mode is "madvise": a plane of 2 MiB or more, aligned
+  // to 2 MiB and advised, takes one page fault per 2 MiB instead of 512. The ~70 MB a photo
+  // touches took ~21000 faults, about a tenth of a one-photo run.
+  constexpr size_t kHugePage = size_t(2) << 20;
+  const size_t bytes = n * sizeof(float);
+  const size_t alignment = bytes >= kHugePage ? kHugePage : 64;
+  const size_t rounded = (bytes + alignment - 1) / alignment * alignment;
+  void* p = std::aligned_alloc(alignment, rounded);
+  if (!p) throw std::bad_alloc();
+#if defined(MADV_HUGEPAGE)
+  if (alignment == kHugePage) madvise(p, rounded, MADV_HUGEPAGE);  // a hint; failure is harmless
+#endif
+  return std::unique_ptr<float[], Free>(static_cast<float*>(p));
+}
 
 void MoveRows(float* dst, const float* src, int rows, int w, WorkerPool& pool) {
   const size_t row_bytes = size_t(w) * sizeof(float);

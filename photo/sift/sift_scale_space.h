@@ -28,13 +28,9 @@ struct Plane {
   };
   std::unique_ptr<float[], Free> storage;
 
-  static std::unique_ptr<float[], Free> Allocate(size_t n) {
-    constexpr size_t kAlignment = 64;
-    void* p = std::aligned_alloc(kAlignment,
-                                 (n * sizeof(float) + kAlignment - 1) / kAlignment * kAlignment);
-    if (!p) throw std::bad_alloc();
-    return std::unique_ptr<float[], Free>(static_cast<float*>(p));
-  }
+  // Storage for n floats, 64-byte aligned; from 2 MiB on, on transparent huge pages where the
+  // system offers them.
+  static std::unique_ptr<float[], Free> Allocate(size_t n);
   void Resize(int width, int height) { Hold(width, height, 0, height); }
   // Holds rows [first, first + count), forgetting what it held.
   void Hold(int width, int height, int first, int count) {
