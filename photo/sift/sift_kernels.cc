@@ -22,9 +22,6 @@ namespace {
 constexpr int kLanes = 8;
 typedef Lanes<kLanes>::Floats Floats;
 typedef Lanes<kLanes>::Ints Ints;
-typedef Lanes<kLanes>::HalfInts Ints4;
-typedef Lanes<kLanes>::Doubles Doubles4;
-typedef Lanes<kLanes>::Longs Longs4;
 
 CWLOC_VECTOR_INLINE Floats Load(const float* p) { return Load<kLanes>(p); }
 CWLOC_VECTOR_INLINE Floats Splat(float x) { return Floats{} + x; }

@@ -14,8 +14,8 @@ namespace cwloc::sift_internal {
 
 std::unique_ptr<float[], Plane::Free> Plane::Allocate(size_t n) {
   // Linux's default transparent-huge-page mode is "madvise": a plane of 2 MiB or more, aligned
-  // to 2 MiB and advised, takes one page fault per 2 MiB instead of 512. The ~70 MB a photo
-  // touches took ~21000 faults, about a tenth of a one-photo run.
+  // to 2 MiB and advised, takes one page fault per 2 MiB instead of 512. A one-photo run took
+  // ~21000 faults, about a tenth of its time.
   constexpr size_t kHugePage = size_t(2) << 20;
   const size_t bytes = n * sizeof(float);
   const size_t alignment = bytes >= kHugePage ? kHugePage : 64;
