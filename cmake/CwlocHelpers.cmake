@@ -1,6 +1,12 @@
 # Small helpers so every module declares itself the same way.
 
 set(CWLOC_WARNINGS -Wall -Wextra -Wpedantic -Wshadow -Wno-unused-parameter)
+# A warning fails the build in CI (.ci/run sets CI=true), so none creeps in; elsewhere it is
+# printed, since another compiler version may add warnings of its own.
+option(CWLOC_WERROR "Treat warnings as errors (default: on when the environment sets CI)" "$ENV{CI}")
+if(CWLOC_WERROR)
+  list(APPEND CWLOC_WARNINGS -Werror)
+endif()
 # The same index gives the same poses on every platform: no fused multiply-adds, which GCC and
 # clang make of a * b + c wherever the target has them (aarch64; x86-64 only with -mfma).
 set(CWLOC_COMPILE_OPTIONS ${CWLOC_WARNINGS} -ffp-contract=off)
@@ -30,12 +36,17 @@ function(cwloc_add_executable name)
   endif()
 endfunction()
 
+# The tests' own code at -O1 in optimised builds: it compiles in less than half the time of -O3
+# (34 s -> 14 s for a typical test file) and runs little; the libraries under test keep the
+# build type's optimisation. After CMake's -O3 on the command line, so it wins.
+set(CWLOC_TEST_COMPILE_OPTIONS ${CWLOC_COMPILE_OPTIONS} $<$<CONFIG:Release,RelWithDebInfo>:-O1>)
+
 # cwloc_add_test(NAME SRCS a_test.cc LINK libs...): one gtest binary, registered with CTest;
 # its tests carry the label NAME (ctest -L kdtree_tests).
 function(cwloc_add_test name)
   cmake_parse_arguments(ARG "" "" "SRCS;LINK" ${ARGN})
   add_executable(${name} ${ARG_SRCS})
-  target_compile_options(${name} PRIVATE ${CWLOC_COMPILE_OPTIONS})
+  target_compile_options(${name} PRIVATE ${CWLOC_TEST_COMPILE_OPTIONS})
   target_link_libraries(${name} PRIVATE cwloc_test_main ${ARG_LINK})
   set_target_properties(${name} PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${PROJECT_BINARY_DIR}/tests)
   gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60

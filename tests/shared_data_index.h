@@ -1,9 +1,8 @@
 #pragma once
 // The index of a real data set in ../shared/data (its mapping_model/bin and database.db), built
-// once per test binary with default options (or as a compact index of `code_bytes` codes) and
-// kept until the binary exits, so that the suites that use one data set share one build.
+// with default options (or as a compact index of `code_bytes` codes) once per build tree and
+// shared by every test process (test::SharedFixture).
 #include <filesystem>
-#include <map>
 #include <optional>
 #include <string>
 
@@ -20,21 +19,18 @@ struct SharedDataIndex {
 // std::nullopt when the data set is not next to the source tree (the caller skips).
 inline std::optional<SharedDataIndex> BuildSharedDataIndex(const std::string& name,
                                                            uint32_t code_bytes = 0) {
-  static TempDir dir;
-  static std::map<std::string, std::optional<SharedDataIndex>> built;
-  const std::string file = name + (code_bytes ? "-" + std::to_string(code_bytes) : "") + ".cwl";
-  if (const auto it = built.find(file); it != built.end()) return it->second;
-  std::optional<SharedDataIndex>& entry = built[file];
   const auto data = SharedDataDir(name);
-  if (!data) return entry;
-  IndexBuildOptions options;
-  options.model_dir = *data / "mapping_model" / "bin";
-  options.database_path = *data / "database.db";
-  options.output_path = dir / file;
-  options.code_bytes = code_bytes;
-  BuildIndex(options);
-  entry = SharedDataIndex{*data, options.output_path};
-  return entry;
+  if (!data) return std::nullopt;
+  const std::string file = name + (code_bytes ? "_" + std::to_string(code_bytes) : "");
+  const auto folder = SharedFixture("data_" + file, [&](const std::filesystem::path& out) {
+    IndexBuildOptions options;
+    options.model_dir = *data / "mapping_model" / "bin";
+    options.database_path = *data / "database.db";
+    options.output_path = out / "index.cwl";
+    options.code_bytes = code_bytes;
+    BuildIndex(options);
+  });
+  return SharedDataIndex{*data, folder / "index.cwl"};
 }
 
 }  // namespace cwloc::test

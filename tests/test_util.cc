@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <spawn.h>
+#include <sys/file.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -59,6 +60,61 @@ TempDir::TempDir() {
 TempDir::~TempDir() {
   std::error_code ec;
   std::filesystem::remove_all(path_, ec);
+}
+
+namespace {
+
+// Changes when this test binary or one of our tools is rebuilt.
+std::string BuildFingerprint() {
+  std::string stamps;
+  std::error_code ec;
+  for (const auto& file : {std::filesystem::read_symlink("/proc/self/exe", ec),
+                           ToolPath("cwloc-synth"), ToolPath("cwloc-index"),
+                           ToolPath("cwloc-localize")}) {
+    const auto time = std::filesystem::last_write_time(file, ec);
+    const auto size = std::filesystem::is_regular_file(file, ec) ? std::filesystem::file_size(file)
+                                                                 : 0;
+    stamps += file.string() + ":" + std::to_string(time.time_since_epoch().count()) + ":" +
+              std::to_string(size) + ";";
+  }
+  char hex[17];
+  std::snprintf(hex, sizeof(hex), "%016zx", std::hash<std::string>()(stamps));
+  return hex;
+}
+
+}  // namespace
+
+std::filesystem::path SharedFixture(const std::string& name,
+                                    const std::function<void(const std::filesystem::path&)>& make) {
+  // One folder per test binary: another binary's build never replaces what this one reads.
+  std::error_code ec;
+  const auto root = ToolPath("").parent_path().parent_path() / "test-fixtures" /
+                    std::filesystem::read_symlink("/proc/self/exe", ec).filename();
+  std::filesystem::create_directories(root);
+  const auto folder = root / (name + "-" + BuildFingerprint());
+  const int lock = ::open((root / (name + ".lock")).c_str(), O_CREAT | O_RDWR | O_CLOEXEC, 0644);
+  if (lock < 0 || ::flock(lock, LOCK_EX) != 0)
+    throw std::runtime_error(root.string() + ": cannot lock " + name + ": " + std::strerror(errno));
+  struct Unlock {
+    int fd;
+    ~Unlock() { ::close(fd); }
+  } unlock{lock};
+  if (std::filesystem::is_directory(folder)) return folder;
+  // Older builds' copies of this fixture, and a half-made one of a process that died.
+  for (const auto& entry : std::filesystem::directory_iterator(root)) {
+    const std::string entry_name = entry.path().filename().string();
+    if (entry_name.size() == name.size() + 17 && entry_name.rfind(name + "-", 0) == 0 &&
+        entry.is_directory())
+      std::filesystem::remove_all(entry.path());
+  }
+  const auto partial = root / (name + ".partial");
+  std::filesystem::remove_all(partial);
+  std::filesystem::create_directories(partial);
+  make(partial);
+  if (testing::Test::HasFailure())
+    throw std::runtime_error("shared fixture " + name + " could not be made");
+  std::filesystem::rename(partial, folder);
+  return folder;
 }
 
 std::vector<uint8_t> ReadBytes(const std::filesystem::path& path) {

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <random>
 #include <span>
@@ -41,6 +42,15 @@ class TempDir {
  private:
   std::filesystem::path path_;
 };
+
+// A fixture shared by the test processes of one build tree (ctest runs each test in a process
+// of its own, so a suite's SetUpTestSuite runs once per test): the folder `make` fills, made
+// once under a lock in the build tree and kept while this test binary and our tools stay as
+// they are (a rebuild of either makes it anew). `make` writes into the folder it is given, or
+// fails the test or throws, and then nothing is kept. Call it from SetUpTestSuite; read the
+// folder, never write into it.
+std::filesystem::path SharedFixture(const std::string& name,
+                                    const std::function<void(const std::filesystem::path&)>& make);
 
 // A whole file's bytes (empty when it cannot be read), and a file replaced by `bytes` (throws
 // std::runtime_error when it cannot be written).

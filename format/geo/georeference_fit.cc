@@ -121,15 +121,19 @@ Similarity WeightedUmeyama(std::span<const Eigen::Vector3d> x, std::span<const E
 enum class Degeneracy { kNone, kCoincident, kCollinear };
 
 // Whether the points at `indices` coincide or lie on a line: singular values of the centred
-// coordinates (RMS spread below `coincident_spread`; second below kCollinearRatio of the first).
+// coordinates (RMS spread below `coincident_spread`; second below kCollinearRatio of the first),
+// as the square roots of the 3 x 3 scatter matrix's: its squared ratios stay far above double
+// precision, and an SVD of the N x 3 matrix instantiates Eigen's QR preconditioners, which
+// took this file 80 s of every build's compile time.
 Degeneracy Classify(std::span<const Eigen::Vector3d> points, std::span<const size_t> indices,
                     double coincident_spread) {
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
   for (size_t i : indices) mean += points[i];
   mean /= static_cast<double>(indices.size());
-  Eigen::MatrixX3d centred(indices.size(), 3);
-  for (size_t k = 0; k < indices.size(); ++k) centred.row(k) = points[indices[k]] - mean;
-  const Eigen::Vector3d singular = Eigen::JacobiSVD<Eigen::MatrixX3d>(centred).singularValues();
+  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+  for (size_t i : indices) scatter += (points[i] - mean) * (points[i] - mean).transpose();
+  const Eigen::Vector3d singular =
+      Eigen::JacobiSVD<Eigen::Matrix3d>(scatter).singularValues().cwiseSqrt();
   if (!(singular[0] / std::sqrt(static_cast<double>(indices.size())) > coincident_spread)) {
     return Degeneracy::kCoincident;
   }

@@ -127,23 +127,26 @@ class LocalizerApiGeoToolsTest : public testing::Test {
   static void SetUpTestSuite() {
     if (!std::filesystem::exists(test::ToolPath("cwloc-synth"))) return;
     dir_ = new test::TempDir();
-    std::string output;
-    ASSERT_EQ(test::RunCommand(test::Quote(test::ToolPath("cwloc-synth")) +
-                                   " --preset demo --seed 3 --threads 2 --geo '47.3779 8.5403 455'"
-                                   " --gps-noise 3 --gps-outliers 0.1 --prior-position-error 10"
-                                   " --prior-gravity-error 1 -o " +
-                                   test::Quote(City()),
-                               &output),
-              0)
-        << output;
-    ASSERT_EQ(
-        test::RunCommand(test::Quote(test::ToolPath("cwloc-index")) + " build --model " +
-                             test::Quote(City() / "mapping_model" / "bin") + " --database " +
-                             test::Quote(City() / "database.db") + " --georef " +
-                             test::Quote(City() / "georef.txt") + " -o " + test::Quote(IndexPath()),
-                         &output),
-        0)
-        << output;
+    fixture_ = new std::filesystem::path(test::SharedFixture("geo_city", [](const auto& out) {
+      const auto city = out / "city";
+      std::string output;
+      ASSERT_EQ(test::RunCommand(test::Quote(test::ToolPath("cwloc-synth")) +
+                                     " --preset demo --seed 3 --threads 2"
+                                     " --geo '47.3779 8.5403 455' --gps-noise 3 --gps-outliers 0.1"
+                                     " --prior-position-error 10 --prior-gravity-error 1 -o " +
+                                     test::Quote(city),
+                                 &output),
+                0)
+          << output;
+      ASSERT_EQ(test::RunCommand(test::Quote(test::ToolPath("cwloc-index")) + " build --model " +
+                                     test::Quote(city / "mapping_model" / "bin") + " --database " +
+                                     test::Quote(city / "database.db") + " --georef " +
+                                     test::Quote(city / "georef.txt") + " -o " +
+                                     test::Quote(out / "city.cwl"),
+                                 &output),
+                0)
+          << output;
+    }));
     localizer_ = new api::Localizer(api::Localizer::Open(IndexPath().string()));
   }
   static void TearDownTestSuite() {
@@ -151,13 +154,16 @@ class LocalizerApiGeoToolsTest : public testing::Test {
     localizer_ = nullptr;
     delete dir_;
     dir_ = nullptr;
+    delete fixture_;
+    fixture_ = nullptr;
   }
   void SetUp() override {
     if (localizer_ == nullptr) GTEST_SKIP() << "cwloc-synth is not built (CWLOC_BUILD_TOOLS=OFF)";
   }
 
-  static std::filesystem::path City() { return *dir_ / "city"; }
-  static std::filesystem::path IndexPath() { return *dir_ / "city.cwl"; }
+  // The city and its index, shared by the suite's processes: read only.
+  static std::filesystem::path City() { return *fixture_ / "city"; }
+  static std::filesystem::path IndexPath() { return *fixture_ / "city.cwl"; }
 
   // queries_with_intrinsics.txt: "NAME MODEL W H PARAMS...", in query order.
   static std::vector<std::pair<std::string, api::Camera>> Queries() {
@@ -230,7 +236,8 @@ class LocalizerApiGeoToolsTest : public testing::Test {
     return by_name;
   }
 
-  static inline test::TempDir* dir_ = nullptr;
+  static inline test::TempDir* dir_ = nullptr;  // this process's scratch
+  static inline std::filesystem::path* fixture_ = nullptr;
   static inline api::Localizer* localizer_ = nullptr;
 };
 

@@ -51,31 +51,38 @@ class GeoLocalizationTest : public testing::Test {
  protected:
   static void SetUpTestSuite() {
     dir_ = new test::TempDir();
-    const auto city = City();
-    std::string output;
-    ASSERT_EQ(test::RunCommand(test::ToolPath("cwloc-synth").string() +
-                                   " --preset demo --seed 3 --threads 2 --geo '47.3779 8.5403 455'"
-                                   " --gps-noise 3 --gps-outliers 0.1 --prior-position-error 10"
-                                   " --prior-radius 50 --prior-gravity-error 1 -o " +
-                                   city.string(),
-                               &output),
-              0)
-        << output;
-    ASSERT_EQ(test::RunCommand(test::ToolPath("cwloc-index").string() + " build --model " +
-                                   (city / "mapping_model" / "bin").string() + " --database " +
-                                   (city / "database.db").string() + " --georef " +
-                                   (city / "georef.txt").string() + " -o " + IndexPath().string(),
-                               &output),
-              0)
-        << output;
+    fixture_ = new std::filesystem::path(test::SharedFixture("geo_city", [](const auto& out) {
+      const auto city = out / "city";
+      std::string output;
+      ASSERT_EQ(test::RunCommand(test::ToolPath("cwloc-synth").string() +
+                                     " --preset demo --seed 3 --threads 2"
+                                     " --geo '47.3779 8.5403 455' --gps-noise 3 --gps-outliers 0.1"
+                                     " --prior-position-error 10 --prior-radius 50"
+                                     " --prior-gravity-error 1 -o " +
+                                     city.string(),
+                                 &output),
+                0)
+          << output;
+      ASSERT_EQ(test::RunCommand(test::ToolPath("cwloc-index").string() + " build --model " +
+                                     (city / "mapping_model" / "bin").string() + " --database " +
+                                     (city / "database.db").string() + " --georef " +
+                                     (city / "georef.txt").string() + " -o " +
+                                     (out / "city.cwl").string(),
+                                 &output),
+                0)
+          << output;
+    }));
   }
   static void TearDownTestSuite() {
     delete dir_;
     dir_ = nullptr;
+    delete fixture_;
+    fixture_ = nullptr;
   }
 
-  static std::filesystem::path City() { return *dir_ / "city"; }
-  static std::filesystem::path IndexPath() { return *dir_ / "city.cwl"; }
+  // The city and its index, shared by the suite's processes: read only.
+  static std::filesystem::path City() { return *fixture_ / "city"; }
+  static std::filesystem::path IndexPath() { return *fixture_ / "city.cwl"; }
 
   // Runs cwloc-localize on every query with `extra` options; returns the JSON lines.
   static std::vector<nlohmann::json> Localize(const std::string& extra, int* exit_code = nullptr) {
@@ -98,7 +105,8 @@ class GeoLocalizationTest : public testing::Test {
     EXPECT_EQ(test::ValidateJson(schema, file, lines, &output), 0) << output;
   }
 
-  static inline test::TempDir* dir_ = nullptr;
+  static inline test::TempDir* dir_ = nullptr;  // this process's scratch
+  static inline std::filesystem::path* fixture_ = nullptr;
 };
 
 TEST_F(GeoLocalizationTest, TheFitFlagsEveryWildGpsPositionAndItsResidualIsTheNoise) {

@@ -20,32 +20,38 @@ class TileTest : public testing::TestWithParam<bool> {
  protected:
   static void SetUpTestSuite() {
     dir_ = new test::TempDir();
-    std::string output;
-    ASSERT_EQ(test::RunCommand(test::ToolPath("cwloc-synth").string() +
-                                   " --preset demo --seed 3 --threads 2 --geo '47.3779 8.5403 455'"
-                                   " -o " +
-                                   City().string(),
-                               &output),
-              0)
-        << output;
-    for (const bool compact : {false, true}) {
-      ASSERT_EQ(Index("build --model " + (City() / "mapping_model" / "bin").string() +
-                          " --database " + (City() / "database.db").string() + " --georef " +
-                          (City() / "georef.txt").string() + (compact ? " --compact" : "") +
-                          " -o " + Whole(compact).string(),
-                      &output),
+    fixture_ = new std::filesystem::path(test::SharedFixture("tile_city", [](const auto& out) {
+      std::string output;
+      const auto city = out / "city";
+      ASSERT_EQ(test::RunCommand(test::ToolPath("cwloc-synth").string() +
+                                     " --preset demo --seed 3 --threads 2"
+                                     " --geo '47.3779 8.5403 455' -o " +
+                                     city.string(),
+                                 &output),
                 0)
           << output;
-    }
+      for (const bool compact : {false, true}) {
+        ASSERT_EQ(Index("build --model " + (city / "mapping_model" / "bin").string() +
+                            " --database " + (city / "database.db").string() + " --georef " +
+                            (city / "georef.txt").string() + (compact ? " --compact" : "") +
+                            " -o " + (out / (compact ? "compact.cwl" : "full.cwl")).string(),
+                        &output),
+                  0)
+            << output;
+      }
+    }));
   }
   static void TearDownTestSuite() {
     delete dir_;
     dir_ = nullptr;
+    delete fixture_;
+    fixture_ = nullptr;
   }
 
-  static std::filesystem::path City() { return *dir_ / "city"; }
+  // The city and its indexes, shared by the suite's processes: read only.
+  static std::filesystem::path City() { return *fixture_ / "city"; }
   static std::filesystem::path Whole(bool compact) {
-    return *dir_ / (compact ? "compact.cwl" : "full.cwl");
+    return *fixture_ / (compact ? "compact.cwl" : "full.cwl");
   }
   static int Index(const std::string& arguments, std::string* output) {
     return test::RunCommand(test::ToolPath("cwloc-index").string() + " " + arguments, output);
@@ -73,7 +79,8 @@ class TileTest : public testing::TestWithParam<bool> {
     return checksums;
   }
 
-  static inline test::TempDir* dir_ = nullptr;
+  static inline test::TempDir* dir_ = nullptr;  // this process's scratch
+  static inline std::filesystem::path* fixture_ = nullptr;
 };
 
 TEST_P(TileTest, ATileOfEveryClusterHoldsTheParentsSectionsBitForBit) {
@@ -184,27 +191,33 @@ class ClusteredTileTest : public testing::Test {
  protected:
   static void SetUpTestSuite() {
     dir_ = new test::TempDir();
-    std::string output;
-    ASSERT_EQ(test::RunCommand(test::ToolPath("cwloc-synth").string() +
-                                   " --preset demo --seed 4 -o " + (*dir_ / "city").string(),
-                               &output),
-              0)
-        << output;
-    ASSERT_EQ(test::RunCommand(test::ToolPath("cwloc-index").string() + " build --model " +
-                                   (*dir_ / "city" / "mapping_model" / "bin").string() +
-                                   " --database " + (*dir_ / "city" / "database.db").string() +
-                                   " --clusters 12 -o " + Whole().string(),
-                               &output),
-              0)
-        << output;
+    fixture_ = new std::filesystem::path(test::SharedFixture("clustered_city", [](const auto& out) {
+      std::string output;
+      ASSERT_EQ(test::RunCommand(test::ToolPath("cwloc-synth").string() +
+                                     " --preset demo --seed 4 -o " + (out / "city").string(),
+                                 &output),
+                0)
+          << output;
+      ASSERT_EQ(test::RunCommand(test::ToolPath("cwloc-index").string() + " build --model " +
+                                     (out / "city" / "mapping_model" / "bin").string() +
+                                     " --database " + (out / "city" / "database.db").string() +
+                                     " --clusters 12 -o " + (out / "clustered.cwl").string(),
+                                 &output),
+                0)
+          << output;
+    }));
   }
   static void TearDownTestSuite() {
     delete dir_;
     dir_ = nullptr;
+    delete fixture_;
+    fixture_ = nullptr;
   }
-  static std::filesystem::path Whole() { return *dir_ / "clustered.cwl"; }
+  static std::filesystem::path City() { return *fixture_ / "city"; }  // read only
+  static std::filesystem::path Whole() { return *fixture_ / "clustered.cwl"; }
 
-  static inline test::TempDir* dir_ = nullptr;
+  static inline test::TempDir* dir_ = nullptr;  // this process's scratch
+  static inline std::filesystem::path* fixture_ = nullptr;
 };
 
 TEST_F(ClusteredTileTest, AListedImageBringsItsWholeCluster) {
