@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <iostream>
+#include <memory>
 #include <nlohmann/json.hpp>
 
 #include "cwloc/version.h"
@@ -11,6 +12,7 @@
 #include "format/base/tool_main.h"
 #include "format/index/index.h"
 #include "format/index/xxhash64.h"
+#include "indexer/build_option_table.h"
 #include "indexer/index_build_flags.h"
 #include "indexer/index_builder.h"
 #include "indexer/index_extract.h"
@@ -184,6 +186,66 @@ int RunVerify(const std::string& path) {
   return kExitOk;
 }
 
+// `cwloc-index build`'s flags, one per line of the build option table
+// (indexer/build_option_table.inc), with the defaults of IndexBuildOptions and IndexBuildFlags.
+class BuildFlags {
+ public:
+  void AddTo(CLI::App* build) {
+    const IndexBuildOptions options;
+    const IndexBuildFlags flags;
+    const std::span<const BuildOptionSpec> table = BuildOptionTable();
+    texts_.resize(table.size());
+    switches_ = std::make_unique<bool[]>(table.size());
+    for (size_t i = 0; i < table.size(); ++i) {
+      const BuildOptionSpec& spec = table[i];
+      const std::optional<BuildOptionValue> value = spec.get(options, flags);
+      const std::string flag = "--" + std::string(spec.flag);
+      if (IsSwitch(spec)) {
+        options_.push_back(build->add_flag(flag, switches_[i], spec.help));
+        continue;
+      }
+      CLI::Option* option =
+          build->add_option(flag, texts_[i], spec.help)->type_name(TypeName(spec));
+      // Numbers show their default; an unset optional, an empty path or name has none.
+      if (value && !std::holds_alternative<std::string>(*value) &&
+          !std::holds_alternative<std::filesystem::path>(*value))
+        option->default_str(FormatBuildOption(*value));
+      options_.push_back(option);
+    }
+  }
+
+  // Every flag given, through the table; ValidateBuildOptions checks the ranges.
+  void Apply(IndexBuildOptions* options, IndexBuildFlags* flags) const {
+    const std::span<const BuildOptionSpec> table = BuildOptionTable();
+    for (size_t i = 0; i < table.size(); ++i) {
+      if (options_[i]->count() == 0) continue;
+      const BuildOptionSpec& spec = table[i];
+      spec.set(IsSwitch(spec) ? BuildOptionValue(switches_[i]) : ParseBuildOption(spec, texts_[i]),
+               options, flags);
+    }
+  }
+
+ private:
+  static bool IsSwitch(const BuildOptionSpec& spec) { return spec.type == BuildOptionType<bool>(); }
+  static std::string TypeName(const BuildOptionSpec& spec) {
+    switch (spec.type) {
+      case BuildOptionType<int32_t>():
+        return "INT";
+      case BuildOptionType<double>():
+        return "FLOAT";
+      case BuildOptionType<std::string>():
+      case BuildOptionType<std::filesystem::path>():
+        return "TEXT";
+      default:
+        return "UINT";
+    }
+  }
+
+  std::vector<std::string> texts_;
+  std::unique_ptr<bool[]> switches_;  // CLI11 sets bools, and vector<bool> has none to point at
+  std::vector<CLI::Option*> options_;
+};
+
 }  // namespace
 }  // namespace cwloc
 
@@ -196,7 +258,6 @@ int main(int argc, char** argv) {
 
   cwloc::IndexBuildOptions options;
   cwloc::IndexBuildFlags flags;
-  uint32_t clusters = 0;
   bool json = false;
   auto* build =
       app.add_subcommand("build", "Build an index from a COLMAP sparse model and its database");
@@ -208,45 +269,9 @@ int main(int argc, char** argv) {
       ->required();
   build->add_option("-o,--output", options.output_path, "Index file to write (atomically)")
       ->required();
-  auto* cluster_file_option = build->add_option(
-      "--cluster-file", flags.cluster_file,
-      "Clustering: lines 'IMAGE_NAME CLUSTER_ID' (default: one cluster per image)");
-  build
-      ->add_option(
-          "--clusters", clusters,
-          "Clustering: spectral clustering of the co-visibility graph into this many clusters")
-      ->excludes(cluster_file_option);
-  build->add_option("--trees", options.forest.num_trees, "Randomized kd-trees in the global forest")
-      ->capture_default_str();
-  build->add_option("--leaf-size", options.forest.max_leaf_size, "Descriptors per kd leaf bucket")
-      ->capture_default_str();
-  build->add_option("--seed", options.seed, "Seed of the kd-forest and clustering randomization")
-      ->capture_default_str();
-  build->add_option("--threads", options.threads, "Worker threads (0 = all cores)")
-      ->capture_default_str();
-  build->add_flag(
-      "--keypoints", options.keypoints,
-      "Also store each view's keypoint (8 bytes per view; the localizer does not need them)");
-  build->add_flag("--compact", flags.compact,
-                  "A device-sized index: one " + std::to_string(cwloc::kCompactCodeBytes) +
-                      "-byte code per 3D point instead of each view's 128-byte descriptor "
-                      "(--code-bytes " +
-                      std::to_string(cwloc::kCompactCodeBytes) + " --trees " +
-                      std::to_string(cwloc::kCompactTrees) + " unless given)");
-  auto* code_bytes_option = build->add_option(
-      "--code-bytes", options.code_bytes,
-      "Compact index code bytes per 3D point: 4, 8, 16, 32 or 64 (0 = full descriptors per view)");
-  cwloc::GeoreferencingOptions& geo = options.georeferencing;
-  build->add_option("--georef", geo.georef_file,
-                    "Georeference from lines 'IMAGE_NAME LAT LON HEIGHT [SIGMA_M]' (WGS84)");
-  build->add_option("--georef-images", geo.images_dir,
-                    "Georeference from the EXIF GPS of the model's photos in this folder");
-  build->add_option("--model-frame", geo.model_frame,
-                    "The model is already geographic: 'ecef' or 'enu:LAT,LON,HEIGHT'");
-  build
-      ->add_option("--georef-sigma", geo.fit.default_sigma_m,
-                   "Position standard deviation (m) of --georef lines without one, and of EXIF GPS")
-      ->capture_default_str();
+  cwloc::BuildFlags build_flags;
+  build_flags.AddTo(build);
+  build->get_option("--clusters")->excludes(build->get_option("--cluster-file"));
   build->add_flag("--json", json, "Print the build report as JSON");
 
   cwloc::IndexExtractOptions extract_options;
@@ -286,9 +311,8 @@ int main(int argc, char** argv) {
   }
   return cwloc::RunTool("cwloc-index", [&]() -> int {
     if (build->parsed()) {
-      if (build->count("--clusters") > 0) flags.clusters = clusters;
-      flags.code_bytes_given = code_bytes_option->count() > 0;
-      flags.trees_given = build->count("--trees") > 0;
+      build_flags.Apply(&options, &flags);
+      cwloc::ValidateBuildOptions(options, flags);
       cwloc::ApplyBuildFlags(flags, &options);
       return cwloc::RunBuild(options, json);
     }

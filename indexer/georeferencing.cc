@@ -1,6 +1,6 @@
 #include "indexer/georeferencing.h"
 
-#include <cmath>
+#include <algorithm>
 #include <sstream>
 #include <unordered_map>
 #include <vector>
@@ -169,10 +169,6 @@ std::optional<ModelGeoreference> GeoreferenceModel(const ModelViews& views,
   if (sources == 0) return std::nullopt;
   if (sources > 1) {
     throw InputError("--georef, --georef-images and --model-frame exclude each other; give one");
-  }
-  if (!(options.fit.default_sigma_m > 0) || !std::isfinite(options.fit.default_sigma_m)) {
-    throw InputError("--georef-sigma " + std::to_string(options.fit.default_sigma_m) +
-                     ": expected a positive number of metres");
   }
   if (!options.model_frame.empty()) return GivenModelFrame(views, options.model_frame);
   return FittedGeoreference(views, options);

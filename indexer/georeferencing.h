@@ -32,7 +32,8 @@ struct ModelGeoreference {
 
 // nullopt when no georeference was asked for. Throws InputError naming the option, file or
 // image for every problem (two sources given, an unknown image name, a photo that cannot be
-// read, too few positions, a degenerate fit).
+// read, too few positions, a degenerate fit). fit.default_sigma_m (--georef-sigma) is in the
+// range ValidateBuildOptions checks (BuildIndex does, before reading the model).
 std::optional<ModelGeoreference> GeoreferenceModel(const ModelViews& views,
                                                    const GeoreferencingOptions& options);
 

@@ -11,6 +11,7 @@
 #include "format/index/xxhash64.h"
 #include "format/kdtree/descriptor_codes.h"
 #include "format/kdtree/kd_forest_builder.h"
+#include "indexer/build_option_table.h"
 #include "indexer/covisibility.h"
 #include "indexer/index_contents.h"
 #include "indexer/model_views.h"
@@ -43,17 +44,7 @@ std::string FingerprintModel(const std::filesystem::path& dir) {
 IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
   const Stopwatch total;
   IndexBuildReport report;
-  if (options.forest.num_trees < 1 || options.forest.num_trees > 64) {
-    throw InputError("--trees " + std::to_string(options.forest.num_trees) + ": expected 1 to 64");
-  }
-  if (options.forest.max_leaf_size < 1 || options.forest.max_leaf_size > 255) {
-    throw InputError("--leaf-size " + std::to_string(options.forest.max_leaf_size) +
-                     ": expected 1 to 255");
-  }
-  if (options.code_bytes != 0 && !IsValidCodeBytes(options.code_bytes)) {
-    throw InputError("--code-bytes " + std::to_string(options.code_bytes) +
-                     ": expected 0 (full descriptors) or 4, 8, 16, 32 or 64");
-  }
+  ValidateBuildOptions(options);
   const bool coded = options.code_bytes != 0;
   const int threads = ResolveThreads(options.threads);
   // The small inputs are read after the model; refuse a bad one before minutes of reading.

@@ -383,11 +383,13 @@ KdForest BuildKdForest(std::span<const uint8_t> descriptors, const KdForestBuild
   }
   const uint64_t n = descriptors.size() / kDescriptorDim;
   const uint32_t num_trees = options.num_trees;
-  if (num_trees == 0 || num_trees > 64) {
-    throw std::invalid_argument("BuildKdForest: num_trees must be in 1..64");
+  if (num_trees == 0 || num_trees > kMaxKdTrees) {
+    throw std::invalid_argument("BuildKdForest: num_trees must be in 1.." +
+                                std::to_string(kMaxKdTrees));
   }
-  if (options.max_leaf_size == 0 || options.max_leaf_size > kKdLeaf - 1) {
-    throw std::invalid_argument("BuildKdForest: max_leaf_size must be in 1..254");
+  if (options.max_leaf_size == 0 || options.max_leaf_size > kMaxKdLeafSize) {
+    throw std::invalid_argument("BuildKdForest: max_leaf_size must be in 1.." +
+                                std::to_string(kMaxKdLeafSize));
   }
   if (n * num_trees >= std::numeric_limits<uint32_t>::max()) {
     throw std::invalid_argument("BuildKdForest: " + std::to_string(n) + " descriptors x " +

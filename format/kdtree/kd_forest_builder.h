@@ -12,10 +12,15 @@
 
 namespace cwloc {
 
+// The most trees a forest has, and descriptors a leaf holds (a leaf's count is a byte, whose
+// largest value kKdLeaf marks a leaf). BuildKdForest refuses options beyond them.
+inline constexpr uint32_t kMaxKdTrees = 64;
+inline constexpr uint32_t kMaxKdLeafSize = kKdLeaf - 1;
+
 struct KdForestBuildOptions {
-  uint32_t num_trees = 4;
-  // Nodes with at most this many descriptors become leaves (1..255). Buckets of 8 make a
-  // leaf visit one cache line of indices and cut the node count 8x against FLANN's 1.
+  uint32_t num_trees = 4;  // 1..kMaxKdTrees
+  // Nodes with at most this many descriptors become leaves (1..kMaxKdLeafSize). Buckets of 8
+  // make a leaf visit one cache line of indices and cut the node count 8x against FLANN's 1.
   uint32_t max_leaf_size = 8;
   // The output is a function of (descriptors, num_trees, max_leaf_size, seed) only.
   uint64_t seed = 0;

@@ -1,10 +1,12 @@
 // cwloc.build_index: `cwloc-index build` from Python, with its flag names and its report.
-#include <functional>
+#include <algorithm>
+#include <filesystem>
 #include <limits>
-#include <map>
 #include <new>
+#include <string>
 
 #include "format/base/error.h"
+#include "indexer/build_option_table.h"
 #include "indexer/index_build_flags.h"
 #include "indexer/index_builder.h"
 #include "python/src/bindings.h"
@@ -30,56 +32,46 @@ bool Flag(const std::string& name, py::handle value) {
   return value.ptr() == Py_True;
 }
 
-using Setter = std::function<void(py::handle, IndexBuildOptions*, IndexBuildFlags*)>;
+// Each keyword is the `cwloc-index build` flag of the same name ('-' written '_'), one per line
+// of the build option table (indexer/build_option_table.inc).
+std::string KeywordOf(const BuildOptionSpec& spec) {
+  std::string name(spec.flag);
+  std::replace(name.begin(), name.end(), '-', '_');
+  return name;
+}
 
-// Each keyword is the `cwloc-index build` flag of the same name ('-' written '_').
-const std::map<std::string, Setter>& Setters() {
-  static const std::map<std::string, Setter> setters = {
-      {"trees",
-       [](py::handle v, IndexBuildOptions* o, IndexBuildFlags* f) {
-         o->forest.num_trees = Whole<uint32_t>("trees", v);
-         f->trees_given = true;
-       }},
-      {"leaf_size",
-       [](py::handle v, IndexBuildOptions* o, IndexBuildFlags*) {
-         o->forest.max_leaf_size = Whole<uint32_t>("leaf_size", v);
-       }},
-      {"seed", [](py::handle v, IndexBuildOptions* o,
-                  IndexBuildFlags*) { o->seed = Whole<uint64_t>("seed", v); }},
-      {"threads", [](py::handle v, IndexBuildOptions* o,
-                     IndexBuildFlags*) { o->threads = Whole<int>("threads", v); }},
-      {"keypoints", [](py::handle v, IndexBuildOptions* o,
-                       IndexBuildFlags*) { o->keypoints = Flag("keypoints", v); }},
-      {"compact", [](py::handle v, IndexBuildOptions*,
-                     IndexBuildFlags* f) { f->compact = Flag("compact", v); }},
-      {"code_bytes",
-       [](py::handle v, IndexBuildOptions* o, IndexBuildFlags* f) {
-         o->code_bytes = Whole<uint32_t>("code_bytes", v);
-         f->code_bytes_given = true;
-       }},
-      {"clusters", [](py::handle v, IndexBuildOptions*,
-                      IndexBuildFlags* f) { f->clusters = Whole<uint32_t>("clusters", v); }},
-      {"cluster_file", [](py::handle v, IndexBuildOptions*,
-                          IndexBuildFlags* f) { f->cluster_file = ToPath(v, "cluster_file"); }},
-      {"georef", [](py::handle v, IndexBuildOptions* o,
-                    IndexBuildFlags*) { o->georeferencing.georef_file = ToPath(v, "georef"); }},
-      {"georef_images",
-       [](py::handle v, IndexBuildOptions* o, IndexBuildFlags*) {
-         o->georeferencing.images_dir = ToPath(v, "georef_images");
-       }},
-      {"model_frame", [](py::handle v, IndexBuildOptions* o,
-                         IndexBuildFlags*) { o->georeferencing.model_frame = py::str(v); }},
-      {"georef_sigma",
-       [](py::handle v, IndexBuildOptions* o, IndexBuildFlags*) {
-         o->georeferencing.fit.default_sigma_m = py::float_(py::reinterpret_borrow<py::object>(v));
-       }},
-  };
-  return setters;
+const BuildOptionSpec* FindKeyword(const std::string& name) {
+  for (const BuildOptionSpec& spec : BuildOptionTable()) {
+    if (KeywordOf(spec) == name) return &spec;
+  }
+  return nullptr;
+}
+
+// A keyword's value as the option's type; its range is ValidateBuildOptions' to check.
+BuildOptionValue FromPython(const BuildOptionSpec& spec, const std::string& name,
+                            py::handle value) {
+  switch (spec.type) {
+    case BuildOptionType<bool>():
+      return Flag(name, value);
+    case BuildOptionType<int32_t>():
+      return Whole<int32_t>(name, value);
+    case BuildOptionType<uint32_t>():
+      return Whole<uint32_t>(name, value);
+    case BuildOptionType<uint64_t>():
+      return Whole<uint64_t>(name, value);
+    case BuildOptionType<double>():
+      return double(py::float_(py::reinterpret_borrow<py::object>(value)));
+    case BuildOptionType<std::string>():
+      return std::string(py::str(value));
+    default:
+      return std::filesystem::path(ToPath(value, name.c_str()));
+  }
 }
 
 std::string Names() {
   std::string names;
-  for (const auto& [name, setter] : Setters()) names += (names.empty() ? "" : ", ") + name;
+  for (const BuildOptionSpec& spec : BuildOptionTable())
+    names += (names.empty() ? "" : ", ") + KeywordOf(spec);
   return names;
 }
 
@@ -92,16 +84,17 @@ py::object BuildIndexPy(py::handle model, py::handle database, py::handle output
   options.output_path = ToPath(output, "output");
   for (const auto& [key, value] : kwargs) {
     const std::string name = py::str(key);
-    const auto setter = Setters().find(name);
-    if (setter == Setters().end())
+    const BuildOptionSpec* spec = FindKeyword(name);
+    if (spec == nullptr)
       throw api::Error(api::ErrorCode::kInvalidArgument,
                        "build_index: unknown option '" + name + "' (one of " + Names() + ")");
-    setter->second(value, &options, &flags);
+    spec->set(FromPython(*spec, name, value), &options, &flags);
   }
   std::string report;
   {
     py::gil_scoped_release release;
     try {
+      ValidateBuildOptions(options, flags);  // before anything is read, as the CLI does
       ApplyBuildFlags(flags, &options);
       report = BuildReportJson(options, BuildIndex(options)).dump();
     } catch (const InputError& e) {  // as libcwloc.so maps the pipeline's errors
@@ -118,13 +111,15 @@ py::object BuildIndexPy(py::handle model, py::handle database, py::handle output
 }  // namespace
 
 void BindIndexer(py::module_& m) {
+  static const std::string doc =
+      "`cwloc-index build`: an index from a COLMAP sparse model folder and its database.db, "
+      "written atomically to output. Keyword options are its flags with '-' written '_': " +
+      Names() +
+      ". Returns the report of `cwloc-index build --json` as a dict (output, file_bytes, "
+      "bytes_per_view, counts, seconds, georeference). Runs without the GIL; bad input raises "
+      "cwloc.BadInputError.";
   m.def("build_index", &BuildIndexPy, py::arg("model"), py::arg("database"), py::arg("output"),
-        "`cwloc-index build`: an index from a COLMAP sparse model folder and its database.db, "
-        "written atomically to output. Keyword options are its flags with '-' written '_': "
-        "compact, seed, threads, keypoints, trees, leaf_size, code_bytes, clusters, "
-        "cluster_file, georef, georef_images, model_frame, georef_sigma. Returns the report of "
-        "`cwloc-index build --json` as a dict (output, file_bytes, bytes_per_view, counts, "
-        "seconds, georeference). Runs without the GIL; bad input raises cwloc.BadInputError.");
+        doc.c_str());
 }
 
 }  // namespace cwloc::python

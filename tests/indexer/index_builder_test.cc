@@ -194,6 +194,20 @@ TEST_F(IndexBuilderTest, CodeBytesThatDoNotSplitADescriptorAreRefused) {
   EXPECT_FALSE(std::filesystem::exists(index_path_));
 }
 
+// BuildIndex, the C++ entry point, checks the build option table's ranges before it reads
+// anything (ValidateBuildOptions): the model and database here do not exist.
+TEST_F(IndexBuilderTest, OutOfRangeOptionsAreRefusedBeforeTheModelIsRead) {
+  IndexBuildOptions options = Options();
+  options.model_dir = dir_ / "nonexistent";
+  options.database_path = dir_ / "nonexistent.db";
+  options.forest.max_leaf_size = 255;
+  EXPECT_EQ(test::InputErrorOf([&] { BuildIndex(options); }), "--leaf-size 255: expected 1 to 254");
+  options.forest.max_leaf_size = 8;
+  options.forest.num_trees = 0;
+  EXPECT_EQ(test::InputErrorOf([&] { BuildIndex(options); }), "--trees 0: expected 1 to 64");
+  EXPECT_FALSE(std::filesystem::exists(index_path_));
+}
+
 TEST_F(IndexBuilderTest, CovisibilityCountsSharedPointsSymmetrically) {
   BuildIndex(Options());
   const Index index = Index::Open(index_path_);

@@ -7,8 +7,13 @@
 #include <cstring>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <regex>
+#include <set>
+#include <sstream>
 
 #include "format/index/index_file.h"
+#include "format/kdtree/kd_forest_builder.h"
+#include "indexer/build_option_table.h"
 #include "tests/indexer/indexer_fixture.h"
 
 namespace cwloc {
@@ -179,6 +184,58 @@ TEST_F(IndexCliTest, BuildFromAMissingModelIsABadInputError) {
   EXPECT_THAT(output, HasSubstr("cwloc-index: error: "));
   EXPECT_THAT(output, HasSubstr("nope"));
   EXPECT_FALSE(std::filesystem::exists(index_path_));
+}
+
+// A value out of its range in the build option table is refused by name, with exit code 2,
+// before anything is read: the model and database here do not exist (issue #39). --leaf-size 255
+// used to pass the builder's own check and fail in the kd-forest, after the whole model was read.
+TEST_F(IndexCliTest, OutOfRangeBuildOptionsAreRefusedBeforeAnythingIsRead) {
+  const std::string inputs =
+      " --model /nonexistent --database /nonexistent -o " + (dir_ / "x.cwl").string();
+  for (const auto& [flag, message] : std::vector<std::pair<std::string, std::string>>{
+           {"--leaf-size 255", "--leaf-size 255: expected 1 to 254"},
+           {"--trees 0", "--trees 0: expected 1 to 64"},
+           {"--code-bytes 3",
+            "--code-bytes 3: expected 0 (full descriptors) or 4, 8, 16, 32 or 64"},
+           {"--clusters 0", "--clusters 0: expected at least 1"},
+           {"--georef-sigma 0", "--georef-sigma 0: expected a positive number of metres"},
+           {"--trees 2x", "--trees 2x: expected a whole number"}}) {
+    std::string output;
+    EXPECT_EQ(Run("build " + flag + inputs, &output), 2) << flag;
+    EXPECT_EQ(output, "cwloc-index: error: " + message + "\n");
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "x.cwl"));
+}
+
+TEST_F(IndexCliTest, TheLargestLeafSizeOfTheKdForestIsAccepted) {
+  ASSERT_NO_FATAL_FAILURE(Build(" --leaf-size " + std::to_string(kMaxKdLeafSize)));
+  std::string output;
+  ASSERT_EQ(Run("info --json " + index_path_.string(), &output), 0) << output;
+  EXPECT_EQ(nlohmann::json::parse(output)["manifest"]["build_parameters"]["kd_leaf_size"], 254);
+  EXPECT_EQ(Run("verify " + index_path_.string(), &output), 0) << output;
+}
+
+// `build --help` lists exactly the table's flags (each with its help) and the few that are not
+// options: the CLI cannot grow a flag that cwloc.build_index lacks (tests/python checks that side).
+TEST_F(IndexCliTest, BuildHelpListsEveryLineOfTheBuildOptionTable) {
+  std::string help;
+  ASSERT_EQ(Run("build --help", &help), 0) << help;
+  std::set<std::string> expected = {"help", "model", "database", "output", "json"};
+  for (const BuildOptionSpec& spec : BuildOptionTable()) {
+    expected.insert(std::string(spec.flag));
+    EXPECT_THAT(help, HasSubstr("  --" + std::string(spec.flag) + " ")) << spec.flag;
+    EXPECT_THAT(help, HasSubstr(spec.help)) << spec.flag;
+  }
+  std::set<std::string> listed;
+  std::istringstream lines(help);
+  const std::regex flag_line(R"(^  (?:-[a-z],)?--([a-z-]+)\b.*)");
+  for (std::string line; std::getline(lines, line);) {
+    std::smatch match;
+    if (std::regex_match(line, match, flag_line)) listed.insert(match[1]);
+  }
+  EXPECT_EQ(listed, expected);
+  EXPECT_THAT(help, HasSubstr("--trees UINT=4 "));
+  EXPECT_THAT(help, HasSubstr("--georef-sigma FLOAT=5 "));
 }
 
 // Every input file of a build given as a device, a pipe or an oversized file is refused by name

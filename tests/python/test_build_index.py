@@ -1,11 +1,12 @@
 """build_index is `cwloc-index build`: the same file, byte for byte, for the same flags, its
 --json report, and its errors as cwloc.Error."""
 import json
+import re
 
 import pytest
 
 import cwloc
-from conftest import HERZ_OPTIONS, cli_error, run, shared_data, tool
+from conftest import HERZ_OPTIONS, SOURCE, cli_error, run, shared_data, tool
 
 
 @pytest.fixture(scope="module")
@@ -58,3 +59,37 @@ def test_errors(data, tmp_path):
     with pytest.raises(cwloc.BadInputError, match="--cluster-file excludes --clusters"):
         cwloc.build_index(data / "mapping_model" / "bin", data / "database.db", out,
                           clusters=3, cluster_file="c.txt")
+
+
+@pytest.mark.parametrize("kwargs, flags, message", [
+    ({"leaf_size": 255}, ["--leaf-size", "255"], "--leaf-size 255: expected 1 to 254"),
+    ({"trees": 0}, ["--trees", "0"], "--trees 0: expected 1 to 64"),
+    ({"code_bytes": 3}, ["--code-bytes", "3"],
+     "--code-bytes 3: expected 0 (full descriptors) or 4, 8, 16, 32 or 64"),
+])
+def test_out_of_range_is_refused_before_reading(tmp_path, kwargs, flags, message):
+    # The model and database do not exist: the range is checked before anything is read.
+    out = tmp_path / "x.cwl"
+    cli = cli_error([tool("cwloc-index"), "build", "--model", "/nonexistent", "--database",
+                     "/nonexistent", "-o", str(out), *flags])
+    with pytest.raises(cwloc.BadInputError) as error:
+        cwloc.build_index("/nonexistent", "/nonexistent", out, **kwargs)
+    assert str(error.value) == cli == message
+    assert not out.exists()
+
+
+def test_keywords_are_the_build_option_table_and_the_cli_flags(tmp_path):
+    """Each line of indexer/build_option_table.inc is a keyword and a `cwloc-index build` flag,
+    and there are no others, so that the two surfaces cannot drift apart."""
+    table = re.findall(r'^CWLOC_BUILD_OPTION\(\s*"([a-z-]+)"',
+                       (SOURCE / "indexer" / "build_option_table.inc").read_text(), re.M)
+    assert len(table) == 13
+    with pytest.raises(cwloc.InvalidArgumentError) as error:
+        cwloc.build_index("/nonexistent", "/nonexistent", tmp_path / "x.cwl", nonsense=1)
+    accepted = re.fullmatch(r".*unknown option 'nonsense' \(one of (.*)\)", str(error.value))
+    assert accepted, str(error.value)
+    assert accepted.group(1).split(", ") == [flag.replace("-", "_") for flag in table]
+    help_text, _ = run([tool("cwloc-index"), "build", "--help"])
+    listed = re.findall(r"^  (?:-[a-z],)?--([a-z-]+)", help_text, re.M)
+    assert sorted(listed) == sorted(table + ["help", "model", "database", "output", "json"])
+    assert all(name.replace("-", "_") in cwloc.build_index.__doc__ for name in table)
