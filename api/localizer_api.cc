@@ -282,7 +282,7 @@ Result Localizer::Localize(const Features& features, const Camera& camera,
     query.source = "features";
     query.keypoints = features.keypoints;
     query.descriptors = features.descriptors;
-    return impl_->Run(std::move(query), {"query", QuerySource::Kind::kFeatures, {}, {}, {}}, call);
+    return impl_->Run(std::move(query), {"query", QuerySource::Kind::kFeatures}, call);
   });
 }
 
@@ -290,7 +290,7 @@ Result Localizer::LocalizePhoto(const std::string& path, const std::optional<Cam
                                 const Options& options) const {
   return Translated([&] {
     const CallOptions call(options, camera);
-    const QuerySource source{path, QuerySource::Kind::kPhoto, path, {}, {}};
+    const QuerySource source{path, QuerySource::Kind::kPhoto, path};
     return impl_->Run(call.assembler.Read(source), source, call);
   });
 }
@@ -303,7 +303,7 @@ Result Localizer::LocalizeEncodedPhoto(const uint8_t* bytes, size_t size,
     const CallOptions call(options, camera);
     Query query = PhotoQueryFromBytes(std::span<const uint8_t>(bytes, size), "photo bytes", "photo",
                                       call.options.photo);
-    return impl_->Run(std::move(query), {"photo", QuerySource::Kind::kImage, {}, {}, {}}, call);
+    return impl_->Run(std::move(query), {"photo", QuerySource::Kind::kImage}, call);
   });
 }
 
@@ -329,7 +329,7 @@ Result Localizer::LocalizeGreyImage(const uint8_t* pixels, uint32_t width, uint3
     query.source = "grey image";
     query.camera.width = width;  // the image's own size, which the camera must have
     query.camera.height = height;
-    const QuerySource source{query.name, QuerySource::Kind::kImage, {}, {}, {}};
+    const QuerySource source{query.name, QuerySource::Kind::kImage};
     call.Complete(source, &query);  // before the extraction it would waste
     GreyImage image;
     image.width = width;

@@ -130,8 +130,8 @@ ModelGeoreference FittedGeoreference(const ModelViews& views,
 
   ModelGeoreference out;
   out.section = SectionOfGeoreference(fit.georeference);
-  out.section.source = static_cast<uint32_t>(from_file ? GeoreferenceSource::kGeorefFile
-                                                       : GeoreferenceSource::kExifGps);
+  out.section.source =
+      static_cast<uint32_t>(from_file ? GeoreferenceSource::kFile : GeoreferenceSource::kExifGps);
   out.section.rms_residual_m = fit.rms_residual_m;
   out.section.num_observations = static_cast<uint32_t>(observations.size());
   out.section.num_inliers = static_cast<uint32_t>(fit.num_inliers);

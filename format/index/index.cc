@@ -32,7 +32,7 @@ void ValidateGeoreference(const IndexGeoreference& g, const std::string& name) {
   const double norm = std::sqrt(g.rotation[0] * g.rotation[0] + g.rotation[1] * g.rotation[1] +
                                 g.rotation[2] * g.rotation[2] + g.rotation[3] * g.rotation[3]);
   if (std::abs(norm - 1) > 1e-6) fail("rotation is not a unit quaternion");
-  if (g.source < static_cast<uint32_t>(GeoreferenceSource::kGeorefFile) ||
+  if (g.source < static_cast<uint32_t>(GeoreferenceSource::kFile) ||
       g.source > static_cast<uint32_t>(GeoreferenceSource::kEnuModel))
     fail("unknown source " + std::to_string(g.source));
 }

@@ -58,7 +58,7 @@ struct SectionData {
   uint32_t flags = 0;
   uint32_t element_size = 1;
   uint64_t count = 0;
-  std::span<const uint8_t> bytes;  // count * element_size bytes
+  std::span<const uint8_t> bytes{};  // count * element_size bytes
 };
 
 // The format minor a file with these sections declares: the oldest 1.x that knows them all

@@ -99,10 +99,10 @@ static_assert(sizeof(IndexGeoreference) == 128 && std::is_trivially_copyable_v<I
 static_assert(offsetof(IndexGeoreference, source) == 96);
 
 enum class GeoreferenceSource : uint32_t {
-  kGeorefFile = 1,  // --georef FILE
-  kExifGps = 2,     // --georef-images DIR
-  kEcefModel = 3,   // --model-frame ecef
-  kEnuModel = 4,    // --model-frame enu:LAT,LON,H
+  kFile = 1,       // --georef FILE
+  kExifGps = 2,    // --georef-images DIR
+  kEcefModel = 3,  // --model-frame ecef
+  kEnuModel = 4,   // --model-frame enu:LAT,LON,H
 };
 
 }  // namespace cwloc

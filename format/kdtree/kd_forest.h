@@ -58,7 +58,7 @@ struct KdForestView {
   std::span<const uint32_t> roots;
   std::span<const uint32_t> leaves;
   std::span<const uint8_t> descriptors;  // N x 128, or empty when `codes` holds the rows
-  DescriptorCodes codes;
+  DescriptorCodes codes{};
 
   size_t NumDescriptors() const {
     return codes.empty() ? descriptors.size() / kDescriptorDim : codes.NumRows();

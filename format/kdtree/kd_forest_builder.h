@@ -37,7 +37,7 @@ struct KdForest {
   std::vector<uint32_t> leaves;
 
   KdForestView View(std::span<const uint8_t> descriptors) const {
-    return KdForestView{nodes, roots, leaves, descriptors, {}};
+    return KdForestView{nodes, roots, leaves, descriptors};
   }
   size_t MemoryBytes() const {
     return nodes.size() * sizeof(KdNode) + (roots.size() + leaves.size()) * sizeof(uint32_t);

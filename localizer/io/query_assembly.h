@@ -26,9 +26,9 @@ struct QuerySource {
   };
   std::string name;
   Kind kind = Kind::kDatabase;
-  std::filesystem::path path;  // the feature file or photo
-  std::string camera_spec;     // "MODEL W H PARAMS" from a list line, if any
-  std::string list;            // the list file that line came from
+  std::filesystem::path path{};  // the feature file or photo
+  std::string camera_spec{};     // "MODEL W H PARAMS" from a list line, if any
+  std::string list{};            // the list file that line came from
 
   // How errors name it: its file, or its name in the database.
   std::string Label() const;

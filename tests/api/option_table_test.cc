@@ -76,7 +76,9 @@ TEST_F(OptionTableTest, EverySurfaceAcceptsTheDefaults) {
     if (const bool* on = std::get_if<bool>(&value)) {
       const ToolRun run = Localize({*on ? flag : "--no-" + std::string(spec.flag)});
       // --no-NAME exists only for a switch that is on by default.
-      if (*on) EXPECT_LE(run.exit_code, 1) << run.stderr_text;
+      if (*on) {
+        EXPECT_LE(run.exit_code, 1) << run.stderr_text;
+      }
     } else {
       const ToolRun run = Localize({flag, text});
       EXPECT_LE(run.exit_code, 1) << run.stderr_text;

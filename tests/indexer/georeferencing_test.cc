@@ -77,7 +77,7 @@ TEST_F(GeoreferencingTest, AGeorefFileIsFitExactlyAndStoredInSectionAndManifest)
   const Index index = Index::Open(index_path_);
   ASSERT_NE(index.georeference(), nullptr);
   const IndexGeoreference& section = *index.georeference();
-  EXPECT_EQ(section.source, static_cast<uint32_t>(GeoreferenceSource::kGeorefFile));
+  EXPECT_EQ(section.source, static_cast<uint32_t>(GeoreferenceSource::kFile));
   EXPECT_EQ(section.num_observations, model_.images.size());
   EXPECT_EQ(section.num_inliers, model_.images.size());
   EXPECT_LT(section.rms_residual_m, 1e-4);

@@ -316,8 +316,8 @@ TEST_F(ClusteredTileTest, NearNeedsAGeoreferencedIndex) {
 }
 
 INSTANTIATE_TEST_SUITE_P(FullAndCompact, TileTest, testing::Bool(),
-                         [](const testing::TestParamInfo<bool>& info) {
-                           return info.param ? "Compact" : "Full";
+                         [](const testing::TestParamInfo<bool>& param_info) {
+                           return param_info.param ? "Compact" : "Full";
                          });
 
 }  // namespace

@@ -129,7 +129,7 @@ struct GuardedForest {
         leaves(std::span<const uint32_t>(forest.leaves)),
         descriptors(std::span<const uint8_t>(data)) {}
   KdForestView View() const {
-    return KdForestView{nodes.span(), roots.span(), leaves.span(), descriptors.span(), {}};
+    return KdForestView{nodes.span(), roots.span(), leaves.span(), descriptors.span()};
   }
   Guarded<KdNode> nodes;
   Guarded<uint32_t> roots;
@@ -608,7 +608,7 @@ TEST(KdForestCorrupt, SharedSubtreesCannotExplodeTheSearch) {
   nodes.push_back(KdNode{0, kKdLeaf, 1, 0, 0});
   const std::vector<uint32_t> roots{0}, leaves{0};
   const std::vector<uint8_t> data(kDescriptorDim, 0);
-  const KdForestView view{nodes, roots, leaves, data, {}};
+  const KdForestView view{nodes, roots, leaves, data};
   std::string error;
   EXPECT_FALSE(ValidateKdForest(view, &error));
   KdForestSearcher searcher(view);

@@ -161,7 +161,7 @@ void WriteGeoreferencedIndex(const fs::path& path, const Georeference& georefere
                         golden.bytes().subspan(entry.offset, entry.size)});
   }
   IndexGeoreference geor = SectionOfGeoreference(georeference);
-  geor.source = static_cast<uint32_t>(GeoreferenceSource::kGeorefFile);
+  geor.source = static_cast<uint32_t>(GeoreferenceSource::kFile);
   sections.push_back(MakeSection(section::kGeoreference,
                                  std::span<const IndexGeoreference>(&geor, 1),
                                  /*flags=*/0));
