@@ -43,7 +43,6 @@ struct Dual {
   double a = 0, du = 0, dv = 0;
 };
 inline Dual operator+(Dual x, Dual y) { return {x.a + y.a, x.du + y.du, x.dv + y.dv}; }
-inline Dual operator-(Dual x, Dual y) { return {x.a - y.a, x.du - y.du, x.dv - y.dv}; }
 inline Dual operator*(Dual x, Dual y) {
   return {x.a * y.a, x.du * y.a + x.a * y.du, x.dv * y.a + x.a * y.dv};
 }
