@@ -58,7 +58,7 @@ void UseIndex(const std::filesystem::path& path) {
         if (localizer.geo()) {
           const Geodetic origin = localizer.geo()->frame().georeference().origin;
           query.position_prior =
-              PositionPrior{origin.latitude_deg, origin.longitude_deg, {}, 500.0};
+              PositionPrior{{origin.latitude_deg, origin.longitude_deg, {}, 500.0}};
           query.gravity = std::array<double, 3>{0, 1, 0};
           localizer.Localize(query, options);
         }
