@@ -4,16 +4,16 @@
 #include <new>
 #include <span>
 
+#include "base/error.h"
 #include "cwloc/cwloc.hpp"
 #include "cwloc/version.h"
-#include "format/base/error.h"
-#include "format/index/index.h"
-#include "localizer/io/camera_spec.h"
-#include "localizer/io/feature_file.h"
-#include "localizer/io/option_table.h"
-#include "localizer/io/photo_query.h"
-#include "localizer/io/query_assembly.h"
-#include "localizer/io/result_json.h"
+#include "format/index.h"
+#include "io/camera_spec.h"
+#include "io/feature_file.h"
+#include "io/option_table.h"
+#include "io/photo_query.h"
+#include "io/query_assembly.h"
+#include "io/result_json.h"
 #include "localizer/localizer.h"
 
 namespace cwloc::api {
@@ -55,7 +55,7 @@ QueryOptions ToQueryOptions(const Options& o) {
   ValidateOrThrowInvalidArgument([&] {
 #define CWLOC_OPTION(field, type, flag, ...) \
   SetOption(&options, flag, OptionValue(std::in_place_type<type>, o.field));
-#include "localizer/io/option_table.inc"
+#include "io/option_table.inc"
 #undef CWLOC_OPTION
     ValidateQueryOptions(options);
   });
@@ -69,7 +69,7 @@ void AssignField(std::string_view flag, const OptionValue& value, Options* o) {
     o->field = std::get<type>(value);             \
     return;                                       \
   }
-#include "localizer/io/option_table.inc"
+#include "io/option_table.inc"
 #undef CWLOC_OPTION
 }
 
@@ -196,7 +196,7 @@ Error::Error(ErrorCode code, const std::string& message)
 Options::Options() {
   const QueryOptions defaults;
 #define CWLOC_OPTION(field, type, flag, ...) field = std::get<type>(FindOption(flag).get(defaults));
-#include "localizer/io/option_table.inc"
+#include "io/option_table.inc"
 #undef CWLOC_OPTION
 }
 

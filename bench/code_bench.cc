@@ -1,5 +1,5 @@
 // cwloc-code-bench: how much of nearest-neighbour matching survives when an index's descriptors
-// are stored as product-quantization codes (format/kdtree/product_quantizer.h), the first
+// are stored as product-quantization codes (kdtree/product_quantizer.h), the first
 // measurement of issue #26's compact index. For each code size it trains a quantizer on the
 // index's descriptors, codes all of them, and scans them with the asymmetric distance for a
 // sample of real query features; against exact brute force over the full descriptors it prints:
@@ -27,14 +27,14 @@
 #include <string>
 #include <vector>
 
-#include "format/base/comma_list.h"
-#include "format/base/parallel_for.h"
-#include "format/base/split_mix64.h"
-#include "format/base/tool_main.h"
-#include "format/index/index.h"
-#include "format/kdtree/descriptor_distance.h"
-#include "format/kdtree/product_quantizer.h"
-#include "localizer/io/database/database_queries.h"
+#include "base/comma_list.h"
+#include "base/parallel_for.h"
+#include "base/split_mix64.h"
+#include "exe/tool_main.h"
+#include "format/index.h"
+#include "io/database/database_queries.h"
+#include "kdtree/descriptor_distance.h"
+#include "kdtree/product_quantizer.h"
 
 namespace cwloc {
 namespace {

@@ -7,8 +7,8 @@
 #include <random>
 #include <vector>
 
-#include "format/base/prefetch.h"
-#include "format/kdtree/descriptor_distance.h"
+#include "base/prefetch.h"
+#include "kdtree/descriptor_distance.h"
 
 namespace cwloc {
 namespace {

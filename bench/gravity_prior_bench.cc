@@ -16,9 +16,9 @@
 #include <string>
 #include <vector>
 
-#include "format/base/split_mix64.h"
+#include "base/split_mix64.h"
 #include "localizer/pose/absolute_pose.h"
-#include "tests/localizer/pose/synthetic_pose.h"
+#include "tests/support/synthetic_pose.h"
 
 namespace cwloc {
 namespace {

@@ -32,12 +32,12 @@
 #include <thread>
 #include <vector>
 
-#include "format/base/comma_list.h"
-#include "format/base/split_mix64.h"
-#include "format/base/stopwatch.h"
-#include "format/kdtree/descriptor_distance.h"
-#include "format/kdtree/kd_forest.h"
-#include "format/kdtree/kd_forest_builder.h"
+#include "base/comma_list.h"
+#include "base/split_mix64.h"
+#include "base/stopwatch.h"
+#include "kdtree/descriptor_distance.h"
+#include "kdtree/kd_forest.h"
+#include "kdtree/kd_forest_builder.h"
 
 namespace cwloc {
 namespace {

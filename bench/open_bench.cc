@@ -5,9 +5,9 @@
 #include <cstdlib>
 #include <vector>
 
-#include "format/base/error.h"
-#include "format/base/stopwatch.h"
-#include "format/index/index.h"
+#include "base/error.h"
+#include "base/stopwatch.h"
+#include "format/index.h"
 
 int main(int argc, char** argv) {
   if (argc < 2) {

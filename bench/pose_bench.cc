@@ -15,7 +15,7 @@
 #include "localizer/pose/p3p.h"
 #include "localizer/pose/p4pf.h"
 #include "localizer/pose/refine_pose.h"
-#include "tests/localizer/pose/synthetic_pose.h"
+#include "tests/support/synthetic_pose.h"
 
 namespace cwloc {
 namespace {

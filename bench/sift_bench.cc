@@ -9,9 +9,9 @@
 #include <string>
 #include <vector>
 
-#include "format/base/stopwatch.h"
+#include "base/stopwatch.h"
 #include "photo/sift/sift_extractor.h"
-#include "tests/photo/sift/sift_agreement_util.h"
+#include "tests/support/sift_agreement_util.h"
 
 using namespace cwloc;
 using sift_bench::ImplementationNames;

@@ -11,10 +11,20 @@ endif()
 # clang make of a * b + c wherever the target has them (aarch64; x86-64 only with -mfma).
 set(CWLOC_COMPILE_OPTIONS ${CWLOC_WARNINGS} -ffp-contract=off)
 
-# cwloc_add_library(NAME [SHARED] SRCS a.cc b.cc PUBLIC_LINK x y PRIVATE_LINK z): static unless
-# SHARED.
+# cwloc_add_library(NAME [SHARED|INTERFACE] SRCS a.cc b.cc PUBLIC_LINK x y PRIVATE_LINK z): static
+# unless SHARED. An INTERFACE library is header-only: SRCS lists its headers, PUBLIC_LINK what
+# they need, and it has no PRIVATE_LINK (tools/check_layering.py reads the same call).
 function(cwloc_add_library name)
-  cmake_parse_arguments(ARG "SHARED" "" "SRCS;PUBLIC_LINK;PRIVATE_LINK" ${ARGN})
+  cmake_parse_arguments(ARG "SHARED;INTERFACE" "" "SRCS;PUBLIC_LINK;PRIVATE_LINK" ${ARGN})
+  if(ARG_INTERFACE)
+    if(ARG_SHARED OR ARG_PRIVATE_LINK)
+      message(FATAL_ERROR "cwloc_add_library(${name} INTERFACE): no SHARED and no PRIVATE_LINK")
+    endif()
+    add_library(${name} INTERFACE ${ARG_SRCS})
+    target_include_directories(${name} INTERFACE ${PROJECT_SOURCE_DIR} ${PROJECT_BINARY_DIR}/generated)
+    target_link_libraries(${name} INTERFACE ${ARG_PUBLIC_LINK})
+    return()
+  endif()
   if(ARG_SHARED)
     add_library(${name} SHARED ${ARG_SRCS})
   else()

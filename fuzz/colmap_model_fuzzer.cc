@@ -2,8 +2,8 @@
 // frames, every cross-reference checked (fuzz/model_container.h packs the files).
 #include <cstdint>
 
-#include "format/base/error.h"
-#include "format/colmap/reconstruction_io.h"
+#include "base/error.h"
+#include "colmap/reconstruction_io.h"
 #include "fuzz/fuzz_file.h"
 #include "fuzz/model_container.h"
 

@@ -5,9 +5,9 @@
 #include <functional>
 #include <vector>
 
-#include "format/base/error.h"
-#include "format/geo/georeference_fit.h"
+#include "base/error.h"
 #include "fuzz/fuzz_file.h"
+#include "geo/georeference_fit.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace cwloc;

@@ -10,9 +10,9 @@
 #include <span>
 #include <vector>
 
-#include "format/base/error.h"
-#include "format/index/index.h"
-#include "format/index/xxhash64.h"
+#include "base/error.h"
+#include "format/index.h"
+#include "format/xxhash64.h"
 #include "fuzz/fuzz_file.h"
 #include "localizer/localizer.h"
 

@@ -4,7 +4,7 @@
 #include <cstdio>
 #include <fstream>
 
-#include "format/colmap/reconstruction_io.h"
+#include "colmap/reconstruction_io.h"
 #include "fuzz/model_container.h"
 
 int main(int argc, char** argv) {

@@ -4,7 +4,7 @@
 #include <cstdint>
 #include <span>
 
-#include "format/base/error.h"
+#include "base/error.h"
 #include "photo/exif.h"
 #include "photo/image_decode.h"
 

@@ -2,11 +2,11 @@
 // (`NAME [MODEL W H PARAMS]`), and the same bytes as a --priors file.
 #include <cstdint>
 
-#include "format/base/error.h"
+#include "base/error.h"
 #include "fuzz/fuzz_file.h"
-#include "localizer/io/camera_spec.h"
-#include "localizer/io/query_list.h"
-#include "localizer/io/query_priors.h"
+#include "io/camera_spec.h"
+#include "io/query_list.h"
+#include "io/query_priors.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace cwloc;

@@ -5,8 +5,8 @@
 #include <stdexcept>
 #include <type_traits>
 
-#include "format/base/error.h"
-#include "format/kdtree/kd_forest_builder.h"
+#include "base/error.h"
+#include "kdtree/kd_forest_builder.h"
 
 namespace cwloc {
 namespace {

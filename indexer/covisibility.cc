@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-#include "format/base/parallel_for.h"
+#include "base/parallel_for.h"
 
 namespace cwloc {
 

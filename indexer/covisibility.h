@@ -3,7 +3,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "format/index/index_sections.h"
+#include "format/index_sections.h"
 
 namespace cwloc {
 

@@ -5,8 +5,8 @@
 #include <unordered_map>
 #include <vector>
 
-#include "format/base/error.h"
-#include "format/geo/index_georeference.h"
+#include "base/error.h"
+#include "geo/index_georeference.h"
 #include "photo/exif.h"
 #include "photo/image_decode.h"
 

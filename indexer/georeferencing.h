@@ -8,8 +8,8 @@
 #include <optional>
 #include <string>
 
-#include "format/geo/georeference_fit.h"
-#include "format/index/index_sections.h"
+#include "format/index_sections.h"
+#include "geo/georeference_fit.h"
 #include "indexer/model_views.h"
 
 namespace cwloc {

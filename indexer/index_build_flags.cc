@@ -1,6 +1,6 @@
 #include "indexer/index_build_flags.h"
 
-#include "format/base/error.h"
+#include "base/error.h"
 
 namespace cwloc {
 

@@ -2,21 +2,21 @@
 
 #include <nlohmann/json.hpp>
 
+#include "base/bounded_file.h"
+#include "base/error.h"
+#include "base/parallel_for.h"
+#include "base/stopwatch.h"
+#include "colmap/reconstruction_io.h"
 #include "cwloc/version.h"
-#include "format/base/bounded_file.h"
-#include "format/base/error.h"
-#include "format/base/parallel_for.h"
-#include "format/base/stopwatch.h"
-#include "format/colmap/reconstruction_io.h"
-#include "format/index/xxhash64.h"
-#include "format/kdtree/descriptor_codes.h"
-#include "format/kdtree/kd_forest_builder.h"
+#include "format/xxhash64.h"
 #include "indexer/build_option_table.h"
 #include "indexer/covisibility.h"
 #include "indexer/index_contents.h"
 #include "indexer/model_views.h"
 #include "indexer/neighbor_distances.h"
 #include "indexer/point_codes.h"
+#include "kdtree/descriptor_codes.h"
+#include "kdtree/kd_forest_builder.h"
 
 namespace cwloc {
 namespace {

@@ -5,9 +5,9 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "format/kdtree/kd_forest_builder.h"
 #include "indexer/clustering.h"
 #include "indexer/georeferencing.h"
+#include "kdtree/kd_forest_builder.h"
 
 namespace cwloc {
 

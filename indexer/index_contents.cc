@@ -3,8 +3,8 @@
 #include <string>
 #include <vector>
 
-#include "format/base/progress.h"
-#include "format/index/index_file.h"
+#include "base/progress.h"
+#include "format/index_file.h"
 
 namespace cwloc {
 

@@ -5,8 +5,8 @@
 #include <span>
 #include <string_view>
 
-#include "format/index/index_sections.h"
-#include "format/kdtree/kd_forest_builder.h"
+#include "format/index_sections.h"
+#include "kdtree/kd_forest_builder.h"
 
 namespace cwloc {
 

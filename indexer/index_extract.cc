@@ -8,13 +8,13 @@
 #include <unordered_map>
 #include <vector>
 
+#include "base/bounded_file.h"
+#include "base/error.h"
+#include "base/parallel_for.h"
+#include "base/stopwatch.h"
 #include "cwloc/version.h"
-#include "format/base/bounded_file.h"
-#include "format/base/error.h"
-#include "format/base/parallel_for.h"
-#include "format/base/stopwatch.h"
-#include "format/geo/index_georeference.h"
-#include "format/index/index.h"
+#include "format/index.h"
+#include "geo/index_georeference.h"
 #include "indexer/index_contents.h"
 
 namespace cwloc {

@@ -4,7 +4,7 @@
 #include <filesystem>
 #include <optional>
 
-#include "format/geo/geo_region.h"
+#include "geo/geo_region.h"
 
 namespace cwloc {
 

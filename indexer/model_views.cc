@@ -4,9 +4,9 @@
 #include <cstring>
 #include <unordered_map>
 
-#include "format/base/error.h"
-#include "format/base/progress.h"
-#include "format/camera/camera_models.h"
+#include "base/error.h"
+#include "base/progress.h"
+#include "camera/camera_models.h"
 
 namespace cwloc {
 namespace {

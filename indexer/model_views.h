@@ -5,9 +5,9 @@
 #include <string_view>
 #include <vector>
 
-#include "format/colmap/database.h"
-#include "format/colmap/reconstruction.h"
-#include "format/index/index_sections.h"
+#include "colmap/database.h"
+#include "colmap/reconstruction.h"
+#include "format/index_sections.h"
 
 namespace cwloc {
 

@@ -4,10 +4,10 @@
 #include <cstring>
 #include <limits>
 
-#include "format/base/parallel_for.h"
-#include "format/base/progress.h"
-#include "format/kdtree/descriptor_distance.h"
-#include "format/kdtree/kd_forest_builder.h"
+#include "base/parallel_for.h"
+#include "base/progress.h"
+#include "kdtree/descriptor_distance.h"
+#include "kdtree/kd_forest_builder.h"
 
 namespace cwloc {
 namespace {

@@ -4,10 +4,10 @@
 #include <cmath>
 #include <limits>
 
-#include "format/base/parallel_for.h"
-#include "format/kdtree/descriptor_codes.h"
-#include "format/kdtree/product_quantizer.h"
+#include "base/parallel_for.h"
 #include "indexer/neighbor_distances.h"
+#include "kdtree/descriptor_codes.h"
+#include "kdtree/product_quantizer.h"
 
 namespace cwloc {
 namespace {

@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "format/base/stopwatch.h"
+#include "base/stopwatch.h"
 
 namespace cwloc {
 namespace {

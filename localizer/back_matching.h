@@ -6,9 +6,9 @@
 #include <unordered_set>
 #include <vector>
 
-#include "format/base/deadline.h"
-#include "format/index/index.h"
-#include "format/kdtree/kd_forest_builder.h"
+#include "base/deadline.h"
+#include "format/index.h"
+#include "kdtree/kd_forest_builder.h"
 #include "localizer/localizer_options.h"
 #include "localizer/matching.h"
 #include "localizer/pose_guide.h"

@@ -4,8 +4,8 @@
 #include <span>
 #include <vector>
 
-#include "format/index/index.h"
-#include "format/kdtree/kd_forest.h"
+#include "format/index.h"
+#include "kdtree/kd_forest.h"
 #include "localizer/matching.h"
 
 namespace cwloc {

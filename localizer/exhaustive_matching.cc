@@ -4,8 +4,8 @@
 #include <cmath>
 #include <limits>
 
-#include "format/base/stopwatch.h"
-#include "format/kdtree/descriptor_distance.h"
+#include "base/stopwatch.h"
+#include "kdtree/descriptor_distance.h"
 
 namespace cwloc {
 namespace {

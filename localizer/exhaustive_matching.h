@@ -3,7 +3,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "format/index/index.h"
+#include "format/index.h"
 #include "localizer/matching.h"
 #include "localizer/query.h"
 

@@ -5,9 +5,9 @@
 #include <numeric>
 #include <span>
 
-#include "format/base/error.h"
-#include "format/base/split_mix64.h"
-#include "format/base/stopwatch.h"
+#include "base/error.h"
+#include "base/split_mix64.h"
+#include "base/stopwatch.h"
 #include "localizer/cluster_wise_ratio.h"
 
 namespace cwloc {

@@ -3,9 +3,9 @@
 #include <cstdint>
 #include <vector>
 
-#include "format/base/deadline.h"
-#include "format/index/index.h"
-#include "format/kdtree/kd_forest.h"
+#include "base/deadline.h"
+#include "format/index.h"
+#include "kdtree/kd_forest.h"
 #include "localizer/localizer_options.h"
 #include "localizer/matching.h"
 #include "localizer/query.h"

@@ -1,7 +1,7 @@
 #include "localizer/geo_priors.h"
 
-#include "format/geo/geo_region.h"
-#include "format/geo/index_georeference.h"
+#include "geo/geo_region.h"
+#include "geo/index_georeference.h"
 
 namespace cwloc {
 

@@ -8,8 +8,8 @@
 #include <optional>
 #include <vector>
 
-#include "format/geo/georeference.h"
-#include "format/index/index.h"
+#include "format/index.h"
+#include "geo/georeference.h"
 #include "localizer/localization_result.h"
 #include "localizer/matching.h"
 #include "localizer/query.h"

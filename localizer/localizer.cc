@@ -8,9 +8,9 @@
 #include <string>
 #include <unordered_map>
 
-#include "format/base/error.h"
-#include "format/base/stopwatch.h"
-#include "format/camera/camera_models.h"
+#include "base/error.h"
+#include "base/stopwatch.h"
+#include "camera/camera_models.h"
 #include "localizer/back_matching.h"
 #include "localizer/exhaustive_matching.h"
 #include "localizer/forward_matching.h"

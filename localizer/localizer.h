@@ -2,7 +2,7 @@
 
 #include <optional>
 
-#include "format/index/index.h"
+#include "format/index.h"
 #include "localizer/geo_priors.h"
 #include "localizer/localization_result.h"
 #include "localizer/localizer_options.h"

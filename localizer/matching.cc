@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <string>
 
-#include "format/base/error.h"
+#include "base/error.h"
 
 namespace cwloc {
 

@@ -7,7 +7,7 @@
 #include <span>
 #include <vector>
 
-#include "format/index/index.h"
+#include "format/index.h"
 
 namespace cwloc {
 

@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "format/kdtree/descriptor_distance.h"
+#include "kdtree/descriptor_distance.h"
 
 namespace cwloc {
 

@@ -4,7 +4,7 @@
 #include <optional>
 #include <vector>
 
-#include "format/camera/camera_models.h"
+#include "camera/camera_models.h"
 #include "localizer/matching.h"
 #include "localizer/pose/camera_pose.h"
 #include "localizer/query.h"

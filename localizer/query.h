@@ -7,8 +7,8 @@
 #include <string_view>
 #include <vector>
 
-#include "format/camera/camera_models.h"
-#include "format/geo/geo_region.h"
+#include "camera/camera_models.h"
+#include "geo/geo_region.h"
 
 namespace cwloc {
 

@@ -4,7 +4,7 @@
 #include <array>
 #include <cmath>
 
-#include "format/camera/camera_models.h"
+#include "camera/camera_models.h"
 
 namespace cwloc {
 

@@ -4,7 +4,7 @@
 #include <span>
 #include <vector>
 
-#include "format/index/index.h"
+#include "format/index.h"
 #include "localizer/localizer_options.h"
 #include "localizer/matching.h"
 #include "localizer/pose/absolute_pose.h"

@@ -22,7 +22,7 @@ struct ExifFocal {
 std::optional<ExifFocal> ReadExifFocal(std::span<const uint8_t> file_bytes, uint32_t width,
                                        uint32_t height);
 
-// Where a photo was taken, from its EXIF GPS tags (docs/geo.md). photo/ cannot use format/geo's
+// Where a photo was taken, from its EXIF GPS tags (docs/geo.md). photo/ cannot use geo/'s
 // Geodetic (the same layer), hence its own struct.
 struct ExifGps {
   double latitude_deg = 0;   // WGS84 (GPSMapDatum is not read), north positive, [-90, 90]

@@ -11,8 +11,8 @@
 #include <new>
 #include <string>
 
-#include "format/base/bounded_file.h"
-#include "format/base/error.h"
+#include "base/bounded_file.h"
+#include "base/error.h"
 
 namespace cwloc {
 namespace {

@@ -17,7 +17,7 @@ inline constexpr uint64_t kDefaultMaxImagePixels = 100'000'000;
 // The smallest side SIFT can work on: VLFeat's coarsest octave must keep a few pixels.
 inline constexpr uint32_t kMinImageSide = 16;
 
-// A photo file's bytes, read whole through ReadFileBounded (format/base/bounded_file.h): a
+// A photo file's bytes, read whole through ReadFileBounded (base/bounded_file.h): a
 // regular file of at most kPhotoFile.max_bytes; throws InputError naming it otherwise.
 std::vector<uint8_t> ReadPhotoFile(const std::filesystem::path& path);
 

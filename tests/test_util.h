@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "format/base/error.h"
+#include "base/error.h"
 
 namespace cwloc::test {
 

@@ -4,8 +4,9 @@ docs/architecture.md's library table lists exactly the CMake libraries, folders 
 
 Reads the cwloc_add_library / cwloc_add_executable / cwloc_add_test / cwloc_add_python_module
 calls of every CMakeLists.txt, assigns each header to the library that compiles the source files of its
-folder, and follows PUBLIC links transitively (PRIVATE links count for the target itself
-only). Prints one line per violation and exits 1; exits 0 when the layering holds.
+folder (a header-only INTERFACE library lists its headers as SRCS), and follows PUBLIC links
+transitively (PRIVATE links count for the target itself only). Prints one line per violation
+and exits 1; exits 0 when the layering holds.
 
 Usage: tools/check_layering.py [SOURCE_DIR]
 """
@@ -19,6 +20,7 @@ SET = re.compile(r"\bset\(\s*([A-Z0-9_]+)\s+([^)]*)\)")
 APPEND = re.compile(r"\blist\(\s*APPEND\s+([A-Z0-9_]+)\s+([^)]*)\)")
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"', re.M)
 KEYWORDS = {"SRCS", "PUBLIC_LINK", "PRIVATE_LINK", "LINK", "OUTPUT"}
+FLAGS = {"SHARED", "INTERFACE"}  # cwloc_add_library's options, before the keywords
 
 
 def parse_calls(root):
@@ -36,7 +38,9 @@ def parse_calls(root):
             args, key = {}, None
             for word in body.split():
                 for value in expand(word, variables):
-                    if value in KEYWORDS:
+                    if value in FLAGS and key is None:
+                        args.setdefault("FLAGS", []).append(value)
+                    elif value in KEYWORDS:
                         key = value
                         args.setdefault(key, [])
                     elif key:
@@ -64,6 +68,7 @@ def main():
             "sources": sources,
             "public": args.get("PUBLIC_LINK", []) + args.get("LINK", []),
             "private": args.get("PRIVATE_LINK", []),
+            "interface": "INTERFACE" in args.get("FLAGS", []),
         }
 
     # A header belongs to the library (or Python module: python/src/) whose source of the same
@@ -99,6 +104,17 @@ def main():
         return result
 
     violations = []
+
+    # A header-only library has headers alone and nothing private to link.
+    for name, target in targets.items():
+        if target["interface"]:
+            if not target["sources"]:
+                violations.append(f"{name}: an INTERFACE library lists its headers as SRCS")
+            for src in target["sources"]:
+                if src.suffix != ".h":
+                    violations.append(f"{name}: INTERFACE library with a non-header source {src.relative_to(root)}")
+            if target["private"]:
+                violations.append(f"{name}: INTERFACE library with a PRIVATE_LINK")
 
     def check(path, target_name, include_private):
         for include in INCLUDE.findall(path.read_text(errors="replace")):

@@ -9,7 +9,7 @@ set -euo pipefail
 # GeographicLib: only the arm64 runtime library. libgeographiclib-dev is not Multi-Arch: same,
 # so its arm64 package would remove the host's (which the native build needs); the cross build
 # links /usr/lib/aarch64-linux-gnu/libGeographicLib.so.23 with the host -dev's headers, which
-# are the same on both (format/geo/CMakeLists.txt).
+# are the same on both (geo/CMakeLists.txt).
 packages=(
   crossbuild-essential-arm64 qemu-user
   libstdc++6:arm64 libjpeg62-turbo-dev:arm64 libpng-dev:arm64 zlib1g-dev:arm64

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "format/base/ransac.h"
+#include "estimators/ransac.h"
 #include "localizer/pose/camera_pose.h"
 #include "localizer/pose/gravity_prior.h"
 #include "localizer/pose/refine_pose.h"
@@ -18,7 +18,7 @@ namespace cwloc {
 // solver and a focal length P4Pf solver ... an image is localized if the best pose has at least
 // 12 inlier correspondences with a reprojection error less than 6 pixels").
 //
-// Pipeline: LO-RANSAC (format/base/ransac.h) over minimal solutions (P3P with a known focal length
+// Pipeline: LO-RANSAC (estimators/ransac.h) over minimal solutions (P3P with a known focal length
 // or a focal prior, P4Pf without), each new best hypothesis refined by Levenberg-Marquardt on its
 // inliers (local_optimization.h); then a final refinement on the inliers with a Cauchy loss
 // (refine_pose.h, Ceres or our own Levenberg-Marquardt); the inlier set and error are finally
@@ -71,7 +71,7 @@ struct AbsolutePoseOptions {
   double max_error_px = 6.0;
   // Success needs at least this many inliers (paper: 12).
   int min_inliers = 12;
-  // The sampler: iteration limits, confidence, seed (format/base/ransac.h).
+  // The sampler: iteration limits, confidence, seed (estimators/ransac.h).
   RansacOptions ransac;
   // Levenberg-Marquardt iterations per local optimisation inside RANSAC.
   int lo_iterations = 10;

@@ -12,7 +12,7 @@
 
 namespace cwloc {
 
-// RANSAC estimators (the RansacEstimator concept of format/base/ransac.h) for absolute pose from
+// RANSAC estimators (the RansacEstimator concept of estimators/ransac.h) for absolute pose from
 // 2D-3D correspondences. All keep views of the caller's arrays, which must outlive them, and a
 // scratch buffer, so one estimator must not be used from several threads at once.
 

@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "format/base/error.h"
+#include "base/error.h"
 #include "localizer/pose/refine_pose_solver.h"
 
 namespace cwloc {

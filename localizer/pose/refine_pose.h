@@ -8,8 +8,8 @@
 #include <span>
 #include <string_view>
 
-#include "format/base/chi_square.h"
-#include "format/base/enum_names.h"
+#include "base/chi_square.h"
+#include "base/enum_names.h"
 #include "localizer/pose/camera_pose.h"
 #include "localizer/pose/gravity_prior.h"
 

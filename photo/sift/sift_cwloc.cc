@@ -22,7 +22,7 @@
 #include <cstring>
 #include <vector>
 
-#include "format/base/parallel_for.h"
+#include "base/parallel_for.h"
 #include "photo/sift/sift_describe.h"
 #include "photo/sift/sift_detect.h"
 #include "photo/sift/sift_levels.h"

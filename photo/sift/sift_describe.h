@@ -10,7 +10,7 @@ extern "C" {
 #include <algorithm>
 #include <cmath>
 
-#include "format/base/parallel_for.h"
+#include "base/parallel_for.h"
 #include "photo/sift/sift_detect.h"
 #include "photo/sift/sift_scale_space.h"
 

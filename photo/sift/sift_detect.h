@@ -5,7 +5,7 @@
 
 #include <vector>
 
-#include "format/base/parallel_for.h"
+#include "base/parallel_for.h"
 #include "photo/sift/sift_scale_space.h"
 
 namespace cwloc::sift_internal {

@@ -12,7 +12,7 @@
 #include <new>
 #include <vector>
 
-#include "format/base/parallel_for.h"
+#include "base/parallel_for.h"
 #include "photo/sift/sift_extractor.h"
 
 namespace cwloc::sift_internal {

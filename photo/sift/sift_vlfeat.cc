@@ -11,7 +11,7 @@ extern "C" {
 #include <mutex>
 #include <stdexcept>
 
-#include "format/base/parallel_for.h"
+#include "base/parallel_for.h"
 #include "photo/sift/sift_levels.h"
 
 namespace cwloc::sift_internal {

@@ -5,7 +5,7 @@
 #include <new>
 #include <string>
 
-#include "format/base/error.h"
+#include "base/error.h"
 #include "indexer/build_option_table.h"
 #include "indexer/index_build_flags.h"
 #include "indexer/index_builder.h"

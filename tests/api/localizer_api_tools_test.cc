@@ -11,9 +11,9 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "colmap/database.h"
 #include "cwloc/cwloc.h"
 #include "cwloc/cwloc.hpp"
-#include "format/colmap/database.h"
 #include "photo/image_decode.h"
 #include "tests/api/api_test_util.h"
 #include "tests/localization_check.h"

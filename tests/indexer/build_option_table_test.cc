@@ -10,9 +10,9 @@
 #include <stdexcept>
 #include <vector>
 
-#include "format/kdtree/descriptor_codes.h"
-#include "format/kdtree/descriptor_distance.h"
-#include "format/kdtree/kd_forest_builder.h"
+#include "kdtree/descriptor_codes.h"
+#include "kdtree/descriptor_distance.h"
+#include "kdtree/kd_forest_builder.h"
 #include "tests/test_util.h"
 
 namespace cwloc {

@@ -7,8 +7,8 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
-#include "format/geo/index_georeference.h"
-#include "format/index/index.h"
+#include "format/index.h"
+#include "geo/index_georeference.h"
 #include "tests/indexer/indexer_fixture.h"
 #include "tests/photo/exif_builder.h"
 

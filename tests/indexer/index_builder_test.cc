@@ -7,7 +7,7 @@
 #include <nlohmann/json.hpp>
 #include <set>
 
-#include "format/index/index.h"
+#include "format/index.h"
 #include "tests/indexer/indexer_fixture.h"
 
 namespace cwloc {

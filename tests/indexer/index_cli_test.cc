@@ -11,9 +11,9 @@
 #include <set>
 #include <sstream>
 
-#include "format/index/index_file.h"
-#include "format/kdtree/kd_forest_builder.h"
+#include "format/index_file.h"
 #include "indexer/build_option_table.h"
+#include "kdtree/kd_forest_builder.h"
 #include "tests/indexer/indexer_fixture.h"
 
 namespace cwloc {

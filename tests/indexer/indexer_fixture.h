@@ -2,11 +2,11 @@
 
 #include <gtest/gtest.h>
 
-#include "format/colmap/database.h"
-#include "format/colmap/reconstruction_io.h"
-#include "format/kdtree/descriptor_distance.h"
+#include "colmap/database.h"
+#include "colmap/reconstruction_io.h"
 #include "indexer/index_builder.h"
-#include "tests/format/colmap/synthetic_model.h"
+#include "kdtree/descriptor_distance.h"
+#include "tests/colmap/synthetic_model.h"
 #include "tests/test_util.h"
 
 namespace cwloc::test {

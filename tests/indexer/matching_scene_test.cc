@@ -7,10 +7,10 @@
 #include <string>
 #include <vector>
 
-#include "format/colmap/database.h"
-#include "format/colmap/reconstruction_io.h"
-#include "format/index/index_file.h"
-#include "format/index/index_layout.h"
+#include "colmap/database.h"
+#include "colmap/reconstruction_io.h"
+#include "format/index_file.h"
+#include "format/index_layout.h"
 #include "indexer/index_builder.h"
 #include "tests/test_util.h"
 

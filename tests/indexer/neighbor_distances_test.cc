@@ -5,7 +5,7 @@
 #include <cmath>
 #include <random>
 
-#include "format/kdtree/descriptor_distance.h"
+#include "kdtree/descriptor_distance.h"
 
 namespace cwloc {
 namespace {

@@ -5,8 +5,8 @@
 #include <cstring>
 #include <fstream>
 
-#include "format/index/index.h"
-#include "localizer/io/database/database_queries.h"
+#include "format/index.h"
+#include "io/database/database_queries.h"
 #include "localizer/localizer.h"
 #include "tests/test_util.h"
 

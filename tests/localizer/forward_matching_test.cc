@@ -11,7 +11,7 @@
 #include <string>
 #include <tuple>
 
-#include "format/base/split_mix64.h"
+#include "base/split_mix64.h"
 #include "localizer/cluster_wise_ratio.h"
 #include "tests/localizer/matching_fixture.h"
 

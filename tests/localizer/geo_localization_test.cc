@@ -9,7 +9,7 @@
 #include <set>
 #include <sstream>
 
-#include "format/geo/georeference.h"
+#include "geo/georeference.h"
 #include "tests/localization_check.h"
 #include "tests/test_util.h"
 

@@ -6,10 +6,10 @@
 #include <fstream>
 #include <sstream>
 
-#include "format/geo/georeference.h"
-#include "format/index/index.h"
-#include "localizer/io/camera_spec.h"
-#include "localizer/io/database/database_queries.h"
+#include "format/index.h"
+#include "geo/georeference.h"
+#include "io/camera_spec.h"
+#include "io/database/database_queries.h"
 #include "localizer/localizer.h"
 #include "tests/shared_data_index.h"
 #include "tests/test_util.h"

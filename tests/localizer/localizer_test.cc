@@ -5,7 +5,7 @@
 #include <optional>
 #include <string>
 
-#include "format/base/error.h"
+#include "base/error.h"
 #include "tests/indexer/indexer_fixture.h"
 
 namespace cwloc {

@@ -8,9 +8,9 @@
 #include <optional>
 #include <vector>
 
-#include "format/base/split_mix64.h"
-#include "format/index/index.h"
-#include "format/kdtree/descriptor_distance.h"
+#include "base/split_mix64.h"
+#include "format/index.h"
+#include "kdtree/descriptor_distance.h"
 #include "localizer/localizer_options.h"
 #include "localizer/matching.h"
 #include "localizer/query.h"

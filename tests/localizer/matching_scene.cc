@@ -7,11 +7,11 @@
 #include <set>
 #include <span>
 
-#include "format/camera/camera_models.h"
-#include "format/index/index_file.h"
-#include "format/index/index_layout.h"
-#include "format/kdtree/descriptor_distance.h"
-#include "format/kdtree/kd_forest_builder.h"
+#include "camera/camera_models.h"
+#include "format/index_file.h"
+#include "format/index_layout.h"
+#include "kdtree/descriptor_distance.h"
+#include "kdtree/kd_forest_builder.h"
 
 namespace cwloc::test {
 namespace {

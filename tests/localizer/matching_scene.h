@@ -5,8 +5,8 @@
 #include <string>
 #include <vector>
 
-#include "format/base/split_mix64.h"
-#include "format/index/index_sections.h"
+#include "base/split_mix64.h"
+#include "format/index_sections.h"
 
 namespace cwloc::test {
 

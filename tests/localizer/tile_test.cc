@@ -6,7 +6,7 @@
 #include <fstream>
 #include <set>
 
-#include "format/index/index.h"
+#include "format/index.h"
 #include "tests/localization_check.h"
 #include "tests/test_util.h"
 

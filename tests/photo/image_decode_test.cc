@@ -4,8 +4,8 @@
 
 #include <fstream>
 
-#include "format/base/error.h"
-#include "format/index/xxhash64.h"
+#include "base/error.h"
+#include "format/xxhash64.h"
 #include "photo/image_resize.h"
 #include "tests/test_png.h"
 #include "tests/test_util.h"

@@ -5,11 +5,11 @@
 #include <iostream>
 #include <unordered_map>
 
+#include "base/error.h"
 #include "cwloc/version.h"
-#include "format/base/error.h"
-#include "format/base/tool_main.h"
-#include "format/geo/index_georeference.h"
-#include "format/index/index.h"
+#include "exe/tool_main.h"
+#include "format/index.h"
+#include "geo/index_georeference.h"
 #include "tools/eval/ground_truth.h"
 #include "tools/eval/report.h"
 #include "tools/eval/result_reader.h"

@@ -5,7 +5,7 @@
 
 #include <Eigen/Core>
 
-#include "format/geo/georeference.h"
+#include "geo/georeference.h"
 #include "tools/eval/pose_error.h"
 
 namespace cwloc::eval {

@@ -8,8 +8,8 @@
 #include <sstream>
 #include <unordered_map>
 
-#include "format/base/bounded_file.h"
-#include "format/base/error.h"
+#include "base/bounded_file.h"
+#include "base/error.h"
 
 namespace cwloc::eval {
 namespace {

@@ -5,7 +5,7 @@
 #include <unordered_map>
 #include <vector>
 
-#include "format/geo/georeference.h"
+#include "geo/georeference.h"
 #include "tools/eval/pose_error.h"
 
 namespace cwloc::eval {

@@ -4,9 +4,9 @@
 #include <sstream>
 #include <unordered_map>
 
-#include "format/base/bounded_file.h"
-#include "format/base/error.h"
-#include "format/colmap/reconstruction_io.h"
+#include "base/bounded_file.h"
+#include "base/error.h"
+#include "colmap/reconstruction_io.h"
 
 namespace cwloc::eval {
 

@@ -8,8 +8,8 @@
 #include <stdexcept>
 #include <unordered_map>
 
+#include "base/chi_square.h"
 #include "cwloc/version.h"
-#include "format/base/chi_square.h"
 
 namespace cwloc::eval {
 namespace {

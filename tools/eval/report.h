@@ -8,7 +8,7 @@
 #include <unordered_map>
 #include <vector>
 
-#include "format/geo/georeference.h"
+#include "geo/georeference.h"
 #include "tools/eval/geo_error.h"
 #include "tools/eval/ground_truth.h"
 #include "tools/eval/recognition.h"

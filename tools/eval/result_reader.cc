@@ -4,7 +4,7 @@
 #include <nlohmann/json.hpp>
 #include <unordered_map>
 
-#include "format/base/error.h"
+#include "base/error.h"
 #include "tools/eval/ground_truth.h"
 
 namespace cwloc::eval {

@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "format/geo/georeference.h"
+#include "geo/georeference.h"
 #include "tools/eval/pose_error.h"
 
 namespace cwloc::eval {

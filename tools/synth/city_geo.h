@@ -11,8 +11,8 @@
 #include <optional>
 #include <string>
 
-#include "format/colmap/reconstruction.h"
-#include "format/geo/georeference.h"
+#include "colmap/reconstruction.h"
+#include "geo/georeference.h"
 #include "tools/synth/city_scene.h"
 
 namespace cwloc::synth {

@@ -9,8 +9,8 @@
 #include <numbers>
 #include <span>
 
-#include "format/base/parallel_for.h"
-#include "format/camera/camera_models.h"
+#include "base/parallel_for.h"
+#include "camera/camera_models.h"
 
 namespace cwloc::synth {
 namespace {

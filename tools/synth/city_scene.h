@@ -14,8 +14,8 @@
 #include <string_view>
 #include <vector>
 
-#include "format/colmap/reconstruction.h"
-#include "format/colmap/types.h"
+#include "colmap/reconstruction.h"
+#include "colmap/types.h"
 #include "tools/synth/city_layout.h"
 #include "tools/synth/sift_descriptors.h"
 

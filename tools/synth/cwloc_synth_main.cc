@@ -10,11 +10,11 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "base/error.h"
+#include "base/stopwatch.h"
+#include "camera/camera_models.h"
 #include "cwloc/version.h"
-#include "format/base/error.h"
-#include "format/base/stopwatch.h"
-#include "format/base/tool_main.h"
-#include "format/camera/camera_models.h"
+#include "exe/tool_main.h"
 #include "tools/synth/city_geo.h"
 #include "tools/synth/city_scene.h"
 #include "tools/synth/scene_writer.h"

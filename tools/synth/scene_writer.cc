@@ -14,13 +14,13 @@
 #include <mutex>
 #include <thread>
 
-#include "format/base/atomic_file.h"
-#include "format/base/error.h"
-#include "format/base/parallel_for.h"
-#include "format/base/stopwatch.h"
-#include "format/camera/camera_models.h"
-#include "format/colmap/database.h"
-#include "format/colmap/reconstruction_io.h"
+#include "base/atomic_file.h"
+#include "base/error.h"
+#include "base/parallel_for.h"
+#include "base/stopwatch.h"
+#include "camera/camera_models.h"
+#include "colmap/database.h"
+#include "colmap/reconstruction_io.h"
 
 namespace cwloc::synth {
 namespace fs = std::filesystem;

@@ -10,7 +10,7 @@
 #include <array>
 #include <cstdint>
 
-#include "format/base/split_mix64.h"
+#include "base/split_mix64.h"
 
 namespace cwloc::synth {
 

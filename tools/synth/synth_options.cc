@@ -5,8 +5,8 @@
 #include <sstream>
 #include <vector>
 
-#include "format/base/error.h"
-#include "format/camera/camera_models.h"
+#include "base/error.h"
+#include "camera/camera_models.h"
 
 namespace cwloc::synth {
 namespace {

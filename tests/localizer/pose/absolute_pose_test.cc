@@ -6,7 +6,7 @@
 #include <limits>
 #include <numbers>
 
-#include "tests/localizer/pose/synthetic_pose.h"
+#include "tests/support/synthetic_pose.h"
 #include "tests/test_util.h"
 
 namespace cwloc {

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <limits>
 
-#include "tests/localizer/pose/synthetic_pose.h"
+#include "tests/support/synthetic_pose.h"
 #include "tests/test_util.h"
 
 namespace cwloc {

@@ -12,7 +12,7 @@
 
 #include "localizer/pose/absolute_pose.h"
 #include "localizer/pose/refine_pose.h"
-#include "tests/localizer/pose/synthetic_pose.h"
+#include "tests/support/synthetic_pose.h"
 #include "tests/test_util.h"
 
 namespace cwloc {

@@ -9,7 +9,7 @@
 #include <optional>
 
 #include "localizer/pose/local_optimization.h"
-#include "tests/localizer/pose/synthetic_pose.h"
+#include "tests/support/synthetic_pose.h"
 #include "tests/test_util.h"
 
 namespace cwloc {

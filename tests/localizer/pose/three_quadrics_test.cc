@@ -2,7 +2,7 @@
 
 #include <gtest/gtest.h>
 
-#include "tests/localizer/pose/synthetic_pose.h"
+#include "tests/support/synthetic_pose.h"
 #include "tests/test_util.h"
 
 namespace cwloc {

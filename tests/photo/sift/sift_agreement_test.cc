@@ -10,7 +10,7 @@
 
 #include "photo/image_resize.h"
 #include "photo/sift/sift_extractor.h"
-#include "tests/photo/sift/sift_agreement_util.h"
+#include "tests/support/sift_agreement_util.h"
 #include "tests/test_util.h"
 
 namespace cwloc {

@@ -11,7 +11,7 @@
 #include <string>
 #include <utility>
 
-#include "format/index/xxhash64.h"
+#include "format/xxhash64.h"
 #include "photo/image_decode.h"
 #include "photo/image_resize.h"
 #include "photo/sift/sift_levels.h"

@@ -7,8 +7,8 @@
 #include <numbers>
 
 #include "cwloc/version.h"
-#include "format/geo/index_georeference.h"
-#include "format/index/index_file.h"
+#include "format/index_file.h"
+#include "geo/index_georeference.h"
 #include "tests/test_util.h"
 #include "tests/tools/eval/eval_fixtures.h"
 

@@ -4,7 +4,7 @@
 
 #include <fstream>
 
-#include "format/base/error.h"
+#include "base/error.h"
 #include "tests/test_util.h"
 #include "tests/tools/eval/eval_fixtures.h"
 #include "tools/eval/ground_truth.h"

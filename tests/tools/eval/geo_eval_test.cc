@@ -6,7 +6,7 @@
 #include <fstream>
 #include <numbers>
 
-#include "format/base/error.h"
+#include "base/error.h"
 #include "tests/test_util.h"
 #include "tests/tools/eval/eval_fixtures.h"
 #include "tools/eval/geo_error.h"

@@ -4,8 +4,8 @@
 
 #include <fstream>
 
-#include "format/base/error.h"
-#include "format/colmap/reconstruction_io.h"
+#include "base/error.h"
+#include "colmap/reconstruction_io.h"
 #include "tests/test_util.h"
 
 namespace cwloc::eval {

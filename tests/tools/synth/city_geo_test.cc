@@ -18,10 +18,10 @@
 #include <set>
 #include <sstream>
 
-#include "format/base/error.h"
-#include "format/camera/camera_models.h"
-#include "format/colmap/reconstruction_io.h"
-#include "format/geo/georeference.h"
+#include "base/error.h"
+#include "camera/camera_models.h"
+#include "colmap/reconstruction_io.h"
+#include "geo/georeference.h"
 #include "tests/test_util.h"
 #include "tools/synth/city_scene.h"
 #include "tools/synth/scene_writer.h"

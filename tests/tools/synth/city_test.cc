@@ -12,10 +12,10 @@
 #include <set>
 #include <sstream>
 
-#include "format/base/error.h"
-#include "format/camera/camera_models.h"
-#include "format/colmap/database.h"
-#include "format/colmap/reconstruction_io.h"
+#include "base/error.h"
+#include "camera/camera_models.h"
+#include "colmap/database.h"
+#include "colmap/reconstruction_io.h"
 #include "tests/test_util.h"
 #include "tools/synth/city_geo.h"
 #include "tools/synth/city_scene.h"

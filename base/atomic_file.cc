@@ -1,0 +1,210 @@
+#include "base/atomic_file.h"
+
+#include <fcntl.h>
+#include <signal.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cerrno>
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+#include <system_error>
+#include <utility>
+#include <vector>
+
+#include "base/error.h"
+
+namespace cwloc {
+namespace {
+
+std::string TempPrefix(const std::filesystem::path& path) {
+  return path.filename().string() + ".tmp-";
+}
+
+// O_EXCL on a name no other writer picks: the process id tells processes apart, the counter
+// the files of this one; a name left behind by a crash is skipped. Returns -1 with errno set.
+int CreateTempFile(const std::filesystem::path& path, std::filesystem::path* temp_path) {
+  static std::atomic<uint64_t> counter{0};
+  const std::string prefix = TempPrefix(path) + std::to_string(::getpid()) + "-";
+  for (int attempt = 0; attempt < 100; ++attempt) {
+    *temp_path = path.parent_path() / (prefix + std::to_string(counter++));
+    const int fd = ::open(temp_path->c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+    if (fd >= 0 || errno != EEXIST) return fd;
+  }
+  return -1;
+}
+
+// An unnamed file in `dir`, or -1 with errno set (EOPNOTSUPP etc. where O_TMPFILE is missing).
+int CreateUnnamedFile(const std::filesystem::path& path) {
+  const std::filesystem::path dir = path.has_parent_path() ? path.parent_path() : ".";
+#ifdef O_TMPFILE
+  return ::open(dir.c_str(), O_TMPFILE | O_WRONLY | O_CLOEXEC, 0644);
+#else
+  errno = EOPNOTSUPP;
+  return -1;
+#endif
+}
+
+// Gives the unnamed file behind `fd` the name `target`; fails with EEXIST when it exists.
+int LinkUnnamedFile(int fd, const std::filesystem::path& target) {
+  const std::string self = "/proc/self/fd/" + std::to_string(fd);
+  return ::linkat(AT_FDCWD, self.c_str(), AT_FDCWD, target.c_str(), AT_SYMLINK_FOLLOW);
+}
+
+}  // namespace
+
+void RemoveDeadWritersTemporaries(const std::filesystem::path& destination) {
+  const std::string prefix = TempPrefix(destination);
+  const std::filesystem::path dir = destination.has_parent_path() ? destination.parent_path() : ".";
+  std::error_code error;
+  for (const auto& entry : std::filesystem::directory_iterator(dir, error)) {
+    const std::string name = entry.path().filename().string();
+    if (name.rfind(prefix, 0) != 0) continue;
+    char* end = nullptr;
+    const long pid = std::strtol(name.c_str() + prefix.size(), &end, 10);
+    if (pid <= 0 || *end != '-' || pid == ::getpid()) continue;
+    if (::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH) {
+      std::filesystem::remove_all(entry.path(), error);
+    }
+  }
+}
+
+AtomicFile::AtomicFile(std::filesystem::path path, Temporary temporary) : path_(std::move(path)) {
+  RemoveDeadWritersTemporaries(path_);
+  if (temporary == Temporary::kUnnamed) {
+    fd_ = CreateUnnamedFile(path_);
+    // Only a missing directory or permission is final; other errors mean no O_TMPFILE here.
+    if (fd_ < 0 && (errno == ENOENT || errno == EACCES || errno == ENOTDIR || errno == EROFS)) {
+      Fail("cannot create a temporary file next to it", errno);
+    }
+    if (fd_ >= 0) return;
+  }
+  fd_ = CreateTempFile(path_, &temp_path_);
+  if (fd_ < 0) {
+    const int error_number = errno;
+    temp_path_.clear();
+    Fail("cannot create a temporary file next to it", error_number);
+  }
+}
+
+AtomicFile::~AtomicFile() {
+  if (fd_ >= 0) ::close(fd_);
+  if (!temp_path_.empty()) ::unlink(temp_path_.c_str());
+}
+
+void AtomicFile::Write(const void* data, size_t size) {
+  const char* bytes = static_cast<const char*>(data);
+  while (size > 0) {
+    const ssize_t n = ::write(fd_, bytes, size);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) Fail("cannot write", n < 0 ? errno : ENOSPC);
+    bytes += n;
+    size -= static_cast<size_t>(n);
+  }
+}
+
+void AtomicFile::CopyFrom(int source_fd, uint64_t size) {
+  loff_t offset = 0;
+  while (static_cast<uint64_t>(offset) < size) {
+    const size_t chunk = static_cast<size_t>(std::min<uint64_t>(size - offset, size_t{1} << 30));
+    const ssize_t n = ::copy_file_range(source_fd, &offset, fd_, nullptr, chunk, 0);
+    if (n > 0) continue;
+    if (n < 0 && errno == EINTR) continue;
+    // Not between these files (EXDEV across file systems, EINVAL, ENOSYS, EOPNOTSUPP), or the
+    // source ended early: copy the rest through a buffer, which reports the real error.
+    break;
+  }
+  std::vector<char> buffer;
+  while (static_cast<uint64_t>(offset) < size) {
+    if (buffer.empty()) buffer.resize(size_t{1} << 20);
+    const size_t chunk = static_cast<size_t>(std::min<uint64_t>(size - offset, buffer.size()));
+    const ssize_t n = ::pread(source_fd, buffer.data(), chunk, offset);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) Fail("cannot read the content to copy", errno);
+    if (n == 0) Fail("cannot copy the previous content", EIO);  // the source shrank
+    Write(buffer.data(), static_cast<size_t>(n));
+    offset += n;
+  }
+}
+
+int AtomicFile::OpenForReading() const {
+  // An unnamed file opens again through its /proc link, as Commit() links it.
+  const std::string name =
+      temp_path_.empty() ? "/proc/self/fd/" + std::to_string(fd_) : temp_path_.string();
+  const int fd = ::open(name.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) Fail("cannot open the temporary file again", errno);
+  return fd;
+}
+
+void AtomicFile::Commit() {
+  // fsync also reports write errors the kernel deferred (a full disk on NFS, EIO).
+  if (::fsync(fd_) != 0) Fail("cannot sync to disk", errno);
+  if (temp_path_.empty()) {
+    // Unnamed: a new destination gets the file directly; an existing one is replaced through a
+    // name that exists only between the link and the rename.
+    if (LinkUnnamedFile(fd_, path_) != 0) {
+      if (errno != EEXIST) Fail("cannot link the temporary file into place", errno);
+      std::filesystem::path named;
+      for (int attempt = 0;; ++attempt) {
+        static std::atomic<uint64_t> counter{0};
+        named = path_.parent_path() /
+                (TempPrefix(path_) + std::to_string(::getpid()) + "-u" + std::to_string(counter++));
+        if (LinkUnnamedFile(fd_, named) == 0) break;
+        if (errno != EEXIST || attempt >= 100)
+          Fail("cannot link the temporary file into place", errno);
+      }
+      temp_path_ = named;
+    }
+  }
+  if (::close(std::exchange(fd_, -1)) != 0) Fail("cannot write", errno);
+  if (!temp_path_.empty() && ::rename(temp_path_.c_str(), path_.c_str()) != 0) {
+    const int error_number = errno;
+    Fail("cannot rename " + temp_path_.filename().string() + " into place", error_number);
+  }
+  temp_path_.clear();
+  // The rename is durable once the directory is: sync it too.
+  const std::filesystem::path dir = path_.has_parent_path() ? path_.parent_path() : ".";
+  const int dir_fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (dir_fd < 0) Fail("cannot open its directory to sync it", errno);
+  const int rc = ::fsync(dir_fd);
+  const int error_number = errno;
+  ::close(dir_fd);
+  // EINVAL: a file system that cannot sync directories; nothing more can be done there.
+  if (rc != 0 && error_number != EINVAL) Fail("cannot sync its directory", error_number);
+}
+
+void AtomicFile::Fail(std::string_view what, int error_number) const {
+  std::string message = path_.string();
+  message += ": ";
+  message += what;
+  message += ": " + std::generic_category().message(error_number);
+  throw InputError(message);
+}
+
+AtomicFileWriter::AtomicFileWriter(std::filesystem::path path)
+    : file_(std::move(path)), buffer_(std::make_unique_for_overwrite<char[]>(kBufferSize)) {}
+
+void AtomicFileWriter::Append(const void* data, size_t size) {
+  if (kBufferSize - used_ < size) Flush();
+  if (size > kBufferSize) {
+    file_.Write(data, size);  // rare: larger than the whole buffer
+    return;
+  }
+  std::memcpy(buffer_.get() + used_, data, size);
+  used_ += size;
+}
+
+void AtomicFileWriter::Flush() {
+  file_.Write(buffer_.get(), used_);
+  used_ = 0;
+}
+
+void AtomicFileWriter::Commit() {
+  Flush();
+  file_.Commit();
+}
+
+}  // namespace cwloc

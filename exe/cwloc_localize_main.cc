@@ -1,0 +1,566 @@
+// cwloc-localize: opens a cwloc index read-only and estimates query camera poses.
+#include <signal.h>
+
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <mutex>
+#include <new>
+#include <nlohmann/json.hpp>
+#include <span>
+#include <sstream>
+#include <thread>
+#include <variant>
+
+#include "base/checkpointed_file.h"
+#include "base/error.h"
+#include "base/progress.h"
+#include "cwloc/version.h"
+#include "exe/tool_main.h"
+#include "format/index.h"
+#include "io/camera_spec.h"
+#include "io/option_table.h"
+#include "io/query_assembly.h"
+#include "io/query_list.h"
+#include "io/query_priors.h"
+#include "io/result_json.h"
+#include "localizer/localizer.h"
+#ifdef CWLOC_WITH_COLMAP_DB
+#include "io/database/database_queries.h"
+#endif
+
+namespace cwloc {
+namespace {
+
+struct CliOptions {
+  std::string index_path;
+  std::string database_path;
+  std::vector<std::string> query_names;
+  std::string query_list;
+  std::vector<std::string> feature_files;
+  std::vector<std::string> images;
+  std::string image_list;
+  std::string image_dir;
+  std::string camera_spec;
+  std::string image_size;
+  double focal = 0.0;
+  bool unknown_focal = false;
+  std::string prior_position;  // --prior-position, for every query
+  std::string prior_gravity;   // --prior-gravity, for every query
+  std::string priors_path;     // --priors: per query
+  QueryOptions options;        // the option table's
+  std::string output_path;
+  std::string poses_path;
+  int threads = 1;
+  bool verify = false;
+  bool quiet = false;
+};
+
+std::vector<QuerySource> CollectQueries(const CliOptions& cli) {
+  using Kind = QuerySource::Kind;
+  std::vector<QuerySource> sources;
+  for (const std::string& name : cli.query_names)
+    sources.push_back({name, Kind::kDatabase, {}, {}, {}});
+  for (const std::string& file : cli.feature_files) {
+    sources.push_back(
+        {std::filesystem::path(file).filename().string(), Kind::kFeatureFile, file, {}, {}});
+  }
+  for (const std::string& image : cli.images) {
+    sources.push_back(
+        {std::filesystem::path(image).filename().string(), Kind::kPhoto, image, {}, {}});
+  }
+  if (!cli.query_list.empty()) {
+    const std::filesystem::path base = std::filesystem::path(cli.query_list).parent_path();
+    const Kind kind = cli.database_path.empty() ? Kind::kFeatureFile : Kind::kDatabase;
+    for (const auto& [name, camera] : ReadQueryList(cli.query_list)) {
+      sources.push_back(
+          {name, kind, kind == Kind::kFeatureFile ? base / name : "", camera, cli.query_list});
+    }
+  }
+  if (!cli.image_list.empty()) {
+    // hloc's lists name images relative to an image folder: --image-dir, else the list's own.
+    const std::filesystem::path base = cli.image_dir.empty()
+                                           ? std::filesystem::path(cli.image_list).parent_path()
+                                           : std::filesystem::path(cli.image_dir);
+    for (const auto& [name, camera] : ReadQueryList(cli.image_list))
+      sources.push_back({name, Kind::kPhoto, base / name, camera, cli.image_list});
+  }
+  if (sources.empty()) {
+    throw InputError("no queries: give --image, --image-list, --query, --query-list or --features");
+  }
+  return sources;
+}
+
+// Reads each query from its source and assembles it as libcwloc does (QueryAssembler).
+class QueryLoader {
+ public:
+  QueryLoader(const CliOptions& cli, const QueryOptions& options)
+      : assembler_(options, Cameras(cli), Priors(cli)) {
+#ifdef CWLOC_WITH_COLMAP_DB
+    if (!cli.database_path.empty())
+      database_ = std::make_unique<DatabaseQueries>(cli.database_path);
+#endif
+  }
+
+  Query Load(const QuerySource& source) const {
+    Query query = source.kind == QuerySource::Kind::kDatabase ? LoadFromDatabase(source)
+                                                              : assembler_.Read(source);
+    assembler_.Complete(source, &query);
+    return query;
+  }
+
+ private:
+  static CameraInputs Cameras(const CliOptions& cli) {
+    CameraInputs cameras;
+    if (!cli.camera_spec.empty()) cameras.camera = ParseCameraSpec(cli.camera_spec, "--camera");
+    if (!cli.image_size.empty())
+      cameras.image_size = ParseImageSize(cli.image_size, "--image-size");
+    cameras.focal_px = cli.focal;
+    cameras.unknown_focal = cli.unknown_focal;
+    return cameras;
+  }
+
+  static PriorInputs Priors(const CliOptions& cli) {
+    PriorInputs priors;
+    if (!cli.prior_position.empty())
+      priors.position = ParsePositionPrior(cli.prior_position, "--prior-position");
+    if (!cli.prior_gravity.empty())
+      priors.gravity = ParseGravityPrior(cli.prior_gravity, "--prior-gravity");
+    if (!cli.priors_path.empty()) priors.per_query = ReadPriorsFile(cli.priors_path);
+    return priors;
+  }
+
+  Query LoadFromDatabase(const QuerySource& source) const {
+#ifdef CWLOC_WITH_COLMAP_DB
+    if (!database_) throw InputError(source.Label() + ": give --database to read it from");
+    return database_->Load(source.name);
+#else
+    throw InputError(source.Label() +
+                     ": this cwloc-localize was built without COLMAP database input");
+#endif
+  }
+
+  QueryAssembler assembler_;
+#ifdef CWLOC_WITH_COLMAP_DB
+  std::unique_ptr<DatabaseQueries> database_;
+#endif
+};
+
+// " f 1380.2 +- 9.7 px," for an estimated focal length, and what a weak constraint leaves.
+std::string EstimatedFocalText(const LocalizationResult& result) {
+  if (!result.focal_depth || result.camera.params.empty()) return "";
+  const FocalDepthUncertainty& uncertainty = *result.focal_depth;
+  const double focal = result.camera.params[0];
+  char text[160];
+  if (WeaklyConstrained(uncertainty, focal)) {
+    std::snprintf(text, sizeof(text), " f %.1f +- %.1f px, weakly constrained (depth +- %.3g),",
+                  focal, uncertainty.focal_std_px, uncertainty.depth_std);
+  } else {
+    std::snprintf(text, sizeof(text), " f %.1f +- %.1f px,", focal, uncertainty.focal_std_px);
+  }
+  return text;
+}
+
+// " position +- 0.8 m (95 %)," in metres for a georeferenced index, else in model units.
+std::string PositionRadiusText(const LocalizationResult& result) {
+  if (!result.covariance) return "";
+  char text[96];
+  if (result.enu_position_covariance) {
+    std::snprintf(text, sizeof(text), " position +- %.3g m (95 %%),",
+                  Radius95(*result.enu_position_covariance));
+  } else {
+    std::snprintf(text, sizeof(text), " position +- %.3g model units (95 %%),",
+                  Radius95(result.covariance->Position()));
+  }
+  return text;
+}
+
+// Writes each finished query's record: JSON lines to --output (stdout by default), a pose line
+// to --poses, a readable line to stdout when the JSON goes to a file. Files get whole records
+// only and keep their previous content until the first checkpoint (CheckpointedFile). The first
+// error writing them stops the run: failed() tells the workers, Close() throws it.
+class ResultSink {
+ public:
+  explicit ResultSink(const CliOptions& cli) : cli_(cli) {
+    if (!cli.output_path.empty() && cli.output_path != "-")
+      json_file_ = std::make_unique<CheckpointedFile>(cli.output_path);
+    if (!cli.poses_path.empty()) poses_file_ = std::make_unique<CheckpointedFile>(cli.poses_path);
+  }
+
+  void Write(const LocalizationResult& result, const LocalizerOptions& options) {
+    std::lock_guard lock(mutex_);
+    if (closed_) return;  // a query abandoned by a stopped batch
+    EmitJsonLine(ResultToJson(result, options).dump());
+    // With the JSON in a file, stdout gets a readable line per query.
+    if (json_file_ && !cli_.quiet) {
+      if (result.success) {
+        std::printf("%s: localized, %u inliers / %u correspondences,%s%s %.1f ms\n",
+                    result.name.c_str(), result.num_inliers, result.correspondences,
+                    PositionRadiusText(result).c_str(), EstimatedFocalText(result).c_str(),
+                    result.times.total * 1e3);
+      } else {
+        std::printf("%s: not localized: %s\n", result.name.c_str(), result.failure_reason.c_str());
+      }
+      std::fflush(stdout);
+    }
+    if (poses_file_ && result.success) Append(*poses_file_, PoseLine(result));
+  }
+
+  void WriteError(const std::string& name, const std::string& error) {
+    std::lock_guard lock(mutex_);
+    if (closed_) return;
+    EmitJsonLine(ErrorToJson(name, error).dump());
+    std::fprintf(stderr, "cwloc-localize: error: %s\n", error.c_str());
+  }
+
+  bool failed() const { return failed_; }
+
+  // Puts every record in place; throws the first write error.
+  void Close() {
+    std::lock_guard lock(mutex_);
+    closed_ = true;
+    for (CheckpointedFile* file : {json_file_.get(), poses_file_.get()}) {
+      if (file && !failed_) Guard([&] { file->Close(); });
+    }
+    if (failed_) throw InputError(error_);
+  }
+
+ private:
+  // One record per line to --output, or stdout without it; the caller holds mutex_.
+  void EmitJsonLine(const std::string& json) {
+    if (json_file_) {
+      Append(*json_file_, json);
+      return;
+    }
+    // A record and its newline in one write, flushed at once: a reader of the pipe sees each
+    // query as it finishes.
+    const std::string line = json + '\n';
+    std::cout.write(line.data(), static_cast<std::streamsize>(line.size()));
+    std::cout.flush();
+  }
+
+  void Append(CheckpointedFile& file, std::string line) {
+    line += '\n';
+    Guard([&] { file.Append(line); });
+  }
+
+  // Runs a file operation unless one failed already, keeping the first error.
+  template <typename Operation>
+  void Guard(Operation operation) {
+    if (failed_) return;
+    try {
+      operation();
+    } catch (const InputError& e) {
+      error_ = e.what();
+      failed_ = true;
+    }
+  }
+
+  const CliOptions& cli_;
+  std::unique_ptr<CheckpointedFile> json_file_;
+  std::unique_ptr<CheckpointedFile> poses_file_;
+  std::mutex mutex_;
+  std::atomic<bool> failed_{false};
+  bool closed_ = false;
+  std::string error_;
+};
+
+// The signal that asked the batch to stop (SIGINT or SIGTERM), else 0; lock-free, so a signal
+// handler may set it.
+std::atomic<int> stop_signal{0};
+static_assert(std::atomic<int>::is_always_lock_free);
+
+void RequestStop(int signal_number) { stop_signal = signal_number; }
+
+// How long a stopped batch waits for its running queries (a large photo's SIFT takes seconds).
+constexpr std::chrono::seconds kStopGrace{1};
+
+// Ctrl-C or a plain kill lets the running queries finish, for up to kStopGrace, and puts every
+// finished record in place; a second one ends the process at once (SA_RESETHAND).
+void StopOnInterrupt() {
+  struct sigaction action {};
+  action.sa_handler = RequestStop;
+  sigemptyset(&action.sa_mask);
+  action.sa_flags = SA_RESETHAND;
+  for (const int signal_number : {SIGINT, SIGTERM}) sigaction(signal_number, &action, nullptr);
+}
+
+int Run(const CliOptions& cli) {
+  const LocalizerOptions& options = cli.options.localizer;
+  if (cli.threads < 1 || cli.threads > 1024)
+    throw InputError("--threads must be between 1 and 1024");
+  const Index index = Index::Open(cli.index_path);
+  if (cli.verify) {
+    index.file().VerifyChecksums();
+    index.Validate();
+  }
+  const std::vector<QuerySource> sources = CollectQueries(cli);
+  // --threads goes to queries first; a photo's SIFT gets the threads no other query uses (one
+  // photo and --threads 4: four threads inside it). Its features do not depend on them.
+  const int threads = std::max(1, std::min<int>(cli.threads, static_cast<int>(sources.size())));
+  QueryOptions query_options = cli.options;
+  query_options.photo.sift.num_threads = cli.threads / threads;
+  const QueryLoader loader(cli, query_options);
+  ResultSink sink(cli);
+  const Localizer localizer(index);
+
+  std::atomic<size_t> next{0};
+  std::atomic<int> localized{0}, failed{0}, errors{0}, internal_errors{0};
+  std::vector<double> times(sources.size(), -1);
+  Progress progress("localizing", sources.size());
+  auto worker = [&] {
+    for (size_t i = next++; i < sources.size() && !sink.failed() && stop_signal == 0; i = next++) {
+      try {
+        const Query query = loader.Load(sources[i]);
+        const LocalizationResult result = localizer.Localize(query, options);
+        times[i] = result.times.total;
+        (result.success ? localized : failed)++;
+        sink.Write(result, options);
+      } catch (const InputError& e) {
+        ++errors;
+        sink.WriteError(sources[i].name, e.what());
+      } catch (const std::bad_alloc&) {
+        // A query too big for the memory left (a huge photo on a small device) must not end
+        // the batch: its buffers are freed by now.
+        ++internal_errors;
+        sink.WriteError(sources[i].name, sources[i].Label() + ": out of memory");
+      } catch (const std::exception& e) {
+        ++internal_errors;
+        sink.WriteError(sources[i].name, sources[i].Label() + ": internal error: " + e.what());
+      }
+      progress.Advance();
+    }
+  };
+  StopOnInterrupt();
+  // The workers have threads of their own; this one waits for them to finish or for a stop,
+  // after which the running queries get kStopGrace to finish and are abandoned after it.
+  std::mutex done_mutex;
+  std::condition_variable done;
+  int running = threads;
+  std::vector<std::thread> pool;
+  for (int t = 0; t < threads; ++t) {
+    pool.emplace_back([&] {
+      worker();
+      const std::lock_guard lock(done_mutex);
+      --running;
+      done.notify_all();
+    });
+  }
+  int abandoned = 0;
+  {
+    std::unique_lock lock(done_mutex);
+    while (running > 0 && stop_signal == 0) done.wait_for(lock, std::chrono::milliseconds(50));
+    done.wait_for(lock, kStopGrace, [&] { return running == 0; });
+    abandoned = running;
+  }
+  for (auto& thread : pool) abandoned > 0 ? thread.detach() : thread.join();
+  progress.Finish();
+  sink.Close();
+  if (const int signal_number = stop_signal) {
+    std::fprintf(stderr, "cwloc-localize: interrupted by %s after %d of %zu queries",
+                 signal_number == SIGINT ? "SIGINT" : "SIGTERM",
+                 localized + failed + errors + internal_errors, sources.size());
+    if (abandoned > 0) {
+      // Their threads still use this function's objects: end here, without unwinding.
+      std::fprintf(stderr, "; %d running %s abandoned\n", abandoned,
+                   abandoned == 1 ? "query" : "queries");
+      std::cout.flush();
+      std::fflush(nullptr);
+      std::_Exit(128 + signal_number);
+    }
+    std::fprintf(stderr, "\n");
+    return 128 + signal_number;  // the shell's code for a process a signal ended
+  }
+
+  std::vector<double> finished;
+  for (double t : times) {
+    if (t >= 0) finished.push_back(t);
+  }
+  std::sort(finished.begin(), finished.end());
+  if (!cli.quiet) {
+    std::fprintf(stderr, "cwloc-localize: localized %d of %zu queries", localized.load(),
+                 sources.size());
+    if (errors > 0) std::fprintf(stderr, " (%d bad input)", errors.load());
+    if (internal_errors > 0)
+      std::fprintf(stderr, " (%d out of memory or internal error)", internal_errors.load());
+    if (!finished.empty())
+      std::fprintf(stderr, ", median %.1f ms per query", finished[finished.size() / 2] * 1e3);
+    std::fprintf(stderr, "\n");
+  }
+  if (internal_errors > 0) return kExitInternalError;
+  if (errors > 0) return kExitBadInput;
+  return failed > 0 ? kExitNotLocalized : kExitOk;
+}
+
+}  // namespace
+}  // namespace cwloc
+
+namespace cwloc {
+namespace {
+
+// The option table's flags. Each value is kept as given and goes through the table once
+// parsing is done, so cwloc-localize refuses what libcwloc refuses, with the same message.
+class TableFlags {
+ public:
+  void AddTo(CLI::App* app) {
+    const QueryOptions defaults;
+    const std::span<const OptionSpec> table = OptionTable();
+    texts_.resize(table.size());
+    switches_ = std::make_unique<bool[]>(table.size());
+    for (size_t i = 0; i < table.size(); ++i) {
+      const OptionSpec& spec = table[i];
+      const OptionValue value = spec.get(defaults);
+      const std::string flag = "--" + std::string(spec.flag);
+      CLI::Option* option = nullptr;
+      if (const bool* on = std::get_if<bool>(&value)) {
+        switches_[i] = *on;
+        // A switch that is on by default is turned off by --no-NAME.
+        const std::string names = *on ? flag + ",!--no-" + std::string(spec.flag) : flag;
+        option = app->add_flag(names, switches_[i], std::string(spec.help));
+      } else {
+        option = app->add_option(flag, texts_[i], std::string(spec.help))
+                     ->default_str(FormatOption(value))
+                     ->type_name(TypeName(spec, value));
+      }
+      option->group(kGroup);
+      options_.push_back(option);
+    }
+  }
+
+  // Every flag given, through the table: ParseOption checks a value, a switch has no range,
+  // and ValidateQueryOptions adds the rules between options.
+  void Apply(QueryOptions* options) const {
+    const std::span<const OptionSpec> table = OptionTable();
+    for (size_t i = 0; i < table.size(); ++i) {
+      if (options_[i]->count() == 0) continue;
+      const OptionSpec& spec = table[i];
+      const bool is_switch = spec.type == OptionValue(false).index();
+      spec.set(options, is_switch ? OptionValue(switches_[i]) : ParseOption(spec, texts_[i]));
+    }
+    ValidateQueryOptions(*options);
+  }
+
+  static constexpr const char* kGroup =
+      "Localization (also cwloc::api::Options, cwloc_options_set)";
+
+ private:
+  static std::string TypeName(const OptionSpec& spec, const OptionValue& value) {
+    if (!spec.range.names.empty()) {
+      std::string names;
+      for (std::string_view name : spec.range.names)
+        names += (names.empty() ? "" : "|") + std::string(name);
+      return "{" + names + "}";
+    }
+    if (std::holds_alternative<double>(value)) return "FLOAT";
+    return std::holds_alternative<int32_t>(value) ? "INT" : "UINT";
+  }
+
+  std::vector<std::string> texts_;
+  std::unique_ptr<bool[]> switches_;  // CLI11 sets bools, and vector<bool> has none to point at
+  std::vector<CLI::Option*> options_;
+};
+
+}  // namespace
+}  // namespace cwloc
+
+int main(int argc, char** argv) {
+  CLI::App app{"cwloc-localize: 6-DoF camera poses of query images against a cwloc index"};
+  app.set_version_flag("--version", std::string("cwloc-localize ") + cwloc::kToolVersion);
+  cwloc::CliOptions cli;
+  constexpr const char* kQueries = "Queries";
+  constexpr const char* kOutput = "Output";
+
+  app.add_option("--index", cli.index_path, "Index file built by cwloc-index")->required();
+#ifdef CWLOC_WITH_COLMAP_DB
+  app.add_option("--database", cli.database_path,
+                 "COLMAP database holding the queries' keypoints and descriptors")
+      ->group(kQueries);
+#endif
+  app.add_option("--image", cli.images,
+                 "Query photo, JPEG or PNG (repeatable): SIFT is extracted as colmap "
+                 "feature_extractor does")
+      ->group(kQueries);
+  app.add_option("--image-list", cli.image_list,
+                 "File of query photos, one per line, optionally followed by 'MODEL W H PARAMS' "
+                 "(hloc's queries_with_intrinsics.txt)")
+      ->group(kQueries);
+  app.add_option("--image-dir", cli.image_dir,
+                 "Folder the --image-list names are relative to (default: the list's folder)")
+      ->group(kQueries);
+  app.add_option("--query", cli.query_names, "Query image name in --database (repeatable)")
+      ->group(kQueries);
+  app.add_option("--query-list", cli.query_list,
+                 "File of queries, one per line: a name in --database (or a feature file), "
+                 "optionally followed by "
+                 "'MODEL W H PARAMS' (hloc's queries_with_intrinsics.txt)")
+      ->group(kQueries);
+  app.add_option("--features", cli.feature_files,
+                 "COLMAP text feature file ('N 128', then 'x y scale orientation d1..d128' lines; "
+                 "repeatable)")
+      ->group(kQueries);
+  auto* camera = app.add_option("--camera", cli.camera_spec,
+                                "Query camera 'MODEL W H PARAMS...' (known focal)")
+                     ->group(kQueries);
+  app.add_option("--image-size", cli.image_size,
+                 "Query image size 'W H' when the focal length is unknown (P4Pf)")
+      ->excludes(camera)
+      ->group(kQueries);
+  app.add_option("--focal", cli.focal,
+                 "Query focal length in pixels, a prior: refined with a radial distortion term "
+                 "(principal point at the image centre)")
+      ->excludes(camera)
+      ->group(kQueries);
+  app.add_flag("--unknown-focal", cli.unknown_focal,
+               "Withhold the focal length: P4Pf estimates it, then focal and radial distortion are "
+               "refined")
+      ->group(kQueries);
+  app.add_option("--prior-position", cli.prior_position,
+                 "GPS prior 'LAT LON [HEIGHT] RADIUS_M' (WGS84): only model cameras within the "
+                 "radius are matched; needs a georeferenced index")
+      ->group(kQueries);
+  app.add_option(
+         "--prior-gravity", cli.prior_gravity,
+         "Gravity direction 'GX GY GZ' in the camera frame (x right, y down, z forward), as "
+         "an IMU gives it; needs a georeferenced index")
+      ->group(kQueries);
+  app.add_option("--priors", cli.priors_path,
+                 "Per-query priors: lines 'NAME position LAT LON HEIGHT|- RADIUS_M' and 'NAME "
+                 "gravity GX GY GZ'")
+      ->group(kQueries);
+  app.add_option("-o,--output", cli.output_path,
+                 "JSON lines output (default: stdout). A file keeps its previous content until "
+                 "this run's first records replace it, about a second in, and only ever holds "
+                 "whole lines, saved about once a second")
+      ->group(kOutput);
+  app.add_option("--poses", cli.poses_path,
+                 "Also write 'NAME QW QX QY QZ TX TY TZ' lines of localized queries (saved as -o "
+                 "is)")
+      ->group(kOutput);
+  app.add_flag("-q,--quiet", cli.quiet, "No summary or readable lines")->group(kOutput);
+  app.add_option("--threads", cli.threads,
+                 "Threads: queries localized in parallel, and a photo's SIFT gets those no other "
+                 "query uses")
+      ->capture_default_str();
+  app.add_flag("--verify", cli.verify,
+               "Verify the index's checksums and stored indices before localizing");
+  cwloc::TableFlags table_flags;
+  table_flags.AddTo(&app);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? cwloc::kExitOk : cwloc::kExitBadInput;
+  }
+  return cwloc::RunTool("cwloc-localize", [&] {
+    table_flags.Apply(&cli.options);
+    return cwloc::Run(cli);
+  });
+}

@@ -1,0 +1,114 @@
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <span>
+#include <string>
+#include <string_view>
+#include <utility>
+
+#include "format/index_file.h"
+#include "format/index_sections.h"
+#include "kdtree/descriptor_codes.h"
+#include "kdtree/kd_forest.h"
+
+namespace cwloc {
+
+// The typed, read-only view of an index file that the localizer and the tools use.
+// Open() is O(number of sections): it checks that every section is present with the right
+// element size and that the counts agree, and never walks the big arrays. Indices stored in
+// those arrays are checked where they are used (the accessors below return an empty name or
+// span, or UINT32_MAX, on a bad one) and all of them by Validate().
+class Index {
+ public:
+  static Index Open(const std::filesystem::path& path);
+
+  const IndexFile& file() const { return file_; }
+  std::string_view manifest_json() const;
+
+  std::span<const IndexCamera> cameras() const { return cameras_; }
+  std::span<const IndexImage> images() const { return images_; }
+  // PNTS of a full index; empty in a compact one, which keeps PORG + PNTF (use PointXyz).
+  std::span<const IndexPoint> points() const { return points_; }
+  size_t num_points() const { return num_points_; }
+  // PORG and PNTF of a compact index (empty / the zero origin in a full one).
+  std::span<const IndexPointOffset> point_offsets() const { return point_offsets_; }
+  IndexPointOrigin point_origin() const {
+    return point_origin_ != nullptr ? *point_origin_ : IndexPointOrigin{};
+  }
+  // Point p's position (p < num_points()).
+  std::array<double, 3> PointXyz(uint32_t p) const;
+  std::span<const uint32_t> tracks() const { return tracks_; }  // view indices
+  // A full index: one 128-byte descriptor per view, and the kd-forest's rows are views.
+  // A compact one (coded()): one product-quantization code per 3D point, and its rows are points.
+  bool coded() const { return !codes_.empty(); }
+  std::span<const uint8_t> descriptors() const { return descriptors_; }  // empty when coded()
+  const DescriptorCodes& codes() const { return codes_; }
+  std::span<const uint32_t> view_points() const { return view_points_; }
+  // Empty unless the index was built with --keypoints.
+  std::span<const ViewKeypoint> view_keypoints() const { return view_keypoints_; }
+  // v_NN per view (full) or per point (coded(): the nearest over the point's clusters).
+  std::span<const float> view_neighbor_distances() const { return view_neighbor_distances_; }
+  std::span<const float> point_neighbor_distances() const { return point_neighbor_distances_; }
+  std::span<const uint32_t> covisibility_offsets() const { return covisibility_offsets_; }
+  std::span<const CovisibilityEdge> covisibility_edges() const { return covisibility_edges_; }
+  // nullptr unless the index was georeferenced (format 1.1's optional GEOR section).
+  const IndexGeoreference* georeference() const { return georeference_; }
+
+  // The global kd-forest over all view descriptors, searched in place.
+  const KdForestView& kd_forest() const { return kd_forest_; }
+
+  size_t num_views() const { return view_points_.size(); }
+  // Rows of the kd-forest: views, or points when coded().
+  size_t num_rows() const { return coded() ? num_points_ : num_views(); }
+  // The point a kd-forest row stands for; UINT32_MAX when out of range.
+  uint32_t PointOfRow(uint32_t row) const;
+  // The row's v_NN distance (VNND or PVNN); 0 when out of range.
+  float RowNeighborDistance(uint32_t row) const;
+  // The descriptor the localizer compares for a view (< num_views()) or a row (< num_rows()):
+  // a pointer into DESC (scratch unused, may be null), or the point's code decoded into
+  // `scratch` (128 bytes).
+  const uint8_t* ViewDescriptor(uint32_t view, uint8_t* scratch) const;
+  const uint8_t* RowDescriptor(uint32_t row, uint8_t* scratch) const;
+
+  // Image name from the string pool; empty if the stored range is out of bounds.
+  std::string_view ImageName(const IndexImage& image) const;
+  // The image (row in IMGS) whose view range holds `view`; UINT32_MAX if none.
+  uint32_t ImageOfView(uint32_t view) const;
+  // Views of a point / edges of an image, empty when the stored range is out of bounds.
+  std::span<const uint32_t> TrackOf(uint32_t point_index) const;
+  std::span<const CovisibilityEdge> CovisibleImages(uint32_t image_index) const;
+
+  // O(size) check of every stored index and range; throws InputError naming the section,
+  // the element and the problem.
+  void Validate() const;
+
+ private:
+  explicit Index(IndexFile file) : file_(std::move(file)) {}
+
+  IndexFile file_;
+  std::span<const IndexCamera> cameras_;
+  std::span<const IndexImage> images_;
+  std::span<const char> strings_;
+  std::span<const IndexPoint> points_;
+  const IndexPointOrigin* point_origin_ = nullptr;
+  std::span<const IndexPointOffset> point_offsets_;
+  size_t num_points_ = 0;
+  // Point p's stored track range, unchecked: PNTS's fields, or PNTF's first_track up to the
+  // next point's (TRKS's end for the last).
+  std::pair<uint64_t, uint64_t> StoredTrack(uint32_t p) const;
+  std::span<const uint32_t> tracks_;
+  std::span<const uint8_t> descriptors_;
+  std::span<const uint32_t> view_points_;
+  std::span<const ViewKeypoint> view_keypoints_;
+  std::span<const float> view_neighbor_distances_;
+  std::span<const float> point_neighbor_distances_;
+  DescriptorCodes codes_;
+  std::span<const uint32_t> covisibility_offsets_;
+  std::span<const CovisibilityEdge> covisibility_edges_;
+  const IndexGeoreference* georeference_ = nullptr;
+  KdForestView kd_forest_;
+};
+
+}  // namespace cwloc

@@ -1,0 +1,83 @@
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "base/error.h"
+#include "format/index_layout.h"
+
+namespace cwloc {
+
+// A read-only memory mapping of an index file. Open() costs O(number of sections): it checks
+// the header, its checksum, the section table and every section's bounds, alignment and size,
+// never touching the big arrays. Section contents are checked where they are used, and fully
+// by VerifyChecksums() (and the indexer's verify command).
+class IndexFile {
+ public:
+  static IndexFile Open(const std::filesystem::path& path);
+  IndexFile(IndexFile&& other) noexcept;
+  IndexFile& operator=(IndexFile&& other) noexcept;
+  ~IndexFile();
+
+  const std::filesystem::path& path() const { return path_; }
+  const FileHeader& header() const { return *reinterpret_cast<const FileHeader*>(data_); }
+  std::span<const SectionEntry> sections() const { return sections_; }
+  std::span<const uint8_t> bytes() const { return {data_, size_}; }
+
+  // nullptr when the file has no such section.
+  const SectionEntry* FindSection(uint32_t tag) const;
+
+  // The section's elements as T. Throws InputError when the section is missing or its element
+  // size is not sizeof(T).
+  template <typename T>
+  std::span<const T> Section(uint32_t tag) const {
+    const SectionEntry& entry = RequireSection(tag, sizeof(T));
+    return {reinterpret_cast<const T*>(data_ + entry.offset), static_cast<size_t>(entry.count)};
+  }
+
+  // Recomputes every section checksum; throws InputError naming the first corrupt section.
+  void VerifyChecksums() const;
+
+ private:
+  IndexFile() = default;
+  const SectionEntry& RequireSection(uint32_t tag, size_t element_size) const;
+  void Unmap();
+
+  std::filesystem::path path_;
+  const uint8_t* data_ = nullptr;
+  size_t size_ = 0;
+  std::span<const SectionEntry> sections_;
+};
+
+// One section to write: its bytes are copied into the file at a 64-byte aligned offset.
+struct SectionData {
+  uint32_t tag = 0;
+  uint32_t flags = 0;
+  uint32_t element_size = 1;
+  uint64_t count = 0;
+  std::span<const uint8_t> bytes{};  // count * element_size bytes
+};
+
+// The format minor a file with these sections declares: the oldest 1.x that knows them all
+// (1.1 without the compact index's sections, 1.2 with them).
+uint16_t FormatMinorOf(std::span<const SectionData> sections);
+
+// Writes an index atomically through an AtomicFile (base/atomic_file.h: an unnamed
+// temporary file in the target directory, fsync, put in place). The output depends only on the
+// sections given (padding is zero), so equal input gives equal bytes.
+void WriteIndexFile(const std::filesystem::path& path, std::span<const SectionData> sections);
+
+template <typename T>
+SectionData MakeSection(uint32_t tag, std::span<const T> elements,
+                        uint32_t flags = kSectionRequired) {
+  return {tag,
+          flags,
+          static_cast<uint32_t>(sizeof(T)),
+          elements.size(),
+          {reinterpret_cast<const uint8_t*>(elements.data()), elements.size_bytes()}};
+}
+
+}  // namespace cwloc

@@ -1,0 +1,82 @@
+#include <algorithm>
+#include <cstring>
+#include <vector>
+
+#include "base/atomic_file.h"
+#include "format/index_file.h"
+#include "format/xxhash64.h"
+
+namespace cwloc {
+namespace {
+
+uint64_t AlignUp(uint64_t value) {
+  return (value + kSectionAlignment - 1) / kSectionAlignment * kSectionAlignment;
+}
+
+}  // namespace
+
+uint16_t FormatMinorOf(std::span<const SectionData> sections) {
+  uint16_t minor = 1;
+  for (const SectionData& section : sections) {
+    if (section.tag == section::kCodebook || section.tag == section::kPointCodes ||
+        section.tag == section::kPointNeighbor || section.tag == section::kPointOrigin ||
+        section.tag == section::kPointOffsets)
+      minor = std::max<uint16_t>(minor, 2);
+  }
+  return minor;
+}
+
+void WriteIndexFile(const std::filesystem::path& path, std::span<const SectionData> sections) {
+  std::vector<SectionEntry> table(sections.size());
+  uint64_t offset = sizeof(FileHeader);
+  for (size_t i = 0; i < sections.size(); ++i) {
+    const SectionData& section = sections[i];
+    if (section.bytes.size() != section.count * section.element_size || section.element_size == 0) {
+      throw std::logic_error("WriteIndexFile: section '" + SectionTagName(section.tag) +
+                             "' bytes do not match count * element_size");
+    }
+    SectionEntry& entry = table[i];
+    std::memset(&entry, 0, sizeof(entry));
+    entry.tag = section.tag;
+    entry.flags = section.flags;
+    entry.offset = AlignUp(offset);
+    entry.size = section.bytes.size();
+    entry.count = section.count;
+    entry.element_size = section.element_size;
+    entry.checksum = XxHash64(section.bytes);
+    offset = entry.offset + entry.size;
+  }
+  const uint64_t table_offset = AlignUp(offset);
+  const uint64_t table_bytes = table.size() * sizeof(SectionEntry);
+
+  FileHeader header;
+  std::memset(&header, 0, sizeof(header));
+  std::memcpy(header.magic, kIndexMagic, sizeof(kIndexMagic));
+  header.byte_order_mark = kByteOrderMark;
+  header.format_major = kFormatMajor;
+  header.format_minor = FormatMinorOf(sections);
+  header.header_size = sizeof(FileHeader);
+  header.section_entry_size = sizeof(SectionEntry);
+  header.file_size = table_offset + table_bytes;
+  header.section_table_offset = table_offset;
+  header.section_count = static_cast<uint32_t>(table.size());
+  header.section_table_checksum =
+      XxHash64({reinterpret_cast<const uint8_t*>(table.data()), table_bytes});
+  header.header_checksum =
+      XxHash64({reinterpret_cast<const uint8_t*>(&header), offsetof(FileHeader, header_checksum)});
+
+  AtomicFile file(path);
+  static constexpr uint8_t kZeros[kSectionAlignment] = {};
+  file.Write(reinterpret_cast<const uint8_t*>(&header), sizeof(header));
+  uint64_t written = sizeof(header);
+  for (size_t i = 0; i < sections.size(); ++i) {
+    file.Write(kZeros, table[i].offset - written);
+    file.Write(sections[i].bytes.data(), sections[i].bytes.size());
+    written = table[i].offset + table[i].size;
+  }
+  file.Write(kZeros, table_offset - written);
+  file.Write(reinterpret_cast<const uint8_t*>(table.data()), table_bytes);
+  file.Commit();
+}
+
+}  // namespace cwloc

@@ -1,0 +1,77 @@
+#pragma once
+
+// The option table (option_table.inc) as data: cwloc-localize makes its flags from it, libcwloc
+// its Options fields and cwloc_options_set names, and both check values through it, so every
+// surface accepts the same values and refuses the others with the same message.
+
+#include <cstdint>
+#include <limits>
+#include <span>
+#include <string>
+#include <string_view>
+#include <variant>
+
+#include "io/photo_query.h"
+#include "io/query_priors.h"
+#include "localizer/localizer_options.h"
+
+namespace cwloc {
+
+// Everything a localization is told besides its inputs: the pipeline's knobs, how photos
+// become features, and whether a photo's EXIF GPS becomes a prior. Defaults are the members'.
+struct QueryOptions {
+  LocalizerOptions localizer;
+  PhotoOptions photo;
+  bool use_exif_gps = false;
+  double exif_gps_radius_m = kDefaultExifGpsRadiusM;
+};
+
+// A value of an option in its API type (the table's `type` column).
+using OptionValue = std::variant<bool, int32_t, uint32_t, uint64_t, double, std::string>;
+
+// The values an option accepts: a choice among names, or numbers between min and max (each
+// bound open or closed; whole-number types are further limited to what they hold).
+struct ValueRange {
+  double min = -std::numeric_limits<double>::infinity();
+  double max = std::numeric_limits<double>::infinity();
+  bool min_open = false;
+  bool max_open = false;
+  std::string_view unit;                    // said in messages: "a number of pixels > 0"
+  std::span<const std::string_view> names;  // a choice's names; empty for numbers
+};
+
+struct OptionSpec {
+  std::string_view flag;  // cwloc-localize's flag without dashes; the C API's name
+  std::string_view help;
+  ValueRange range;
+  size_t type;  // index of the option's type in OptionValue
+  OptionValue (*get)(const QueryOptions& options);
+  void (*set)(QueryOptions* options, const OptionValue& value);  // of the spec's type, checked
+};
+
+// Every option, in the table's order.
+std::span<const OptionSpec> OptionTable();
+
+// The option with this flag name (without dashes); throws InputError "unknown option 'NAME'".
+const OptionSpec& FindOption(std::string_view flag);
+
+// "--FLAG VALUE: expected ..." unless the value is in the option's range.
+void CheckOption(const OptionSpec& spec, const OptionValue& value);
+
+// Text as cwloc-localize takes it ("12", "0.7", "1e3", "true", "cluster-wise"), or a number
+// as the C API takes it, as the option's type; throws InputError naming the flag when it is
+// not a value of that type or is out of range.
+OptionValue ParseOption(const OptionSpec& spec, std::string_view text);
+OptionValue OptionFromNumber(const OptionSpec& spec, double number);
+
+// A value as --help shows it and messages quote it: "0.7", "true", "cluster-wise".
+std::string FormatOption(const OptionValue& value);
+
+// Sets one option, checked; throws InputError naming the flag.
+void SetOption(QueryOptions* options, std::string_view flag, const OptionValue& value);
+
+// Checks every option of options (set in code or through the table) and the rules between
+// them; throws InputError naming the flags.
+void ValidateQueryOptions(const QueryOptions& options);
+
+}  // namespace cwloc

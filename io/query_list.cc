@@ -1,0 +1,30 @@
+#include "io/query_list.h"
+
+#include <fstream>
+#include <sstream>
+
+#include "base/bounded_file.h"
+#include "base/error.h"
+
+namespace cwloc {
+
+std::vector<QueryListEntry> ReadQueryList(const std::filesystem::path& list) {
+  CheckInputFile(list, kQueryListFile);
+  std::ifstream in(list);
+  if (!in) throw InputError(list.string() + ": cannot open the list");
+  std::vector<QueryListEntry> entries;
+  std::string line;
+  while (std::getline(in, line)) {
+    std::istringstream fields(line);
+    QueryListEntry entry;
+    if (!(fields >> entry.name) || entry.name[0] == '#') continue;
+    std::getline(fields, entry.camera);
+    entry.camera.erase(0, entry.camera.find_first_not_of(" \t\r"));
+    entry.camera.erase(entry.camera.find_last_not_of(" \t\r") + 1);
+    entries.push_back(std::move(entry));
+  }
+  if (in.bad()) throw InputError(list.string() + ": cannot read the list");
+  return entries;
+}
+
+}  // namespace cwloc
