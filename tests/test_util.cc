@@ -68,12 +68,12 @@ namespace {
 std::string BuildFingerprint() {
   std::string stamps;
   std::error_code ec;
-  for (const auto& file : {std::filesystem::read_symlink("/proc/self/exe", ec),
-                           ToolPath("cwloc-synth"), ToolPath("cwloc-index"),
-                           ToolPath("cwloc-localize")}) {
+  for (const auto& file :
+       {std::filesystem::read_symlink("/proc/self/exe", ec), ToolPath("cwloc-synth"),
+        ToolPath("cwloc-index"), ToolPath("cwloc-localize")}) {
     const auto time = std::filesystem::last_write_time(file, ec);
-    const auto size = std::filesystem::is_regular_file(file, ec) ? std::filesystem::file_size(file)
-                                                                 : 0;
+    const auto size =
+        std::filesystem::is_regular_file(file, ec) ? std::filesystem::file_size(file) : 0;
     stamps += file.string() + ":" + std::to_string(time.time_since_epoch().count()) + ":" +
               std::to_string(size) + ";";
   }
