@@ -108,7 +108,7 @@ PriorInputs ToPriorInputs(const Options& options) {
   PriorInputs priors;
   if (const auto& p = options.position_prior) {
     priors.position =
-        cwloc::PositionPrior{p->latitude_deg, p->longitude_deg, p->height_m, p->radius_m};
+        cwloc::PositionPrior{{p->latitude_deg, p->longitude_deg, p->height_m, p->radius_m}};
   }
   priors.gravity = options.gravity;
   return priors;
