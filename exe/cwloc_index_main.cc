@@ -198,7 +198,7 @@ class BuildFlags {
     switches_ = std::make_unique<bool[]>(table.size());
     for (size_t i = 0; i < table.size(); ++i) {
       const BuildOptionSpec& spec = table[i];
-      const std::optional<BuildOptionValue> value = spec.get(options, flags);
+      const std::optional<OptionValue> value = spec.get(options, flags);
       const std::string flag = "--" + std::string(spec.flag);
       if (IsSwitch(spec)) {
         options_.push_back(build->add_flag(flag, switches_[i], spec.help));
@@ -209,7 +209,7 @@ class BuildFlags {
       // Numbers show their default; an unset optional, an empty path or name has none.
       if (value && !std::holds_alternative<std::string>(*value) &&
           !std::holds_alternative<std::filesystem::path>(*value))
-        option->default_str(FormatBuildOption(*value));
+        option->default_str(FormatOptionValue(*value));
       options_.push_back(option);
     }
   }
@@ -220,21 +220,21 @@ class BuildFlags {
     for (size_t i = 0; i < table.size(); ++i) {
       if (options_[i]->count() == 0) continue;
       const BuildOptionSpec& spec = table[i];
-      spec.set(IsSwitch(spec) ? BuildOptionValue(switches_[i]) : ParseBuildOption(spec, texts_[i]),
+      spec.set(IsSwitch(spec) ? OptionValue(switches_[i]) : ParseBuildOption(spec, texts_[i]),
                options, flags);
     }
   }
 
  private:
-  static bool IsSwitch(const BuildOptionSpec& spec) { return spec.type == BuildOptionType<bool>(); }
+  static bool IsSwitch(const BuildOptionSpec& spec) { return spec.type == OptionTypeIndex<bool>(); }
   static std::string TypeName(const BuildOptionSpec& spec) {
     switch (spec.type) {
-      case BuildOptionType<int32_t>():
+      case OptionTypeIndex<int32_t>():
         return "INT";
-      case BuildOptionType<double>():
+      case OptionTypeIndex<double>():
         return "FLOAT";
-      case BuildOptionType<std::string>():
-      case BuildOptionType<std::filesystem::path>():
+      case OptionTypeIndex<std::string>():
+      case OptionTypeIndex<std::filesystem::path>():
         return "TEXT";
       default:
         return "UINT";

@@ -427,7 +427,7 @@ class TableFlags {
         option = app->add_flag(names, switches_[i], std::string(spec.help));
       } else {
         option = app->add_option(flag, texts_[i], std::string(spec.help))
-                     ->default_str(FormatOption(value))
+                     ->default_str(FormatOptionValue(value))
                      ->type_name(TypeName(spec, value));
       }
       option->group(kGroup);

@@ -5,12 +5,11 @@
 // surface accepts the same values and refuses the others with the same message.
 
 #include <cstdint>
-#include <limits>
 #include <span>
 #include <string>
 #include <string_view>
-#include <variant>
 
+#include "base/option_value.h"
 #include "io/photo_query.h"
 #include "io/query_priors.h"
 #include "localizer/localizer_options.h"
@@ -24,20 +23,6 @@ struct QueryOptions {
   PhotoOptions photo;
   bool use_exif_gps = false;
   double exif_gps_radius_m = kDefaultExifGpsRadiusM;
-};
-
-// A value of an option in its API type (the table's `type` column).
-using OptionValue = std::variant<bool, int32_t, uint32_t, uint64_t, double, std::string>;
-
-// The values an option accepts: a choice among names, or numbers between min and max (each
-// bound open or closed; whole-number types are further limited to what they hold).
-struct ValueRange {
-  double min = -std::numeric_limits<double>::infinity();
-  double max = std::numeric_limits<double>::infinity();
-  bool min_open = false;
-  bool max_open = false;
-  std::string_view unit;                    // said in messages: "a number of pixels > 0"
-  std::span<const std::string_view> names;  // a choice's names; empty for numbers
 };
 
 struct OptionSpec {
@@ -63,9 +48,6 @@ void CheckOption(const OptionSpec& spec, const OptionValue& value);
 // not a value of that type or is out of range.
 OptionValue ParseOption(const OptionSpec& spec, std::string_view text);
 OptionValue OptionFromNumber(const OptionSpec& spec, double number);
-
-// A value as --help shows it and messages quote it: "0.7", "true", "cluster-wise".
-std::string FormatOption(const OptionValue& value);
 
 // Sets one option, checked; throws InputError naming the flag.
 void SetOption(QueryOptions* options, std::string_view flag, const OptionValue& value);

@@ -48,20 +48,19 @@ const BuildOptionSpec* FindKeyword(const std::string& name) {
 }
 
 // A keyword's value as the option's type; its range is ValidateBuildOptions' to check.
-BuildOptionValue FromPython(const BuildOptionSpec& spec, const std::string& name,
-                            py::handle value) {
+OptionValue FromPython(const BuildOptionSpec& spec, const std::string& name, py::handle value) {
   switch (spec.type) {
-    case BuildOptionType<bool>():
+    case OptionTypeIndex<bool>():
       return Flag(name, value);
-    case BuildOptionType<int32_t>():
+    case OptionTypeIndex<int32_t>():
       return Whole<int32_t>(name, value);
-    case BuildOptionType<uint32_t>():
+    case OptionTypeIndex<uint32_t>():
       return Whole<uint32_t>(name, value);
-    case BuildOptionType<uint64_t>():
+    case OptionTypeIndex<uint64_t>():
       return Whole<uint64_t>(name, value);
-    case BuildOptionType<double>():
+    case OptionTypeIndex<double>():
       return double(py::float_(py::reinterpret_borrow<py::object>(value)));
-    case BuildOptionType<std::string>():
+    case OptionTypeIndex<std::string>():
       return std::string(py::str(value));
     default:
       return std::filesystem::path(ToPath(value, name.c_str()));

@@ -35,7 +35,7 @@ std::optional<OutOfRange> OutOfRangeValue(const OptionSpec& spec, const OptionVa
   // Below the bottom of the range, or of the type's (0 for unsigned types).
   double below = std::isfinite(range.min) ? range.min : 0.0;
   if (!range.min_open || !std::holds_alternative<double>(value)) below -= 1;
-  const std::string text = FormatOption(below);
+  const std::string text = FormatOptionValue(below);
   return OutOfRange{text, below};
 }
 
@@ -71,7 +71,7 @@ TEST_F(OptionTableTest, EverySurfaceAcceptsTheDefaults) {
   for (const OptionSpec& spec : OptionTable()) {
     SCOPED_TRACE(spec.flag);
     const OptionValue value = spec.get(defaults);
-    const std::string text = FormatOption(value);
+    const std::string text = FormatOptionValue(value);
     const std::string flag = "--" + std::string(spec.flag);
     if (const bool* on = std::get_if<bool>(&value)) {
       const ToolRun run = Localize({*on ? flag : "--no-" + std::string(spec.flag)});

@@ -78,24 +78,24 @@ TEST(BuildOptionTableTest, FlagsMembersAreCheckedToo) {
   EXPECT_EQ(ValidationError(IndexBuildOptions(), flags), "");
   IndexBuildOptions options;
   options.georeferencing.fit.default_sigma_m = -0.5;
-  EXPECT_EQ(ValidationError(options), "--georef-sigma -0.5: expected a positive number of metres");
+  EXPECT_EQ(ValidationError(options), "--georef-sigma -0.5: expected a number of metres > 0");
   options.georeferencing.fit.default_sigma_m = std::numeric_limits<double>::infinity();
-  EXPECT_EQ(ValidationError(options), "--georef-sigma inf: expected a positive number of metres");
+  EXPECT_EQ(ValidationError(options), "--georef-sigma inf: expected a number of metres > 0");
 }
 
 TEST(BuildOptionTableTest, TextParsesAsTheOptionsType) {
   const auto parse_error = [](std::string_view flag, std::string_view text) {
     return test::InputErrorOf([&] { ParseBuildOption(FindBuildOption(flag), text); });
   };
-  EXPECT_EQ(ParseBuildOption(FindBuildOption("trees"), "3"), BuildOptionValue(uint32_t{3}));
-  EXPECT_EQ(ParseBuildOption(FindBuildOption("threads"), "-2"), BuildOptionValue(int32_t{-2}));
+  EXPECT_EQ(ParseBuildOption(FindBuildOption("trees"), "3"), OptionValue(uint32_t{3}));
+  EXPECT_EQ(ParseBuildOption(FindBuildOption("threads"), "-2"), OptionValue(int32_t{-2}));
   EXPECT_EQ(ParseBuildOption(FindBuildOption("seed"), "18446744073709551615"),
-            BuildOptionValue(UINT64_MAX));
-  EXPECT_EQ(ParseBuildOption(FindBuildOption("georef-sigma"), "2.5"), BuildOptionValue(2.5));
+            OptionValue(UINT64_MAX));
+  EXPECT_EQ(ParseBuildOption(FindBuildOption("georef-sigma"), "2.5"), OptionValue(2.5));
   EXPECT_EQ(ParseBuildOption(FindBuildOption("model-frame"), "ecef"),
-            BuildOptionValue(std::string("ecef")));
+            OptionValue(std::string("ecef")));
   EXPECT_EQ(ParseBuildOption(FindBuildOption("georef"), "a b.txt"),
-            BuildOptionValue(std::filesystem::path("a b.txt")));
+            OptionValue(std::filesystem::path("a b.txt")));
   EXPECT_EQ(parse_error("trees", "four"), "--trees four: expected a whole number");
   EXPECT_EQ(parse_error("trees", "1.5"), "--trees 1.5: expected a whole number");
   EXPECT_EQ(parse_error("trees", "-1"), "--trees -1: expected 1 to 64");
@@ -103,8 +103,8 @@ TEST(BuildOptionTableTest, TextParsesAsTheOptionsType) {
   EXPECT_EQ(parse_error("seed", "18446744073709551616"),
             "--seed 18446744073709551616: expected at most 18446744073709551615");
   EXPECT_EQ(parse_error("georef-sigma", "five"), "--georef-sigma five: expected a number");
-  EXPECT_EQ(FormatBuildOption(BuildOptionValue(5.0)), "5");
-  EXPECT_EQ(FormatBuildOption(BuildOptionValue(0.25)), "0.25");
+  EXPECT_EQ(FormatOptionValue(OptionValue(5.0)), "5");
+  EXPECT_EQ(FormatOptionValue(OptionValue(0.25)), "0.25");
 }
 
 // A value lands where the table says, and --trees and --code-bytes are marked given, so that
@@ -112,7 +112,7 @@ TEST(BuildOptionTableTest, TextParsesAsTheOptionsType) {
 TEST(BuildOptionTableTest, ValuesLandInTheirMembersAndMarkTheGivenOnes) {
   IndexBuildOptions options;
   IndexBuildFlags flags;
-  const auto set = [&](std::string_view flag, const BuildOptionValue& value) {
+  const auto set = [&](std::string_view flag, const OptionValue& value) {
     FindBuildOption(flag).set(value, &options, &flags);
   };
   set("leaf-size", uint32_t{16});

@@ -206,7 +206,7 @@ TEST_F(GeoreferencingTest, BadGeoreferencesAreClearErrors) {
   GeoreferencingOptions sigma;
   sigma.georef_file = WriteGeorefFile();
   sigma.fit.default_sigma_m = 0;
-  EXPECT_EQ(BuildError(sigma), "--georef-sigma 0: expected a positive number of metres");
+  EXPECT_EQ(BuildError(sigma), "--georef-sigma 0: expected a number of metres > 0");
   EXPECT_FALSE(std::filesystem::exists(index_path_));
 }
 

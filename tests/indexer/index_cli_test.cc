@@ -198,7 +198,7 @@ TEST_F(IndexCliTest, OutOfRangeBuildOptionsAreRefusedBeforeAnythingIsRead) {
            {"--code-bytes 3",
             "--code-bytes 3: expected 0 (full descriptors) or 4, 8, 16, 32 or 64"},
            {"--clusters 0", "--clusters 0: expected at least 1"},
-           {"--georef-sigma 0", "--georef-sigma 0: expected a positive number of metres"},
+           {"--georef-sigma 0", "--georef-sigma 0: expected a number of metres > 0"},
            {"--trees 2x", "--trees 2x: expected a whole number"}}) {
     std::string output;
     EXPECT_EQ(Run("build " + flag + inputs, &output), 2) << flag;
