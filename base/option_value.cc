@@ -196,7 +196,8 @@ OptionValue OptionValueFromNumber(std::string_view flag, const ValueRange& range
       CheckReal(flag, range, number);
       return number;
     default:
-      RefuseValue(flag, NumberText(number), range.names.empty() ? "a name" : NamesText(range.names));
+      RefuseValue(flag, NumberText(number),
+                  range.names.empty() ? "a name" : NamesText(range.names));
   }
 }
 

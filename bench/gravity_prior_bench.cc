@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "base/angles.h"
 #include "base/split_mix64.h"
 #include "localizer/pose/absolute_pose.h"
 #include "tests/support/synthetic_pose.h"
@@ -23,21 +24,11 @@
 namespace cwloc {
 namespace {
 
-constexpr double kDeg = std::numbers::pi / 180.0;
-
 // CPU seconds of this thread: the machine may be shared, wall time would count other jobs.
 double ThreadSeconds() {
   timespec ts;
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
   return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
-
-Eigen::Vector3d RandomUnitVector(SplitMix64& rng) {
-  Eigen::Vector3d v;
-  do {
-    v = Eigen::Vector3d(test::Gaussian(rng), test::Gaussian(rng), test::Gaussian(rng));
-  } while (!(v.norm() > 1e-6));
-  return v.normalized();
 }
 
 struct Run {
@@ -126,9 +117,10 @@ int Main(int argc, char** argv) {
       std::vector<Cell> cells(kNumConditions);
       for (int trial = 0; trial < trials; ++trial) {
         const test::SyntheticPoseProblem problem = test::MakeSyntheticProblem(synth, rng);
-        const Eigen::Vector3d in_world = RandomUnitVector(rng);
+        const Eigen::Vector3d in_world = test::RandomUnitVector(rng);
         const Eigen::Vector3d true_in_camera = problem.pose.rotation * in_world;
-        const Eigen::Vector3d tilt_axis = true_in_camera.cross(RandomUnitVector(rng)).normalized();
+        const Eigen::Vector3d tilt_axis =
+            true_in_camera.cross(test::RandomUnitVector(rng)).normalized();
         const uint64_t ransac_seed = rng.Next();
         for (int condition = 0; condition < kNumConditions; ++condition) {
           AbsolutePoseOptions options;
@@ -137,7 +129,7 @@ int Main(int argc, char** argv) {
             GravityPrior prior;
             prior.in_world = in_world;
             prior.in_camera =
-                Eigen::AngleAxisd(kPriorErrorsDeg[condition] * kDeg, tilt_axis) * true_in_camera;
+                Eigen::AngleAxisd(kPriorErrorsDeg[condition] * kDegree, tilt_axis) * true_in_camera;
             prior.sigma_deg = sigma_deg;
             options.gravity = prior;
           }

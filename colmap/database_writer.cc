@@ -64,7 +64,7 @@ constexpr const char* kCreateTables =
 
 // COLMAP's kMaxNumImages: image ids must stay below it (the images table CHECKs it).
 constexpr int64_t kMaxImageId = std::numeric_limits<int32_t>::max();
-constexpr int kKeypointCols = 6;
+constexpr int kWrittenKeypointCols = 6;
 
 }  // namespace
 
@@ -201,7 +201,7 @@ void DatabaseWriter::WriteKeypoints(image_t image_id, const std::vector<Keypoint
   CheckOpen(db_, path());
   const std::string what = path().string() + ": keypoints of image " + std::to_string(image_id);
   std::vector<float>& buffer = stmts_->keypoint_buffer;
-  buffer.resize(keypoints.size() * kKeypointCols);
+  buffer.resize(keypoints.size() * kWrittenKeypointCols);
   float* out = buffer.data();
   for (const Keypoint& kp : keypoints) {
     *out++ = kp.x;
@@ -214,7 +214,7 @@ void DatabaseWriter::WriteKeypoints(image_t image_id, const std::vector<Keypoint
   sqlite3_stmt* stmt = stmts_->write_keypoints.get();
   StmtScope scope(stmt);
   CheckSqlite(db_, sqlite3_bind_int64(stmt, 1, image_id), what);
-  BindMatrix(db_, stmt, static_cast<int64_t>(keypoints.size()), kKeypointCols, buffer.data(),
+  BindMatrix(db_, stmt, static_cast<int64_t>(keypoints.size()), kWrittenKeypointCols, buffer.data(),
              buffer.size() * sizeof(float), what);
   CheckSqlite(db_, sqlite3_step(stmt), what);
 }

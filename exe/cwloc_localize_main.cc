@@ -71,7 +71,7 @@ std::vector<QuerySource> CollectQueries(const CliOptions& cli) {
     sources.push_back({name, Kind::kDatabase, {}, {}, {}});
   for (const std::string& file : cli.feature_files) {
     sources.push_back(
-        {std::filesystem::path(file).filename().string(), Kind::kFeatureFile, file, {}, {}});
+        {std::filesystem::path(file).filename().string(), Kind::kTextFeatures, file, {}, {}});
   }
   for (const std::string& image : cli.images) {
     sources.push_back(
@@ -79,10 +79,10 @@ std::vector<QuerySource> CollectQueries(const CliOptions& cli) {
   }
   if (!cli.query_list.empty()) {
     const std::filesystem::path base = std::filesystem::path(cli.query_list).parent_path();
-    const Kind kind = cli.database_path.empty() ? Kind::kFeatureFile : Kind::kDatabase;
+    const Kind kind = cli.database_path.empty() ? Kind::kTextFeatures : Kind::kDatabase;
     for (const auto& [name, camera] : ReadQueryList(cli.query_list)) {
       sources.push_back(
-          {name, kind, kind == Kind::kFeatureFile ? base / name : "", camera, cli.query_list});
+          {name, kind, kind == Kind::kTextFeatures ? base / name : "", camera, cli.query_list});
     }
   }
   if (!cli.image_list.empty()) {

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "base/error.h"
+#include "base/option_value.h"
 
 namespace cwloc {
 namespace {
@@ -18,13 +19,6 @@ constexpr double kDegrees = 180.0 / std::numbers::pi;
 // Below this horizontal component of the unit optical axis (|pitch| above 90 - 5.7e-8 degrees)
 // the attitude is treated as looking straight up or down (docs/geo.md).
 constexpr double kGimbalHorizontal = 1e-9;
-
-// Shortest text that reads back as the same double ("91", "1e-300", "nan").
-std::string Number(double value) {
-  std::array<char, 32> text{};
-  const auto result = std::to_chars(text.data(), text.data() + text.size(), value);
-  return std::string(text.data(), result.ptr);
-}
 
 // A row-major 3x3 matrix from GeographicLib as an Eigen matrix.
 Eigen::Matrix3d FromRowMajor(const std::vector<double>& m) {
@@ -74,7 +68,7 @@ struct GeoFrame::Impl {
 GeoFrame::GeoFrame(const Georeference& georeference) : georeference_(georeference) {
   ValidateGeodetic(georeference_.origin, "georeference origin");
   if (!std::isfinite(georeference_.scale) || !(georeference_.scale > 0)) {
-    throw InputError("georeference: scale " + Number(georeference_.scale) +
+    throw InputError("georeference: scale " + NumberText(georeference_.scale) +
                      " is not a positive number");
   }
   const Eigen::Vector4d q = georeference_.rotation.coeffs();
@@ -190,13 +184,13 @@ Georeference GeoreferenceFromEnuModel(const Geodetic& origin) {
 void ValidateGeodetic(const Geodetic& geodetic, const std::string& what) {
   const double lat = geodetic.latitude_deg, lon = geodetic.longitude_deg;
   if (!std::isfinite(lat) || lat < -90 || lat > 90) {
-    throw InputError(what + ": latitude " + Number(lat) + " is outside [-90, 90]");
+    throw InputError(what + ": latitude " + NumberText(lat) + " is outside [-90, 90]");
   }
   if (!std::isfinite(lon) || lon < -180 || lon >= 360) {
-    throw InputError(what + ": longitude " + Number(lon) + " is outside [-180, 360)");
+    throw InputError(what + ": longitude " + NumberText(lon) + " is outside [-180, 360)");
   }
   if (!std::isfinite(geodetic.height_m)) {
-    throw InputError(what + ": height " + Number(geodetic.height_m) + " is not finite");
+    throw InputError(what + ": height " + NumberText(geodetic.height_m) + " is not finite");
   }
 }
 

@@ -15,6 +15,7 @@
 
 #include "base/bounded_file.h"
 #include "base/error.h"
+#include "base/option_value.h"
 #include "estimators/ransac.h"
 
 namespace cwloc {
@@ -32,12 +33,6 @@ constexpr double kCoincidentCentresRatio = 1e-9;
 constexpr double kCoincidentPositionsM = 1e-3;
 // Least squares and re-scoring alternate until the inlier set is stable, at most this often.
 constexpr int kMaxRefinementRounds = 10;
-
-std::string Number(double value) {
-  std::array<char, 32> text{};
-  const auto result = std::to_chars(text.data(), text.data() + text.size(), value);
-  return std::string(text.data(), result.ptr);
-}
 
 bool IsSpace(char c) {
   return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f' || c == '\n';
@@ -325,7 +320,7 @@ GeoFitResult FitGeoreference(std::span<const Eigen::Vector3d> model_centers,
   }
   const auto check_option = [](bool ok, const char* option, double value) {
     if (!ok) {
-      throw InputError(std::string("georeference fit: ") + option + " " + Number(value) +
+      throw InputError(std::string("georeference fit: ") + option + " " + NumberText(value) +
                        " is out of range");
     }
   };
@@ -348,7 +343,7 @@ GeoFitResult FitGeoreference(std::span<const Eigen::Vector3d> model_centers,
     if (!model_centers[i].allFinite()) throw InputError(what + ": the camera centre is not finite");
     ValidateGeodetic(o.position, what);
     if (std::isnan(o.sigma_m) || std::isinf(o.sigma_m)) {
-      throw InputError(what + ": sigma " + Number(o.sigma_m) + " is not finite");
+      throw InputError(what + ": sigma " + NumberText(o.sigma_m) + " is not finite");
     }
     sigma[i] = o.sigma_m > 0 ? o.sigma_m : options.default_sigma_m;
     weight[i] = 1 / (sigma[i] * sigma[i]);
@@ -404,7 +399,7 @@ GeoFitResult FitGeoreference(std::span<const Eigen::Vector3d> model_centers,
                        "observed positions of the " + inlier_count + " inliers");
     model = WeightedUmeyama(model_centers, positions, weight, indices);
     if (!std::isfinite(model.scale) || !(model.scale > 0)) {
-      throw InputError("georeference fit: the fitted scale " + Number(model.scale) +
+      throw InputError("georeference fit: the fitted scale " + NumberText(model.scale) +
                        " is not a positive number");
     }
     estimator.FlagInliers(model, &inliers);

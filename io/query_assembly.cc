@@ -25,7 +25,7 @@ Query QueryAssembler::Read(const QuerySource& source) const {
   switch (source.kind) {
     case QuerySource::Kind::kPhoto:
       return LoadPhotoQuery(source.path, source.name, options_.photo);
-    case QuerySource::Kind::kFeatureFile: {
+    case QuerySource::Kind::kTextFeatures: {
       Query query;
       ReadFeatureFile(source.path, &query);
       query.name = source.name;

@@ -18,11 +18,11 @@ namespace cwloc {
 // One query to run.
 struct QuerySource {
   enum class Kind {
-    kDatabase,     // an image name in a COLMAP database (read by the CLI's database input)
-    kFeatureFile,  // a COLMAP text feature file
-    kPhoto,        // a JPEG or PNG file
-    kFeatures,     // features in memory (the API)
-    kImage,        // a photo in memory or a grey image (the API): the query has its size
+    kDatabase,      // an image name in a COLMAP database (read by the CLI's database input)
+    kTextFeatures,  // a COLMAP text feature file
+    kPhoto,         // a JPEG or PNG file
+    kFeatures,      // features in memory (the API)
+    kImage,         // a photo in memory or a grey image (the API): the query has its size
   };
   std::string name;
   Kind kind = Kind::kDatabase;
@@ -53,7 +53,7 @@ class QueryAssembler {
  public:
   QueryAssembler(const QueryOptions& options, CameraInputs cameras, PriorInputs priors);
 
-  // Reads a feature file's or a photo's features (kFeatureFile, kPhoto).
+  // Reads a feature file's or a photo's features (kTextFeatures, kPhoto).
   Query Read(const QuerySource& source) const;
 
   // Gives a read query its camera and priors. The camera: a list line's, then --camera, then

@@ -7,7 +7,9 @@
 #   tools/check_sanitizers.sh tsan   ThreadSanitizer in build-tsan (the device configuration):
 #                                    a batch of queries on one index with 4 threads through
 #                                    cwloc-localize, the library's concurrent-use tests, and
-#                                    SIFT on several threads inside one photo
+#                                    SIFT on several threads inside one photo; its files
+#                                    compiled one at a time (CWLOC_UNITY_BUILD=OFF), so that
+#                                    each compiles without the others of its batch
 set -euo pipefail
 cd "$(dirname "$0")/.."
 mode="${1:-}"
@@ -34,7 +36,7 @@ case "$mode" in
   tsan)
     cmake -S . -B build-tsan -G Ninja "${clang[@]}" -DCWLOC_SANITIZE=thread -DCWLOC_WITH_PYTHON=OFF \
       -DCWLOC_WITH_COLMAP_DB=OFF -DCWLOC_BUILD_TOOLS=OFF -DCWLOC_WITH_VLFEAT=OFF \
-      -DCWLOC_WITH_CERES=OFF -DCWLOC_BUILD_BENCHMARKS=OFF >/dev/null
+      -DCWLOC_WITH_CERES=OFF -DCWLOC_BUILD_BENCHMARKS=OFF -DCWLOC_UNITY_BUILD=OFF >/dev/null
     cmake --build build-tsan -j "$jobs" --target cwloc_localize_exe api_tests sift_tests base_tests \
       >build-tsan/build.log 2>&1 || { tail -50 build-tsan/build.log; exit 1; }
     export TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1"

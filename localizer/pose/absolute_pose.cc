@@ -5,6 +5,7 @@
 #include <numbers>
 #include <sstream>
 
+#include "base/angles.h"
 #include "localizer/pose/pose_estimators.h"
 #include "localizer/pose/refine_pose.h"
 
@@ -38,8 +39,6 @@ bool CheckInput(size_t num_points2D, size_t num_points3D, size_t sample_size,
   return true;
 }
 
-constexpr double kDeg = std::numbers::pi / 180.0;
-
 // The gravity prior, normalised, if the options have one; false with result->failure_reason set
 // when it is invalid.
 bool CheckGravity(const AbsolutePoseOptions& options, std::optional<GravityPrior>* gravity,
@@ -68,13 +67,14 @@ std::optional<GravityConstraint> SoftGravity(const std::optional<GravityPrior>& 
 std::optional<GravityCheck> HypothesisCheck(const std::optional<GravityPrior>& gravity,
                                             const AbsolutePoseOptions& options) {
   if (!gravity.has_value()) return std::nullopt;
-  return GravityCheck{gravity->in_camera, gravity->in_world,
-                      GravityRejectionAngle(gravity->sigma_deg * kDeg, options.ransac.confidence)};
+  return GravityCheck{
+      gravity->in_camera, gravity->in_world,
+      GravityRejectionAngle(gravity->sigma_deg * kDegree, options.ransac.confidence)};
 }
 
 std::string GravityRejectionText(const std::optional<GravityCheck>& check) {
   if (!check.has_value()) return {};
-  return Concat(" or disagreed with the gravity prior by more than ", check->max_angle / kDeg,
+  return Concat(" or disagreed with the gravity prior by more than ", check->max_angle / kDegree,
                 " deg");
 }
 
@@ -103,7 +103,7 @@ void Finish(std::span<const Eigen::Vector2d> pixels, std::span<const Eigen::Vect
   if (options.gravity.has_value()) {
     result->gravity_angle_deg = GravityAngle(rot, options.gravity->in_world.normalized(),
                                              options.gravity->in_camera.normalized()) /
-                                kDeg;
+                                kDegree;
   }
   result->success = result->num_inliers >= options.min_inliers;
   if (!result->success) {
@@ -290,7 +290,7 @@ AbsolutePoseResult EstimateAbsolutePose(std::span<const Eigen::Vector2d> normali
     // optimisation gathers what a tilt error up to the prior's bound moves (tan(bound) beyond
     // the threshold, in normalised coordinates) under a Cauchy loss whose scale adds the
     // displacement of a 1 sigma error.
-    const double sigma = gravity->sigma_deg * kDeg;
+    const double sigma = gravity->sigma_deg * kDegree;
     const double bound = GravityErrorBound(sigma, options.ransac.confidence);
     LocalOptimizationOptions p2p_lo = lo;
     p2p_lo.loss_scale = max_error + std::tan(sigma);

@@ -6,10 +6,10 @@
 #include <numbers>
 #include <sstream>
 
+#include "base/angles.h"
+
 namespace cwloc {
 namespace {
-
-constexpr double kDeg = std::numbers::pi / 180.0;
 
 // The Cauchy scale that is 95% efficient for Gaussian noise, in units of its sigma.
 constexpr double kCauchyTuning = 2.3849;
@@ -49,7 +49,7 @@ double GravityAngle(const Eigen::Matrix3d& rotation, const Eigen::Vector3d& in_w
 
 GravityConstraint GravityWeight(const GravityPrior& normalized_prior, double residual_sigma) {
   return {normalized_prior.in_camera, normalized_prior.in_world,
-          residual_sigma / (normalized_prior.sigma_deg * kDeg)};
+          residual_sigma / (normalized_prior.sigma_deg * kDegree)};
 }
 
 double CauchyScaleNoise(double loss_scale_px) {
@@ -62,7 +62,7 @@ double GravityErrorBound(double sigma_rad, double confidence) {
 }
 
 double GravityRejectionAngle(double sigma_rad, double confidence) {
-  return GravityErrorBound(sigma_rad, confidence) + kGravityHypothesisAllowanceDeg * kDeg;
+  return GravityErrorBound(sigma_rad, confidence) + kGravityHypothesisAllowanceDeg * kDegree;
 }
 
 }  // namespace cwloc

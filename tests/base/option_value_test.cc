@@ -15,8 +15,7 @@ constexpr std::array<std::string_view, 3> kNames = {"a", "bb", "c"};
 constexpr std::array<uint32_t, 3> kChoices = {0, 4, 8};
 
 std::string Parsed(const ValueRange& range, size_t type, std::string_view text) {
-  const std::string error =
-      test::InputErrorOf([&] { ParseOptionValue("opt", range, type, text); });
+  const std::string error = test::InputErrorOf([&] { ParseOptionValue("opt", range, type, text); });
   return error.empty() ? FormatOptionValue(ParseOptionValue("opt", range, type, text)) : error;
 }
 
@@ -27,7 +26,8 @@ TEST(OptionValueTest, RealRangesInWords) {
   EXPECT_EQ(Parsed(Inside(0, 1), real, "1"), "--opt 1: expected a value in (0, 1)");
   EXPECT_EQ(Parsed(AboveUpTo(0, 90, "degrees"), real, "90.5"),
             "--opt 90.5: expected degrees in (0, 90]");
-  EXPECT_EQ(Parsed(Above(0, "metres"), real, "-0.25"), "--opt -0.25: expected a number of metres > 0");
+  EXPECT_EQ(Parsed(Above(0, "metres"), real, "-0.25"),
+            "--opt -0.25: expected a number of metres > 0");
   EXPECT_EQ(Parsed(AtLeast(0), real, "nan"), "--opt nan: expected a value >= 0");
   EXPECT_EQ(Parsed(AnyValue(), real, "inf"), "--opt inf: expected a value >= -inf");
   EXPECT_EQ(Parsed(AnyValue(), real, "x"), "--opt x: expected a number");
@@ -44,15 +44,15 @@ TEST(OptionValueTest, WholeNumbersWithinTheirTypeAndRange) {
             "--opt 18446744073709551616: expected at most 18446744073709551615");
   EXPECT_EQ(Parsed(OneOf(kChoices, "none"), u32, "5"), "--opt 5: expected 0 (none) or 4 or 8");
   EXPECT_EQ(Parsed(OneOf(kChoices, "none"), u32, "8"), "8");
-  EXPECT_EQ(test::InputErrorOf([] {
-              OptionValueFromNumber("opt", AtLeast(1), OptionTypeIndex<uint32_t>(), 0.5);
-            }),
+  EXPECT_EQ(test::InputErrorOf(
+                [] { OptionValueFromNumber("opt", AtLeast(1), OptionTypeIndex<uint32_t>(), 0.5); }),
             "--opt 0.5: expected a whole number");
 }
 
 TEST(OptionValueTest, SwitchesNamesAndPaths) {
   EXPECT_EQ(Parsed(AnyValue(), OptionTypeIndex<bool>(), "1"), "true");
-  EXPECT_EQ(Parsed(AnyValue(), OptionTypeIndex<bool>(), "yes"), "--opt yes: expected true or false");
+  EXPECT_EQ(Parsed(AnyValue(), OptionTypeIndex<bool>(), "yes"),
+            "--opt yes: expected true or false");
   EXPECT_EQ(Parsed(OneOf(kNames), OptionTypeIndex<std::string>(), "bb"), "bb");
   EXPECT_EQ(Parsed(OneOf(kNames), OptionTypeIndex<std::string>(), "b"),
             "--opt b: expected a, bb or c");

@@ -22,7 +22,7 @@
 namespace cwloc {
 namespace {
 
-constexpr double kColmapFocal = 2974.0646411524222;  // queries_with_intrinsics.txt
+constexpr double kSceauxColmapFocal = 2974.0646411524222;  // queries_with_intrinsics.txt
 constexpr double kColmapK = -0.16177253866712157;
 
 struct PoseError {
@@ -68,7 +68,7 @@ class SceauxCastleTest : public testing::Test {
     ASSERT_TRUE(result.focal_estimated);
     EXPECT_EQ(result.camera.model_id, CameraModelId::kSimpleRadial);
     ASSERT_EQ(result.camera.params.size(), 4u);
-    EXPECT_NEAR(result.camera.params[0], kColmapFocal, 0.01 * kColmapFocal);
+    EXPECT_NEAR(result.camera.params[0], kSceauxColmapFocal, 0.01 * kSceauxColmapFocal);
     EXPECT_NEAR(result.camera.params[3], kColmapK, 0.01);
   }
 

@@ -168,13 +168,13 @@ TEST(ExifGps, MalformedOrMissingPositionsGiveNothing) {
 // seconds it lists, and records_gnss.txt's decimal degrees.
 TEST(ExifGps, RealPhonePhotos) {
   CWLOC_REQUIRE_SHARED_DATA(samples, "exif_samples");
-  struct Expected {
+  struct ExpectedFix {
     const char* file;
     double lat_minutes, lat_seconds, lon_minutes, lon_seconds, altitude;
   };
-  for (const Expected& e :
-       {Expected{"01.jpg", 31, 8.10, 24, 1.06, 27}, Expected{"02.jpg", 31, 8.13, 24, 1.40, 30},
-        Expected{"03.jpg", 31, 8.57, 24, 1.61, 39}}) {
+  for (const ExpectedFix& e : {ExpectedFix{"01.jpg", 31, 8.10, 24, 1.06, 27},
+                               ExpectedFix{"02.jpg", 31, 8.13, 24, 1.40, 30},
+                               ExpectedFix{"03.jpg", 31, 8.57, 24, 1.61, 39}}) {
     SCOPED_TRACE(e.file);
     const auto gps = ReadExifGps(ReadPhotoFile(samples / "berlin_iphone4s" / e.file));
     ASSERT_TRUE(gps);

@@ -34,6 +34,15 @@ inline double Gaussian(SplitMix64& rng) {
   return std::sqrt(-2.0 * std::log(u)) * std::cos(2.0 * std::numbers::pi * v);
 }
 
+// A direction uniform on the sphere.
+inline Eigen::Vector3d RandomUnitVector(SplitMix64& rng) {
+  Eigen::Vector3d v;
+  do {
+    v = Eigen::Vector3d(Gaussian(rng), Gaussian(rng), Gaussian(rng));
+  } while (!(v.norm() > 1e-6));
+  return v.normalized();
+}
+
 // N(mean, sigma^2) draws from either generator (std::normal_distribution for std::mt19937_64).
 template <typename Rng>
 class NormalSampler;

@@ -48,9 +48,9 @@ ordered_json QuartilesJson(const std::optional<Quartiles>& q) {
 }
 
 ordered_json TimeQuantilesJson(const TimeQuantiles& q) {
-  ordered_json json = QuartilesJson(q);
-  json["p90"] = q.p90;
-  return json;
+  ordered_json quantiles = QuartilesJson(q);
+  quantiles["p90"] = q.p90;
+  return quantiles;
 }
 
 std::string ThresholdName(const Threshold& t, const char* unit) {

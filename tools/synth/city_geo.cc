@@ -10,6 +10,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "base/angles.h"
 #include "tools/synth/sift_descriptors.h"
 
 namespace cwloc::synth {
@@ -23,8 +24,6 @@ enum GeoStream : uint64_t {
   kGpsOutlierStream,
   kQueryPriorStream,
 };
-
-constexpr double kDegree = std::numbers::pi / 180;
 
 // Shortest text that reads back to the same double.
 std::string Shortest(double value) {
@@ -223,7 +222,8 @@ GeoFiles MakeGeoFiles(const CityScene& scene, const GeoOptions& geo, const Model
       "scale " +
       Shortest(enu_from_model.scale) + "\nR";
   for (int row = 0; row < 3; ++row) {
-    for (int col = 0; col < 3; ++col) files.scale_to_metres += " " + Shortest(r(row, col));
+    for (int col = 0; col < 3; ++col)
+      files.scale_to_metres.append(" ").append(Shortest(r(row, col)));
   }
   files.scale_to_metres += "\nt";
   for (int i = 0; i < 3; ++i) {

@@ -5,12 +5,11 @@
 #include <cmath>
 #include <numbers>
 
+#include "base/angles.h"
 #include "tools/synth/sift_descriptors.h"
 
 namespace cwloc::synth {
 namespace {
-
-constexpr double kDegree = std::numbers::pi / 180;
 
 // Random draws each in their own statement, in the order GCC made them (arguments right to
 // left): the order of arguments and of operands is unspecified, and clang's differs.

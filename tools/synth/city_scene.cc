@@ -17,7 +17,7 @@ namespace {
 
 // Stream tags: every random stream is seeded from (seed, tag, ids) so that no two uses share
 // numbers and nothing depends on thread scheduling.
-enum Stream : uint64_t {
+enum SceneStream : uint64_t {
   kPointsStream = 100,
   kMotifShapeStream,
   kObserveStream,

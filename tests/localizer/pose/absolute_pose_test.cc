@@ -6,6 +6,7 @@
 #include <limits>
 #include <numbers>
 
+#include "base/angles.h"
 #include "tests/support/synthetic_pose.h"
 #include "tests/test_util.h"
 
@@ -290,21 +291,14 @@ TEST(AbsolutePose, WorksWithoutFinalRefinement) {
 namespace cwloc {
 namespace {
 
-constexpr double kDeg = std::numbers::pi / 180.0;
-
-Eigen::Vector3d RandomUnitVector(SplitMix64& rng) {
-  return Eigen::Vector3d(test::Gaussian(rng), test::Gaussian(rng), test::Gaussian(rng))
-      .normalized();
-}
-
 // A prior for the problem's camera: a random world gravity, the camera's error_deg off.
 GravityPrior PriorFor(const test::SyntheticPoseProblem& problem, double error_deg, double sigma_deg,
                       SplitMix64& rng) {
   GravityPrior prior;
-  prior.in_world = RandomUnitVector(rng);
+  prior.in_world = test::RandomUnitVector(rng);
   const Eigen::Vector3d in_camera = problem.pose.rotation * prior.in_world;
-  const Eigen::Vector3d axis = in_camera.cross(RandomUnitVector(rng)).normalized();
-  prior.in_camera = Eigen::AngleAxisd(error_deg * kDeg, axis) * in_camera;
+  const Eigen::Vector3d axis = in_camera.cross(test::RandomUnitVector(rng)).normalized();
+  prior.in_camera = Eigen::AngleAxisd(error_deg * kDegree, axis) * in_camera;
   prior.sigma_deg = sigma_deg;
   return prior;
 }
@@ -412,8 +406,8 @@ TEST(GravityPrior, UncalibratedDropsHypothesesThatDisagree) {
 
 TEST(GravityPrior, RejectionAngleFollowsSigmaAndConfidence) {
   // sqrt(-2 ln(1e-4)) = 4.292 sigma, plus the 3 degree allowance.
-  EXPECT_NEAR(GravityRejectionAngle(1.0 * kDeg, 0.9999) / kDeg, 4.292 + 3.0, 1e-3);
-  EXPECT_NEAR(GravityErrorBound(2.0 * kDeg, 0.99) / kDeg, 2.0 * 3.035, 1e-3);
+  EXPECT_NEAR(GravityRejectionAngle(1.0 * kDegree, 0.9999) / kDegree, 4.292 + 3.0, 1e-3);
+  EXPECT_NEAR(GravityErrorBound(2.0 * kDegree, 0.99) / kDegree, 2.0 * 3.035, 1e-3);
   EXPECT_NEAR(CauchyScaleNoise(2.0), 0.8386, 1e-4);
   EXPECT_EQ(CauchyScaleNoise(0.0), 1.0);
 }

@@ -8,6 +8,7 @@
 #include <limits>
 #include <numbers>
 
+#include "base/angles.h"
 #include "tests/support/synthetic_pose.h"
 #include "tests/test_util.h"
 
@@ -16,19 +17,9 @@ namespace {
 
 using Eigen::Vector3d;
 
-constexpr double kDeg = std::numbers::pi / 180.0;
-
-Vector3d RandomUnitVector(SplitMix64& rng) {
-  Vector3d v;
-  do {
-    v = Vector3d(test::Gaussian(rng), test::Gaussian(rng), test::Gaussian(rng));
-  } while (!(v.norm() > 1e-6));
-  return v.normalized();
-}
-
 // A unit vector at exactly `angle` from the unit vector v, in a random direction.
 Vector3d Tilt(const Vector3d& v, double angle, SplitMix64& rng) {
-  const Vector3d axis = v.cross(RandomUnitVector(rng)).normalized();
+  const Vector3d axis = v.cross(test::RandomUnitVector(rng)).normalized();
   return Eigen::AngleAxisd(angle, axis) * v;
 }
 
@@ -51,7 +42,7 @@ void SetPoint(P2PProblem* p, int i, const Eigen::Vector2d& xy, double depth) {
 P2PProblem RandomProblem(SplitMix64& rng, double min_depth = 1.0, double max_depth = 10.0) {
   P2PProblem p;
   p.pose = test::RandomPose(rng);
-  p.gravity_in_world = RandomUnitVector(rng);
+  p.gravity_in_world = test::RandomUnitVector(rng);
   p.gravity_in_camera = p.pose.rotation * p.gravity_in_world;
   for (int i = 0; i < 2; ++i) {
     const double x = test::Uniform(rng, -1.7, 1.7);
@@ -204,7 +195,7 @@ TEST(GravityP2P, PointsNearAndFar) {
     // Points millimetres from a camera 1e4 from the world origin: their coordinates carry only
     // ~1e-16 * 1e4 / 1e-3 = 1e-9 of their spread, which bounds any solver.
     P2PProblem offset = Scaled(RandomProblem(rng), 1e-3);
-    const Vector3d shift = 1e4 * RandomUnitVector(rng);
+    const Vector3d shift = 1e4 * test::RandomUnitVector(rng);
     for (Vector3d& point : offset.points) point += shift;
     offset.pose.translation -= offset.pose.rotation * shift;
     Solve(offset, &poses);
@@ -219,7 +210,7 @@ TEST(GravityP2P, PointsNearAndFar) {
     P2PProblem small = RandomProblem(rng);
     const Vector3d ray = test::Uniform(rng, -0.5, 0.5) * Vector3d::UnitX() +
                          test::Uniform(rng, -0.5, 0.5) * Vector3d::UnitY() + Vector3d::UnitZ();
-    const Vector3d cam0 = 1e6 * ray, cam1 = cam0 + 10.0 * RandomUnitVector(rng);
+    const Vector3d cam0 = 1e6 * ray, cam1 = cam0 + 10.0 * test::RandomUnitVector(rng);
     small.bearings = {cam0.normalized(), cam1.normalized()};
     small.points = {small.pose.rotation.conjugate() * (cam0 - small.pose.translation),
                     small.pose.rotation.conjugate() * (cam1 - small.pose.translation)};
@@ -248,7 +239,7 @@ TEST(GravityP2P, TwoPointsNearlyOnOneRay) {
     for (int k = 0; k < 5; ++k) {
       const double separation = separations[k];
       SCOPED_TRACE(separation);
-      const Vector3d side = cam0.cross(RandomUnitVector(rng)).normalized();
+      const Vector3d side = cam0.cross(test::RandomUnitVector(rng)).normalized();
       const Vector3d cam1 = 2.0 * cam0 + separation * 2.0 * cam0.norm() * side;
       problem.bearings[1] = cam1.normalized();
       problem.points[1] = problem.pose.rotation.conjugate() * (cam1 - problem.pose.translation);
@@ -319,7 +310,7 @@ TEST(GravityP2P, NoisyGravity) {
   constexpr int kTrials = 2000;
   for (int trial = 0; trial < kTrials; ++trial) {
     P2PProblem problem = RandomProblem(rng);
-    problem.gravity_in_camera = Tilt(problem.gravity_in_camera, 1.0 * kDeg, rng);
+    problem.gravity_in_camera = Tilt(problem.gravity_in_camera, 1.0 * kDegree, rng);
     Solve(problem, &poses);
     ExpectValidSolutions(poses, problem);
     if (poses.empty()) {
@@ -336,7 +327,7 @@ TEST(GravityP2P, NoisyGravity) {
     }
     double best_rotation = std::numeric_limits<double>::infinity(), best_center = 0.0;
     for (const CameraPose& pose : poses) {
-      const double rotation = pose.rotation.angularDistance(problem.pose.rotation) / kDeg;
+      const double rotation = pose.rotation.angularDistance(problem.pose.rotation) / kDegree;
       if (rotation < best_rotation) {
         best_rotation = rotation;
         best_center = (pose.Center() - problem.pose.Center()).norm();
@@ -364,14 +355,14 @@ TEST(GravityP2P, NeverReturnsNonFinitePoses) {
     // Unrelated rays, points, gravities and scales.
     P2PProblem problem;
     for (int i = 0; i < 2; ++i) {
-      problem.bearings[i] = RandomUnitVector(rng);
-      problem.points[i] = scales[rng.Uniform(5)] * RandomUnitVector(rng);
+      problem.bearings[i] = test::RandomUnitVector(rng);
+      problem.points[i] = scales[rng.Uniform(5)] * test::RandomUnitVector(rng);
     }
     if (trial % 7 == 0) problem.points[1] = problem.points[0];
     if (trial % 11 == 0) problem.bearings[1] = problem.bearings[0];
     if (trial % 13 == 0) problem.bearings[1] = -problem.bearings[0];
-    problem.gravity_in_camera = RandomUnitVector(rng);
-    problem.gravity_in_world = RandomUnitVector(rng);
+    problem.gravity_in_camera = test::RandomUnitVector(rng);
+    problem.gravity_in_world = test::RandomUnitVector(rng);
     if (trial % 5 == 0) problem.gravity_in_world = Vector3d::Unit(rng.Uniform(3));
     Solve(problem, &poses);
     EXPECT_LE(poses.size(), 2u);

@@ -8,6 +8,7 @@
 #include <numeric>
 #include <optional>
 
+#include "base/angles.h"
 #include "localizer/pose/local_optimization.h"
 #include "tests/support/synthetic_pose.h"
 #include "tests/test_util.h"
@@ -32,29 +33,22 @@ CameraPose Perturb(const CameraPose& pose, double angle_rad, double shift, std::
                     pose.translation + shift * dir);
 }
 
-constexpr double kDeg = std::numbers::pi / 180.0;
-
-Eigen::Vector3d RandomUnitVector(SplitMix64& rng) {
-  return Eigen::Vector3d(test::Gaussian(rng), test::Gaussian(rng), test::Gaussian(rng))
-      .normalized();
-}
-
 // A gravity constraint for a camera with rotation `truth`: a random world gravity, the camera's
 // off by error_deg in a random direction, the weight of sigma_deg for the pixel noise that the
 // Cauchy scale assumes.
 GravityConstraint RandomGravity(const CameraPose& truth, double error_deg, double sigma_deg,
                                 double loss_scale_px, SplitMix64& rng) {
   GravityPrior prior;
-  prior.in_world = RandomUnitVector(rng);
+  prior.in_world = test::RandomUnitVector(rng);
   const Eigen::Vector3d in_camera = truth.rotation * prior.in_world;
-  const Eigen::Vector3d axis = in_camera.cross(RandomUnitVector(rng)).normalized();
-  prior.in_camera = Eigen::AngleAxisd(error_deg * kDeg, axis) * in_camera;
+  const Eigen::Vector3d axis = in_camera.cross(test::RandomUnitVector(rng)).normalized();
+  prior.in_camera = Eigen::AngleAxisd(error_deg * kDegree, axis) * in_camera;
   prior.sigma_deg = sigma_deg;
   return GravityWeight(prior, CauchyScaleNoise(loss_scale_px));
 }
 
 double GravityAngleDeg(const CameraPose& pose, const GravityConstraint& gravity) {
-  return GravityAngle(pose.RotationMatrix(), gravity.in_world, gravity.in_camera) / kDeg;
+  return GravityAngle(pose.RotationMatrix(), gravity.in_world, gravity.in_camera) / kDegree;
 }
 
 test::SyntheticPoseOptions Clean() {

@@ -15,23 +15,13 @@
 namespace cwloc::eval {
 namespace {
 
+using cwloc::test::InputErrorOf;
 using test::PoseFromCenter;
 using test::Radians;
 using test::Scenario;
 
 void WriteFile(const std::filesystem::path& path, const std::string& text) {
   std::ofstream(path) << text;
-}
-
-// The InputError message of body(), or "" if it did not throw one.
-template <typename F>
-std::string InputErrorOf(F body) {
-  try {
-    body();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
 }
 
 TEST(Quartiles, LinearInterpolationBetweenClosestRanks) {

@@ -17,19 +17,9 @@
 namespace cwloc::eval {
 namespace {
 
+using cwloc::test::InputErrorOf;
 using test::PoseFromCenter;
 using test::Radians;
-
-// The InputError message of body(), or "" if it did not throw one.
-template <typename F>
-std::string InputErrorOf(F body) {
-  try {
-    body();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
-}
 
 // WGS84's radii of curvature at a latitude, from the ellipsoid's definition (not through
 // GeographicLib): metres per radian of latitude (meridian) and of longitude (prime vertical,

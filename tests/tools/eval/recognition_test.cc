@@ -45,7 +45,7 @@ TEST(Recognition, RightImagesShareAtLeastMinSharedPointsWithTheQuery) {
     }
     model.points3D[p] = point;
   }
-  test::TempDir dir;
+  cwloc::test::TempDir dir;
   colmap::WriteReconstruction(model, dir.path(), colmap::ModelFormat::kBinary);
   std::map<std::string, std::vector<uint64_t>> seen = {{"q", {}}, {"far", {1, 2, 3}}};
   for (uint64_t p = 1; p <= 15; ++p) seen["q"].push_back(p);
@@ -58,7 +58,7 @@ TEST(Recognition, RightImagesShareAtLeastMinSharedPointsWithTheQuery) {
 }
 
 TEST(Recognition, QueryPointsFileErrorsNameTheLine) {
-  test::TempDir dir;
+  cwloc::test::TempDir dir;
   const auto path = dir / "points.txt";
   std::ofstream(path) << "# comment\nq1 1 2 3\nq2 4 x\n";
   try {
@@ -92,15 +92,16 @@ namespace cwloc::eval {
 namespace {
 
 TEST(RecognitionCli, ModelWithoutQueryPointsIsAUsageError) {
-  test::TempDir dir;
+  cwloc::test::TempDir dir;
   std::ofstream(dir / "gt.txt") << "q 1 0 0 0 0 0 0\n";
   std::ofstream(dir / "poses.txt") << "q 1 0 0 0 0 0 0\n";
   std::string output;
-  EXPECT_EQ(test::RunCommand(test::ToolPath("cwloc-eval").string() + " --results " +
-                                 (dir / "poses.txt").string() + " --gt " +
-                                 (dir / "gt.txt").string() + " --model " + dir.path().string(),
-                             &output),
-            2);
+  EXPECT_EQ(
+      cwloc::test::RunCommand(cwloc::test::ToolPath("cwloc-eval").string() + " --results " +
+                                  (dir / "poses.txt").string() + " --gt " +
+                                  (dir / "gt.txt").string() + " --model " + dir.path().string(),
+                              &output),
+      2);
   EXPECT_THAT(output, testing::HasSubstr(
                           "--model needs --gt-points or --gt-model to know what each query sees"));
 }

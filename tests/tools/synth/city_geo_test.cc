@@ -18,6 +18,7 @@
 #include <set>
 #include <sstream>
 
+#include "base/angles.h"
 #include "base/error.h"
 #include "camera/camera_models.h"
 #include "colmap/reconstruction_io.h"
@@ -33,7 +34,6 @@ namespace {
 namespace fs = std::filesystem;
 using testing::HasSubstr;
 
-constexpr double kDegree = std::numbers::pi / 180;
 const Geodetic kSydney{-33.8568, 151.2153, 25};
 
 std::string ReadBytes(const fs::path& path) {
