@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <new>
 #include <span>
+#include <vector>
 
 #include "base/error.h"
 #include "cwloc/cwloc.hpp"
@@ -49,25 +50,38 @@ auto Translated(Fn fn) -> decltype(fn()) {
   }
 }
 
-// The options through the table, as cwloc-localize takes them: the same checks and messages.
-QueryOptions ToQueryOptions(const Options& o) {
-  QueryOptions options;
-  ValidateOrThrowInvalidArgument([&] {
-#define CWLOC_OPTION(field, type, flag, ...) \
-  SetOption(&options, flag, OptionValue(std::in_place_type<type>, o.field));
+// The API's fields in the option table's order (OptionTable()).
+std::vector<OptionValue> FieldValues(const Options& o) {
+  return {
+#define CWLOC_OPTION(field, type, ...) OptionValue(std::in_place_type<type>, o.field),
 #include "io/option_table.inc"
 #undef CWLOC_OPTION
-    ValidateQueryOptions(options);
+  };
+}
+
+// The options through the table, as cwloc-localize takes them: the same checks and messages,
+// each value checked once as it lands through its spec.
+QueryOptions ToQueryOptions(const Options& o) {
+  const std::span<const OptionSpec> table = OptionTable();
+  const std::vector<OptionValue> fields = FieldValues(o);
+  QueryOptions options;
+  ValidateOrThrowInvalidArgument([&] {
+    for (size_t i = 0; i < table.size(); ++i) {
+      CheckOption(table[i], fields[i]);
+      table[i].set(&options, fields[i]);
+    }
+    CheckOptionRules(options);
   });
   return options;
 }
 
-// Sets the field of a checked value of the table's option `flag`.
-void AssignField(std::string_view flag, const OptionValue& value, Options* o) {
-#define CWLOC_OPTION(field, type, flag_name, ...) \
-  if (flag == flag_name) {                        \
-    o->field = std::get<type>(value);             \
-    return;                                       \
+// Sets the field of the table's option at `index` to a checked value.
+void AssignField(size_t index, const OptionValue& value, Options* o) {
+  size_t i = 0;
+#define CWLOC_OPTION(field, type, ...) \
+  if (index == i++) {                  \
+    o->field = std::get<type>(value);  \
+    return;                            \
   }
 #include "io/option_table.inc"
 #undef CWLOC_OPTION
@@ -195,16 +209,15 @@ Error::Error(ErrorCode code, const std::string& message)
 
 Options::Options() {
   const QueryOptions defaults;
-#define CWLOC_OPTION(field, type, flag, ...) field = std::get<type>(FindOption(flag).get(defaults));
-#include "io/option_table.inc"
-#undef CWLOC_OPTION
+  const std::span<const OptionSpec> table = OptionTable();
+  for (size_t i = 0; i < table.size(); ++i) AssignField(i, table[i].get(defaults), this);
 }
 
 void Options::Set(const std::string& name, const std::string& value) {
   Translated([&] {
     ValidateOrThrowInvalidArgument([&] {
       const OptionSpec& spec = FindOption(name);
-      AssignField(spec.flag, ParseOption(spec, value), this);
+      AssignField(&spec - OptionTable().data(), ParseOption(spec, value), this);
     });
   });
 }
@@ -213,7 +226,7 @@ void Options::Set(const std::string& name, double value) {
   Translated([&] {
     ValidateOrThrowInvalidArgument([&] {
       const OptionSpec& spec = FindOption(name);
-      AssignField(spec.flag, OptionFromNumber(spec, value), this);
+      AssignField(&spec - OptionTable().data(), OptionFromNumber(spec, value), this);
     });
   });
 }

@@ -123,19 +123,19 @@ int Main(int argc, char** argv) {
             true_in_camera.cross(test::RandomUnitVector(rng)).normalized();
         const uint64_t ransac_seed = rng.Next();
         for (int condition = 0; condition < kNumConditions; ++condition) {
-          AbsolutePoseOptions options;
-          options.ransac.seed = ransac_seed;
+          PoseContext context;
+          context.ransac.seed = ransac_seed;
           if (kPriorErrorsDeg[condition] >= 0.0) {
             GravityPrior prior;
             prior.in_world = in_world;
             prior.in_camera =
                 Eigen::AngleAxisd(kPriorErrorsDeg[condition] * kDegree, tilt_axis) * true_in_camera;
             prior.sigma_deg = sigma_deg;
-            options.gravity = prior;
+            context.gravity = prior;
           }
           const double start = ThreadSeconds();
-          const AbsolutePoseResult result =
-              EstimateAbsolutePose(problem.normalized, problem.points3D, problem.focal_px, options);
+          const AbsolutePoseResult result = EstimateAbsolutePose(
+              problem.normalized, problem.points3D, problem.focal_px, {}, context);
           Run run;
           run.ms = 1e3 * (ThreadSeconds() - start);
           run.iterations = result.stats.iterations;

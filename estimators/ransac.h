@@ -26,14 +26,19 @@ namespace cwloc {
 // sampler: the pose stage (localizer/pose/pose_estimators.h) and the georeference fit
 // (geo/georeference_fit.cc, plain RANSAC with max_refinements = 0).
 
+// The sampler's settings.
 struct RansacOptions {
   uint32_t min_iterations = 100;    // sampled hypotheses at least (unless data < sample size)
   uint32_t max_iterations = 10000;  // and at most
   double confidence = 0.9999;       // probability of drawing one all-inlier sample
-  uint64_t seed = 0;                // same seed, same data: same result on every platform
   uint32_t max_refinements = 4;     // local optimisation rounds per new best hypothesis
+};
+
+// What one run is given besides the settings: its seed and its deadline.
+struct RansacRun {
+  uint64_t seed = 0;  // same seed, same data: same result on every platform
   // A latency budget: no new sample once it has passed (after the first), whatever the
-  // iteration counts above ask for.
+  // iteration counts of the options ask for.
   Deadline deadline;
 };
 
@@ -43,7 +48,7 @@ struct RansacStats {
   double inlier_ratio = 0.0;                               // num_inliers / number of data points
   uint32_t refinements = 0;                                // local optimisation rounds run
   double score = std::numeric_limits<double>::infinity();  // MSAC score of the best model
-  bool stopped_by_deadline = false;  // RansacOptions::deadline ended the sampling
+  bool stopped_by_deadline = false;                        // RansacRun::deadline ended the sampling
 };
 
 // What Ransac needs from a problem.
@@ -84,7 +89,7 @@ inline uint32_t RansacRequiredIterations(double inlier_ratio, size_t sample_size
 // Runs LO-RANSAC. On return *best_model holds the best model found if stats.num_inliers > 0
 // or at least one model was scored (stats.score finite); otherwise it is untouched.
 template <RansacEstimator Estimator>
-RansacStats Ransac(const Estimator& estimator, const RansacOptions& options,
+RansacStats Ransac(const Estimator& estimator, const RansacOptions& options, const RansacRun& run,
                    typename Estimator::Model* best_model) {
   using Model = typename Estimator::Model;
   constexpr size_t kSampleSize = Estimator::kSampleSize;
@@ -93,7 +98,7 @@ RansacStats Ransac(const Estimator& estimator, const RansacOptions& options,
   if (num_data < kSampleSize || num_data > std::numeric_limits<uint32_t>::max()) return stats;
   const uint32_t n = static_cast<uint32_t>(num_data);
 
-  SplitMix64 rng(options.seed);
+  SplitMix64 rng(run.seed);
   std::array<uint32_t, kSampleSize> sample;
   std::vector<Model> models;
   uint32_t required = options.max_iterations;
@@ -101,7 +106,7 @@ RansacStats Ransac(const Estimator& estimator, const RansacOptions& options,
 
   while (stats.iterations < options.max_iterations &&
          (stats.iterations < min_iterations || stats.iterations < required)) {
-    if (stats.iterations > 0 && options.deadline.Passed()) {
+    if (stats.iterations > 0 && run.deadline.Passed()) {
       stats.stopped_by_deadline = true;
       break;
     }

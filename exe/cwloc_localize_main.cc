@@ -436,7 +436,8 @@ class TableFlags {
   }
 
   // Every flag given, through the table: ParseOption checks a value, a switch has no range,
-  // and ValidateQueryOptions adds the rules between options.
+  // the defaults are in range (option_table_test), and CheckOptionRules adds the rules between
+  // options.
   void Apply(QueryOptions* options) const {
     const std::span<const OptionSpec> table = OptionTable();
     for (size_t i = 0; i < table.size(); ++i) {
@@ -445,7 +446,7 @@ class TableFlags {
       const bool is_switch = spec.type == OptionValue(false).index();
       spec.set(options, is_switch ? OptionValue(switches_[i]) : ParseOption(spec, texts_[i]));
     }
-    ValidateQueryOptions(*options);
+    CheckOptionRules(*options);
   }
 
   static constexpr const char* kGroup =

@@ -374,11 +374,11 @@ GeoFitResult FitGeoreference(std::span<const Eigen::Vector3d> model_centers,
   ransac.min_iterations = 0;
   ransac.max_iterations = static_cast<uint32_t>(options.max_iterations);
   ransac.confidence = options.confidence;
-  ransac.seed = options.seed;
   ransac.max_refinements = 0;
   Similarity best;
   std::vector<char> inliers(n, 0);
-  if (std::isfinite(Ransac(estimator, ransac, &best).score)) estimator.FlagInliers(best, &inliers);
+  if (std::isfinite(Ransac(estimator, ransac, RansacRun{options.seed, {}}, &best).score))
+    estimator.FlagInliers(best, &inliers);
 
   // Weighted least squares on the inliers, re-scored, until the inlier set is stable.
   std::vector<char> fitted;

@@ -76,6 +76,10 @@ void SetOption(QueryOptions* options, std::string_view flag, const OptionValue& 
 
 void ValidateQueryOptions(const QueryOptions& options) {
   for (const OptionSpec& spec : Specs()) CheckOption(spec, spec.get(options));
+  CheckOptionRules(options);
+}
+
+void CheckOptionRules(const QueryOptions& options) {
   const RansacOptions& ransac = options.localizer.pose.ransac;
   if (ransac.min_iterations > ransac.max_iterations) {
     throw InputError("--min-ransac-iterations " + std::to_string(ransac.min_iterations) +

@@ -53,7 +53,11 @@ OptionValue OptionFromNumber(const OptionSpec& spec, double number);
 void SetOption(QueryOptions* options, std::string_view flag, const OptionValue& value);
 
 // Checks every option of options (set in code or through the table) and the rules between
-// them; throws InputError naming the flags.
+// them (CheckOptionRules); throws InputError naming the flags.
 void ValidateQueryOptions(const QueryOptions& options);
+
+// The rules between options whose values were checked one by one (CheckOption): RANSAC's
+// iteration bounds, what this build can compute (SIFT without VLFeat, a refiner without Ceres).
+void CheckOptionRules(const QueryOptions& options);
 
 }  // namespace cwloc

@@ -44,15 +44,16 @@ struct BackMatchingResult {
 // matches leave weakly constrained can continue with a larger N_B where it stopped.
 class BackMatcher {
  public:
-  // The index, the clusters, the query and the guide must outlive the matcher; the forward
-  // matches are read here, for their votes.
+  // The index, the clusters, the query, the options and the guide must outlive the matcher;
+  // the forward matches are read here, for their votes.
   BackMatcher(const Index& index, const ClusterMembers& clusters, const Query& query,
               std::span<const FeatureMatch> forward_matches, const LocalizerOptions& options,
               ClusterMask allowed = {}, PoseGuide* guide = nullptr, const Deadline& stop = {});
   BackMatcher(const BackMatcher&) = delete;
   BackMatcher& operator=(const BackMatcher&) = delete;
 
-  // Back-matches until the result holds back_matches matches (or a stop above).
+  // Back-matches until the result holds back_matches matches (or a stop above): first
+  // options.back_matches (N_B), then, to continue where it stopped, a larger target.
   void Run(uint32_t back_matches);
   const BackMatchingResult& result() const { return result_; }
   BackMatchingResult TakeResult() { return std::move(result_); }
@@ -65,7 +66,7 @@ class BackMatcher {
   const Index& index_;
   const ClusterMembers& clusters_;
   const Query& query_;
-  LocalizerOptions options_;
+  const LocalizerOptions& options_;
   ClusterMask allowed_;
   PoseGuide* guide_;
   Deadline stop_;

@@ -69,10 +69,10 @@ std::optional<PoseHypothesis> FitPoseHypothesis(const Index& index, const Query&
   const std::vector<FeatureMatch> correspondences =
       UniqueCorrespondences(index, {forward.begin(), forward.end()});
   if (correspondences.size() < size_t(options.pose.min_inliers)) return std::nullopt;
-  LocalizerOptions fit_options = options;
-  fit_options.pose.ransac.deadline = stop;
-  fit_options.pose.refine_deadline = stop;
-  const QueryPose fit = EstimateQueryPose(index, query, correspondences, fit_options);
+  PoseContext context;
+  context.ransac.deadline = stop;
+  context.refine_deadline = stop;
+  const QueryPose fit = EstimateQueryPose(index, query, correspondences, options, context);
   if (!fit.pose.success) return std::nullopt;
   PoseHypothesis hypothesis;
   hypothesis.pose = fit.pose.pose;
@@ -178,7 +178,7 @@ MatcherOutput MatchClusterExhaustive(const Index& index, const ClusterMembers& c
 // well constrained. A pose estimate that fails keeps the last one that localized and its
 // correspondences (the back-match counts and image votes then include the larger set).
 void ConstrainFocalLength(const Index& index, const Query& query, const LocalizerOptions& options,
-                          MatcherOutput* matched, QueryPose* fit) {
+                          const PoseContext& context, MatcherOutput* matched, QueryPose* fit) {
   while (matched->back_matcher != nullptr && fit->pose.success &&
          fit->pose.focal_depth.has_value() &&
          WeaklyConstrained(*fit->pose.focal_depth, fit->pose.focal_length_px)) {
@@ -189,7 +189,7 @@ void ConstrainFocalLength(const Index& index, const Query& query, const Localize
     if (matched->back_matcher->result().matches.size() == before) break;  // nothing left to see
     std::vector<FeatureMatch> previous = std::move(matched->correspondences);
     TakeBackMatches(index, matched);
-    QueryPose more = EstimateQueryPose(index, query, matched->correspondences, options);
+    QueryPose more = EstimateQueryPose(index, query, matched->correspondences, options, context);
     if (!more.pose.success) {
       matched->correspondences = std::move(previous);
       break;
@@ -314,24 +314,24 @@ LocalizationResult Localizer::Localize(const Query& query, const LocalizerOption
       matched.failure_reason = "no match to a model camera within " + prior_region;
   }
 
-  // The gravity prior: the model's down direction where the query is thought to be.
-  LocalizerOptions pose_options = options;
-  pose_options.pose.ransac.deadline = deadlines.ransac;
-  pose_options.pose.refine_deadline = deadlines.refine;
+  PoseContext pose_context;
+  pose_context.ransac.deadline = deadlines.ransac;
+  pose_context.refine_deadline = deadlines.refine;
   if (query.gravity) {
+    // The gravity prior: the model's down direction where the query is thought to be.
     GravityPrior prior;
     prior.in_camera = {(*query.gravity)[0], (*query.gravity)[1], (*query.gravity)[2]};
     prior.in_world = geo_->GravityInModel(query.position_prior);
     prior.sigma_deg = options.prior_gravity_sigma_deg;
-    pose_options.pose.gravity = prior;
+    pose_context.gravity = prior;
     priors.gravity = query.gravity;
   }
 
   const Stopwatch pose_time;
   QueryPose fit;
   if (matched.failure_reason.empty()) {
-    fit = EstimateQueryPose(index_, query, matched.correspondences, pose_options);
-    ConstrainFocalLength(index_, query, pose_options, &matched, &fit);
+    fit = EstimateQueryPose(index_, query, matched.correspondences, options, pose_context);
+    ConstrainFocalLength(index_, query, options, pose_context, &matched, &fit);
   } else {
     fit.pose.failure_reason = matched.failure_reason;
   }

@@ -72,9 +72,8 @@ struct LocalizerOptions {
   uint32_t query_tree_checks = 64;    // distance computations per search of the query's forest
   BackMatching back_matching = BackMatching::kAuto;
   double guide_radius_px = 20.0;  // guided: query features this near the projection compete
-  // Robust pose: inlier threshold, minimum inliers, RANSAC's limits, refinement. Its
-  // ransac.seed is overwritten with `seed` below for each query: one seed drives a query's
-  // randomness (the pose stage alone, in benchmarks and tests, takes its own).
+  // Robust pose: inlier threshold, minimum inliers, RANSAC's limits, refinement. RANSAC is
+  // seeded with `seed` below: one seed drives a query's randomness.
   AbsolutePoseOptions pose;
   // A query's gravity prior (--prior-gravity): its standard deviation, degrees.
   double prior_gravity_sigma_deg = GravityPrior().sigma_deg;

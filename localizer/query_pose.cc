@@ -28,7 +28,7 @@ std::vector<FeatureMatch> UniqueCorrespondences(const Index& index,
 
 QueryPose EstimateQueryPose(const Index& index, const Query& query,
                             std::span<const FeatureMatch> correspondences,
-                            const LocalizerOptions& options) {
+                            const LocalizerOptions& options, PoseContext context) {
   std::vector<Eigen::Vector2d> points2D;
   std::vector<Eigen::Vector3d> points3D;
   points2D.reserve(correspondences.size());
@@ -55,21 +55,21 @@ QueryPose EstimateQueryPose(const Index& index, const Query& query,
     result.used.push_back(i);
   }
 
-  AbsolutePoseOptions pose_options = options.pose;
-  pose_options.ransac.seed = options.seed;
+  context.ransac.seed = options.seed;
+  context.image_diagonal_px = std::hypot(double(camera.width), double(camera.height));
   switch (camera.calibration) {
     case Calibration::kKnown:
-      result.pose = EstimateAbsolutePose(
-          points2D, points3D, MeanFocalLength(camera.model_id, camera.params), pose_options);
+      result.pose =
+          EstimateAbsolutePose(points2D, points3D, MeanFocalLength(camera.model_id, camera.params),
+                               options.pose, context);
       break;
     case Calibration::kFocalPrior:
-      pose_options.image_diagonal_px = std::hypot(double(camera.width), double(camera.height));
-      result.pose = EstimateAbsolutePoseFocalPrior(
-          points2D, points3D, MeanFocalLength(camera.model_id, camera.params), pose_options);
+      result.pose = EstimateAbsolutePoseFocalPrior(points2D, points3D,
+                                                   MeanFocalLength(camera.model_id, camera.params),
+                                                   options.pose, context);
       break;
     case Calibration::kUnknown:
-      pose_options.image_diagonal_px = std::hypot(double(camera.width), double(camera.height));
-      result.pose = EstimateAbsolutePoseUnknownFocal(points2D, points3D, pose_options);
+      result.pose = EstimateAbsolutePoseUnknownFocal(points2D, points3D, options.pose, context);
       break;
   }
   return result;

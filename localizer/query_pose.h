@@ -31,9 +31,10 @@ struct QueryPose {
 // (Calibration::kFocalPrior, kUnknown) is a SIMPLE_RADIAL with its principal point at
 // QueryCamera::ImageCenter: RANSAC runs P3P with the prior focal length (the camera's mean focal)
 // or P4Pf, and the refinement estimates the focal length and the radial distortion with the pose.
-// RANSAC is seeded with options.seed.
+// RANSAC is seeded with options.seed; the context brings the query's deadlines and gravity
+// prior (its seed and image diagonal are set here).
 QueryPose EstimateQueryPose(const Index& index, const Query& query,
                             std::span<const FeatureMatch> correspondences,
-                            const LocalizerOptions& options);
+                            const LocalizerOptions& options, PoseContext context = {});
 
 }  // namespace cwloc

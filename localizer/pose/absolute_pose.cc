@@ -39,17 +39,17 @@ bool CheckInput(size_t num_points2D, size_t num_points3D, size_t sample_size,
   return true;
 }
 
-// The gravity prior, normalised, if the options have one; false with result->failure_reason set
+// The gravity prior, normalised, if the context has one; false with result->failure_reason set
 // when it is invalid.
-bool CheckGravity(const AbsolutePoseOptions& options, std::optional<GravityPrior>* gravity,
+bool CheckGravity(const PoseContext& context, std::optional<GravityPrior>* gravity,
                   AbsolutePoseResult* result) {
-  if (!options.gravity.has_value()) return true;
-  const std::string error = GravityPriorError(*options.gravity);
+  if (!context.gravity.has_value()) return true;
+  const std::string error = GravityPriorError(*context.gravity);
   if (!error.empty()) {
     result->failure_reason = "invalid gravity prior: " + error;
     return false;
   }
-  *gravity = NormalizedGravityPrior(*options.gravity);
+  *gravity = NormalizedGravityPrior(*context.gravity);
   return true;
 }
 
@@ -81,7 +81,8 @@ std::string GravityRejectionText(const std::optional<GravityCheck>& check) {
 // Final inlier set, error and verdict for `pose` with residual camera.Project(X_c) - pixel
 // (f * pi(X_c) - pixel for k = 0).
 void Finish(std::span<const Eigen::Vector2d> pixels, std::span<const Eigen::Vector3d> points3D,
-            const AbsolutePoseOptions& options, AbsolutePoseResult* result) {
+            const AbsolutePoseOptions& options, const PoseContext& context,
+            AbsolutePoseResult* result) {
   const Eigen::Matrix3d rot = result->pose.rotation.toRotationMatrix();
   const RadialCamera camera{result->focal_length_px, result->radial_distortion};
   const double max_sq = options.max_error_px * options.max_error_px;
@@ -100,9 +101,9 @@ void Finish(std::span<const Eigen::Vector2d> pixels, std::span<const Eigen::Vect
   }
   result->mean_reprojection_error_px =
       result->num_inliers > 0 ? error_sum / result->num_inliers : 0.0;
-  if (options.gravity.has_value()) {
-    result->gravity_angle_deg = GravityAngle(rot, options.gravity->in_world.normalized(),
-                                             options.gravity->in_camera.normalized()) /
+  if (context.gravity.has_value()) {
+    result->gravity_angle_deg = GravityAngle(rot, context.gravity->in_world.normalized(),
+                                             context.gravity->in_camera.normalized()) /
                                 kDegree;
   }
   result->success = result->num_inliers >= options.min_inliers;
@@ -153,9 +154,9 @@ struct FocalBounds {
 };
 
 bool UncalibratedBounds(std::span<const Eigen::Vector2d> centered_pixels,
-                        const AbsolutePoseOptions& options, FocalBounds* bounds,
-                        AbsolutePoseResult* result) {
-  double diagonal = options.image_diagonal_px;
+                        const AbsolutePoseOptions& options, const PoseContext& context,
+                        FocalBounds* bounds, AbsolutePoseResult* result) {
+  double diagonal = context.image_diagonal_px;
   if (!(diagonal > 0.0)) {
     for (const Eigen::Vector2d& p : centered_pixels) {
       if (p.allFinite()) diagonal = std::max(diagonal, 2.0 * p.norm());
@@ -185,8 +186,8 @@ bool SaneCamera(const RadialCamera& camera, const FocalBounds& bounds,
 }
 
 // The budget's deadline passed: the result keeps RANSAC's pose and says so.
-bool SkipsRefinement(const AbsolutePoseOptions& options, AbsolutePoseResult* result) {
-  result->refinement_skipped = options.refine_deadline.Passed();
+bool SkipsRefinement(const PoseContext& context, AbsolutePoseResult* result) {
+  result->refinement_skipped = context.refine_deadline.Passed();
   return result->refinement_skipped;
 }
 
@@ -257,13 +258,13 @@ void ReportUncertainty(std::span<const Eigen::Vector2d> pixels,
 
 AbsolutePoseResult EstimateAbsolutePose(std::span<const Eigen::Vector2d> normalized_points,
                                         std::span<const Eigen::Vector3d> points3D,
-                                        double focal_length_px,
-                                        const AbsolutePoseOptions& options) {
+                                        double focal_length_px, const AbsolutePoseOptions& options,
+                                        const PoseContext& context) {
   AbsolutePoseResult result;
   result.focal_length_px = focal_length_px;
   // GravityP2P for a valid prior not vaguer than kGravityP2PMaxSigmaDeg, else P3P.
   const bool p2p =
-      options.gravity.has_value() && options.gravity->sigma_deg <= kGravityP2PMaxSigmaDeg;
+      context.gravity.has_value() && context.gravity->sigma_deg <= kGravityP2PMaxSigmaDeg;
   const size_t sample_size =
       p2p ? GravityPoseEstimator::kSampleSize : AbsolutePoseEstimator::kSampleSize;
   if (!CheckInput(normalized_points.size(), points3D.size(), sample_size, options, &result)) {
@@ -274,7 +275,7 @@ AbsolutePoseResult EstimateAbsolutePose(std::span<const Eigen::Vector2d> normali
     return result;
   }
   std::optional<GravityPrior> gravity;
-  if (!CheckGravity(options, &gravity, &result)) return result;
+  if (!CheckGravity(context, &gravity, &result)) return result;
 
   LocalOptimizationOptions lo;
   lo.max_iterations = options.lo_iterations;
@@ -296,11 +297,11 @@ AbsolutePoseResult EstimateAbsolutePose(std::span<const Eigen::Vector2d> normali
     p2p_lo.loss_scale = max_error + std::tan(sigma);
     const GravityPoseEstimator estimator(normalized_points, points3D, max_error, gravity->in_camera,
                                          gravity->in_world, max_error + std::tan(bound), p2p_lo);
-    result.stats = Ransac(estimator, options.ransac, &result.pose);
+    result.stats = Ransac(estimator, options.ransac, context.ransac, &result.pose);
   }
   if (!p2p || result.stats.num_inliers < static_cast<uint32_t>(std::max(options.min_inliers, 0))) {
     CameraPose pose;
-    const RansacStats stats = Ransac(p3p, options.ransac, &pose);
+    const RansacStats stats = Ransac(p3p, options.ransac, context.ransac, &pose);
     if (!p2p) {
       result.stats = stats;
       result.pose = pose;
@@ -326,7 +327,7 @@ AbsolutePoseResult EstimateAbsolutePose(std::span<const Eigen::Vector2d> normali
   refine.loss_scale_px = options.loss_scale_px;
   refine.refiner = options.refiner;
   refine.gravity = SoftGravity(gravity, options, 1.0);
-  if (options.refine && !SkipsRefinement(options, &result)) {
+  if (options.refine && !SkipsRefinement(context, &result)) {
     std::vector<uint32_t> inliers;
     p3p.Inliers(result.pose, &inliers);
     CameraPose refined = result.pose;
@@ -338,23 +339,23 @@ AbsolutePoseResult EstimateAbsolutePose(std::span<const Eigen::Vector2d> normali
       result.refined = true;
     }
   }
-  Finish(pixels, points3D, options, &result);
+  Finish(pixels, points3D, options, context, &result);
   ReportUncertainty(pixels, points3D, refine, /*uncalibrated=*/false, &result);
   return result;
 }
 
 AbsolutePoseResult EstimateAbsolutePoseUnknownFocal(
     std::span<const Eigen::Vector2d> centered_pixels, std::span<const Eigen::Vector3d> points3D,
-    const AbsolutePoseOptions& options) {
+    const AbsolutePoseOptions& options, const PoseContext& context) {
   AbsolutePoseResult result;
   if (!CheckInput(centered_pixels.size(), points3D.size(), AbsolutePoseFocalEstimator::kSampleSize,
                   options, &result)) {
     return result;
   }
   FocalBounds bounds;
-  if (!UncalibratedBounds(centered_pixels, options, &bounds, &result)) return result;
+  if (!UncalibratedBounds(centered_pixels, options, context, &bounds, &result)) return result;
   std::optional<GravityPrior> gravity;
-  if (!CheckGravity(options, &gravity, &result)) return result;
+  if (!CheckGravity(context, &gravity, &result)) return result;
 
   LocalOptimizationOptions lo;
   lo.max_iterations = options.lo_iterations;
@@ -363,7 +364,7 @@ AbsolutePoseResult EstimateAbsolutePoseUnknownFocal(
   const AbsolutePoseFocalEstimator estimator(centered_pixels, points3D, options.max_error_px,
                                              bounds.min_focal, bounds.max_focal, lo, check);
   PoseAndFocal model;
-  result.stats = Ransac(estimator, options.ransac, &model);
+  result.stats = Ransac(estimator, options.ransac, context.ransac, &model);
   if (!std::isfinite(result.stats.score)) {
     result.failure_reason = Concat(
         "no pose hypothesis: every minimal sample was degenerate or "
@@ -374,13 +375,13 @@ AbsolutePoseResult EstimateAbsolutePoseUnknownFocal(
   result.pose = model.pose;
   result.focal_length_px = model.focal_length;
 
-  if (options.refine && !SkipsRefinement(options, &result)) {
+  if (options.refine && !SkipsRefinement(context, &result)) {
     std::vector<uint32_t> inliers;
     estimator.Inliers(model, &inliers);
     RefineUncalibrated(centered_pixels, points3D, std::move(inliers), bounds, options, gravity,
                        &result);
   }
-  Finish(centered_pixels, points3D, options, &result);
+  Finish(centered_pixels, points3D, options, context, &result);
   ReportUncertainty(centered_pixels, points3D, UncalibratedRefinement(options, gravity),
                     /*uncalibrated=*/true, &result);
   return result;
@@ -389,9 +390,10 @@ AbsolutePoseResult EstimateAbsolutePoseUnknownFocal(
 AbsolutePoseResult EstimateAbsolutePoseFocalPrior(std::span<const Eigen::Vector2d> centered_pixels,
                                                   std::span<const Eigen::Vector3d> points3D,
                                                   double prior_focal_length_px,
-                                                  const AbsolutePoseOptions& options) {
+                                                  const AbsolutePoseOptions& options,
+                                                  const PoseContext& context) {
   if (options.focal_prior_solver == FocalPriorSolver::kP4Pf) {
-    return EstimateAbsolutePoseUnknownFocal(centered_pixels, points3D, options);
+    return EstimateAbsolutePoseUnknownFocal(centered_pixels, points3D, options, context);
   }
   AbsolutePoseResult result;
   result.focal_length_px = prior_focal_length_px;
@@ -404,9 +406,9 @@ AbsolutePoseResult EstimateAbsolutePoseFocalPrior(std::span<const Eigen::Vector2
     return result;
   }
   FocalBounds bounds;
-  if (!UncalibratedBounds(centered_pixels, options, &bounds, &result)) return result;
+  if (!UncalibratedBounds(centered_pixels, options, context, &bounds, &result)) return result;
   std::optional<GravityPrior> gravity;
-  if (!CheckGravity(options, &gravity, &result)) return result;
+  if (!CheckGravity(context, &gravity, &result)) return result;
 
   std::vector<Eigen::Vector2d> normalized(centered_pixels.size());
   for (size_t i = 0; i < normalized.size(); ++i) {
@@ -418,19 +420,19 @@ AbsolutePoseResult EstimateAbsolutePoseFocalPrior(std::span<const Eigen::Vector2
   const std::optional<GravityCheck> check = HypothesisCheck(gravity, options);
   const AbsolutePoseEstimator estimator(normalized, points3D,
                                         options.max_error_px / prior_focal_length_px, lo, check);
-  result.stats = Ransac(estimator, options.ransac, &result.pose);
+  result.stats = Ransac(estimator, options.ransac, context.ransac, &result.pose);
   if (!std::isfinite(result.stats.score)) {
     result.failure_reason =
         "no pose hypothesis: every minimal sample was degenerate" + GravityRejectionText(check);
     return result;
   }
-  if (options.refine && !SkipsRefinement(options, &result)) {
+  if (options.refine && !SkipsRefinement(context, &result)) {
     std::vector<uint32_t> inliers;
     estimator.Inliers(result.pose, &inliers);
     RefineUncalibrated(centered_pixels, points3D, std::move(inliers), bounds, options, gravity,
                        &result);
   }
-  Finish(centered_pixels, points3D, options, &result);
+  Finish(centered_pixels, points3D, options, context, &result);
   ReportUncertainty(centered_pixels, points3D, UncalibratedRefinement(options, gravity),
                     /*uncalibrated=*/true, &result);
   return result;

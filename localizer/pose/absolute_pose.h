@@ -43,7 +43,7 @@ namespace cwloc {
 // The first round that fails stops the loop; the camera of the last kept round is reported
 // (RANSAC's own, with k = 0, when none was kept).
 //
-// A gravity prior (AbsolutePoseOptions::gravity, gravity_prior.h; docs/algorithm.md):
+// A gravity prior (PoseContext::gravity, gravity_prior.h; docs/algorithm.md):
 //   - known focal length: RANSAC's minimal sample is 2 points and its solver GravityP2P
 //     (gravity_p2p.h), whose poses honour the prior's direction exactly; the adaptive iteration
 //     count uses the sample size 2, log(1 - confidence) / log(1 - w^2). Its local optimisation
@@ -71,26 +71,21 @@ struct AbsolutePoseOptions {
   double max_error_px = 6.0;
   // Success needs at least this many inliers (paper: 12).
   int min_inliers = 12;
-  // The sampler: iteration limits, confidence, seed (estimators/ransac.h).
+  // The sampler: iteration limits, confidence (estimators/ransac.h).
   RansacOptions ransac;
   // Levenberg-Marquardt iterations per local optimisation inside RANSAC.
   int lo_iterations = 10;
   // Final refinement of the best pose (and the focal length when unknown), and its solver.
   bool refine = true;
-  // A latency budget: the refinement is skipped once this has passed (the result says so).
-  Deadline refine_deadline;
   PoseRefiner refiner = PoseRefinementOptions().refiner;
   // Cauchy loss scale of the final refinement, pixels: residuals well below it count as
   // squared errors, residuals near the 6 px threshold already weigh about 1/(1 + 36/a^2).
   double loss_scale_px = 2.0;
   // Uncalibrated cameras only: hypotheses and refinements with a focal length outside
   // [min_focal_px, max_focal_px] are rejected. A bound <= 0 is derived from the image
-  // diagonal d: min = 0.1 d, max = 10 d.
+  // diagonal d (PoseContext::image_diagonal_px): min = 0.1 d, max = 10 d.
   double min_focal_px = 0.0;
   double max_focal_px = 0.0;
-  // The image diagonal for those defaults, pixels; <= 0: twice the largest distance of an
-  // image point from the principal point (the points' extent, at most the true diagonal).
-  double image_diagonal_px = 0.0;
   // Uncalibrated cameras only (see above): refine k with the focal length (else k stays 0),
   // rounds of refinement and re-scoring, the bound on |k| (COLMAP's max_extra_param).
   bool refine_radial_distortion = true;
@@ -100,9 +95,22 @@ struct AbsolutePoseOptions {
   // 5% short of the refined focal length and whose lens distorts, it gives more RANSAC inliers
   // than P4Pf and the same refined poses (docs/algorithm.md).
   FocalPriorSolver focal_prior_solver = FocalPriorSolver::kP3P;
+};
+
+// What one estimate is given besides the settings, which stay as they were set: the query's
+// seed, deadlines, gravity prior and image size.
+struct PoseContext {
+  // RANSAC's seed and its latency budget: no new sample once the deadline has passed.
+  RansacRun ransac;
+  // The final refinement is skipped once this has passed (the result says so).
+  Deadline refine_deadline;
   // The gravity direction in the camera and the model frame, known before the pose (see above).
   // An invalid prior (GravityPriorError) fails the estimate with failure_reason set.
   std::optional<GravityPrior> gravity;
+  // Uncalibrated cameras: the image diagonal for the focal bounds' defaults, pixels; <= 0:
+  // twice the largest distance of an image point from the principal point (the points'
+  // extent, at most the true diagonal).
+  double image_diagonal_px = 0.0;
 };
 
 struct AbsolutePoseResult {
@@ -118,7 +126,7 @@ struct AbsolutePoseResult {
   int num_inliers = 0;
   RansacStats stats;                        // of the RANSAC run (before the final refinement)
   bool refined = false;                     // the final refinement was applied
-  bool refinement_skipped = false;          // refine_deadline had passed
+  bool refinement_skipped = false;          // PoseContext::refine_deadline had passed
   int camera_refinement_rounds = 0;         // uncalibrated: refinement rounds kept
   double mean_reprojection_error_px = 0.0;  // over the inliers
   // Uncalibrated, refined and successful: how well the focal length and the depth are told
@@ -141,20 +149,22 @@ struct AbsolutePoseResult {
 AbsolutePoseResult EstimateAbsolutePose(std::span<const Eigen::Vector2d> normalized_points,
                                         std::span<const Eigen::Vector3d> points3D,
                                         double focal_length_px,
-                                        const AbsolutePoseOptions& options = {});
+                                        const AbsolutePoseOptions& options = {},
+                                        const PoseContext& context = {});
 
 // Unknown focal length (square pixels, principal point known): P4Pf in RANSAC, then the
 // uncalibrated refinement. centered_pixels: pixel minus principal point, as observed (the
 // refinement estimates the radial distortion).
 AbsolutePoseResult EstimateAbsolutePoseUnknownFocal(
     std::span<const Eigen::Vector2d> centered_pixels, std::span<const Eigen::Vector3d> points3D,
-    const AbsolutePoseOptions& options = {});
+    const AbsolutePoseOptions& options = {}, const PoseContext& context = {});
 
 // A focal length prior (EXIF, a user's guess): RANSAC as options.focal_prior_solver says, then
 // the uncalibrated refinement, which frees the focal length and k.
 AbsolutePoseResult EstimateAbsolutePoseFocalPrior(std::span<const Eigen::Vector2d> centered_pixels,
                                                   std::span<const Eigen::Vector3d> points3D,
                                                   double prior_focal_length_px,
-                                                  const AbsolutePoseOptions& options = {});
+                                                  const AbsolutePoseOptions& options = {},
+                                                  const PoseContext& context = {});
 
 }  // namespace cwloc

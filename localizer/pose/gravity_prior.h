@@ -6,7 +6,7 @@
 namespace cwloc {
 
 // A gravity direction known before the pose: a phone's IMU measures it in the camera frame, the
-// index's georeference gives it in the model frame. AbsolutePoseOptions::gravity takes it
+// index's georeference gives it in the model frame. PoseContext::gravity takes it
 // (absolute_pose.h says what each pose solver does with it; docs/algorithm.md, section 4).
 struct GravityPrior {
   // The direction gravity pulls (down), camera frame: x right, y down, z forward (the image's

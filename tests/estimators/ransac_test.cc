@@ -99,7 +99,7 @@ TEST(Ransac, FitsALineWithManyOutliers) {
   const auto points = LineData(rng, 60, 240, 2.0, -3.0, 0.05);
   const LineEstimator estimator(points, 0.3);
   LineEstimator::Model model;
-  const RansacStats stats = Ransac(estimator, RansacOptions{}, &model);
+  const RansacStats stats = Ransac(estimator, RansacOptions{}, RansacRun{}, &model);
   EXPECT_NEAR(model.a, 2.0, 0.02);
   EXPECT_NEAR(model.b, -3.0, 0.05);
   EXPECT_GE(stats.num_inliers, 58u);  // a few random outliers may fall on the line
@@ -116,18 +116,19 @@ TEST(Ransac, IsDeterministicForASeed) {
   auto& rng = test::Rng();
   const auto points = LineData(rng, 50, 150, -1.0, 4.0, 0.1);
   const LineEstimator estimator(points, 0.5);
-  RansacOptions options;
-  options.seed = 42;
+  const RansacOptions options;
+  RansacRun run;
+  run.seed = 42;
   LineEstimator::Model m1, m2, m3;
-  const RansacStats s1 = Ransac(estimator, options, &m1);
-  const RansacStats s2 = Ransac(estimator, options, &m2);
+  const RansacStats s1 = Ransac(estimator, options, run, &m1);
+  const RansacStats s2 = Ransac(estimator, options, run, &m2);
   EXPECT_EQ(m1.a, m2.a);
   EXPECT_EQ(m1.b, m2.b);
   EXPECT_EQ(s1.iterations, s2.iterations);
   EXPECT_EQ(s1.refinements, s2.refinements);
   EXPECT_EQ(s1.score, s2.score);
-  options.seed = 43;
-  Ransac(estimator, options, &m3);
+  run.seed = 43;
+  Ransac(estimator, options, run, &m3);
   EXPECT_NEAR(m3.a, -1.0, 0.05);
 }
 
@@ -151,11 +152,11 @@ TEST(Ransac, RespectsIterationBoundsAndTinyInput) {
   options.min_iterations = 10;
   options.max_iterations = 50;
   LineEstimator::Model model;
-  EXPECT_LE(Ransac(estimator, options, &model).iterations, 50u);
+  EXPECT_LE(Ransac(estimator, options, RansacRun{}, &model).iterations, 50u);
 
   const std::vector<Eigen::Vector2d> one = {Eigen::Vector2d(1, 1)};
   const LineEstimator tiny(one, 0.1);
-  const RansacStats stats = Ransac(tiny, RansacOptions{}, &model);
+  const RansacStats stats = Ransac(tiny, RansacOptions{}, RansacRun{}, &model);
   EXPECT_EQ(stats.iterations, 0u);
   EXPECT_EQ(stats.num_inliers, 0u);
 }

@@ -79,10 +79,12 @@ INSTANTIATE_TEST_SUITE_P(OutlierRatios, UnknownFocal, testing::Values(0.5, 0.7))
 class Uncalibrated : public testing::TestWithParam<std::tuple<double, bool>> {};
 
 AbsolutePoseResult EstimateUncalibrated(const test::SyntheticPoseProblem& problem, bool prior,
-                                        const AbsolutePoseOptions& options = {}) {
-  return prior ? EstimateAbsolutePoseFocalPrior(problem.pixels, problem.points3D,
-                                                0.95 * problem.focal_px, options)
-               : EstimateAbsolutePoseUnknownFocal(problem.pixels, problem.points3D, options);
+                                        const AbsolutePoseOptions& options = {},
+                                        const PoseContext& context = {}) {
+  return prior
+             ? EstimateAbsolutePoseFocalPrior(problem.pixels, problem.points3D,
+                                              0.95 * problem.focal_px, options, context)
+             : EstimateAbsolutePoseUnknownFocal(problem.pixels, problem.points3D, options, context);
 }
 
 TEST_P(Uncalibrated, RefinementRecoversFocalAndDistortion) {
@@ -148,9 +150,9 @@ TEST(UncalibratedRefinement, KeepsOnlySaneCameras) {
 
   // A barrel distortion that would fold the corners of a larger image back: 1 + 3 k r_c^2 < 0
   // at r_c = 1.7 (the corner 1.7 f from the centre) with k = -0.15.
-  options = {};
-  options.image_diagonal_px = 2.0 * 1.7 * problem.focal_px;
-  result = EstimateUncalibrated(problem, false, options);
+  PoseContext context;
+  context.image_diagonal_px = 2.0 * 1.7 * problem.focal_px;
+  result = EstimateUncalibrated(problem, false, {}, context);
   EXPECT_FALSE(result.refined);
   EXPECT_EQ(result.radial_distortion, 0.0);
 
@@ -235,24 +237,27 @@ TEST(AbsolutePose, ReportsBadInput) {
 TEST(AbsolutePose, DeterministicForASeed) {
   auto& rng = test::Rng();
   const auto problem = test::MakeSyntheticProblem({}, rng);
-  AbsolutePoseOptions options;
-  options.ransac.seed = 7;
-  const auto a =
-      EstimateAbsolutePose(problem.normalized, problem.points3D, problem.focal_px, options);
-  const auto b =
-      EstimateAbsolutePose(problem.normalized, problem.points3D, problem.focal_px, options);
+  const AbsolutePoseOptions options;
+  PoseContext context;
+  context.ransac.seed = 7;
+  const auto a = EstimateAbsolutePose(problem.normalized, problem.points3D, problem.focal_px,
+                                      options, context);
+  const auto b = EstimateAbsolutePose(problem.normalized, problem.points3D, problem.focal_px,
+                                      options, context);
   EXPECT_EQ(a.pose.rotation.coeffs(), b.pose.rotation.coeffs());
   EXPECT_EQ(a.pose.translation, b.pose.translation);
   EXPECT_EQ(a.inliers, b.inliers);
   EXPECT_EQ(a.stats.iterations, b.stats.iterations);
-  const auto c = EstimateAbsolutePoseUnknownFocal(problem.pixels, problem.points3D, options);
-  const auto d = EstimateAbsolutePoseUnknownFocal(problem.pixels, problem.points3D, options);
+  const auto c =
+      EstimateAbsolutePoseUnknownFocal(problem.pixels, problem.points3D, options, context);
+  const auto d =
+      EstimateAbsolutePoseUnknownFocal(problem.pixels, problem.points3D, options, context);
   EXPECT_EQ(c.focal_length_px, d.focal_length_px);
   EXPECT_EQ(c.pose.translation, d.pose.translation);
   // Another seed takes other samples but finds the same pose.
-  options.ransac.seed = 8;
-  const auto e =
-      EstimateAbsolutePose(problem.normalized, problem.points3D, problem.focal_px, options);
+  context.ransac.seed = 8;
+  const auto e = EstimateAbsolutePose(problem.normalized, problem.points3D, problem.focal_px,
+                                      options, context);
   ASSERT_TRUE(e.success);
   EXPECT_LT(test::RotationErrorDeg(e.pose, a.pose), 0.01);
 }
@@ -317,11 +322,12 @@ TEST(GravityPrior, KnownFocalSamplesTwoPoints) {
   for (int trial = 0; trial < 5; ++trial) {
     const auto problem = test::MakeSyntheticProblem(synth, rng);
     AbsolutePoseOptions options;
-    const AbsolutePoseResult without =
-        EstimateAbsolutePose(problem.normalized, problem.points3D, problem.focal_px, options);
-    options.gravity = PriorFor(problem, 0.5, 1.0, rng);
-    const AbsolutePoseResult with =
-        EstimateAbsolutePose(problem.normalized, problem.points3D, problem.focal_px, options);
+    PoseContext context;
+    const AbsolutePoseResult without = EstimateAbsolutePose(problem.normalized, problem.points3D,
+                                                            problem.focal_px, options, context);
+    context.gravity = PriorFor(problem, 0.5, 1.0, rng);
+    const AbsolutePoseResult with = EstimateAbsolutePose(problem.normalized, problem.points3D,
+                                                         problem.focal_px, options, context);
     ExpectAccurate(without, problem);
     ExpectAccurate(with, problem);
     EXPECT_FALSE(with.gravity_fallback);
@@ -344,14 +350,15 @@ TEST(GravityPrior, KnownFocalSurvivesAPriorFarOffItsSigma) {
   for (int trial = 0; trial < 10; ++trial) {
     const auto problem = test::MakeSyntheticProblem(synth, rng);
     AbsolutePoseOptions options;
+    PoseContext context;
     // 3 sigma: GravityP2P's hypotheses keep few inliers, its local optimisation mostly
     // recovers; 20 sigma: mostly P3P after it finds the pose.
     for (int k = 0; k < 2; ++k) {
       const double error_deg = k == 0 ? 3.0 : 20.0;
       SCOPED_TRACE(error_deg);
-      options.gravity = PriorFor(problem, error_deg, 1.0, rng);
-      const AbsolutePoseResult result =
-          EstimateAbsolutePose(problem.normalized, problem.points3D, problem.focal_px, options);
+      context.gravity = PriorFor(problem, error_deg, 1.0, rng);
+      const AbsolutePoseResult result = EstimateAbsolutePose(problem.normalized, problem.points3D,
+                                                             problem.focal_px, options, context);
       ExpectAccurate(result, problem);
       EXPECT_NEAR(result.gravity_angle_deg, error_deg, 0.2);
       fallbacks[k] += result.gravity_fallback;
@@ -369,9 +376,10 @@ TEST(GravityPrior, VaguePriorChecksP3PHypotheses) {
   synth.outlier_ratio = 0.7;
   const auto problem = test::MakeSyntheticProblem(synth, rng);
   AbsolutePoseOptions options;
-  options.gravity = PriorFor(problem, 5.0, 2.0 * kGravityP2PMaxSigmaDeg, rng);
-  const AbsolutePoseResult result =
-      EstimateAbsolutePose(problem.normalized, problem.points3D, problem.focal_px, options);
+  PoseContext context;
+  context.gravity = PriorFor(problem, 5.0, 2.0 * kGravityP2PMaxSigmaDeg, rng);
+  const AbsolutePoseResult result = EstimateAbsolutePose(problem.normalized, problem.points3D,
+                                                         problem.focal_px, options, context);
   ExpectAccurate(result, problem);
   EXPECT_FALSE(result.gravity_fallback);
   EXPECT_GE(result.stats.iterations, 300u);  // P3P: 337 for 30% inliers
@@ -385,18 +393,19 @@ TEST(GravityPrior, UncalibratedDropsHypothesesThatDisagree) {
   for (int trial = 0; trial < 3; ++trial) {
     const auto problem = test::MakeSyntheticProblem(synth, rng);
     AbsolutePoseOptions options;
-    options.gravity = PriorFor(problem, 1.0, 1.0, rng);
+    PoseContext context;
+    context.gravity = PriorFor(problem, 1.0, 1.0, rng);
     AbsolutePoseResult result =
-        EstimateAbsolutePoseUnknownFocal(problem.pixels, problem.points3D, options);
+        EstimateAbsolutePoseUnknownFocal(problem.pixels, problem.points3D, options, context);
     ExpectAccurate(result, problem);
     EXPECT_NEAR(result.focal_length_px, problem.focal_px, 0.01 * problem.focal_px);
     result = EstimateAbsolutePoseFocalPrior(problem.pixels, problem.points3D,
-                                            0.95 * problem.focal_px, options);
+                                            0.95 * problem.focal_px, options, context);
     ExpectAccurate(result, problem);
     // A prior 30 degrees off, far beyond 4.29 sigma + 3 degrees: every hypothesis near the
     // true pose is dropped.
-    options.gravity = PriorFor(problem, 30.0, 1.0, rng);
-    result = EstimateAbsolutePoseUnknownFocal(problem.pixels, problem.points3D, options);
+    context.gravity = PriorFor(problem, 30.0, 1.0, rng);
+    result = EstimateAbsolutePoseUnknownFocal(problem.pixels, problem.points3D, options, context);
     EXPECT_FALSE(result.success);
     if (result.num_inliers > 0) {
       EXPECT_LE(result.gravity_angle_deg, 30.0);
@@ -416,29 +425,31 @@ TEST(GravityPrior, ReportsAnInvalidPrior) {
   SplitMix64 rng = test::SplitMixFrom(test::Rng());
   const auto problem = test::MakeSyntheticProblem(test::SyntheticPoseOptions{}, rng);
   AbsolutePoseOptions options;
+  PoseContext context;
   GravityPrior prior = PriorFor(problem, 0.0, 1.0, rng);
   prior.in_camera.setZero();
-  options.gravity = prior;
-  AbsolutePoseResult result =
-      EstimateAbsolutePose(problem.normalized, problem.points3D, problem.focal_px, options);
+  context.gravity = prior;
+  AbsolutePoseResult result = EstimateAbsolutePose(problem.normalized, problem.points3D,
+                                                   problem.focal_px, options, context);
   EXPECT_FALSE(result.success);
   EXPECT_EQ(result.failure_reason, "invalid gravity prior: in_camera is zero");
   prior = PriorFor(problem, 0.0, 1.0, rng);
   prior.in_world.x() = std::numeric_limits<double>::quiet_NaN();
-  options.gravity = prior;
-  result = EstimateAbsolutePoseUnknownFocal(problem.pixels, problem.points3D, options);
+  context.gravity = prior;
+  result = EstimateAbsolutePoseUnknownFocal(problem.pixels, problem.points3D, options, context);
   EXPECT_EQ(result.failure_reason, "invalid gravity prior: in_world is not finite");
   prior = PriorFor(problem, 0.0, 0.0, rng);
-  options.gravity = prior;
-  result =
-      EstimateAbsolutePoseFocalPrior(problem.pixels, problem.points3D, problem.focal_px, options);
+  context.gravity = prior;
+  result = EstimateAbsolutePoseFocalPrior(problem.pixels, problem.points3D, problem.focal_px,
+                                          options, context);
   EXPECT_EQ(result.failure_reason, "invalid gravity prior: sigma_deg 0 is not positive and finite");
   // Directions need not be unit vectors.
   prior = PriorFor(problem, 0.0, 1.0, rng);
   prior.in_camera *= 9.81;
   prior.in_world *= 0.5;
-  options.gravity = prior;
-  result = EstimateAbsolutePose(problem.normalized, problem.points3D, problem.focal_px, options);
+  context.gravity = prior;
+  result = EstimateAbsolutePose(problem.normalized, problem.points3D, problem.focal_px, options,
+                                context);
   ExpectAccurate(result, problem);
   EXPECT_LT(result.gravity_angle_deg, 0.1);
 }

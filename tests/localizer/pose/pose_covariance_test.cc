@@ -130,9 +130,10 @@ TEST(PoseCovariance, UnknownFocalAndDistortionAreMarginalised) {
   test::SyntheticPoseOptions synth = Scene(1.0);
   synth.radial_k = -0.05;
   const Calibration c = Measure(synth, 400, [](const auto& problem) {
-    AbsolutePoseOptions options = EstimatorOptions();
-    options.image_diagonal_px = std::hypot(1600.0, 1200.0);
-    return EstimateAbsolutePoseUnknownFocal(problem.pixels, problem.points3D, options);
+    PoseContext context;
+    context.image_diagonal_px = std::hypot(1600.0, 1200.0);
+    return EstimateAbsolutePoseUnknownFocal(problem.pixels, problem.points3D, EstimatorOptions(),
+                                            context);
   });
   ExpectCalibrated(c);
 }
