@@ -22,19 +22,24 @@ std::string RealRangeText(const ValueRange& range) {
          (range.min_open ? " > " : " >= ") + NumberText(range.min);
 }
 
+// "a, b or c" of items as text.
+template <typename T, typename ToText>
+std::string ListText(std::span<const T> items, ToText to_text) {
+  std::string text;
+  for (size_t i = 0; i < items.size(); ++i) {
+    if (i > 0) text += i + 1 == items.size() ? " or " : ", ";
+    text += to_text(items[i]);
+  }
+  return text;
+}
+
 // "0 (full descriptors) or 4, 8, 16, 32 or 64".
 std::string ChoicesText(const ValueRange& range) {
-  const auto list = [](std::span<const uint32_t> choices) {
-    std::string text;
-    for (size_t i = 0; i < choices.size(); ++i) {
-      if (i > 0) text += i + 1 == choices.size() ? " or " : ", ";
-      text += std::to_string(choices[i]);
-    }
-    return text;
-  };
-  if (range.first_choice_note.empty() || range.choices.size() < 2) return list(range.choices);
+  const auto number = [](uint32_t choice) { return std::to_string(choice); };
+  if (range.first_choice_note.empty() || range.choices.size() < 2)
+    return ListText(range.choices, number);
   return std::to_string(range.choices[0]) + " (" + std::string(range.first_choice_note) + ") or " +
-         list(range.choices.subspan(1));
+         ListText(range.choices.subspan(1), number);
 }
 
 // A bound of a whole-number type: its largest value is no double for 64 bits.
@@ -73,12 +78,7 @@ std::string NumberText(double value) {
 }
 
 std::string NamesText(std::span<const std::string_view> names) {
-  std::string text;
-  for (size_t i = 0; i < names.size(); ++i) {
-    if (i > 0) text += i + 1 == names.size() ? " or " : ", ";
-    text += names[i];
-  }
-  return text;
+  return ListText(names, [](std::string_view name) { return std::string(name); });
 }
 
 namespace {
