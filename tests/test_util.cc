@@ -174,13 +174,7 @@ int ValidateJson(const std::string& schema, const std::filesystem::path& file, b
 }
 
 std::string UnderMemoryLimit(uint64_t kib, const std::string& command) {
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
-  return command;
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
-  return command;
-#endif
-#endif
+  if (kSanitized) return command;
   return "ulimit -v " + std::to_string(kib) + " && " + command;
 }
 

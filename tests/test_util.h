@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <iterator>
 #include <optional>
 #include <random>
 #include <span>
@@ -15,6 +16,33 @@
 #include "base/error.h"
 
 namespace cwloc::test {
+
+// True in a build with AddressSanitizer or ThreadSanitizer (CWLOC_SANITIZE).
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+inline constexpr bool kSanitized = true;
+#elif defined(__has_feature)
+inline constexpr bool kSanitized =
+    __has_feature(address_sanitizer) || __has_feature(thread_sanitizer);
+#else
+inline constexpr bool kSanitized = false;
+#endif
+
+// The items a real-data test repeats one code path over (photos, queries): all of them, or the
+// first under a sanitizer, which runs 10-20x slower and checks the path, not the accuracy over
+// every item (the Release suite checks that). A plain iterator pair: clang 14 cannot compile
+// libstdc++ 12's views.
+template <typename Iterator>
+struct Items {
+  Iterator first, last;
+  Iterator begin() const { return first; }
+  Iterator end() const { return last; }
+  size_t size() const { return static_cast<size_t>(std::distance(first, last)); }
+};
+template <typename Container>
+auto SanitizerSample(const Container& items) {
+  const auto first = std::begin(items), last = std::end(items);
+  return Items<decltype(first)>{first, kSanitized && first != last ? std::next(first) : last};
+}
 
 // The PRNG every test draws from; test_main reseeds it before each test so a failure
 // reproduces with --gtest_filter alone. The seed is printed when it differs from the default.

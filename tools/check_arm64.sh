@@ -1,16 +1,17 @@
 #!/usr/bin/env bash
-# The aarch64 device build, under qemu-user, must return what the x86-64 device build returns
-# from the same index built on x86-64: the same localized set, the same inlier and
-# correspondence counts, poses and cameras within 1e-6 relative (tools/compare_results.py).
+# The aarch64 device build, under qemu-user, must return what x86-64 returns from the same
+# index built on x86-64: the same localized set, the same inlier and correspondence counts,
+# poses and cameras within 1e-6 relative (tools/compare_results.py). Both run the refiner a
+# device build has (--refiner builtin), so the x86-64 side is the full build's cwloc-localize.
 # Data: herz_jesu_p25 from its photos and from its stored query features, and a generated city
 # from its query features; both also with a compact index (format 1.2, --compact).
 #
-# Usage: tools/check_arm64.sh NATIVE_BUILD X86_DEVICE_BUILD ARM64_DEVICE_BUILD
+# Usage: tools/check_arm64.sh NATIVE_BUILD ARM64_DEVICE_BUILD
 #   NATIVE_BUILD: a full build (cwloc-index, cwloc-synth) that makes the indexes.
 set -euo pipefail
+[ $# -eq 2 ] || { echo "usage: tools/check_arm64.sh NATIVE_BUILD ARM64_DEVICE_BUILD" >&2; exit 2; }
 native=$(realpath "$1")
-x86=$(realpath "$2")
-arm=$(realpath "$3")
+arm=$(realpath "$2")
 cd "$(dirname "$0")/.."
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
@@ -27,10 +28,10 @@ compare() {
   {
     if (
       status=0
-      "$x86/bin/cwloc-localize" "$@" -q -o "$work/$name.x86.jsonl" || status=$?
+      "$native/bin/cwloc-localize" "$@" --refiner builtin -q -o "$work/$name.x86.jsonl" || status=$?
       [ "$status" -le 1 ] || { echo "check_arm64: x86-64 failed on $name ($status)"; exit 1; }
       status=0
-      qemu-aarch64 "$arm/bin/cwloc-localize" "$@" -q -o "$work/$name.arm64.jsonl" || status=$?
+      qemu-aarch64 "$arm/bin/cwloc-localize" "$@" --refiner builtin -q -o "$work/$name.arm64.jsonl" || status=$?
       [ "$status" -le 1 ] || { echo "check_arm64: aarch64 failed on $name ($status)"; exit 1; }
       echo -n "check_arm64: $name: "
       python3 tools/compare_results.py "$work/$name.x86.jsonl" "$work/$name.arm64.jsonl"

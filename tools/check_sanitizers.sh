@@ -3,7 +3,7 @@
 #   tools/check_sanitizers.sh asan   clang with ASan + UBSan (and libFuzzer's coverage) in
 #                                    build-asan: builds everything, runs the whole test suite
 #   tools/check_sanitizers.sh fuzz   each libFuzzer target of build-asan for FUZZ_SECONDS
-#                                    (default 60), two at a time, from fuzz/corpus
+#                                    (default 30), two at a time, from fuzz/corpus
 #   tools/check_sanitizers.sh tsan   ThreadSanitizer in build-tsan (the device configuration):
 #                                    a batch of queries on one index with 4 threads through
 #                                    cwloc-localize, the library's concurrent-use tests, and
@@ -31,7 +31,7 @@ case "$mode" in
     ;;
   fuzz)
     [ -x build-asan/bin/cwloc-fuzz-index ] || { echo "run tools/check_sanitizers.sh asan first" >&2; exit 2; }
-    fuzz/run.sh build-asan --seconds "${FUZZ_SECONDS:-60}" --jobs "$jobs"
+    fuzz/run.sh build-asan --seconds "${FUZZ_SECONDS:-30}" --jobs "$jobs"
     ;;
   tsan)
     cmake -S . -B build-tsan -G Ninja "${clang[@]}" -DCWLOC_SANITIZE=thread -DCWLOC_WITH_PYTHON=OFF \

@@ -6,6 +6,7 @@
 
 #include "tests/indexer/indexer_fixture.h"
 #include "tests/localization_check.h"
+#include "tests/shared_data_index.h"
 #include "tests/test_png.h"
 
 namespace cwloc {
@@ -95,13 +96,7 @@ TEST_F(PhotoCliTest, APhotoCameraMustMatchThePhotosSize) {
 // "out of memory" and exit code 3; the batch goes on. Sanitizers reserve terabytes of address
 // space, so ulimit -v cannot apply to their builds.
 TEST_F(PhotoCliTest, APhotoTooBigForTheMemoryLeftFailsAloneAndTheBatchGoesOn) {
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
-  GTEST_SKIP() << "ulimit -v does not apply to sanitizer builds";
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
-  GTEST_SKIP() << "ulimit -v does not apply to sanitizer builds";
-#endif
-#endif
+  if (test::kSanitized) GTEST_SKIP() << "ulimit -v does not apply to sanitizer builds";
   // 3.6 gigapixels at one bit per pixel: 4 MB of PNG, 3.6 GB once decoded.
   const auto huge = dir_ / "huge.png";
   test::WriteGreyPng(huge, 60000, 60000, 0, 1);
@@ -135,37 +130,40 @@ class SharedPhotoTest : public testing::Test {
  protected:
   // False (and the test skipped) when the data set is absent.
   bool Open(const std::string& name) {
-    const auto data = test::SharedDataDir(name);
-    if (!data) return false;
-    data_ = *data;
-    index_ = dir_ / "model.cwl";
-    std::string output;
-    EXPECT_EQ(test::RunCommand(test::ToolPath("cwloc-index").string() + " build --model " +
-                                   Quote(data_ / "mapping_model/bin") + " --database " +
-                                   Quote(data_ / "database.db") + " -o " + Quote(index_),
-                               &output),
-              0)
-        << output;
+    const auto shared = test::BuildSharedDataIndex(name);
+    if (!shared) return false;
+    data_ = shared->data;
+    index_ = shared->index;
     return true;
   }
 
-  // Localizes the photos of query_list.txt with `camera_args`; checks each pose against
-  // queries_gt.txt (distances through scale_to_metres.txt) and returns the records.
+  // Localizes the photos of query_list.txt (the first one in a sanitizer build) with
+  // `camera_args`; checks each pose against queries_gt.txt (distances through
+  // scale_to_metres.txt) and returns the records.
   std::vector<nlohmann::json> LocalizeAll(const std::string& camera_args, double max_distance,
                                           double max_degrees, uint32_t extraction_width) const {
+    std::vector<std::string> photos;
+    std::ifstream list_in(data_ / "query_list.txt");
+    for (std::string line; std::getline(list_in, line);)
+      if (!line.empty()) photos.push_back(line);
+    const auto list = dir_ / "photos.txt";
+    std::ofstream list_out(list);
+    for (const std::string& photo : test::SanitizerSample(photos)) list_out << photo << '\n';
+    list_out.close();
     const auto jsonl = dir_ / "photos.jsonl";
     std::string output;
     const int code = test::RunCommand(
         test::ToolPath("cwloc-localize").string() + " --index " + Quote(index_) + " --image-list " +
-            Quote(data_ / "query_list.txt") + " --image-dir " + Quote(data_ / "query_images") +
+            Quote(list) + " --image-dir " + Quote(data_ / "query_images") +
             " --max-image-size 1600 --max-features 6000 --threads 2 -q -o " + Quote(jsonl) + " " +
             camera_args,
         &output);
     EXPECT_EQ(code, 0) << output;
     const auto truth = test::ReadGroundTruth(data_ / "queries_gt.txt");
+    EXPECT_EQ(truth.size(), photos.size());
     const double scale = test::ReadMetresPerUnit(data_ / "scale_to_metres.txt");
     const auto records = test::ReadJsonLines(jsonl);
-    EXPECT_EQ(records.size(), truth.size());
+    EXPECT_EQ(records.size(), test::SanitizerSample(photos).size());
     for (const auto& record : records) {
       const std::string name = record["name"];
       EXPECT_TRUE(record["success"].get<bool>()) << name;
