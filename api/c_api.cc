@@ -6,6 +6,7 @@
 #include <limits>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <utility>
 
 #include "cwloc/cwloc.h"
@@ -253,6 +254,20 @@ void cwloc_result_camera(const cwloc_result* result, cwloc_camera* camera) {
   camera->calibration = static_cast<cwloc_calibration>(c.calibration);
 }
 
+cwloc_status cwloc_result_value(const cwloc_result* result, const char* name, double* value) {
+  if (result == nullptr || name == nullptr || value == nullptr)
+    return Fail(CWLOC_ERROR_INVALID_ARGUMENT, "result, name or value is NULL");
+  const std::string_view wanted = name;
+#define CWLOC_RESULT_FIELD(field, type, group, key, help) \
+  if (wanted == #field) {                                 \
+    *value = static_cast<double>(result->result.field);   \
+    return CWLOC_OK;                                      \
+  }
+#include "cwloc/result_fields.inc"
+#undef CWLOC_RESULT_FIELD
+  return Fail(CWLOC_ERROR_INVALID_ARGUMENT, "unknown result value '" + std::string(name) + "'");
+}
+
 uint32_t cwloc_result_num_features(const cwloc_result* result) {
   return result != nullptr ? result->result.num_features : 0;
 }
@@ -297,8 +312,9 @@ cwloc_status cwloc_result_ranked_image(const cwloc_result* result, uint32_t i, u
 void cwloc_result_times(const cwloc_result* result, cwloc_stage_times* times) {
   if (result == nullptr || times == nullptr) return;
   const cwloc::api::StageTimes& t = result->result.times;
-  *times = {t.extraction,    t.forward_knn, t.ratio_test, t.query_tree,
-            t.back_matching, t.pose,        t.total};
+#define CWLOC_STAGE_TIME(name, help) times->name = t.name;
+#include "cwloc/stage_times.inc"
+#undef CWLOC_STAGE_TIME
 }
 
 cwloc_status cwloc_result_geo_pose(const cwloc_result* result, cwloc_geo_pose* pose) {

@@ -129,7 +129,7 @@ PriorInputs ToPriorInputs(const Options& options) {
 }
 
 Result ToResult(const LocalizationResult& r, const Query& query, const Index& index,
-                const LocalizerOptions& options) {
+                const QueryOptions& options) {
   Result result;
   result.json = ResultToJson(r, options).dump();
   result.success = r.success;
@@ -139,10 +139,9 @@ Result ToResult(const LocalizationResult& r, const Query& query, const Index& in
   result.center = r.center;
   result.camera = ToCamera(r.camera);
   result.focal_estimated = r.focal_estimated;
-  result.num_features = r.num_features;
-  result.correspondences = r.correspondences;
-  result.num_inliers = r.num_inliers;
-  result.ransac_iterations = r.ransac_iterations;
+#define CWLOC_RESULT_FIELD(name, type, group, key, help) result.name = r.name;
+#include "localizer/result_fields.inc"
+#undef CWLOC_RESULT_FIELD
   result.inliers.reserve(r.inliers.size());
   for (const InlierMatch& match : r.inliers) {
     result.inliers.push_back(
@@ -151,15 +150,9 @@ Result ToResult(const LocalizationResult& r, const Query& query, const Index& in
          match.point,
          index.PointXyz(match.point)});
   }
-  for (const cwloc::RankedImage& image : r.ranked_images)
-    result.ranked_images.push_back({image.image_id, image.name, image.votes});
-  result.times = {r.times.extraction, r.times.forward_knn,   r.times.ratio_test,
-                  r.times.query_tree, r.times.back_matching, r.times.pose,
-                  r.times.total};
-  if (const auto& g = r.geo) {
-    result.geo = GeoPose{g->latitude_deg, g->longitude_deg, g->height_m, g->enu,
-                         g->heading_deg,  g->pitch_deg,     g->roll_deg};
-  }
+  result.ranked_images = r.ranked_images;
+  result.times = r.times;
+  result.geo = r.geo;
   if (const auto& p = r.priors.position)
     result.position_prior =
         PositionPrior{p->latitude_deg, p->longitude_deg, p->height_m, p->radius_m};
@@ -242,8 +235,7 @@ struct Localizer::Impl {
   // A complete query.
   Result Localize(const Query& query, const CallOptions& call) const {
     ValidateOrThrowInvalidArgument([&] { localizer.ValidatePriors(query); });
-    return ToResult(localizer.Localize(query, call.options.localizer), query, index,
-                    call.options.localizer);
+    return ToResult(localizer.Localize(query, call.options.localizer), query, index, call.options);
   }
 
   std::string path;

@@ -7,6 +7,9 @@ install(TARGETS cwloc_api EXPORT cwlocTargets
   RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 install(FILES api/include/cwloc/cwloc.hpp api/include/cwloc/cwloc.h
   ${PROJECT_BINARY_DIR}/generated/cwloc/options.inc
+  ${PROJECT_BINARY_DIR}/generated/cwloc/result_fields.inc
+  ${PROJECT_BINARY_DIR}/generated/cwloc/result_types.h
+  ${PROJECT_BINARY_DIR}/generated/cwloc/stage_times.inc
   DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/cwloc)
 
 foreach(tool cwloc_localize_exe cwloc_index_exe cwloc_synth_exe cwloc_eval_exe)

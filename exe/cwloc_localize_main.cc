@@ -195,7 +195,7 @@ class ResultSink {
     if (!cli.poses_path.empty()) poses_file_ = std::make_unique<CheckpointedFile>(cli.poses_path);
   }
 
-  void Write(const LocalizationResult& result, const LocalizerOptions& options) {
+  void Write(const LocalizationResult& result, const QueryOptions& options) {
     std::lock_guard lock(mutex_);
     if (closed_) return;  // a query abandoned by a stopped batch
     EmitJsonLine(ResultToJson(result, options).dump());
@@ -323,7 +323,7 @@ int Run(const CliOptions& cli) {
         const LocalizationResult result = localizer.Localize(query, options);
         times[i] = result.times.total;
         (result.success ? localized : failed)++;
-        sink.Write(result, options);
+        sink.Write(result, cli.options);
       } catch (const InputError& e) {
         ++errors;
         sink.WriteError(sources[i].name, e.what());

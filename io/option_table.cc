@@ -33,6 +33,7 @@ void Assign(const std::string& name, PoseRefiner* member) {
 #define CWLOC_OPTION(field, type, flag, target, range, help)                       \
   OptionSpec{                                                                      \
       flag,                                                                        \
+      #field,                                                                      \
       help,                                                                        \
       range,                                                                       \
       OptionTypeIndex<type>(),                                                     \

@@ -27,6 +27,7 @@ struct QueryOptions {
 
 struct OptionSpec {
   std::string_view flag;  // cwloc-localize's flag without dashes; the C API's name
+  std::string_view name;  // api::Options' field; the key in a result record's "parameters"
   std::string_view help;
   ValueRange range;
   size_t type;  // index of the option's type in OptionValue

@@ -1,34 +1,27 @@
 #include "io/result_json.h"
 
 #include <cstdio>
+#include <filesystem>
+#include <type_traits>
+#include <variant>
 
 #include "camera/camera_models.h"
 
 namespace cwloc {
 
-nlohmann::ordered_json OptionsToJson(const LocalizerOptions& options) {
-  return {{"matcher", std::string(MatcherName(options.matcher))},
-          {"k", options.k},
-          {"checks", options.checks},
-          {"ratio", options.ratio},
-          {"forward_matches", options.forward_matches},
-          {"back_matches", options.back_matches},
-          {"max_back_matches", options.max_back_matches},
-          {"max_back_images", options.max_back_clusters},
-          {"min_matches_to_vote", options.min_matches_to_vote},
-          {"query_tree_checks", options.query_tree_checks},
-          {"back_matching", std::string(kBackMatchingNames[size_t(options.back_matching)])},
-          {"guide_radius_px", options.guide_radius_px},
-          {"budget_ms", options.budget_ms},
-          {"min_inliers", options.pose.min_inliers},
-          {"max_error_px", options.pose.max_error_px},
-          {"min_ransac_iterations", options.pose.ransac.min_iterations},
-          {"max_ransac_iterations", options.pose.ransac.max_iterations},
-          {"ransac_confidence", options.pose.ransac.confidence},
-          {"refine", options.pose.refine},
-          {"refiner", std::string(PoseRefinerName(options.pose.refiner))},
-          {"prior_gravity_sigma_deg", options.prior_gravity_sigma_deg},
-          {"seed", options.seed}};
+nlohmann::ordered_json OptionsToJson(const QueryOptions& options) {
+  nlohmann::ordered_json out = nlohmann::ordered_json::object();
+  for (const OptionSpec& spec : OptionTable()) {
+    std::visit(
+        [&](const auto& value) {
+          if constexpr (std::is_same_v<std::decay_t<decltype(value)>, std::filesystem::path>)
+            out[std::string(spec.name)] = value.string();
+          else
+            out[std::string(spec.name)] = value;
+        },
+        spec.get(options));
+  }
+  return out;
 }
 
 namespace {
@@ -58,8 +51,7 @@ nlohmann::ordered_json CovarianceToJson(const PoseCovariance& covariance,
 
 }  // namespace
 
-nlohmann::ordered_json ResultToJson(const LocalizationResult& result,
-                                    const LocalizerOptions& options) {
+nlohmann::ordered_json ResultToJson(const LocalizationResult& result, const QueryOptions& options) {
   nlohmann::ordered_json out;
   out["name"] = result.name;
   out["success"] = result.success;
@@ -111,16 +103,11 @@ nlohmann::ordered_json ResultToJson(const LocalizationResult& result,
     }
     out["priors"] = priors;
   }
-  out["num_inliers"] = result.num_inliers;
-  out["inlier_ratio"] = result.inlier_ratio;
-  out["matches"] = {{"features", result.num_features},
-                    {"features_searched", result.features_searched},
-                    {"forward", result.forward_matches},
-                    {"back", result.back_matches},
-                    {"correspondences", result.correspondences},
-                    {"back_matched_images", result.back_matched_clusters},
-                    {"guided", result.guided},
-                    {"ransac_iterations", result.ransac_iterations}};
+  // The result's numbers, each at its place (result_fields.inc).
+#define CWLOC_RESULT_FIELD(name, type, group, key, help) \
+  (*group ? out[group][key] : out[key]) = result.name;
+#include "localizer/result_fields.inc"
+#undef CWLOC_RESULT_FIELD
   nlohmann::ordered_json ranked = nlohmann::ordered_json::array();
   for (const RankedImage& image : result.ranked_images) {
     ranked.push_back({{"image_id", image.image_id}, {"name", image.name}, {"votes", image.votes}});
@@ -133,15 +120,12 @@ nlohmann::ordered_json ResultToJson(const LocalizationResult& result,
                     {"first_octave", result.photo->first_octave},
                     {"max_features", result.photo->max_features}};
   }
-  out["times_ms"] = {{"extraction", t.extraction * 1e3},
-                     {"forward_knn", t.forward_knn * 1e3},
-                     {"ratio_test", t.ratio_test * 1e3},
-                     {"query_tree", t.query_tree * 1e3},
-                     {"back_matching", t.back_matching * 1e3},
-                     {"pose", t.pose * 1e3},
-                     {"total", t.total * 1e3}};
-  if (options.budget_ms > 0) {
-    out["budget"] = {{"ms", options.budget_ms}, {"cut", result.budget_cut}};
+  nlohmann::ordered_json& times_ms = out["times_ms"];
+#define CWLOC_STAGE_TIME(name, help) times_ms[#name] = t.name * 1e3;
+#include "localizer/stage_times.inc"
+#undef CWLOC_STAGE_TIME
+  if (options.localizer.budget_ms > 0) {
+    out["budget"] = {{"ms", options.localizer.budget_ms}, {"cut", result.budget_cut}};
   }
   out["parameters"] = OptionsToJson(options);
   return out;

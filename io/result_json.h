@@ -3,13 +3,14 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "io/option_table.h"
 #include "localizer/localization_result.h"
 
 namespace cwloc {
 
-// One result as described by schemas/localization-result.schema.json.
-nlohmann::ordered_json ResultToJson(const LocalizationResult& result,
-                                    const LocalizerOptions& options);
+// One result as described by schemas/localization-result.schema.json, with the options it was
+// made with.
+nlohmann::ordered_json ResultToJson(const LocalizationResult& result, const QueryOptions& options);
 
 // The record of a query that could not be processed (bad input): name and error only.
 nlohmann::ordered_json ErrorToJson(const std::string& name, const std::string& error);
@@ -17,7 +18,7 @@ nlohmann::ordered_json ErrorToJson(const std::string& name, const std::string& e
 // "NAME QW QX QY QZ TX TY TZ" (the visuallocalization.net submission format).
 std::string PoseLine(const LocalizationResult& result);
 
-// The options as JSON (recorded in every result).
-nlohmann::ordered_json OptionsToJson(const LocalizerOptions& options);
+// Every option of the table by its name (OptionSpec::name), as a result records them.
+nlohmann::ordered_json OptionsToJson(const QueryOptions& options);
 
 }  // namespace cwloc

@@ -121,9 +121,16 @@ class Result:
     center: npt.NDArray[np.float64]
     camera: Camera
     focal_estimated: bool
-    num_features: int
-    correspondences: int
+    # The result's numbers, one per line of result_fields.inc (its help says what each counts).
     num_inliers: int
+    inlier_ratio: float
+    num_features: int
+    features_searched: int
+    forward_matches: int
+    back_matches: int
+    correspondences: int
+    back_matched_clusters: int
+    guided: bool
     ransac_iterations: int
     inliers: Inliers
     ranked_images: list[RankedImage]

@@ -4,8 +4,6 @@
 namespace cwloc::python {
 namespace {
 
-using namespace py::literals;
-
 // The inliers of the pose, one row each.
 struct Inliers {
   py::array_t<uint32_t> features;  // N
@@ -63,23 +61,20 @@ void BindParts(py::module_& m) {
                std::to_string(r.votes) + ")";
       });
 
-  py::class_<api::StageTimes>(m, "StageTimes", "Wall-clock seconds per stage.")
-      .def_readonly("extraction", &api::StageTimes::extraction, "Photo decoding and SIFT")
-      .def_readonly("forward_knn", &api::StageTimes::forward_knn, "Forward k-NN search")
-      .def_readonly("ratio_test", &api::StageTimes::ratio_test, "Ratio tests")
-      .def_readonly("query_tree", &api::StageTimes::query_tree, "The query features' forest")
-      .def_readonly("back_matching", &api::StageTimes::back_matching, "Back-matching")
-      .def_readonly("pose", &api::StageTimes::pose, "RANSAC and refinement")
-      .def_readonly("total", &api::StageTimes::total, "The whole query")
-      .def(
-          "to_dict",
-          [](const api::StageTimes& t) {
-            return py::dict("extraction"_a = t.extraction, "forward_knn"_a = t.forward_knn,
-                            "ratio_test"_a = t.ratio_test, "query_tree"_a = t.query_tree,
-                            "back_matching"_a = t.back_matching, "pose"_a = t.pose,
-                            "total"_a = t.total);
-          },
-          "{stage: seconds}");
+  py::class_<api::StageTimes> times(m, "StageTimes", "Wall-clock seconds per stage.");
+#define CWLOC_STAGE_TIME(name, help) times.def_readonly(#name, &api::StageTimes::name, help);
+#include "cwloc/stage_times.inc"
+#undef CWLOC_STAGE_TIME
+  times.def(
+      "to_dict",
+      [](const api::StageTimes& t) {
+        py::dict out;
+#define CWLOC_STAGE_TIME(name, help) out[#name] = t.name;
+#include "cwloc/stage_times.inc"
+#undef CWLOC_STAGE_TIME
+        return out;
+      },
+      "{stage: seconds}");
 
   py::class_<api::GeoPose>(m, "GeoPose", "A localized camera on the globe (docs/geo.md).")
       .def_readonly("latitude_deg", &api::GeoPose::latitude_deg, "WGS84 latitude")
@@ -148,10 +143,14 @@ void BindParts(py::module_& m) {
 void BindResults(py::module_& m) {
   BindParts(m);
   using R = api::Result;
-  py::class_<R>(m, "Result",
-                "One query's answer. success False is no error: failure_reason says why. The "
-                "pose is COLMAP's cam_from_world: X_cam = R X_world + t.")
-      .def_readonly("success", &R::success, "Whether the query was localized")
+  py::class_<R> result(m, "Result",
+                       "One query's answer. success False is no error: failure_reason says why. "
+                       "The pose is COLMAP's cam_from_world: X_cam = R X_world + t.");
+  // The result's numbers (num_inliers, the match counts, ...): result_fields.inc.
+#define CWLOC_RESULT_FIELD(name, type, group, key, help) result.def_readonly(#name, &R::name, help);
+#include "cwloc/result_fields.inc"
+#undef CWLOC_RESULT_FIELD
+  result.def_readonly("success", &R::success, "Whether the query was localized")
       .def_readonly("failure_reason", &R::failure_reason, "Why not, when success is False")
       .def_property_readonly(
           "rotation", [](const R& r) { return Array(r.rotation.data(), {4}); },
@@ -167,10 +166,6 @@ void BindResults(py::module_& m) {
           "float64 (3,): the camera centre, model frame")
       .def_readonly("camera", &R::camera, "The camera used; estimated unless it was known")
       .def_readonly("focal_estimated", &R::focal_estimated, "Whether the focal was estimated")
-      .def_readonly("num_features", &R::num_features, "Query features")
-      .def_readonly("correspondences", &R::correspondences, "2D-3D pairs given to RANSAC")
-      .def_readonly("num_inliers", &R::num_inliers, "RANSAC inliers")
-      .def_readonly("ransac_iterations", &R::ransac_iterations, "RANSAC iterations")
       .def_property_readonly(
           "inliers", [](const R& r) { return ToInliers(r.inliers); }, "Inliers (arrays)")
       .def_readonly("ranked_images", &R::ranked_images, "[RankedImage] by votes")

@@ -1,13 +1,14 @@
 """The module gives cwloc-localize's poses bit for bit, as typed results with numpy arrays."""
 import json
 import os
+import re
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 import cwloc
-from conftest import GOLDEN, HERZ_FLAGS, HERZ_OPTIONS, read_jsonl, run, tool
+from conftest import GOLDEN, HERZ_FLAGS, HERZ_OPTIONS, SOURCE, read_jsonl, run, tool
 
 
 def test_version_is_the_librarys():
@@ -43,6 +44,26 @@ def test_features_give_the_clis_poses(golden, golden_localizer, tmp_path):
         again = golden_localizer.localize_features(
             keypoints.astype(np.float64), descriptors, cwloc.Camera.from_string(camera))
         assert again.rotation.tolist() == cli["pose"]["qvec"]
+
+
+def test_every_line_of_the_result_table_is_the_records_value(golden, golden_localizer):
+    """cwloc.Result has each number of localizer/result_fields.inc, and StageTimes each stage of
+    stage_times.inc, with the value of the JSON record."""
+    table = (SOURCE / "localizer" / "result_fields.inc").read_text()
+    fields = re.findall(r'^CWLOC_RESULT_FIELD\((\w+), (\w+), "(\w*)", "(\w+)"', table, re.M)
+    stages = re.findall(r"^CWLOC_STAGE_TIME\((\w+),",
+                        (SOURCE / "localizer" / "stage_times.inc").read_text(), re.M)
+    assert len(fields) == table.count("\nCWLOC_RESULT_FIELD(")  # every line parsed
+    _, camera, features = golden[1][0]
+    result = golden_localizer.localize_features(*cwloc.read_feature_file(features), camera)
+    record = result.to_dict()
+    for name, type_, group, key in fields:
+        value = getattr(result, name)
+        assert type(value) is {"uint32_t": int, "double": float, "bool": bool}[type_], name
+        assert value == (record[group][key] if group else record[key]), name
+    assert list(result.times.to_dict()) == stages
+    for stage in stages:
+        assert getattr(result.times, stage) * 1e3 == pytest.approx(record["times_ms"][stage])
 
 
 def test_result_fields(golden, golden_localizer):

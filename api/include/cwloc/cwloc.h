@@ -48,9 +48,11 @@ typedef struct cwloc_camera {
   cwloc_calibration calibration;
 } cwloc_camera;
 
-/* Wall-clock seconds per stage. */
+/* Wall-clock seconds per stage: one field per line of <cwloc/stage_times.inc>. */
 typedef struct cwloc_stage_times {
-  double extraction, forward_knn, ratio_test, query_tree, back_matching, pose, total;
+#define CWLOC_STAGE_TIME(name, help) double name;
+#include "cwloc/stage_times.inc"
+#undef CWLOC_STAGE_TIME
 } cwloc_stage_times;
 
 /* A GPS fix (see cwloc.hpp's PositionPrior): the query was taken within radius_m of this WGS84
@@ -141,6 +143,11 @@ CWLOC_C_API void cwloc_result_pose(const cwloc_result* result, double rotation_w
                                    double translation[3], double center[3]);
 /* The camera as used (estimated when it was not known). */
 CWLOC_C_API void cwloc_result_camera(const cwloc_result* result, cwloc_camera* camera);
+/* A number of the result by its name in <cwloc/result_fields.inc>, which says what each one
+ * counts ("num_inliers", "inlier_ratio", "forward_matches", "back_matches", "guided", ...; a
+ * switch is 1 or 0). An unknown name is CWLOC_ERROR_INVALID_ARGUMENT. */
+CWLOC_C_API cwloc_status cwloc_result_value(const cwloc_result* result, const char* name,
+                                            double* value);
 CWLOC_C_API uint32_t cwloc_result_num_features(const cwloc_result* result);
 CWLOC_C_API uint32_t cwloc_result_num_correspondences(const cwloc_result* result);
 CWLOC_C_API uint32_t cwloc_result_num_inliers(const cwloc_result* result);

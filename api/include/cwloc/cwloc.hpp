@@ -14,6 +14,8 @@
 #include <string>
 #include <vector>
 
+#include "cwloc/result_types.h"
+
 #if defined(__GNUC__)
 #define CWLOC_API __attribute__((visibility("default")))
 #else
@@ -101,11 +103,11 @@ struct CWLOC_API Options {
   std::optional<std::array<double, 3>> gravity;  // --prior-gravity
 };
 
-struct RankedImage {
-  uint32_t image_id = 0;  // COLMAP's image id
-  std::string name;
-  uint32_t votes = 0;
-};
+// A model image and its votes, a stage's seconds, a camera on the globe: the localizer's own
+// plain types (cwloc/result_types.h).
+using cwloc::GeoPose;
+using cwloc::RankedImage;
+using cwloc::StageTimes;
 
 // A RANSAC inlier of the reported pose.
 struct Inlier {
@@ -113,28 +115,6 @@ struct Inlier {
   std::array<float, 2> keypoint{};  // its pixel
   uint32_t point = 0;               // row of the index's 3D points
   std::array<double, 3> xyz{};      // the point, model frame
-};
-
-// Wall-clock seconds per stage (docs/algorithm.md).
-struct StageTimes {
-  double extraction = 0;  // photo decoding and SIFT; 0 for given features
-  double forward_knn = 0;
-  double ratio_test = 0;
-  double query_tree = 0;
-  double back_matching = 0;
-  double pose = 0;
-  double total = 0;
-};
-
-// A localized camera on the globe (docs/geo.md defines the angles).
-struct GeoPose {
-  double latitude_deg = 0;  // WGS84
-  double longitude_deg = 0;
-  double height_m = 0;          // above the ellipsoid
-  std::array<double, 3> enu{};  // metres east, north, up of the index's origin (IndexInfo)
-  double heading_deg = 0;       // of the optical axis, clockwise from true north, [0, 360)
-  double pitch_deg = 0;         // of the optical axis above the horizon, [-90, 90]
-  double roll_deg = 0;          // about the optical axis, (-180, 180]
 };
 
 // How well the refined pose is known (docs/algorithm.md, "Pose uncertainty"): from the final
@@ -162,10 +142,11 @@ struct Result {
   std::array<double, 3> center{};  // the camera centre in the model frame
   Camera camera;                   // as used; estimated (SIMPLE_RADIAL) unless it was known
   bool focal_estimated = false;
-  uint32_t num_features = 0;
-  uint32_t correspondences = 0;  // 2D-3D pairs given to RANSAC
-  uint32_t num_inliers = 0;
-  uint32_t ransac_iterations = 0;
+  // The result's numbers (num_inliers, the match counts, ...): one field per line of
+  // <cwloc/result_fields.inc>, which says what each counts.
+#define CWLOC_RESULT_FIELD(name, type, group, key, help) type name{};
+#include "cwloc/result_fields.inc"
+#undef CWLOC_RESULT_FIELD
   std::vector<Inlier> inliers;  // on success
   std::vector<RankedImage> ranked_images;
   StageTimes times;
