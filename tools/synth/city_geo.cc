@@ -2,7 +2,6 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <numbers>
@@ -11,6 +10,7 @@
 #include <vector>
 
 #include "base/angles.h"
+#include "base/option_value.h"
 #include "tools/synth/sift_descriptors.h"
 
 namespace cwloc::synth {
@@ -24,13 +24,6 @@ enum GeoStream : uint64_t {
   kGpsOutlierStream,
   kQueryPriorStream,
 };
-
-// Shortest text that reads back to the same double.
-std::string Shortest(double value) {
-  char buffer[32];
-  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
-  return std::string(buffer, result.ptr);
-}
 
 // " LAT LON HEIGHT": 1e-12 degrees (0.1 um) and 1 um.
 std::string GeodeticText(const Geodetic& g) {
@@ -176,7 +169,7 @@ GeoFiles MakeGeoFiles(const CityScene& scene, const GeoOptions& geo, const Model
                 "off.\n",
                 geo.prior_position_error, geo.prior_gravity_error_deg);
   files.query_priors += line;
-  const std::string radius = Shortest(geo.prior_radius);
+  const std::string radius = NumberText(geo.prior_radius);
   const double gravity_error = geo.prior_gravity_error_deg * kDegree;
   for (size_t i = num_mapping; i < images.size(); ++i) {
     const SceneImage& image = images[i];
@@ -205,8 +198,8 @@ GeoFiles MakeGeoFiles(const CityScene& scene, const GeoOptions& geo, const Model
     const Eigen::Vector3d noisy =
         (std::cos(gravity_error) * gravity + std::sin(gravity_error) * axis.cross(gravity))
             .normalized();
-    files.query_priors += image.name + " gravity " + Shortest(noisy.x()) + " " +
-                          Shortest(noisy.y()) + " " + Shortest(noisy.z()) + "\n";
+    files.query_priors += image.name + " gravity " + NumberText(noisy.x()) + " " +
+                          NumberText(noisy.y()) + " " + NumberText(noisy.z()) + "\n";
   }
 
   const Georeference enu_from_model = frame.EnuFromModel(*geo.origin);
@@ -220,14 +213,14 @@ GeoFiles MakeGeoFiles(const CityScene& scene, const GeoOptions& geo, const Model
       " (cwloc-synth --geo)\n"
       "# X_gt = s * R * X_model + t (R row by row)\n"
       "scale " +
-      Shortest(enu_from_model.scale) + "\nR";
+      NumberText(enu_from_model.scale) + "\nR";
   for (int row = 0; row < 3; ++row) {
     for (int col = 0; col < 3; ++col)
-      files.scale_to_metres.append(" ").append(Shortest(r(row, col)));
+      files.scale_to_metres.append(" ").append(NumberText(r(row, col)));
   }
   files.scale_to_metres += "\nt";
   for (int i = 0; i < 3; ++i) {
-    files.scale_to_metres += " " + Shortest(enu_from_model.translation[i]);
+    files.scale_to_metres += " " + NumberText(enu_from_model.translation[i]);
   }
   files.scale_to_metres += "\n";
   return files;
