@@ -77,12 +77,15 @@ std::vector<std::string> TableMismatches(const nlohmann::json& schema, const std
 
   std::set<std::string> matches;
   for (const ResultField& field : ResultFields()) {
-    const std::string json_type =
-        field.type == "bool" ? "boolean" : field.type == "double" ? "number" : "integer";
-    const std::string python_type =
-        field.type == "bool" ? "bool" : field.type == "double" ? "float" : "int";
-    const nlohmann::json& properties =
-        field.group.empty() ? record["properties"] : record["properties"][field.group]["properties"];
+    const std::string json_type = field.type == "bool"     ? "boolean"
+                                  : field.type == "double" ? "number"
+                                                           : "integer";
+    const std::string python_type = field.type == "bool"     ? "bool"
+                                    : field.type == "double" ? "float"
+                                                             : "int";
+    const nlohmann::json& properties = field.group.empty()
+                                           ? record["properties"]
+                                           : record["properties"][field.group]["properties"];
     const std::string path = (field.group.empty() ? "" : field.group + ".") + field.key;
     if (field.group == "matches") matches.insert(field.key);
     if (!properties.contains(field.key)) {
@@ -180,10 +183,9 @@ TEST(ResultTable, CReadsEveryLineByItsName) {
   const double params[] = {900, 512, 384, -0.01};
   const cwloc_camera camera = {"SIMPLE_RADIAL", 1024, 768, params, 4, CWLOC_CALIBRATION_KNOWN};
   cwloc_result* result = nullptr;
-  ASSERT_EQ(cwloc_localize_features(localizer, features.keypoints.data(),
-                                    features.descriptors.data(),
-                                    static_cast<uint32_t>(features.keypoints.size() / 2), &camera,
-                                    nullptr, &result),
+  ASSERT_EQ(cwloc_localize_features(
+                localizer, features.keypoints.data(), features.descriptors.data(),
+                static_cast<uint32_t>(features.keypoints.size() / 2), &camera, nullptr, &result),
             CWLOC_OK)
       << cwloc_last_error();
   ASSERT_EQ(cwloc_result_success(result), 1);
