@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <memory>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <unordered_map>
 
@@ -221,6 +222,74 @@ std::vector<RankedImage> RankImages(const Index& index, std::span<const FeatureM
 }
 
 // The one check of a query, whatever it was read from.
+// The matcher the options name, on the clusters `allowed` (all when empty).
+MatcherOutput RunMatcher(const Index& index, const ClusterMembers& clusters, const Query& query,
+                         const LocalizerOptions& options, ClusterMask allowed,
+                         const StageDeadlines& deadlines) {
+  switch (options.matcher) {
+    case Matcher::kClusterWise:
+      return MatchClusterWise(index, clusters, query, options, allowed, deadlines);
+    case Matcher::kGlobalRatio:
+      return MatchGlobally(index, query, options, allowed, deadlines);
+    case Matcher::kClusterExhaustive:
+      return MatchClusterExhaustive(index, clusters, query, options, allowed);
+  }
+  throw std::logic_error("unknown matcher");
+}
+
+// What matching found and took, into the result: its counts, ranked images and stage times.
+void ReportMatching(const Index& index, const Query& query, const MatcherOutput& matched,
+                    const LocalizerOptions& options, LocalizationResult* result) {
+  result->num_features = query.NumFeatures();
+  result->features_searched = matched.forward_stats.features_searched;
+  result->forward_matches = static_cast<uint32_t>(matched.forward.size());
+  result->back_matches = static_cast<uint32_t>(matched.back.size());
+  result->back_matched_clusters = matched.back_matched_clusters;
+  result->guided = matched.guided;
+  result->correspondences = static_cast<uint32_t>(matched.correspondences.size());
+  result->ranked_images = RankImages(index, matched.forward, matched.back, options.ranked_images);
+  result->times.forward_knn = matched.forward_stats.seconds_knn;
+  result->times.ratio_test = matched.forward_stats.seconds_ratio_test;
+  result->times.query_tree = matched.seconds_query_tree;
+  result->times.back_matching = matched.seconds_back_matching;
+}
+
+// The pose stage's answer, into the result: the pose, its inliers, the camera as estimated, the
+// covariance and, on a georeferenced index, the pose on the globe; or why there is none.
+void ReportPose(const Index& index, const std::optional<IndexGeo>& geo, const Query& query,
+                const MatcherOutput& matched, const QueryPose& fit, LocalizationResult* result) {
+  const AbsolutePoseResult& pose = fit.pose;
+  result->num_inliers = static_cast<uint32_t>(pose.num_inliers);
+  result->inlier_ratio =
+      fit.used.empty() ? 0.0 : double(pose.num_inliers) / double(fit.used.size());
+  result->ransac_iterations = pose.stats.iterations;
+  result->success = pose.success;
+  if (!pose.success) {
+    result->failure_reason = pose.failure_reason;
+    return;
+  }
+  const CameraPose& p = pose.pose;
+  result->rotation = {p.rotation.w(), p.rotation.x(), p.rotation.y(), p.rotation.z()};
+  result->translation = {p.translation.x(), p.translation.y(), p.translation.z()};
+  const Eigen::Vector3d center = p.Center();
+  result->center = {center.x(), center.y(), center.z()};
+  if (geo) result->geo = geo->PoseOnGlobe(p.rotation, center);
+  result->covariance = pose.covariance;
+  if (geo && pose.covariance)
+    result->enu_position_covariance = geo->LocalEnuCovariance(center, pose.covariance->Position());
+  for (size_t i = 0; i < pose.inliers.size(); ++i) {
+    if (!pose.inliers[i]) continue;
+    const FeatureMatch& match = matched.correspondences[fit.used[i]];
+    result->inliers.push_back({match.feature, index.view_points()[match.view]});
+  }
+  if (!query.camera.FocalKnown()) {
+    result->focal_estimated = true;
+    result->camera.model_id = CameraModelId::kSimpleRadial;
+    result->camera.params = EstimatedCameraParams(query.camera, pose);
+    result->focal_depth = pose.focal_depth;
+  }
+}
+
 void ValidateQuery(const Query& query) {
   const std::string source = query.Source();
   if (query.descriptors.size() != size_t{query.NumFeatures()} * 128) {
@@ -299,17 +368,7 @@ LocalizationResult Localizer::Localize(const Query& query, const LocalizerOption
   if (query.position_prior && priors.clusters_in_radius == 0) {
     matched.failure_reason = "no model camera within " + prior_region;
   } else {
-    switch (options.matcher) {
-      case Matcher::kClusterWise:
-        matched = MatchClusterWise(index_, clusters_, query, options, allowed, deadlines);
-        break;
-      case Matcher::kGlobalRatio:
-        matched = MatchGlobally(index_, query, options, allowed, deadlines);
-        break;
-      case Matcher::kClusterExhaustive:
-        matched = MatchClusterExhaustive(index_, clusters_, query, options, allowed);
-        break;
-    }
+    matched = RunMatcher(index_, clusters_, query, options, allowed, deadlines);
     if (query.position_prior && matched.correspondences.empty() && matched.failure_reason.empty())
       matched.failure_reason = "no match to a model camera within " + prior_region;
   }
@@ -335,66 +394,25 @@ LocalizationResult Localizer::Localize(const Query& query, const LocalizerOption
   } else {
     fit.pose.failure_reason = matched.failure_reason;
   }
-  const AbsolutePoseResult& pose = fit.pose;
 
   LocalizationResult result;
   result.name = query.name;
   result.camera = query.camera;
-  result.num_features = query.NumFeatures();
-  result.features_searched = matched.forward_stats.features_searched;
-  result.forward_matches = static_cast<uint32_t>(matched.forward.size());
-  result.back_matches = static_cast<uint32_t>(matched.back.size());
-  result.back_matched_clusters = matched.back_matched_clusters;
-  result.guided = matched.guided;
+  result.photo = query.photo;
+  ReportMatching(index_, query, matched, options, &result);
+  ReportPose(index_, geo_, query, matched, fit, &result);
+  if (query.gravity && fit.pose.success) priors.gravity_error_deg = fit.pose.gravity_angle_deg;
+  result.priors = priors;
   if (options.budget_ms > 0) {
     const auto cut = [&](bool was_cut, const char* stage) {
       if (was_cut) result.budget_cut.push_back(stage);
     };
     cut(matched.forward_stats.stopped_by_deadline, "forward");
     cut(matched.back_stopped_by_deadline, "back_matching");
-    cut(pose.stats.stopped_by_deadline, "ransac");
-    cut(pose.refinement_skipped, "refinement");
+    cut(fit.pose.stats.stopped_by_deadline, "ransac");
+    cut(fit.pose.refinement_skipped, "refinement");
   }
-  result.ranked_images = RankImages(index_, matched.forward, matched.back, options.ranked_images);
-  result.correspondences = static_cast<uint32_t>(matched.correspondences.size());
-  result.num_inliers = static_cast<uint32_t>(pose.num_inliers);
-  result.inlier_ratio = fit.used.empty() ? 0.0 : double(pose.num_inliers) / double(fit.used.size());
-  result.ransac_iterations = pose.stats.iterations;
-  result.success = pose.success;
-  if (pose.success) {
-    const CameraPose& p = pose.pose;
-    result.rotation = {p.rotation.w(), p.rotation.x(), p.rotation.y(), p.rotation.z()};
-    result.translation = {p.translation.x(), p.translation.y(), p.translation.z()};
-    const Eigen::Vector3d center = p.Center();
-    result.center = {center.x(), center.y(), center.z()};
-    if (geo_) result.geo = geo_->PoseOnGlobe(p.rotation, center);
-    result.covariance = pose.covariance;
-    if (geo_ && pose.covariance) {
-      result.enu_position_covariance =
-          geo_->LocalEnuCovariance(center, pose.covariance->Position());
-    }
-    if (query.gravity) priors.gravity_error_deg = pose.gravity_angle_deg;
-    for (size_t i = 0; i < pose.inliers.size(); ++i) {
-      if (!pose.inliers[i]) continue;
-      const FeatureMatch& match = matched.correspondences[fit.used[i]];
-      result.inliers.push_back({match.feature, index_.view_points()[match.view]});
-    }
-    if (!query.camera.FocalKnown()) {
-      result.focal_estimated = true;
-      result.camera.model_id = CameraModelId::kSimpleRadial;
-      result.camera.params = EstimatedCameraParams(query.camera, pose);
-      result.focal_depth = pose.focal_depth;
-    }
-  } else {
-    result.failure_reason = pose.failure_reason;
-  }
-  result.times.forward_knn = matched.forward_stats.seconds_knn;
-  result.times.ratio_test = matched.forward_stats.seconds_ratio_test;
-  result.times.query_tree = matched.seconds_query_tree;
-  result.times.back_matching = matched.seconds_back_matching;
   result.times.pose = matched.seconds_pose + pose_time.Seconds();
-  result.priors = priors;
-  result.photo = query.photo;
   result.times.extraction = query.photo ? query.photo->extraction_seconds : 0.0;
   result.times.total = total.Seconds() + result.times.extraction;
   return result;
