@@ -2,8 +2,9 @@
 # The sanitizer jobs of CI (docs/reliability.md), each in its own build folder:
 #   tools/check_sanitizers.sh asan   clang with ASan + UBSan (and libFuzzer's coverage) in
 #                                    build-asan: builds everything, runs the whole test suite
+#                                    but the developer tools' own tests (CWLOC_BUILD_TOOL_TESTS)
 #   tools/check_sanitizers.sh fuzz   each libFuzzer target of build-asan for FUZZ_SECONDS
-#                                    (default 30), two at a time, from fuzz/corpus
+#                                    (default 20), two at a time, from fuzz/corpus
 #   tools/check_sanitizers.sh tsan   ThreadSanitizer in build-tsan (the device configuration):
 #                                    a batch of queries on one index with 4 threads through
 #                                    cwloc-localize, the library's concurrent-use tests, and
@@ -19,7 +20,8 @@ clang=(-DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=
 case "$mode" in
   asan)
     cmake -S . -B build-asan -G Ninja "${clang[@]}" -DCWLOC_SANITIZE=address,undefined \
-      -DCWLOC_WITH_PYTHON=OFF -DCWLOC_BUILD_FUZZERS=ON -DCWLOC_BUILD_BENCHMARKS=OFF >/dev/null
+      -DCWLOC_WITH_PYTHON=OFF -DCWLOC_BUILD_FUZZERS=ON -DCWLOC_BUILD_BENCHMARKS=OFF \
+      -DCWLOC_BUILD_TOOL_TESTS=OFF >/dev/null
     cmake --build build-asan -j "$jobs" >build-asan/build.log 2>&1 || { tail -50 build-asan/build.log; exit 1; }
     # A test that spawns our tools runs them sanitized too; any report fails the test.
     if ! ASAN_OPTIONS=abort_on_error=1:detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
@@ -31,7 +33,7 @@ case "$mode" in
     ;;
   fuzz)
     [ -x build-asan/bin/cwloc-fuzz-index ] || { echo "run tools/check_sanitizers.sh asan first" >&2; exit 2; }
-    fuzz/run.sh build-asan --seconds "${FUZZ_SECONDS:-30}" --jobs "$jobs"
+    fuzz/run.sh build-asan --seconds "${FUZZ_SECONDS:-20}" --jobs "$jobs"
     ;;
   tsan)
     cmake -S . -B build-tsan -G Ninja "${clang[@]}" -DCWLOC_SANITIZE=thread -DCWLOC_WITH_PYTHON=OFF \

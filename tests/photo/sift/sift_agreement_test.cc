@@ -53,7 +53,7 @@ class SiftAgreementTest : public testing::TestWithParam<SiftOptions::Implementat
 TEST_P(SiftAgreementTest, AgreesWithColmapBothWays) {
   CWLOC_REQUIRE_SHARED_DATA(data, kDataset);
   const bool threaded = GetParam() == SiftOptions::Implementation::kCwloc;
-  for (const char* name : kQueries)
+  for (const char* name : test::SanitizerSample(kQueries))
     for (int threads = 1; threads <= (threaded ? 2 : 1); ++threads) {
       SCOPED_TRACE(std::string(name) + " on " + std::to_string(threads) + " thread(s)");
       const SiftFeatures colmap = sift_bench::ReadColmapFeatures(data / "database.db", name);
