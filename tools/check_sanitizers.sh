@@ -8,7 +8,8 @@
 #   tools/check_sanitizers.sh tsan   ThreadSanitizer in build-tsan (the device configuration):
 #                                    a batch of queries on one index with 4 threads through
 #                                    cwloc-localize, the library's concurrent-use tests, and
-#                                    SIFT on several threads inside one photo; its files
+#                                    SIFT on several threads inside one photo; and what the
+#                                    device build links (ldd, on x86-64 only here); its files
 #                                    compiled one at a time (CWLOC_UNITY_BUILD=OFF), so that
 #                                    each compiles without the others of its batch
 set -euo pipefail
@@ -16,6 +17,7 @@ cd "$(dirname "$0")/.."
 mode="${1:-}"
 jobs="$(nproc)"
 clang=(-DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=Release)
+source tools/device_options.sh
 
 case "$mode" in
   asan)
@@ -36,9 +38,8 @@ case "$mode" in
     fuzz/run.sh build-asan --seconds "${FUZZ_SECONDS:-20}" --jobs "$jobs"
     ;;
   tsan)
-    cmake -S . -B build-tsan -G Ninja "${clang[@]}" -DCWLOC_SANITIZE=thread -DCWLOC_WITH_PYTHON=OFF \
-      -DCWLOC_WITH_COLMAP_DB=OFF -DCWLOC_BUILD_TOOLS=OFF -DCWLOC_WITH_VLFEAT=OFF \
-      -DCWLOC_WITH_CERES=OFF -DCWLOC_BUILD_BENCHMARKS=OFF -DCWLOC_UNITY_BUILD=OFF >/dev/null
+    cmake -S . -B build-tsan -G Ninja "${clang[@]}" -DCWLOC_SANITIZE=thread "${device_options[@]}" \
+      -DCWLOC_BUILD_BENCHMARKS=OFF -DCWLOC_UNITY_BUILD=OFF >/dev/null
     cmake --build build-tsan -j "$jobs" --target cwloc_localize_exe api_tests sift_tests base_tests \
       >build-tsan/build.log 2>&1 || { tail -50 build-tsan/build.log; exit 1; }
     export TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1"
@@ -62,6 +63,16 @@ case "$mode" in
         { cat build-tsan/"$binary".log; exit 1; }
       grep -E '^\[  PASSED  \]' build-tsan/"$binary".log | sed "s/^/ThreadSanitizer: $binary /"
     done
+    # The device configuration links nothing beyond the C/C++ runtime and small C libraries
+    # (clang links the sanitizer's runtime statically, so ldd shows what a device build needs).
+    forbidden='sqlite|libvl\.|ceres|glog|gflags|lapack|blas|atlas|gfortran|cholmod|spqr|metis|gomp'
+    for binary in build-tsan/bin/cwloc-localize build-tsan/lib/libcwloc.so; do
+      if ldd "$binary" | grep -E "$forbidden"; then
+        echo "device build: $binary links one of: $forbidden" >&2
+        exit 1
+      fi
+    done
+    echo "device build of cwloc-localize and libcwloc.so: OK (C/C++ runtime, libjpeg, libpng, zlib, libexif, GeographicLib)"
     ;;
   *)
     echo "usage: tools/check_sanitizers.sh asan|fuzz|tsan" >&2
