@@ -61,6 +61,7 @@ function(cwloc_add_test name)
   target_compile_options(${name} PRIVATE ${CWLOC_TEST_COMPILE_OPTIONS})
   target_link_libraries(${name} PRIVATE cwloc_test_main ${ARG_LINK})
   set_target_properties(${name} PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${PROJECT_BINARY_DIR}/tests)
+  set_property(GLOBAL APPEND PROPERTY CWLOC_TEST_TARGETS ${name})
   gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60
     PROPERTIES SKIP_REGULAR_EXPRESSION "\\[  SKIPPED \\]" LABELS ${name})
 endfunction()

@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # The sanitizer jobs of CI (docs/reliability.md), each in its own build folder:
 #   tools/check_sanitizers.sh asan   clang with ASan + UBSan (and libFuzzer's coverage) in
-#                                    build-asan: builds everything, runs the whole test suite
-#                                    but the developer tools' own tests (CWLOC_BUILD_TOOL_TESTS)
+#                                    build-asan: builds the tests, the tools they run and the
+#                                    fuzzers, runs the whole test suite but the developer tools'
+#                                    own tests (CWLOC_BUILD_TOOL_TESTS)
 #   tools/check_sanitizers.sh fuzz   each libFuzzer target of build-asan for FUZZ_SECONDS
 #                                    (default 20), two at a time, from fuzz/corpus
 #   tools/check_sanitizers.sh tsan   ThreadSanitizer in build-tsan (the device configuration):
@@ -24,7 +25,9 @@ case "$mode" in
     cmake -S . -B build-asan -G Ninja "${clang[@]}" -DCWLOC_SANITIZE=address,undefined \
       -DCWLOC_WITH_PYTHON=OFF -DCWLOC_BUILD_FUZZERS=ON -DCWLOC_BUILD_BENCHMARKS=OFF \
       -DCWLOC_BUILD_TOOL_TESTS=OFF >/dev/null
-    cmake --build build-asan -j "$jobs" >build-asan/build.log 2>&1 || { tail -50 build-asan/build.log; exit 1; }
+    # The tests, the tools they run and the fuzzers: not cwloc-eval, whose tests are left out.
+    cmake --build build-asan -j "$jobs" --target cwloc_test_suite cwloc_fuzzers \
+      >build-asan/build.log 2>&1 || { tail -50 build-asan/build.log; exit 1; }
     # A test that spawns our tools runs them sanitized too; any report fails the test.
     if ! ASAN_OPTIONS=abort_on_error=1:detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
       ctest --test-dir build-asan --output-on-failure -j "$jobs" >build-asan/ctest.log 2>&1; then

@@ -116,6 +116,8 @@ AbsolutePoseOptions EstimatorOptions() {
 // the noise's tail off the residuals the noise is estimated from (at 2.5 px, 87 % fall inside
 // the 95 % region); the refinement alone is calibrated there (below).
 TEST(PoseCovariance, KnownFocalIsCalibrated) {
+  if (test::kSanitized)  // the same code runs sanitized in the tests below, on fewer poses
+    GTEST_SKIP() << "a statistic over 400 estimates: the Release suite's";
   for (const double noise_px : {1.0, 1.5}) {
     SCOPED_TRACE(noise_px);
     const Calibration c = Measure(Scene(noise_px), 400, [](const auto& problem) {
@@ -127,6 +129,8 @@ TEST(PoseCovariance, KnownFocalIsCalibrated) {
 }
 
 TEST(PoseCovariance, UnknownFocalAndDistortionAreMarginalised) {
+  if (test::kSanitized)  // the same code runs sanitized in the tests below, on fewer poses
+    GTEST_SKIP() << "a statistic over 400 estimates: the Release suite's";
   test::SyntheticPoseOptions synth = Scene(1.0);
   synth.radial_k = -0.05;
   const Calibration c = Measure(synth, 400, [](const auto& problem) {
