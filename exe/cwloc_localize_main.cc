@@ -33,6 +33,7 @@
 #include "io/query_priors.h"
 #include "io/result_json.h"
 #include "localizer/localizer.h"
+#include "localizer/tracker.h"
 #ifdef CWLOC_WITH_COLMAP_DB
 #include "io/database/database_queries.h"
 #endif
@@ -60,6 +61,7 @@ struct CliOptions {
   std::string output_path;
   std::string poses_path;
   int threads = 1;
+  bool sequence = false;  // the queries are frames of one camera, in order
   bool verify = false;
   bool quiet = false;
 };
@@ -201,9 +203,12 @@ class ResultSink {
     EmitJsonLine(ResultToJson(result, options).dump());
     // With the JSON in a file, stdout gets a readable line per query.
     if (json_file_ && !cli_.quiet) {
+      // A frame of a sequence says how it got its pose.
+      const char* how =
+          result.tracking ? kTrackingModeNames[size_t(result.tracking->mode)].data() : "localized";
       if (result.success) {
-        std::printf("%s: localized, %u inliers / %u correspondences,%s%s %.1f ms\n",
-                    result.name.c_str(), result.num_inliers, result.correspondences,
+        std::printf("%s: %s, %u inliers / %u correspondences,%s%s %.1f ms\n", result.name.c_str(),
+                    how, result.num_inliers, result.correspondences,
                     PositionRadiusText(result).c_str(), EstimatedFocalText(result).c_str(),
                     result.times.total * 1e3);
       } else {
@@ -305,12 +310,17 @@ int Run(const CliOptions& cli) {
   const std::vector<QuerySource> sources = CollectQueries(cli);
   // --threads goes to queries first; a photo's SIFT gets the threads no other query uses (one
   // photo and --threads 4: four threads inside it). Its features do not depend on them.
-  const int threads = std::max(1, std::min<int>(cli.threads, static_cast<int>(sources.size())));
+  // A sequence's frames are tracked in order, one after the other.
+  const int threads =
+      cli.sequence ? 1 : std::max(1, std::min<int>(cli.threads, static_cast<int>(sources.size())));
   QueryOptions query_options = cli.options;
   query_options.photo.sift.num_threads = cli.threads / threads;
   const QueryLoader loader(cli, query_options);
   ResultSink sink(cli);
   const Localizer localizer(index);
+  std::optional<Tracker> tracker;
+  if (cli.sequence) tracker.emplace(localizer, options);
+  std::atomic<int> modes[kTrackingModeNames.size()] = {};
 
   std::atomic<size_t> next{0};
   std::atomic<int> localized{0}, failed{0}, errors{0}, internal_errors{0};
@@ -320,7 +330,9 @@ int Run(const CliOptions& cli) {
     for (size_t i = next++; i < sources.size() && !sink.failed() && stop_signal == 0; i = next++) {
       try {
         const Query query = loader.Load(sources[i]);
-        const LocalizationResult result = localizer.Localize(query, options);
+        const LocalizationResult result =
+            tracker ? tracker->Track(query) : localizer.Localize(query, options);
+        if (result.tracking) ++modes[static_cast<size_t>(result.tracking->mode)];
         times[i] = result.times.total;
         (result.success ? localized : failed)++;
         sink.Write(result, cli.options);
@@ -391,6 +403,10 @@ int Run(const CliOptions& cli) {
     if (errors > 0) std::fprintf(stderr, " (%d bad input)", errors.load());
     if (internal_errors > 0)
       std::fprintf(stderr, " (%d out of memory or internal error)", internal_errors.load());
+    if (tracker) {
+      std::fprintf(stderr, " (%d tracked, %d relocalized, %d lost)", modes[0].load(),
+                   modes[1].load(), modes[2].load());
+    }
     if (!finished.empty())
       std::fprintf(stderr, ", median %.1f ms per query", finished[finished.size() / 2] * 1e3);
     std::fprintf(stderr, "\n");
@@ -550,6 +566,11 @@ int main(int argc, char** argv) {
                  "Threads: queries localized in parallel, and a photo's SIFT gets those no other "
                  "query uses")
       ->capture_default_str();
+  app.add_flag("--sequence", cli.sequence,
+               "The queries are frames of one moving camera, in the order given: each is "
+               "tracked from the frames before it, or localized from scratch when that fails "
+               "(docs/algorithm.md, \"Sequences\"); one frame at a time")
+      ->group(kQueries);
   app.add_flag("--verify", cli.verify,
                "Verify the index's checksums and stored indices before localizing");
   cwloc::TableFlags table_flags;

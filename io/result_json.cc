@@ -120,6 +120,18 @@ nlohmann::ordered_json ResultToJson(const LocalizationResult& result, const Quer
                     {"first_octave", result.photo->first_octave},
                     {"max_features", result.photo->max_features}};
   }
+  if (const auto& tracking = result.tracking) {
+    nlohmann::ordered_json& record = out["tracking"];
+    record["mode"] = kTrackingModeNames[static_cast<size_t>(tracking->mode)];
+    record["predicted_from"] = tracking->predicted_from.empty()
+                                   ? nlohmann::ordered_json(nullptr)
+                                   : nlohmann::ordered_json(tracking->predicted_from);
+    if (tracking->prediction_error) {
+      record["prediction_error"] = *tracking->prediction_error;
+      record["prediction_error_deg"] = *tracking->prediction_error_deg;
+    }
+    record["time_ms"] = tracking->seconds * 1e3;
+  }
   nlohmann::ordered_json& times_ms = out["times_ms"];
 #define CWLOC_STAGE_TIME(name, help) times_ms[#name] = t.name * 1e3;
 #include "localizer/stage_times.inc"

@@ -130,6 +130,80 @@ MatcherOutput MatchClusterWise(const Index& index, const ClusterMembers& cluster
   return out;
 }
 
+// Votes for the clusters of the `count` model images whose cameras are nearest the predicted
+// one, the nearest with most: a view of each image voting as a forward match would.
+std::vector<FeatureMatch> NearestImageVotes(const Index& index, const FramePrediction& prediction,
+                                            uint32_t count) {
+  const CameraPose& pose = prediction.hypothesis.pose;
+  std::vector<double> depths;
+  for (const uint32_t point : prediction.seen_points) {
+    if (point >= index.num_points()) continue;
+    const auto xyz = index.PointXyz(point);
+    depths.push_back(pose.Apply(Eigen::Vector3d(xyz[0], xyz[1], xyz[2])).z());
+  }
+  if (depths.empty()) return {};
+  std::nth_element(depths.begin(), depths.begin() + depths.size() / 2, depths.end());
+  const double depth = std::max(depths[depths.size() / 2], 1e-9);
+  const Eigen::Vector3d center = pose.Center();
+  const Eigen::Vector3d axis = pose.rotation.conjugate() * Eigen::Vector3d::UnitZ();
+  std::vector<std::pair<double, uint32_t>> nearest;  // (distance, image)
+  for (uint32_t i = 0; i < index.images().size(); ++i) {
+    const IndexImage& image = index.images()[i];
+    if (image.num_views == 0) continue;
+    const auto& q = image.cam_from_world_rotation;
+    const auto& t = image.cam_from_world_translation;
+    const CameraPose other(Eigen::Quaterniond(q[0], q[1], q[2], q[3]),
+                           Eigen::Vector3d(t[0], t[1], t[2]));
+    const Eigen::Vector3d other_axis = other.rotation.conjugate() * Eigen::Vector3d::UnitZ();
+    nearest.push_back({(other.Center() - center).norm() / depth + (1.0 - axis.dot(other_axis)), i});
+  }
+  const size_t kept = std::min<size_t>(count, nearest.size());
+  std::partial_sort(nearest.begin(), nearest.begin() + kept, nearest.end());
+  std::vector<FeatureMatch> votes;
+  for (size_t rank = 0; rank < kept; ++rank) {
+    const IndexImage& image = index.images()[nearest[rank].second];
+    for (size_t v = rank; v < kept; ++v) votes.push_back({0, image.first_view, 0.0f});
+  }
+  return votes;
+}
+
+// A predicted frame: guided back-matching from the clusters that saw the previous frame's
+// inliers, each of their views voting as a forward match would.
+MatcherOutput MatchPredicted(const Index& index, const ClusterMembers& clusters, const Query& query,
+                             const LocalizerOptions& options, ClusterMask allowed,
+                             const FramePrediction& prediction, const StageDeadlines& deadlines) {
+  MatcherOutput out;
+  const Stopwatch guide_time;
+  if (!prediction.views.empty()) {
+    PoseGuide guide(query, prediction.hypothesis, prediction.radius_px);
+    for (const uint32_t view : prediction.views) {
+      if (const std::optional<FeatureMatch> match = guide.Match(index, view, options.ratio))
+        out.back.push_back(*match);
+    }
+    out.guided = true;
+    out.seconds_back_matching = guide_time.Seconds();
+    out.correspondences = UniqueCorrespondences(index, out.back);
+    return out;
+  }
+  std::vector<FeatureMatch> votes;
+  if (prediction.nearest_images_first) {
+    votes = NearestImageVotes(index, prediction, options.max_back_clusters);
+  } else {
+    for (const uint32_t point : prediction.seen_points) {
+      if (point >= index.num_points()) continue;
+      for (const uint32_t view : index.TrackOf(point)) votes.push_back({0, view, 0.0f});
+    }
+  }
+  out.guide = std::make_unique<PoseGuide>(query, prediction.hypothesis, prediction.radius_px);
+  out.guided = true;
+  out.seconds_guide = guide_time.Seconds();
+  out.back_matcher = std::make_unique<BackMatcher>(index, clusters, query, votes, options, allowed,
+                                                   out.guide.get(), deadlines.back);
+  out.back_matcher->Run(options.back_matches);
+  TakeBackMatches(index, &out);
+  return out;
+}
+
 // The diagnostic baseline: the pose is fit to the global 1-ratio matches.
 MatcherOutput MatchGlobally(const Index& index, const Query& query, const LocalizerOptions& options,
                             ClusterMask allowed, const StageDeadlines& deadlines) {
@@ -280,7 +354,7 @@ void ReportPose(const Index& index, const std::optional<IndexGeo>& geo, const Qu
   for (size_t i = 0; i < pose.inliers.size(); ++i) {
     if (!pose.inliers[i]) continue;
     const FeatureMatch& match = matched.correspondences[fit.used[i]];
-    result->inliers.push_back({match.feature, index.view_points()[match.view]});
+    result->inliers.push_back({match.feature, index.view_points()[match.view], match.view});
   }
   if (!query.camera.FocalKnown()) {
     result->focal_estimated = true;
@@ -344,7 +418,8 @@ void Localizer::ValidatePriors(const Query& query) const {
   }
 }
 
-LocalizationResult Localizer::Localize(const Query& query, const LocalizerOptions& options) const {
+LocalizationResult Localizer::Localize(const Query& query, const LocalizerOptions& options,
+                                       const FramePrediction* prediction) const {
   const Stopwatch total;
   const StageDeadlines deadlines = StageDeadlines::For(Deadline::Clock::now(), options.budget_ms);
   ValidateQuery(query);
@@ -368,7 +443,10 @@ LocalizationResult Localizer::Localize(const Query& query, const LocalizerOption
   if (query.position_prior && priors.clusters_in_radius == 0) {
     matched.failure_reason = "no model camera within " + prior_region;
   } else {
-    matched = RunMatcher(index_, clusters_, query, options, allowed, deadlines);
+    matched =
+        prediction != nullptr
+            ? MatchPredicted(index_, clusters_, query, options, allowed, *prediction, deadlines)
+            : RunMatcher(index_, clusters_, query, options, allowed, deadlines);
     if (query.position_prior && matched.correspondences.empty() && matched.failure_reason.empty())
       matched.failure_reason = "no match to a model camera within " + prior_region;
   }

@@ -7,9 +7,25 @@
 #include "localizer/localization_result.h"
 #include "localizer/localizer_options.h"
 #include "localizer/matching.h"
+#include "localizer/pose_guide.h"
 #include "localizer/query.h"
 
 namespace cwloc {
+
+// A frame whose pose is predicted from the frames before it (tracker.h). Localize then matches
+// the frame only near where the model's points project under the prediction (guided
+// back-matching, no forward matching), first in the clusters that see `seen_points`, the
+// previous frame's inlier points, and fits the pose to those matches as usual.
+struct FramePrediction {
+  PoseHypothesis hypothesis;
+  std::vector<uint32_t> seen_points;  // rows of the index's points
+  double radius_px = 0;               // query features this near a projection compete
+  // Instead, first the clusters of the model images whose cameras are nearest the predicted
+  // one (centres over the median depth of `seen_points`, and viewing directions).
+  bool nearest_images_first = false;
+  // Or only these views, each matched once (no clusters, no votes).
+  std::vector<uint32_t> views;
+};
 
 // Localizes queries against one index. Construction is O(images); Localize is const and
 // thread-safe, so one Localizer serves every thread of a batch.
@@ -21,7 +37,9 @@ class Localizer {
   // stage fits them. Throws InputError naming the query for one that cannot be processed at
   // all (no features, an unusable camera); a query that simply fails to localize returns
   // success = false with the reason.
-  LocalizationResult Localize(const Query& query, const LocalizerOptions& options) const;
+  // With a prediction, the frame is matched near it instead (FramePrediction).
+  LocalizationResult Localize(const Query& query, const LocalizerOptions& options,
+                              const FramePrediction* prediction = nullptr) const;
 
   // The part of Localize's check that concerns the query's priors: a latitude in [-90, 90], a
   // finite longitude and height, a positive radius, a non-zero gravity, and a georeferenced

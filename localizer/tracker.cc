@@ -1,0 +1,184 @@
+#include "localizer/tracker.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "base/stopwatch.h"
+
+namespace cwloc {
+namespace {
+
+// Matching rounds around the pose of the round before, at most (the first around the rough
+// pose), and the change of pose below which the matches would be the same: about 2 pixels at a
+// focal length of 1000 pixels.
+constexpr int kMaxMatchingRounds = 3;
+constexpr double kStillDeg = 0.1;
+constexpr double kStillDepthShare = 0.002;
+
+CameraPose PoseOf(const LocalizationResult& result) {
+  const auto& q = result.rotation;
+  const auto& t = result.translation;
+  return {Eigen::Quaterniond(q[0], q[1], q[2], q[3]), Eigen::Vector3d(t[0], t[1], t[2])};
+}
+
+double RotationAngleDeg(const CameraPose& a, const CameraPose& b) {
+  return a.rotation.angularDistance(b.rotation) * 180.0 / std::numbers::pi;
+}
+
+// The median depth of the result's inlier points in its camera: the scale a centre's change is
+// measured against.
+double MedianInlierDepth(const Index& index, const LocalizationResult& result,
+                         const CameraPose& pose) {
+  std::vector<double> depths;
+  depths.reserve(result.inliers.size());
+  for (const InlierMatch& inlier : result.inliers) {
+    const auto xyz = index.PointXyz(inlier.point);
+    depths.push_back(pose.Apply(Eigen::Vector3d(xyz[0], xyz[1], xyz[2])).z());
+  }
+  if (depths.empty()) return 0.0;
+  auto middle = depths.begin() + depths.size() / 2;
+  std::nth_element(depths.begin(), middle, depths.end());
+  return *middle;
+}
+
+}  // namespace
+
+Tracker::Tracker(const Localizer& localizer, const LocalizerOptions& options,
+                 const TrackerOptions& tracker_options)
+    : localizer_(localizer),
+      options_(options),
+      tracking_options_(options),
+      tracker_options_(tracker_options) {
+  // The confidence ends RANSAC early on a tracked frame's mostly-inlier matches.
+  RansacOptions& ransac = tracking_options_.pose.ransac;
+  ransac.max_iterations = std::min(ransac.max_iterations, tracker_options.max_ransac_iterations);
+  ransac.min_iterations = std::min(ransac.min_iterations, ransac.max_iterations / 10);
+  rough_options_ = tracking_options_;
+  rough_options_.pose.refine = false;
+}
+
+void Tracker::Reset() {
+  last_.reset();
+  before_last_.reset();
+}
+
+std::optional<LocalizationResult> Tracker::TrackFrom(const Query& frame,
+                                                     const CameraPose& predicted,
+                                                     TrackingInfo* info) const {
+  FramePrediction prediction;
+  prediction.hypothesis = last_->camera_and_pose;
+  prediction.hypothesis.pose = predicted;
+  if (frame.camera.FocalKnown()) {
+    prediction.hypothesis.model_id = frame.camera.model_id;
+    prediction.hypothesis.params = frame.camera.params;
+  }
+  // The rough pose: the last frame's matched views, evenly thinned, in the wide window.
+  const std::vector<uint32_t>& seen = last_->inlier_views;
+  const size_t step = std::max<size_t>(1, (seen.size() + tracker_options_.rough_views - 1) /
+                                              std::max<uint32_t>(tracker_options_.rough_views, 1));
+  for (size_t i = 0; i < seen.size(); i += step) prediction.views.push_back(seen[i]);
+  prediction.radius_px = tracker_options_.radius_px;
+  const LocalizationResult rough = localizer_.Localize(frame, rough_options_, &prediction);
+  if (!rough.success) return std::nullopt;
+
+  // Matched again around the pose of the round before, until it stops moving: a rough pose
+  // from a poor prediction keeps only the matches that agree with it.
+  prediction.views.clear();
+  prediction.nearest_images_first = true;
+  prediction.radius_px = options_.guide_radius_px;
+  CameraPose around = PoseOf(rough);
+  const LocalizationResult* before = &rough;
+  std::optional<LocalizationResult> result;
+  for (int round = 0; round < kMaxMatchingRounds; ++round) {
+    prediction.hypothesis.pose = around;
+    if (!frame.camera.FocalKnown()) prediction.hypothesis.params = before->camera.params;
+    prediction.seen_points.clear();
+    for (const InlierMatch& inlier : before->inliers)
+      prediction.seen_points.push_back(inlier.point);
+    result = localizer_.Localize(frame, tracking_options_, &prediction);
+    if (!result->success) return std::nullopt;
+    const CameraPose pose = PoseOf(*result);
+    const double depth = MedianInlierDepth(localizer_.index(), *result, pose);
+    const bool still = RotationAngleDeg(pose, around) <= kStillDeg &&
+                       (pose.Center() - around.Center()).norm() <= kStillDepthShare * depth;
+    around = pose;
+    before = &*result;
+    if (still) break;
+  }
+
+  const CameraPose pose = PoseOf(*result);
+  const double rotation_deg = RotationAngleDeg(pose, predicted);
+  const double distance = (pose.Center() - predicted.Center()).norm();
+  const double depth = MedianInlierDepth(localizer_.index(), *result, pose);
+  info->prediction_error = distance;
+  info->prediction_error_deg = rotation_deg;
+  if (!(rotation_deg <= tracker_options_.max_rotation_change_deg) ||
+      !(distance <= tracker_options_.max_relative_position_change * depth))
+    return std::nullopt;
+  return result;
+}
+
+LocalizationResult Tracker::Track(const Query& frame) {
+  const Stopwatch time;
+  TrackingInfo info;
+  std::optional<LocalizationResult> result;
+  std::optional<CameraPose> first_prediction;
+  if (last_) {
+    info.predicted_from = last_->name;
+    // The last motion repeated, then the last pose alone (a camera that stopped or turned).
+    std::vector<CameraPose> predictions;
+    if (before_last_) {
+      const Eigen::Quaterniond motion_rotation =
+          last_->pose.rotation * before_last_->pose.rotation.conjugate();
+      const Eigen::Vector3d motion_translation =
+          last_->pose.translation - motion_rotation * before_last_->pose.translation;
+      predictions.emplace_back(motion_rotation * last_->pose.rotation,
+                               motion_rotation * last_->pose.translation + motion_translation);
+    }
+    predictions.push_back(last_->pose);
+    first_prediction = predictions.front();
+    for (const CameraPose& predicted : predictions) {
+      TrackingInfo attempt = info;
+      result = TrackFrom(frame, predicted, &attempt);
+      if (result) {
+        info = attempt;
+        info.mode = TrackingMode::kTracked;
+        break;
+      }
+    }
+  }
+  if (!result) {
+    result = localizer_.Localize(frame, options_);
+    info.mode = result->success ? TrackingMode::kRelocalized : TrackingMode::kLost;
+    info.prediction_error.reset();
+    info.prediction_error_deg.reset();
+    if (result->success && first_prediction) {
+      const CameraPose pose = PoseOf(*result);
+      info.prediction_error = (pose.Center() - first_prediction->Center()).norm();
+      info.prediction_error_deg = RotationAngleDeg(pose, *first_prediction);
+    }
+  }
+
+  if (result->success) {
+    PosedFrame posed;
+    posed.name = frame.name;
+    posed.pose = PoseOf(*result);
+    posed.camera_and_pose.pose = posed.pose;
+    posed.camera_and_pose.model_id = result->camera.model_id;
+    posed.camera_and_pose.params = result->camera.params;
+    posed.inlier_views.reserve(result->inliers.size());
+    for (const InlierMatch& inlier : result->inliers) posed.inlier_views.push_back(inlier.view);
+    before_last_ = std::move(last_);
+    last_ = std::move(posed);
+  } else {
+    before_last_.reset();  // the motion since the last pose is unknown
+  }
+  info.seconds = time.Seconds();
+  // The frame's whole time; the stages' are those of its last matching round.
+  result->times.total = info.seconds + result->times.extraction;
+  result->tracking = std::move(info);
+  return std::move(*result);
+}
+
+}  // namespace cwloc

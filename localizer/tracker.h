@@ -1,0 +1,68 @@
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "localizer/localization_result.h"
+#include "localizer/localizer.h"
+#include "localizer/pose/camera_pose.h"
+
+namespace cwloc {
+
+// Tracking frames of one moving camera (docs/algorithm.md, "Sequences").
+struct TrackerOptions {
+  // The first matching's window around a point's projection under the predicted pose, pixels:
+  // the views that matched the last frame's inliers, at most `rough_views` of them, give a rough
+  // pose. The frame is then matched around that pose in the model images nearest it, as
+  // guided back-matching matches a query around its first pose (with
+  // LocalizerOptions::guide_radius_px), until the pose stops moving.
+  double radius_px = 80.0;
+  uint32_t rough_views = 300;
+  // RANSAC's iterations on a tracked frame, whose matches near the prediction are mostly inliers.
+  uint32_t max_ransac_iterations = 100;
+  // A tracked pose farther than this from its prediction is not trusted and the frame is
+  // localized from scratch: the rotation between them, and the distance between the centres
+  // over the median depth of the frame's inliers.
+  double max_rotation_change_deg = 10.0;
+  double max_relative_position_change = 0.25;
+};
+
+// Frames of one camera, in order: a frame's pose is predicted from the frames before it (the
+// last pose moved by the last motion, or the last pose alone), the frame is matched near that
+// prediction for a rough pose, then near the rough pose, and its pose fit to those matches with
+// the same inlier checks as any query (tracked); when that
+// fails or lands far from the prediction, the frame is localized from scratch (relocalized);
+// when both fail it is lost: no pose, never a guessed one. One Tracker per stream; several on
+// one Localizer may run on several threads.
+class Tracker {
+ public:
+  // The localizer must outlive the tracker.
+  Tracker(const Localizer& localizer, const LocalizerOptions& options,
+          const TrackerOptions& tracker_options = {});
+
+  // The frame's result, with its `tracking` set. Throws InputError as Localizer::Localize does.
+  LocalizationResult Track(const Query& frame);
+  // Forgets the frames so far: the next frame is localized from scratch.
+  void Reset();
+
+ private:
+  struct PosedFrame {
+    std::string name;
+    CameraPose pose;  // cam_from_world
+    PoseHypothesis camera_and_pose;
+    std::vector<uint32_t> inlier_views;
+  };
+  std::optional<LocalizationResult> TrackFrom(const Query& frame, const CameraPose& predicted,
+                                              TrackingInfo* info) const;
+
+  const Localizer& localizer_;
+  LocalizerOptions options_;
+  LocalizerOptions rough_options_;     // the rough pose's: no refinement
+  LocalizerOptions tracking_options_;  // options_ with the tracker's RANSAC iterations
+  TrackerOptions tracker_options_;
+  std::optional<PosedFrame> last_;
+  std::optional<PosedFrame> before_last_;  // the frame just before last_, when it had a pose
+};
+
+}  // namespace cwloc

@@ -1,0 +1,187 @@
+// Frames of a real phone video tracked one after the other (localizer/tracker.h), against the
+// map COLMAP made of the other frames (../shared/data/fox_video): as accurate as localizing each
+// frame alone, and never a pose far from the truth when the sequence jumps.
+#include "localizer/tracker.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <map>
+#include <vector>
+
+#include "io/camera_spec.h"
+#include "io/database/database_queries.h"
+#include "tests/localization_check.h"
+#include "tests/shared_data_index.h"
+#include "tests/test_util.h"
+
+namespace cwloc {
+namespace {
+
+class TrackerTest : public testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    const auto shared = test::BuildSharedDataIndex("fox_video");
+    if (!shared) return;
+    data_ = new std::filesystem::path(shared->data);
+    index_ = new Index(Index::Open(shared->index));
+  }
+  static void TearDownTestSuite() {
+    delete index_;
+    index_ = nullptr;
+    delete data_;
+    data_ = nullptr;
+  }
+  void SetUp() override {
+    if (index_ == nullptr) GTEST_SKIP() << "shared data 'fox_video' not found";
+    truth_ = test::ReadGroundTruth(*data_ / "queries_gt.txt");
+    // The frames in time order (the list's order); under a sanitizer the first 8.
+    std::ifstream list(*data_ / "query_list.txt");
+    for (std::string name; list >> name && (!test::kSanitized || frames_.size() < 8);)
+      frames_.push_back(name);
+    ASSERT_GE(frames_.size(), 8u);
+  }
+
+  // A frame's stored features with the camera COLMAP found for it.
+  Query Frame(const std::string& name) const {
+    Query query = DatabaseQueries(*data_ / "database.db").Load(name);
+    query.camera = ParseCameraSpec(truth_.at(name).camera, "queries_gt.txt");
+    return query;
+  }
+  double PositionError(const LocalizationResult& result) const {
+    const Eigen::Vector3d center(result.center[0], result.center[1], result.center[2]);
+    return (center - truth_.at(result.name).pose.Center()).norm();
+  }
+  static double Median(std::vector<double> values) {
+    std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+    return values[values.size() / 2];
+  }
+
+  static inline std::filesystem::path* data_ = nullptr;
+  static inline Index* index_ = nullptr;
+  std::map<std::string, test::GroundTruthQuery> truth_;
+  std::vector<std::string> frames_;
+};
+
+TEST_F(TrackerTest, FramesInTimeOrderAreTrackedAsAccuratelyAsLocalizedAlone) {
+  const Localizer localizer(*index_);
+  Tracker tracker(localizer, LocalizerOptions{});
+  std::vector<double> tracked_errors, alone_errors;
+  for (size_t i = 0; i < frames_.size(); ++i) {
+    const Query frame = Frame(frames_[i]);
+    const LocalizationResult result = tracker.Track(frame);
+    const LocalizationResult alone = localizer.Localize(frame, LocalizerOptions{});
+    ASSERT_TRUE(result.success) << frames_[i] << ": " << result.failure_reason;
+    ASSERT_TRUE(alone.success) << frames_[i];
+    ASSERT_TRUE(result.tracking.has_value());
+    const TrackingInfo& tracking = *result.tracking;
+    if (i == 0) {
+      EXPECT_EQ(tracking.mode, TrackingMode::kRelocalized);
+      EXPECT_EQ(tracking.predicted_from, "");
+      EXPECT_FALSE(tracking.prediction_error.has_value());
+      continue;
+    }
+    EXPECT_EQ(tracking.predicted_from, frames_[i - 1]);
+    ASSERT_TRUE(tracking.prediction_error.has_value()) << frames_[i];
+    if (tracking.mode != TrackingMode::kTracked) continue;
+    // The same inlier checks as a query alone, and as many inliers within a few per cent.
+    EXPECT_GE(result.num_inliers, uint32_t(LocalizerOptions{}.pose.min_inliers));
+    EXPECT_GE(result.num_inliers, alone.num_inliers * 9 / 10) << frames_[i];
+    EXPECT_LE(tracking.prediction_error_deg.value(), TrackerOptions{}.max_rotation_change_deg);
+    tracked_errors.push_back(PositionError(result));
+    alone_errors.push_back(PositionError(alone));
+  }
+  // Measured on the 25 frames: 12 tracked (frames are 1-14 video frames apart), their median
+  // error 0.0007 model units, as localized alone (the frames spread over 8.2 units).
+  EXPECT_GE(tracked_errors.size(), test::kSanitized ? 2u : 10u);
+  ASSERT_FALSE(tracked_errors.empty());
+  EXPECT_LE(Median(tracked_errors), 1.1 * Median(alone_errors));
+  for (size_t i = 0; i < tracked_errors.size(); ++i)
+    EXPECT_LE(tracked_errors[i], 3 * alone_errors[i] + 0.001);
+}
+
+// The frames shuffled: every jump is either tracked to the right place or relocalized, and no
+// frame gets a pose far from the truth (10x the median error of the frames alone).
+TEST_F(TrackerTest, JumpsAreRelocalizedAndNeverGiveAFarPose) {
+  const Localizer localizer(*index_);
+  Tracker tracker(localizer, LocalizerOptions{});
+  std::vector<std::string> shuffled = frames_;
+  std::shuffle(shuffled.begin(), shuffled.end(), test::Rng());
+  int relocalized = 0;
+  for (const std::string& name : shuffled) {
+    const LocalizationResult result = tracker.Track(Frame(name));
+    ASSERT_TRUE(result.success) << name << ": " << result.failure_reason;
+    EXPECT_LE(PositionError(result), 0.02) << name;  // 10x the 0.0012 median alone
+    relocalized += result.tracking->mode == TrackingMode::kRelocalized;
+  }
+  EXPECT_GE(relocalized, 2);
+}
+
+// A frame of another place between two frames: no pose for it, and the next frame gets its
+// right pose from the frame before the stranger.
+TEST_F(TrackerTest, AFrameOfAnotherPlaceIsLostAndTheNextIsFound) {
+  const auto herz = test::SharedDataDir("herz_jesu_p25");
+  if (!herz) GTEST_SKIP() << "shared data 'herz_jesu_p25' not found";
+  const Localizer localizer(*index_);
+  Tracker tracker(localizer, LocalizerOptions{});
+  ASSERT_TRUE(tracker.Track(Frame(frames_[0])).success);
+  ASSERT_TRUE(tracker.Track(Frame(frames_[1])).success);
+  Query stranger = DatabaseQueries(*herz / "database.db").Load("0012.jpg");
+  const LocalizationResult lost = tracker.Track(stranger);
+  EXPECT_FALSE(lost.success);
+  EXPECT_EQ(lost.tracking->mode, TrackingMode::kLost);
+  EXPECT_EQ(lost.tracking->predicted_from, frames_[1]);
+  const LocalizationResult next = tracker.Track(Frame(frames_[2]));
+  ASSERT_TRUE(next.success) << next.failure_reason;
+  EXPECT_EQ(next.tracking->predicted_from, frames_[1]);
+  EXPECT_LE(PositionError(next), 0.01);
+}
+
+TEST_F(TrackerTest, ResetStartsFromScratch) {
+  const Localizer localizer(*index_);
+  Tracker tracker(localizer, LocalizerOptions{});
+  ASSERT_TRUE(tracker.Track(Frame(frames_[0])).success);
+  tracker.Reset();
+  const LocalizationResult result = tracker.Track(Frame(frames_[1]));
+  ASSERT_TRUE(result.success);
+  EXPECT_EQ(result.tracking->mode, TrackingMode::kRelocalized);
+  EXPECT_EQ(result.tracking->predicted_from, "");
+}
+
+// cwloc-localize --sequence: one record per frame in the given order, each with its tracking
+// object (schema), and the summary counts the modes.
+TEST_F(TrackerTest, TheCliTracksAQueryListAsASequence) {
+  const test::TempDir dir;
+  const auto out = dir.path() / "frames.jsonl";
+  std::string output;
+  ASSERT_EQ(
+      test::RunCommand(
+          test::ToolPath("cwloc-localize").string() + " --index " + index_->file().path().string() +
+              " --database " + (*data_ / "database.db").string() + " --query-list " +
+              (*data_ / "queries_with_intrinsics.txt").string() + " --sequence -o " + out.string(),
+          &output),
+      0)
+      << output;
+  const std::vector<nlohmann::json> records = test::ReadJsonLines(out);
+  ASSERT_EQ(records.size(), 25u);
+  int tracked = 0;
+  for (size_t i = 0; i < records.size(); ++i) {
+    ASSERT_TRUE(records[i].contains("tracking")) << i;
+    tracked += records[i]["tracking"]["mode"] == "tracked";
+    if (i > 0) {
+      EXPECT_EQ(records[i]["tracking"]["predicted_from"], records[i - 1]["name"]);
+    }
+  }
+  EXPECT_EQ(records[0]["tracking"]["predicted_from"], nullptr);
+  EXPECT_GE(tracked, 10);
+  EXPECT_NE(output.find("localized 25 of 25 queries (" + std::to_string(tracked) + " tracked, " +
+                        std::to_string(25 - tracked) + " relocalized, 0 lost)"),
+            std::string::npos)
+      << output;
+  std::string validation;
+  EXPECT_EQ(test::ValidateJson("localization-result.schema.json", out, true, &validation), 0)
+      << validation;
+}
+
+}  // namespace
+}  // namespace cwloc
