@@ -60,6 +60,7 @@ struct CliOptions {
   QueryOptions options;        // the option table's
   std::string output_path;
   std::string poses_path;
+  std::string trajectory_path;  // --sequence's poses in the TUM format
   int threads = 1;
   bool sequence = false;  // the queries are frames of one camera, in order
   bool verify = false;
@@ -195,9 +196,12 @@ class ResultSink {
     if (!cli.output_path.empty() && cli.output_path != "-")
       json_file_ = std::make_unique<CheckpointedFile>(cli.output_path);
     if (!cli.poses_path.empty()) poses_file_ = std::make_unique<CheckpointedFile>(cli.poses_path);
+    if (!cli.trajectory_path.empty())
+      trajectory_file_ = std::make_unique<CheckpointedFile>(cli.trajectory_path);
   }
 
-  void Write(const LocalizationResult& result, const QueryOptions& options) {
+  // `position`: the query's place in the batch, a sequence frame's timestamp.
+  void Write(const LocalizationResult& result, const QueryOptions& options, size_t position) {
     std::lock_guard lock(mutex_);
     if (closed_) return;  // a query abandoned by a stopped batch
     EmitJsonLine(ResultToJson(result, options).dump());
@@ -217,6 +221,8 @@ class ResultSink {
       std::fflush(stdout);
     }
     if (poses_file_ && result.success) Append(*poses_file_, PoseLine(result));
+    if (trajectory_file_ && result.success)
+      Append(*trajectory_file_, TrajectoryLine(result, double(position)));
   }
 
   void WriteError(const std::string& name, const std::string& error) {
@@ -232,7 +238,7 @@ class ResultSink {
   void Close() {
     std::lock_guard lock(mutex_);
     closed_ = true;
-    for (CheckpointedFile* file : {json_file_.get(), poses_file_.get()}) {
+    for (CheckpointedFile* file : {json_file_.get(), poses_file_.get(), trajectory_file_.get()}) {
       if (file && !failed_) Guard([&] { file->Close(); });
     }
     if (failed_) throw InputError(error_);
@@ -272,6 +278,7 @@ class ResultSink {
   const CliOptions& cli_;
   std::unique_ptr<CheckpointedFile> json_file_;
   std::unique_ptr<CheckpointedFile> poses_file_;
+  std::unique_ptr<CheckpointedFile> trajectory_file_;
   std::mutex mutex_;
   std::atomic<bool> failed_{false};
   bool closed_ = false;
@@ -302,6 +309,8 @@ int Run(const CliOptions& cli) {
   const LocalizerOptions& options = cli.options.localizer;
   if (cli.threads < 1 || cli.threads > 1024)
     throw InputError("--threads must be between 1 and 1024");
+  if (!cli.trajectory_path.empty() && !cli.sequence)
+    throw InputError("--trajectory needs --sequence (a trajectory is a sequence's frames)");
   const Index index = Index::Open(cli.index_path);
   if (cli.verify) {
     index.file().VerifyChecksums();
@@ -335,7 +344,7 @@ int Run(const CliOptions& cli) {
         if (result.tracking) ++modes[static_cast<size_t>(result.tracking->mode)];
         times[i] = result.times.total;
         (result.success ? localized : failed)++;
-        sink.Write(result, cli.options);
+        sink.Write(result, cli.options, i);
       } catch (const InputError& e) {
         ++errors;
         sink.WriteError(sources[i].name, e.what());
@@ -560,6 +569,11 @@ int main(int argc, char** argv) {
   app.add_option("--poses", cli.poses_path,
                  "Also write 'NAME QW QX QY QZ TX TY TZ' lines of localized queries (saved as -o "
                  "is)")
+      ->group(kOutput);
+  app.add_option("--trajectory", cli.trajectory_path,
+                 "With --sequence: also write the frames' poses as a TUM trajectory, "
+                 "'TIMESTAMP TX TY TZ QX QY QZ QW' (the camera in the world; the timestamp is "
+                 "the frame's place in the sequence, from 0), as evo reads it (saved as -o is)")
       ->group(kOutput);
   app.add_flag("-q,--quiet", cli.quiet, "No summary or readable lines")->group(kOutput);
   app.add_option("--threads", cli.threads,

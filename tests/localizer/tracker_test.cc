@@ -6,7 +6,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <fstream>
 #include <map>
+#include <sstream>
 #include <vector>
 
 #include "io/camera_spec.h"
@@ -153,14 +155,16 @@ TEST_F(TrackerTest, ResetStartsFromScratch) {
 TEST_F(TrackerTest, TheCliTracksAQueryListAsASequence) {
   const test::TempDir dir;
   const auto out = dir.path() / "frames.jsonl";
+  const auto trajectory = dir.path() / "trajectory.txt";
+  const std::string localize = test::ToolPath("cwloc-localize").string() + " --index " +
+                               index_->file().path().string() + " --database " +
+                               (*data_ / "database.db").string() + " --query-list " +
+                               (*data_ / "queries_with_intrinsics.txt").string();
   std::string output;
-  ASSERT_EQ(
-      test::RunCommand(
-          test::ToolPath("cwloc-localize").string() + " --index " + index_->file().path().string() +
-              " --database " + (*data_ / "database.db").string() + " --query-list " +
-              (*data_ / "queries_with_intrinsics.txt").string() + " --sequence -o " + out.string(),
-          &output),
-      0)
+  ASSERT_EQ(test::RunCommand(localize + " --sequence -o " + out.string() + " --trajectory " +
+                                 trajectory.string(),
+                             &output),
+            0)
       << output;
   const std::vector<nlohmann::json> records = test::ReadJsonLines(out);
   ASSERT_EQ(records.size(), 25u);
@@ -181,6 +185,31 @@ TEST_F(TrackerTest, TheCliTracksAQueryListAsASequence) {
   std::string validation;
   EXPECT_EQ(test::ValidateJson("localization-result.schema.json", out, true, &validation), 0)
       << validation;
+
+  // The TUM trajectory: the frame's place, its centre and world_from_camera's rotation (the
+  // conjugate of the record's cam_from_world quaternion), bit for bit.
+  std::ifstream lines(trajectory);
+  size_t frame = 0;
+  for (std::string line; std::getline(lines, line); ++frame) {
+    std::istringstream fields(line);
+    double t, x, y, z, qx, qy, qz, qw;
+    ASSERT_TRUE(fields >> t >> x >> y >> z >> qx >> qy >> qz >> qw) << line;
+    const nlohmann::json& pose = records[frame]["pose"];
+    EXPECT_EQ(t, double(frame));
+    EXPECT_EQ(x, pose["center"][0].get<double>());
+    EXPECT_EQ(z, pose["center"][2].get<double>());
+    EXPECT_EQ(qw, pose["qvec"][0].get<double>());
+    EXPECT_EQ(qx, -pose["qvec"][1].get<double>());
+    EXPECT_EQ(qz, -pose["qvec"][3].get<double>());
+  }
+  EXPECT_EQ(frame, records.size());
+
+  EXPECT_EQ(test::RunCommand(
+                localize + " -o " + out.string() + " --trajectory " + trajectory.string(), &output),
+            2);
+  EXPECT_EQ(output,
+            "cwloc-localize: error: --trajectory needs --sequence (a trajectory is a sequence's "
+            "frames)\n");
 }
 
 }  // namespace
