@@ -16,6 +16,7 @@
 #include "io/query_assembly.h"
 #include "io/result_json.h"
 #include "localizer/localizer.h"
+#include "localizer/tracker.h"
 
 namespace cwloc::api {
 namespace {
@@ -170,6 +171,10 @@ Result ToResult(const LocalizationResult& r, const Query& query, const Index& in
   }
   result.gravity = r.priors.gravity;
   result.gravity_error_deg = r.priors.gravity_error_deg;
+  if (const auto& t = r.tracking) {
+    result.tracking = Tracking{static_cast<TrackingMode>(t->mode), t->predicted_from,
+                               t->prediction_error, t->prediction_error_deg, t->seconds};
+  }
   return result;
 }
 
@@ -227,15 +232,77 @@ void Options::Set(const std::string& name, double value) {
 struct Localizer::Impl {
   explicit Impl(Index opened) : index(std::move(opened)), localizer(index) {}
 
-  Result Run(Query query, const QuerySource& source, const CallOptions& call) const {
+  Result Run(Query query, const QuerySource& source, const CallOptions& call,
+             cwloc::Tracker* tracker) const {
     call.Complete(source, &query);
-    return Localize(query, call);
+    return Localize(query, call, tracker);
   }
 
-  // A complete query.
-  Result Localize(const Query& query, const CallOptions& call) const {
+  // A complete query: localized alone, or as the next frame of `tracker`.
+  Result Localize(const Query& query, const CallOptions& call, cwloc::Tracker* tracker) const {
     ValidateOrThrowInvalidArgument([&] { localizer.ValidatePriors(query); });
-    return ToResult(localizer.Localize(query, call.options.localizer), query, index, call.options);
+    const LocalizationResult result = tracker != nullptr
+                                          ? tracker->Track(query)
+                                          : localizer.Localize(query, call.options.localizer);
+    return ToResult(result, query, index, call.options);
+  }
+
+  Result FromFeatures(const Features& features, const Camera& camera, const Options& options,
+                      cwloc::Tracker* tracker) const {
+    return Translated([&] {
+      const CallOptions call(options, camera);
+      Query query;
+      query.name = "query";
+      query.source = "features";
+      query.keypoints = features.keypoints;
+      query.descriptors = features.descriptors;
+      return Run(std::move(query), {"query", QuerySource::Kind::kFeatures}, call, tracker);
+    });
+  }
+
+  Result FromPhoto(const std::string& photo, const std::optional<Camera>& camera,
+                   const Options& options, cwloc::Tracker* tracker) const {
+    return Translated([&] {
+      const CallOptions call(options, camera);
+      const QuerySource source{photo, QuerySource::Kind::kPhoto, photo};
+      return Run(call.assembler.Read(source), source, call, tracker);
+    });
+  }
+
+  Result FromGreyImage(const uint8_t* pixels, uint32_t width, uint32_t height, size_t stride,
+                       const Camera& camera, const Options& options,
+                       cwloc::Tracker* tracker) const {
+    return Translated([&] {
+      if (pixels == nullptr) throw InvalidArgument("grey image: null pointer");
+      if (width == 0 || height == 0 || stride < width) {
+        throw InvalidArgument("grey image: " + std::to_string(width) + " x " +
+                              std::to_string(height) + " with stride " + std::to_string(stride) +
+                              ": expected a positive size and stride >= width");
+      }
+      const CallOptions call(options, camera);
+      const PhotoOptions& photo_options = call.options.photo;
+      if (uint64_t{width} * height > photo_options.max_image_pixels) {
+        throw InvalidArgument("grey image: " + std::to_string(uint64_t{width} * height) +
+                              " pixels, more than --max-image-pixels " +
+                              std::to_string(photo_options.max_image_pixels));
+      }
+      Query query;
+      query.name = "image";
+      query.source = "grey image";
+      query.camera.width = width;  // the image's own size, which the camera must have
+      query.camera.height = height;
+      const QuerySource source{query.name, QuerySource::Kind::kImage};
+      call.Complete(source, &query);  // before the extraction it would waste
+      GreyImage image;
+      image.width = width;
+      image.height = height;
+      image.pixels.resize(size_t{width} * height);
+      for (uint32_t y = 0; y < height; ++y) {
+        std::copy_n(pixels + y * stride, width, image.pixels.data() + size_t{y} * width);
+      }
+      ExtractPhotoFeatures(std::move(image), photo_options, &query);
+      return Localize(query, call, tracker);
+    });
   }
 
   std::string path;
@@ -280,24 +347,12 @@ IndexInfo Localizer::Info() const {
 
 Result Localizer::Localize(const Features& features, const Camera& camera,
                            const Options& options) const {
-  return Translated([&] {
-    const CallOptions call(options, camera);
-    Query query;
-    query.name = "query";
-    query.source = "features";
-    query.keypoints = features.keypoints;
-    query.descriptors = features.descriptors;
-    return impl_->Run(std::move(query), {"query", QuerySource::Kind::kFeatures}, call);
-  });
+  return impl_->FromFeatures(features, camera, options, nullptr);
 }
 
 Result Localizer::LocalizePhoto(const std::string& path, const std::optional<Camera>& camera,
                                 const Options& options) const {
-  return Translated([&] {
-    const CallOptions call(options, camera);
-    const QuerySource source{path, QuerySource::Kind::kPhoto, path};
-    return impl_->Run(call.assembler.Read(source), source, call);
-  });
+  return impl_->FromPhoto(path, camera, options, nullptr);
 }
 
 Result Localizer::LocalizeEncodedPhoto(const uint8_t* bytes, size_t size,
@@ -308,45 +363,49 @@ Result Localizer::LocalizeEncodedPhoto(const uint8_t* bytes, size_t size,
     const CallOptions call(options, camera);
     Query query = PhotoQueryFromBytes(std::span<const uint8_t>(bytes, size), "photo bytes", "photo",
                                       call.options.photo);
-    return impl_->Run(std::move(query), {"photo", QuerySource::Kind::kImage}, call);
+    return impl_->Run(std::move(query), {"photo", QuerySource::Kind::kImage}, call, nullptr);
   });
 }
 
 Result Localizer::LocalizeGreyImage(const uint8_t* pixels, uint32_t width, uint32_t height,
                                     size_t stride, const Camera& camera,
                                     const Options& options) const {
-  return Translated([&] {
-    if (pixels == nullptr) throw InvalidArgument("grey image: null pointer");
-    if (width == 0 || height == 0 || stride < width) {
-      throw InvalidArgument("grey image: " + std::to_string(width) + " x " +
-                            std::to_string(height) + " with stride " + std::to_string(stride) +
-                            ": expected a positive size and stride >= width");
-    }
-    const CallOptions call(options, camera);
-    const PhotoOptions& photo_options = call.options.photo;
-    if (uint64_t{width} * height > photo_options.max_image_pixels) {
-      throw InvalidArgument("grey image: " + std::to_string(uint64_t{width} * height) +
-                            " pixels, more than --max-image-pixels " +
-                            std::to_string(photo_options.max_image_pixels));
-    }
-    Query query;
-    query.name = "image";
-    query.source = "grey image";
-    query.camera.width = width;  // the image's own size, which the camera must have
-    query.camera.height = height;
-    const QuerySource source{query.name, QuerySource::Kind::kImage};
-    call.Complete(source, &query);  // before the extraction it would waste
-    GreyImage image;
-    image.width = width;
-    image.height = height;
-    image.pixels.resize(size_t{width} * height);
-    for (uint32_t y = 0; y < height; ++y) {
-      std::copy_n(pixels + y * stride, width, image.pixels.data() + size_t{y} * width);
-    }
-    ExtractPhotoFeatures(std::move(image), photo_options, &query);
-    return impl_->Localize(query, call);
-  });
+  return impl_->FromGreyImage(pixels, width, height, stride, camera, options, nullptr);
 }
+
+struct Tracker::Impl {
+  Impl(const Localizer::Impl& localizer_impl, const Options& tracker_options)
+      : localizer(localizer_impl),
+        options(tracker_options),
+        tracker(localizer_impl.localizer,
+                Translated([&] { return ToQueryOptions(tracker_options).localizer; })) {}
+
+  const Localizer::Impl& localizer;
+  const Options options;
+  cwloc::Tracker tracker;
+};
+
+Tracker::Tracker(const Localizer& localizer, const Options& options)
+    : impl_(std::make_unique<Impl>(*localizer.impl_, options)) {}
+Tracker::Tracker(Tracker&&) noexcept = default;
+Tracker& Tracker::operator=(Tracker&&) noexcept = default;
+Tracker::~Tracker() = default;
+
+Result Tracker::Track(const Features& features, const Camera& camera) {
+  return impl_->localizer.FromFeatures(features, camera, impl_->options, &impl_->tracker);
+}
+
+Result Tracker::TrackPhoto(const std::string& path, const std::optional<Camera>& camera) {
+  return impl_->localizer.FromPhoto(path, camera, impl_->options, &impl_->tracker);
+}
+
+Result Tracker::TrackGreyImage(const uint8_t* pixels, uint32_t width, uint32_t height,
+                               size_t stride, const Camera& camera) {
+  return impl_->localizer.FromGreyImage(pixels, width, height, stride, camera, impl_->options,
+                                        &impl_->tracker);
+}
+
+void Tracker::Reset() { impl_->tracker.Reset(); }
 
 Features ReadFeatureFile(const std::string& path) {
   return Translated([&] {

@@ -23,6 +23,21 @@
 namespace cwloc {
 namespace {
 
+// A query's features as cwloc-localize --database reads them: the stored keypoints and
+// descriptors, unchanged.
+api::Features DatabaseFeatures(const colmap::DatabaseReader& db, const std::string& name) {
+  const auto image = db.FindImage(name);
+  if (!image) throw std::runtime_error(name + ": not in the database");
+  colmap::ImageFeatures stored = db.ReadFeatures(image->image_id);
+  api::Features features;
+  for (const colmap::Keypoint& keypoint : stored.keypoints) {
+    features.keypoints.push_back(keypoint.x);
+    features.keypoints.push_back(keypoint.y);
+  }
+  features.descriptors = std::move(stored.descriptors.data);
+  return features;
+}
+
 // The library and the tool are one pipeline: identical poses and counts.
 TEST(LocalizerApiToolsTest, GivesTheSamePosesAsCwlocLocalize) {
   const api::Localizer localizer = api::Localizer::Open(GoldenIndex().string());
@@ -180,21 +195,6 @@ class LocalizerApiGeoToolsTest : public testing::Test {
       queries.emplace_back(name, ParseCamera(camera));
     }
     return queries;
-  }
-
-  // A query's features as cwloc-localize --database reads them: the stored keypoints and
-  // descriptors, unchanged.
-  static api::Features DatabaseFeatures(const colmap::DatabaseReader& db, const std::string& name) {
-    const auto image = db.FindImage(name);
-    if (!image) throw std::runtime_error(name + ": not in the database");
-    colmap::ImageFeatures stored = db.ReadFeatures(image->image_id);
-    api::Features features;
-    for (const colmap::Keypoint& keypoint : stored.keypoints) {
-      features.keypoints.push_back(keypoint.x);
-      features.keypoints.push_back(keypoint.y);
-    }
-    features.descriptors = std::move(stored.descriptors.data);
-    return features;
   }
 
   // query_priors.txt as the API's options: "NAME position LAT LON HEIGHT|- RADIUS_M" and
@@ -445,6 +445,59 @@ TEST_F(LocalizerApiGeoToolsTest, ExifGpsIsThePositionPriorUnlessOneIsGiven) {
   EXPECT_EQ(cli_given["priors"]["position"]["clusters_in_radius"].get<uint32_t>(),
             given.clusters_in_radius);
   EXPECT_EQ(cli_given["success"].get<bool>(), given.success);
+}
+
+// api::Tracker is cwloc-localize --sequence: the same modes, poses and counts, bit for bit, on
+// the frames of a real video (../shared/data/fox_video, skipped without it); Reset starts over.
+TEST(TrackerApiTest, TracksAVideoAsCwlocLocalizeSequenceDoes) {
+  const auto shared = test::BuildSharedDataIndex("fox_video");
+  if (!shared) GTEST_SKIP() << "shared data 'fox_video' not found";
+  const test::TempDir dir;
+  // The first frames in time order (8 under a sanitizer), with the cameras COLMAP found.
+  std::vector<std::pair<std::string, std::string>> frames;
+  std::ifstream intrinsics(shared->data / "queries_with_intrinsics.txt");
+  std::ofstream list(dir.path() / "frames.txt");
+  for (std::string line;
+       std::getline(intrinsics, line) && frames.size() < (test::kSanitized ? 8u : 25u);) {
+    const size_t space = line.find(' ');
+    frames.emplace_back(line.substr(0, space), line.substr(space + 1));
+    list << line << "\n";
+  }
+  list.close();
+  std::string output;
+  ASSERT_EQ(test::RunCommand(test::Quote(test::ToolPath("cwloc-localize")) + " --index " +
+                                 test::Quote(shared->index) + " --database " +
+                                 test::Quote(shared->data / "database.db") + " --query-list " +
+                                 test::Quote(dir.path() / "frames.txt") + " --sequence -q",
+                             &output),
+            0)
+      << output;
+  std::istringstream records(output);
+  const api::Localizer localizer = api::Localizer::Open(shared->index.string());
+  api::Tracker tracker(localizer);
+  const colmap::DatabaseReader db(shared->data / "database.db");
+  int tracked = 0;
+  for (const auto& [name, camera] : frames) {
+    SCOPED_TRACE(name);
+    std::string line;
+    ASSERT_TRUE(std::getline(records, line));
+    const nlohmann::json cli = nlohmann::json::parse(line);
+    const api::Result result = tracker.Track(DatabaseFeatures(db, name), ParseCamera(camera));
+    ASSERT_TRUE(result.tracking.has_value());
+    ASSERT_TRUE(result.success);
+    const char* modes[] = {"tracked", "relocalized", "lost"};
+    EXPECT_EQ(modes[static_cast<int>(result.tracking->mode)], cli["tracking"]["mode"]);
+    tracked += result.tracking->mode == api::TrackingMode::kTracked;
+    EXPECT_EQ(result.num_inliers, cli["num_inliers"].get<uint32_t>());
+    EXPECT_EQ(result.rotation, (cli["pose"]["qvec"].get<std::array<double, 4>>()));
+    EXPECT_EQ(result.translation, (cli["pose"]["tvec"].get<std::array<double, 3>>()));
+  }
+  EXPECT_GE(tracked, 3);
+  tracker.Reset();
+  const api::Result after_reset =
+      tracker.Track(DatabaseFeatures(db, frames[1].first), ParseCamera(frames[1].second));
+  EXPECT_EQ(after_reset.tracking->mode, api::TrackingMode::kRelocalized);
+  EXPECT_EQ(after_reset.tracking->predicted_from, "");
 }
 
 }  // namespace

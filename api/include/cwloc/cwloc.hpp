@@ -133,6 +133,22 @@ struct PoseCovariance {
   std::optional<double> position_radius95_m;
 };
 
+// How a frame of a stream got its pose (Tracker; docs/algorithm.md, "Sequences").
+enum class TrackingMode : int {
+  kTracked = 0,      // matched near the pose predicted from the frames before it
+  kRelocalized = 1,  // localized from scratch: the first frame, or tracking failed its checks
+  kLost = 2,         // neither gave a pose
+};
+
+struct Tracking {
+  TrackingMode mode = TrackingMode::kLost;
+  std::string predicted_from;  // the frame the prediction started from; empty without one
+  // How far the pose is from the prediction (model units, degrees); set when both exist.
+  std::optional<double> prediction_error;
+  std::optional<double> prediction_error_deg;
+  double seconds = 0;  // the tracker's whole time on the frame, relocalization included
+};
+
 struct Result {
   bool success = false;
   std::string failure_reason;  // why not, when success is false
@@ -159,6 +175,7 @@ struct Result {
   // The angle between the gravity prior and the localized pose's gravity; on success with one.
   std::optional<double> gravity_error_deg;
   std::optional<PoseCovariance> covariance;  // on success
+  std::optional<Tracking> tracking;          // a frame that a Tracker took
   // The JSON record cwloc-localize writes for this query (schemas/localization-result.schema.json).
   std::string json;
 };
@@ -211,8 +228,33 @@ class CWLOC_API Localizer {
                            const Camera& camera, const Options& options = Options()) const;
 
  private:
+  friend class Tracker;
   struct Impl;
   explicit Localizer(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+// The frames of one moving camera, in order (cwloc-localize --sequence): each frame is tracked
+// from the frames before it, or localized from scratch when that fails, or lost (no pose);
+// every Result has `tracking`. One Tracker per stream, its calls one at a time; trackers on one
+// Localizer may run on several threads. The Localizer must outlive its trackers.
+class CWLOC_API Tracker {
+ public:
+  explicit Tracker(const Localizer& localizer, const Options& options = Options());
+  Tracker(Tracker&&) noexcept;
+  Tracker& operator=(Tracker&&) noexcept;
+  ~Tracker();
+
+  // The next frame, as Localizer's Localize, LocalizePhoto and LocalizeGreyImage take a query.
+  Result Track(const Features& features, const Camera& camera);
+  Result TrackPhoto(const std::string& path, const std::optional<Camera>& camera = std::nullopt);
+  Result TrackGreyImage(const uint8_t* pixels, uint32_t width, uint32_t height, size_t stride,
+                        const Camera& camera);
+  // Forgets the frames so far: the next frame is localized from scratch.
+  void Reset();
+
+ private:
+  struct Impl;
   std::unique_ptr<Impl> impl_;
 };
 
