@@ -7,6 +7,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <type_traits>
 #include <utility>
 
 #include "cwloc/cwloc.h"
@@ -19,6 +20,11 @@ struct cwloc_localizer {
 
 struct cwloc_options {
   cwloc::api::Options options;
+};
+
+struct cwloc_tracker {
+  cwloc::api::Tracker tracker;
+  bool georeferenced = false;  // its localizer's index
 };
 
 struct cwloc_result {
@@ -70,13 +76,46 @@ const cwloc::api::Options& OptionsOrDefault(const cwloc_options* options) {
   return options != nullptr ? options->options : defaults;
 }
 
-// Checks the handle and output arguments every query shares, then runs the query.
-cwloc_status RunQuery(const cwloc_localizer* localizer, cwloc_result** out,
+// Checks the handle (a localizer or a tracker) and output arguments every query shares, then
+// runs the query.
+template <typename Handle>
+cwloc_status RunQuery(Handle* handle, cwloc_result** out,
                       const std::function<cwloc::api::Result()>& query) {
+  constexpr bool kTracker = std::is_same_v<std::remove_const_t<Handle>, cwloc_tracker>;
   if (out == nullptr) return Fail(CWLOC_ERROR_INVALID_ARGUMENT, "out is NULL");
   *out = nullptr;
-  if (localizer == nullptr) return Fail(CWLOC_ERROR_INVALID_ARGUMENT, "localizer is NULL");
-  return Guarded([&] { *out = new cwloc_result{query(), localizer->info.georeferenced}; });
+  if (handle == nullptr)
+    return Fail(CWLOC_ERROR_INVALID_ARGUMENT, kTracker ? "tracker is NULL" : "localizer is NULL");
+  bool georeferenced;
+  if constexpr (kTracker) {
+    georeferenced = handle->georeferenced;
+  } else {
+    georeferenced = handle->info.georeferenced;
+  }
+  return Guarded([&] { *out = new cwloc_result{query(), georeferenced}; });
+}
+
+// A query's features from C's arrays, which must be there when there are features.
+cwloc::api::Features FeaturesOf(const float* keypoints, const uint8_t* descriptors,
+                                uint32_t num_features) {
+  if (num_features > 0 && (keypoints == nullptr || descriptors == nullptr)) {
+    throw cwloc::api::Error(cwloc::api::ErrorCode::kInvalidArgument,
+                            "keypoints or descriptors is NULL");
+  }
+  cwloc::api::Features features;
+  features.keypoints.assign(keypoints, keypoints + size_t{num_features} * 2);
+  features.descriptors.assign(descriptors, descriptors + size_t{num_features} * 128);
+  return features;
+}
+
+// The camera features and grey images need (at least the image size).
+cwloc::api::Camera RequiredCamera(const cwloc_camera* camera, const char* what) {
+  const auto query_camera = ToCamera(camera);
+  if (!query_camera) {
+    throw cwloc::api::Error(cwloc::api::ErrorCode::kInvalidArgument,
+                            std::string(what) + " (at least the image size)");
+  }
+  return *query_camera;
 }
 
 // A result accessor's value that does not exist: NOT_AVAILABLE and why.
@@ -174,19 +213,9 @@ cwloc_status cwloc_localize_features(const cwloc_localizer* localizer, const flo
                                      const cwloc_camera* camera, const cwloc_options* options,
                                      cwloc_result** out) {
   return RunQuery(localizer, out, [&] {
-    if (num_features > 0 && (keypoints == nullptr || descriptors == nullptr)) {
-      throw cwloc::api::Error(cwloc::api::ErrorCode::kInvalidArgument,
-                              "keypoints or descriptors is NULL");
-    }
-    const auto query_camera = ToCamera(camera);
-    if (!query_camera) {
-      throw cwloc::api::Error(cwloc::api::ErrorCode::kInvalidArgument,
-                              "features need a camera (at least the image size)");
-    }
-    cwloc::api::Features features;
-    features.keypoints.assign(keypoints, keypoints + size_t{num_features} * 2);
-    features.descriptors.assign(descriptors, descriptors + size_t{num_features} * 128);
-    return localizer->localizer.Localize(features, *query_camera, OptionsOrDefault(options));
+    cwloc::api::Features features = FeaturesOf(keypoints, descriptors, num_features);
+    return localizer->localizer.Localize(features, RequiredCamera(camera, "features need a camera"),
+                                         OptionsOrDefault(options));
   });
 }
 
@@ -214,13 +243,54 @@ cwloc_status cwloc_localize_grey_image(const cwloc_localizer* localizer, const u
                                        const cwloc_camera* camera, const cwloc_options* options,
                                        cwloc_result** out) {
   return RunQuery(localizer, out, [&] {
-    const auto query_camera = ToCamera(camera);
-    if (!query_camera) {
-      throw cwloc::api::Error(cwloc::api::ErrorCode::kInvalidArgument,
-                              "a grey image needs a camera (at least the image size)");
-    }
-    return localizer->localizer.LocalizeGreyImage(pixels, width, height, stride, *query_camera,
-                                                  OptionsOrDefault(options));
+    return localizer->localizer.LocalizeGreyImage(
+        pixels, width, height, stride, RequiredCamera(camera, "a grey image needs a camera"),
+        OptionsOrDefault(options));
+  });
+}
+
+cwloc_status cwloc_tracker_create(const cwloc_localizer* localizer, const cwloc_options* options,
+                                  cwloc_tracker** out) {
+  if (out == nullptr) return Fail(CWLOC_ERROR_INVALID_ARGUMENT, "out is NULL");
+  *out = nullptr;
+  if (localizer == nullptr) return Fail(CWLOC_ERROR_INVALID_ARGUMENT, "localizer is NULL");
+  return Guarded([&] {
+    *out = new cwloc_tracker{cwloc::api::Tracker(localizer->localizer, OptionsOrDefault(options)),
+                             localizer->info.georeferenced};
+  });
+}
+
+void cwloc_tracker_destroy(cwloc_tracker* tracker) { delete tracker; }
+
+cwloc_status cwloc_tracker_reset(cwloc_tracker* tracker) {
+  if (tracker == nullptr) return Fail(CWLOC_ERROR_INVALID_ARGUMENT, "tracker is NULL");
+  return Guarded([&] { tracker->tracker.Reset(); });
+}
+
+cwloc_status cwloc_track_features(cwloc_tracker* tracker, const float* keypoints,
+                                  const uint8_t* descriptors, uint32_t num_features,
+                                  const cwloc_camera* camera, cwloc_result** out) {
+  return RunQuery(tracker, out, [&] {
+    cwloc::api::Features features = FeaturesOf(keypoints, descriptors, num_features);
+    return tracker->tracker.Track(features, RequiredCamera(camera, "features need a camera"));
+  });
+}
+
+cwloc_status cwloc_track_photo(cwloc_tracker* tracker, const char* path, const cwloc_camera* camera,
+                               cwloc_result** out) {
+  return RunQuery(tracker, out, [&] {
+    if (path == nullptr)
+      throw cwloc::api::Error(cwloc::api::ErrorCode::kInvalidArgument, "path is NULL");
+    return tracker->tracker.TrackPhoto(path, ToCamera(camera));
+  });
+}
+
+cwloc_status cwloc_track_grey_image(cwloc_tracker* tracker, const uint8_t* pixels, uint32_t width,
+                                    uint32_t height, size_t stride, const cwloc_camera* camera,
+                                    cwloc_result** out) {
+  return RunQuery(tracker, out, [&] {
+    return tracker->tracker.TrackGreyImage(pixels, width, height, stride,
+                                           RequiredCamera(camera, "a grey image needs a camera"));
   });
 }
 
@@ -352,6 +422,18 @@ cwloc_status cwloc_result_gravity_error(const cwloc_result* result, double* degr
   if (!result->result.gravity_error_deg)
     return NotAvailable("gravity error", "the query was not localized");
   *degrees = *result->result.gravity_error_deg;
+  last_error.clear();
+  return CWLOC_OK;
+}
+
+cwloc_status cwloc_result_tracking(const cwloc_result* result, cwloc_tracking* tracking) {
+  if (result == nullptr) return Fail(CWLOC_ERROR_INVALID_ARGUMENT, "result is NULL");
+  if (tracking == nullptr) return Fail(CWLOC_ERROR_INVALID_ARGUMENT, "tracking is NULL");
+  const auto& t = result->result.tracking;
+  if (!t) return NotAvailable("tracking", "the query was not a tracker's frame");
+  *tracking = {static_cast<cwloc_tracking_mode>(t->mode), t->predicted_from.c_str(),
+               t->prediction_error.has_value() ? 1 : 0,   t->prediction_error.value_or(0.0),
+               t->prediction_error_deg.value_or(0.0),     t->seconds};
   last_error.clear();
   return CWLOC_OK;
 }

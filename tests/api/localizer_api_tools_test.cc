@@ -475,6 +475,11 @@ TEST(TrackerApiTest, TracksAVideoAsCwlocLocalizeSequenceDoes) {
   std::istringstream records(output);
   const api::Localizer localizer = api::Localizer::Open(shared->index.string());
   api::Tracker tracker(localizer);
+  // And C's tracker, on a localizer of its own.
+  cwloc_localizer* c_localizer = nullptr;
+  ASSERT_EQ(cwloc_localizer_open(shared->index.c_str(), 0, &c_localizer), CWLOC_OK);
+  cwloc_tracker* c_tracker = nullptr;
+  ASSERT_EQ(cwloc_tracker_create(c_localizer, nullptr, &c_tracker), CWLOC_OK);
   const colmap::DatabaseReader db(shared->data / "database.db");
   int tracked = 0;
   for (const auto& [name, camera] : frames) {
@@ -482,7 +487,9 @@ TEST(TrackerApiTest, TracksAVideoAsCwlocLocalizeSequenceDoes) {
     std::string line;
     ASSERT_TRUE(std::getline(records, line));
     const nlohmann::json cli = nlohmann::json::parse(line);
-    const api::Result result = tracker.Track(DatabaseFeatures(db, name), ParseCamera(camera));
+    const api::Features features = DatabaseFeatures(db, name);
+    const api::Camera frame_camera = ParseCamera(camera);
+    const api::Result result = tracker.Track(features, frame_camera);
     ASSERT_TRUE(result.tracking.has_value());
     ASSERT_TRUE(result.success);
     const char* modes[] = {"tracked", "relocalized", "lost"};
@@ -491,7 +498,41 @@ TEST(TrackerApiTest, TracksAVideoAsCwlocLocalizeSequenceDoes) {
     EXPECT_EQ(result.num_inliers, cli["num_inliers"].get<uint32_t>());
     EXPECT_EQ(result.rotation, (cli["pose"]["qvec"].get<std::array<double, 4>>()));
     EXPECT_EQ(result.translation, (cli["pose"]["tvec"].get<std::array<double, 3>>()));
+
+    const cwloc_camera c_camera{frame_camera.model.c_str(), frame_camera.width,
+                                frame_camera.height,        frame_camera.params.data(),
+                                frame_camera.params.size(), CWLOC_CALIBRATION_KNOWN};
+    cwloc_result* c_result = nullptr;
+    ASSERT_EQ(
+        cwloc_track_features(c_tracker, features.keypoints.data(), features.descriptors.data(),
+                             uint32_t(features.keypoints.size() / 2), &c_camera, &c_result),
+        CWLOC_OK)
+        << cwloc_last_error();
+    cwloc_tracking c_tracking;
+    ASSERT_EQ(cwloc_result_tracking(c_result, &c_tracking), CWLOC_OK);
+    EXPECT_EQ(int(c_tracking.mode), int(result.tracking->mode));
+    EXPECT_EQ(c_tracking.predicted_from, result.tracking->predicted_from);
+    EXPECT_EQ(c_tracking.has_prediction_error, result.tracking->prediction_error.has_value());
+    std::array<double, 4> rotation;
+    std::array<double, 3> translation, center;
+    cwloc_result_pose(c_result, rotation.data(), translation.data(), center.data());
+    EXPECT_EQ(rotation, result.rotation);
+    EXPECT_EQ(translation, result.translation);
+    cwloc_result_destroy(c_result);
   }
+  ASSERT_EQ(cwloc_tracker_reset(c_tracker), CWLOC_OK);
+  cwloc_tracker_destroy(c_tracker);
+  // A query localized alone has no tracking to report.
+  cwloc_result* alone = nullptr;
+  ASSERT_EQ(
+      cwloc_localize_photo(c_localizer, (shared->data / "query_images" / frames[0].first).c_str(),
+                           nullptr, nullptr, &alone),
+      CWLOC_OK);
+  cwloc_tracking none;
+  EXPECT_EQ(cwloc_result_tracking(alone, &none), CWLOC_ERROR_NOT_AVAILABLE);
+  EXPECT_STREQ(cwloc_last_error(), "tracking: the query was not a tracker's frame");
+  cwloc_result_destroy(alone);
+  cwloc_localizer_close(c_localizer);
   EXPECT_GE(tracked, 3);
   tracker.Reset();
   const api::Result after_reset =

@@ -78,9 +78,26 @@ typedef struct cwloc_index_info {
   double origin_latitude_deg, origin_longitude_deg, origin_height_m;
 } cwloc_index_info;
 
+/* How a frame of a stream got its pose (a tracker; docs/algorithm.md, "Sequences"). */
+typedef enum cwloc_tracking_mode {
+  CWLOC_TRACKED = 0,     /* matched near the pose predicted from the frames before it */
+  CWLOC_RELOCALIZED = 1, /* localized from scratch: the first frame, or tracking failed */
+  CWLOC_LOST = 2         /* neither gave a pose */
+} cwloc_tracking_mode;
+
+typedef struct cwloc_tracking {
+  cwloc_tracking_mode mode;
+  const char* predicted_from; /* the frame the prediction started from; "" without one */
+  int has_prediction_error;   /* whether the next two are set */
+  double prediction_error;    /* model units between the pose's centre and the prediction's */
+  double prediction_error_deg;
+  double seconds; /* the tracker's whole time on the frame */
+} cwloc_tracking;
+
 typedef struct cwloc_localizer cwloc_localizer;
 typedef struct cwloc_options cwloc_options;
 typedef struct cwloc_result cwloc_result;
+typedef struct cwloc_tracker cwloc_tracker;
 
 CWLOC_C_API const char* cwloc_version(void);
 CWLOC_C_API const char* cwloc_last_error(void);
@@ -133,6 +150,24 @@ CWLOC_C_API cwloc_status cwloc_localize_grey_image(
     const cwloc_localizer* localizer, const uint8_t* pixels, uint32_t width, uint32_t height,
     size_t stride, const cwloc_camera* camera, const cwloc_options* options, cwloc_result** out);
 
+/* A tracker: the frames of one moving camera, in order (cwloc-localize --sequence), with the
+ * options given here (NULL: the defaults). Each frame is tracked from the frames before it,
+ * localized from scratch when that fails, or lost (no pose). One tracker per stream, its calls
+ * one at a time; trackers of one localizer may run on several threads; the localizer must
+ * outlive them. Reset forgets the frames so far. */
+CWLOC_C_API cwloc_status cwloc_tracker_create(const cwloc_localizer* localizer,
+                                              const cwloc_options* options, cwloc_tracker** out);
+CWLOC_C_API void cwloc_tracker_destroy(cwloc_tracker* tracker);
+CWLOC_C_API cwloc_status cwloc_tracker_reset(cwloc_tracker* tracker);
+CWLOC_C_API cwloc_status cwloc_track_features(cwloc_tracker* tracker, const float* keypoints,
+                                              const uint8_t* descriptors, uint32_t num_features,
+                                              const cwloc_camera* camera, cwloc_result** out);
+CWLOC_C_API cwloc_status cwloc_track_photo(cwloc_tracker* tracker, const char* path,
+                                           const cwloc_camera* camera, cwloc_result** out);
+CWLOC_C_API cwloc_status cwloc_track_grey_image(cwloc_tracker* tracker, const uint8_t* pixels,
+                                                uint32_t width, uint32_t height, size_t stride,
+                                                const cwloc_camera* camera, cwloc_result** out);
+
 /* Results: read with these accessors, then destroy. Pointers they return live as long as the
  * result. */
 CWLOC_C_API void cwloc_result_destroy(cwloc_result* result);
@@ -183,6 +218,9 @@ CWLOC_C_API cwloc_status cwloc_result_covariance(const cwloc_result* result, dou
 CWLOC_C_API cwloc_status cwloc_result_enu_covariance(const cwloc_result* result,
                                                      double enu_position[9],
                                                      double* position_radius95_m);
+/* How a tracker's frame got its pose; CWLOC_ERROR_NOT_AVAILABLE for a query localized alone. */
+CWLOC_C_API cwloc_status cwloc_result_tracking(const cwloc_result* result,
+                                               cwloc_tracking* tracking);
 /* The JSON record cwloc-localize writes for this query (schemas/localization-result.schema.json).
  */
 CWLOC_C_API const char* cwloc_result_json(const cwloc_result* result);
