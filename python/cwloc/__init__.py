@@ -26,6 +26,8 @@ from ._cwloc import (
     RankedImage,
     Result,
     StageTimes,
+    Tracker,
+    Tracking,
     default_options,
     read_feature_file,
     version,
@@ -36,8 +38,8 @@ __version__ = version()
 __all__ = [
     "BadInputError", "Camera", "Error", "ErrorCode", "GeoPose", "IndexInfo", "Inliers",
     "InternalError", "InvalidArgumentError", "Localizer", "Options", "OutOfMemoryError",
-    "PoseCovariance", "PositionPrior", "RankedImage", "Result", "StageTimes", "default_options",
-    "read_feature_file", "version", "__version__",
+    "PoseCovariance", "PositionPrior", "RankedImage", "Result", "StageTimes", "Tracker",
+    "Tracking", "default_options", "read_feature_file", "version", "__version__",
 ]
 
 try:  # builds with the indexer (not a device build, -DCWLOC_WITH_COLMAP_DB=OFF)

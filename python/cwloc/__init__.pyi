@@ -112,6 +112,13 @@ class IndexInfo:
     origin_longitude_deg: float
     origin_height_m: float
 
+class Tracking:
+    mode: str  # 'tracked', 'relocalized' or 'lost'
+    predicted_from: Optional[str]
+    prediction_error: Optional[float]
+    prediction_error_deg: Optional[float]
+    seconds: float
+
 class Result:
     success: bool
     failure_reason: str
@@ -141,6 +148,7 @@ class Result:
     gravity: Optional[npt.NDArray[np.float64]]
     gravity_error_deg: Optional[float]
     covariance: Optional[PoseCovariance]
+    tracking: Optional[Tracking]
     json: str
     def to_dict(self) -> dict[str, Any]: ...
 
@@ -156,3 +164,11 @@ class Localizer:
     def localize_features(self, keypoints: npt.ArrayLike, descriptors: npt.ArrayLike,
                           camera: _CameraLike, **options: Any) -> Result: ...
     def localize_grey(self, image: npt.ArrayLike, camera: _CameraLike, **options: Any) -> Result: ...
+
+class Tracker:
+    def __init__(self, localizer: Localizer, **options: Any) -> None: ...
+    def track_photo(self, photo: _Path, camera: Optional[_CameraLike] = None) -> Result: ...
+    def track_features(self, keypoints: npt.ArrayLike, descriptors: npt.ArrayLike,
+                       camera: _CameraLike) -> Result: ...
+    def track_grey(self, image: npt.ArrayLike, camera: _CameraLike) -> Result: ...
+    def reset(self) -> None: ...

@@ -20,6 +20,7 @@ void BindCamera(py::module_& m);     // camera.cc
 void BindOptions(py::module_& m);    // options.cc
 void BindResults(py::module_& m);    // results.cc
 void BindLocalizer(py::module_& m);  // localizer.cc
+void BindTracker(py::module_& m);    // tracker.cc
 void BindIndexer(py::module_& m);    // indexer.cc, in builds with the indexer
 
 // A Camera, or hloc's "MODEL W H PARAMS..." text. Raises TypeError / ValueError.

@@ -9,6 +9,7 @@ PYBIND11_MODULE(_cwloc, m) {
   python::BindOptions(m);
   python::BindResults(m);
   python::BindLocalizer(m);
+  python::BindTracker(m);
 #ifdef CWLOC_PYTHON_WITH_INDEXER
   python::BindIndexer(m);
 #endif

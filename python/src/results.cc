@@ -120,6 +120,29 @@ void BindParts(py::module_& m) {
           [](const api::PoseCovariance& c) { return OrNone(c.position_radius95_m); },
           "The 95 % radius in metres (georeferenced index), or None");
 
+  py::class_<api::Tracking>(m, "Tracking", "How a Tracker's frame got its pose.")
+      .def_property_readonly(
+          "mode",
+          [](const api::Tracking& t) {
+            constexpr const char* kModes[] = {"tracked", "relocalized", "lost"};
+            return std::string(kModes[static_cast<int>(t.mode)]);
+          },
+          "'tracked' (matched near the predicted pose), 'relocalized' (from scratch) or 'lost' "
+          "(no pose)")
+      .def_property_readonly(
+          "predicted_from",
+          [](const api::Tracking& t) {
+            return t.predicted_from.empty() ? py::none() : py::cast(t.predicted_from);
+          },
+          "The frame the prediction started from, or None")
+      .def_property_readonly(
+          "prediction_error", [](const api::Tracking& t) { return OrNone(t.prediction_error); },
+          "Model units between the pose's centre and the prediction's, or None")
+      .def_property_readonly(
+          "prediction_error_deg",
+          [](const api::Tracking& t) { return OrNone(t.prediction_error_deg); },
+          "Degrees between the pose and the prediction, or None")
+      .def_readonly("seconds", &api::Tracking::seconds, "The tracker's whole time on the frame");
   py::class_<api::IndexInfo>(m, "IndexInfo", "An opened index.")
       .def_readonly("path", &api::IndexInfo::path, "The file")
       .def_readonly("format_version", &api::IndexInfo::format_version, "'MAJOR.MINOR'")
@@ -187,6 +210,9 @@ void BindResults(py::module_& m) {
       .def_property_readonly(
           "covariance", [](const R& r) { return OrNone(r.covariance); },
           "PoseCovariance on success, else None")
+      .def_property_readonly(
+          "tracking", [](const R& r) { return OrNone(r.tracking); },
+          "Tracking for a Tracker's frame, else None")
       .def_readonly("json", &R::json, "The JSON record cwloc-localize writes for this query")
       .def(
           "to_dict", [](const R& r) { return py::module_::import("json").attr("loads")(r.json); },
