@@ -78,8 +78,7 @@ int main(int argc, char** argv) {
   int rounds = 10;
   app.add_option("--index", index, "Index file")->required();
   app.add_option("--database", database, "COLMAP database with the frames' features")->required();
-  app.add_option("--query-list", list, "Frames in time order: 'NAME MODEL W H PARAMS'")
-      ->required();
+  app.add_option("--query-list", list, "Frames in time order: 'NAME MODEL W H PARAMS'")->required();
   app.add_option("--rounds", rounds, "Rounds (each: every frame alone, then the sequence)")
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
