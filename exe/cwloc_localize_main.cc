@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <functional>
 #include <iostream>
 #include <memory>
 #include <mutex>
@@ -28,12 +29,16 @@
 #include "format/index.h"
 #include "io/camera_spec.h"
 #include "io/option_table.h"
+#include "io/photo_query.h"
 #include "io/query_assembly.h"
 #include "io/query_list.h"
 #include "io/query_priors.h"
 #include "io/result_json.h"
 #include "localizer/localizer.h"
 #include "localizer/tracker.h"
+#ifdef CWLOC_WITH_VIDEO
+#include "photo/video/video_frames.h"
+#endif
 #ifdef CWLOC_WITH_COLMAP_DB
 #include "io/database/database_queries.h"
 #endif
@@ -62,7 +67,9 @@ struct CliOptions {
   std::string poses_path;
   std::string trajectory_path;  // --sequence's poses in the TUM format
   int threads = 1;
-  bool sequence = false;  // the queries are frames of one camera, in order
+  bool sequence = false;   // the queries are frames of one camera, in order
+  std::string video_path;  // --video: a sequence of a video file's frames
+  uint32_t video_step = 1;
   bool verify = false;
   bool quiet = false;
 };
@@ -96,8 +103,11 @@ std::vector<QuerySource> CollectQueries(const CliOptions& cli) {
     for (const auto& [name, camera] : ReadQueryList(cli.image_list))
       sources.push_back({name, Kind::kPhoto, base / name, camera, cli.image_list});
   }
-  if (sources.empty()) {
-    throw InputError("no queries: give --image, --image-list, --query, --query-list or --features");
+  if (!cli.video_path.empty() && !sources.empty())
+    throw InputError("--video takes no other queries (its frames are the sequence)");
+  if (sources.empty() && cli.video_path.empty()) {
+    throw InputError(
+        "no queries: give --image, --image-list, --query, --query-list, --features or --video");
   }
   return sources;
 }
@@ -106,7 +116,7 @@ std::vector<QuerySource> CollectQueries(const CliOptions& cli) {
 class QueryLoader {
  public:
   QueryLoader(const CliOptions& cli, const QueryOptions& options)
-      : assembler_(options, Cameras(cli), Priors(cli)) {
+      : options_(options), assembler_(options, Cameras(cli), Priors(cli)) {
 #ifdef CWLOC_WITH_COLMAP_DB
     if (!cli.database_path.empty())
       database_ = std::make_unique<DatabaseQueries>(cli.database_path);
@@ -117,6 +127,20 @@ class QueryLoader {
     Query query = source.kind == QuerySource::Kind::kDatabase ? LoadFromDatabase(source)
                                                               : assembler_.Read(source);
     assembler_.Complete(source, &query);
+    return query;
+  }
+
+  // A video frame: the camera from --camera or --focal, else only its size; then its SIFT.
+  Query LoadFrame(const std::string& name, GreyImage image) const {
+    Query query;
+    query.name = name;
+    query.source = name;
+    query.camera.width = image.width;
+    query.camera.height = image.height;
+    query.camera.calibration = Calibration::kUnknown;
+    query.camera.source = IntrinsicsSource::kNone;
+    assembler_.Complete({name, QuerySource::Kind::kImage}, &query);
+    ExtractPhotoFeatures(std::move(image), options_.photo, &query);
     return query;
   }
 
@@ -151,6 +175,7 @@ class QueryLoader {
 #endif
   }
 
+  const QueryOptions& options_;
   QueryAssembler assembler_;
 #ifdef CWLOC_WITH_COLMAP_DB
   std::unique_ptr<DatabaseQueries> database_;
@@ -200,8 +225,8 @@ class ResultSink {
       trajectory_file_ = std::make_unique<CheckpointedFile>(cli.trajectory_path);
   }
 
-  // `position`: the query's place in the batch, a sequence frame's timestamp.
-  void Write(const LocalizationResult& result, const QueryOptions& options, size_t position) {
+  // `timestamp`: a sequence frame's, for --trajectory.
+  void Write(const LocalizationResult& result, const QueryOptions& options, double timestamp) {
     std::lock_guard lock(mutex_);
     if (closed_) return;  // a query abandoned by a stopped batch
     EmitJsonLine(ResultToJson(result, options).dump());
@@ -222,7 +247,7 @@ class ResultSink {
     }
     if (poses_file_ && result.success) Append(*poses_file_, PoseLine(result));
     if (trajectory_file_ && result.success)
-      Append(*trajectory_file_, TrajectoryLine(result, double(position)));
+      Append(*trajectory_file_, TrajectoryLine(result, timestamp));
   }
 
   void WriteError(const std::string& name, const std::string& error) {
@@ -309,8 +334,13 @@ int Run(const CliOptions& cli) {
   const LocalizerOptions& options = cli.options.localizer;
   if (cli.threads < 1 || cli.threads > 1024)
     throw InputError("--threads must be between 1 and 1024");
-  if (!cli.trajectory_path.empty() && !cli.sequence)
+  const bool sequence = cli.sequence || !cli.video_path.empty();
+  if (!cli.trajectory_path.empty() && !sequence)
     throw InputError("--trajectory needs --sequence (a trajectory is a sequence's frames)");
+#ifndef CWLOC_WITH_VIDEO
+  if (!cli.video_path.empty())
+    throw InputError("--video: this cwloc-localize was built without FFmpeg (CWLOC_WITH_VIDEO)");
+#endif
   const Index index = Index::Open(cli.index_path);
   if (cli.verify) {
     index.file().VerifyChecksums();
@@ -321,74 +351,115 @@ int Run(const CliOptions& cli) {
   // photo and --threads 4: four threads inside it). Its features do not depend on them.
   // A sequence's frames are tracked in order, one after the other.
   const int threads =
-      cli.sequence ? 1 : std::max(1, std::min<int>(cli.threads, static_cast<int>(sources.size())));
+      sequence ? 1 : std::max(1, std::min<int>(cli.threads, static_cast<int>(sources.size())));
   QueryOptions query_options = cli.options;
   query_options.photo.sift.num_threads = cli.threads / threads;
   const QueryLoader loader(cli, query_options);
   ResultSink sink(cli);
   const Localizer localizer(index);
   std::optional<Tracker> tracker;
-  if (cli.sequence) tracker.emplace(localizer, options);
+  if (sequence) tracker.emplace(localizer, options);
   std::atomic<int> modes[kTrackingModeNames.size()] = {};
 
-  std::atomic<size_t> next{0};
   std::atomic<int> localized{0}, failed{0}, errors{0}, internal_errors{0};
+  // One query: read, localized or tracked, written; its seconds, or -1 when it was an error.
+  const auto process = [&](const std::string& name, const std::string& label,
+                           const std::function<Query()>& load, double timestamp) {
+    try {
+      const Query query = load();
+      const LocalizationResult result =
+          tracker ? tracker->Track(query) : localizer.Localize(query, options);
+      if (result.tracking) ++modes[static_cast<size_t>(result.tracking->mode)];
+      (result.success ? localized : failed)++;
+      sink.Write(result, cli.options, timestamp);
+      return result.times.total;
+    } catch (const InputError& e) {
+      ++errors;
+      sink.WriteError(name, e.what());
+    } catch (const std::bad_alloc&) {
+      // A query too big for the memory left (a huge photo on a small device) must not end
+      // the batch: its buffers are freed by now.
+      ++internal_errors;
+      sink.WriteError(name, label + ": out of memory");
+    } catch (const std::exception& e) {
+      ++internal_errors;
+      sink.WriteError(name, label + ": internal error: " + e.what());
+    }
+    return -1.0;
+  };
   std::vector<double> times(sources.size(), -1);
-  Progress progress("localizing", sources.size());
-  auto worker = [&] {
-    for (size_t i = next++; i < sources.size() && !sink.failed() && stop_signal == 0; i = next++) {
+  size_t total = sources.size();
+  int abandoned = 0;
+  StopOnInterrupt();
+  if (!cli.video_path.empty()) {
+#ifdef CWLOC_WITH_VIDEO
+    // The frames as they are decoded, on this thread; a stream that breaks ends the run once
+    // the frames before the break are written (exit 2).
+    VideoFrames video(cli.video_path, query_options.photo.max_image_pixels);
+    Progress progress("tracking", std::max<uint64_t>(video.estimated_frames() / cli.video_step, 1));
+    std::string broken;
+    while (!sink.failed() && stop_signal == 0) {
+      std::optional<VideoFrame> frame;
       try {
-        const Query query = loader.Load(sources[i]);
-        const LocalizationResult result =
-            tracker ? tracker->Track(query) : localizer.Localize(query, options);
-        if (result.tracking) ++modes[static_cast<size_t>(result.tracking->mode)];
-        times[i] = result.times.total;
-        (result.success ? localized : failed)++;
-        sink.Write(result, cli.options, i);
+        frame = video.Next(cli.video_step);
       } catch (const InputError& e) {
-        ++errors;
-        sink.WriteError(sources[i].name, e.what());
-      } catch (const std::bad_alloc&) {
-        // A query too big for the memory left (a huge photo on a small device) must not end
-        // the batch: its buffers are freed by now.
-        ++internal_errors;
-        sink.WriteError(sources[i].name, sources[i].Label() + ": out of memory");
-      } catch (const std::exception& e) {
-        ++internal_errors;
-        sink.WriteError(sources[i].name, sources[i].Label() + ": internal error: " + e.what());
+        broken = e.what();
+        break;
       }
+      if (!frame) break;
+      const std::string name = cli.video_path + "#" + std::to_string(frame->index);
+      times.push_back(process(
+          name, name, [&] { return loader.LoadFrame(name, std::move(frame->image)); },
+          frame->seconds));
       progress.Advance();
     }
-  };
-  StopOnInterrupt();
-  // The workers have threads of their own; this one waits for them to finish or for a stop,
-  // after which the running queries get kStopGrace to finish and are abandoned after it.
-  std::mutex done_mutex;
-  std::condition_variable done;
-  int running = threads;
-  std::vector<std::thread> pool;
-  for (int t = 0; t < threads; ++t) {
-    pool.emplace_back([&] {
-      worker();
-      const std::lock_guard lock(done_mutex);
-      --running;
-      done.notify_all();
-    });
+    total = times.size();
+    progress.Finish();
+    if (!broken.empty()) {
+      sink.Close();
+      throw InputError(broken);
+    }
+#endif
+  } else {
+    std::atomic<size_t> next{0};
+    Progress progress("localizing", sources.size());
+    auto worker = [&] {
+      for (size_t i = next++; i < sources.size() && !sink.failed() && stop_signal == 0;
+           i = next++) {
+        times[i] = process(
+            sources[i].name, sources[i].Label(), [&] { return loader.Load(sources[i]); },
+            double(i));  // a list's frames: their place
+        progress.Advance();
+      }
+    };
+    // The workers have threads of their own; this one waits for them to finish or for a stop,
+    // after which the running queries get kStopGrace to finish and are abandoned after it.
+    std::mutex done_mutex;
+    std::condition_variable done;
+    int running = threads;
+    std::vector<std::thread> pool;
+    for (int t = 0; t < threads; ++t) {
+      pool.emplace_back([&] {
+        worker();
+        const std::lock_guard lock(done_mutex);
+        --running;
+        done.notify_all();
+      });
+    }
+    {
+      std::unique_lock lock(done_mutex);
+      while (running > 0 && stop_signal == 0) done.wait_for(lock, std::chrono::milliseconds(50));
+      done.wait_for(lock, kStopGrace, [&] { return running == 0; });
+      abandoned = running;
+    }
+    for (auto& thread : pool) abandoned > 0 ? thread.detach() : thread.join();
+    progress.Finish();
   }
-  int abandoned = 0;
-  {
-    std::unique_lock lock(done_mutex);
-    while (running > 0 && stop_signal == 0) done.wait_for(lock, std::chrono::milliseconds(50));
-    done.wait_for(lock, kStopGrace, [&] { return running == 0; });
-    abandoned = running;
-  }
-  for (auto& thread : pool) abandoned > 0 ? thread.detach() : thread.join();
-  progress.Finish();
   sink.Close();
   if (const int signal_number = stop_signal) {
     std::fprintf(stderr, "cwloc-localize: interrupted by %s after %d of %zu queries",
                  signal_number == SIGINT ? "SIGINT" : "SIGTERM",
-                 localized + failed + errors + internal_errors, sources.size());
+                 localized + failed + errors + internal_errors, total);
     if (abandoned > 0) {
       // Their threads still use this function's objects: end here, without unwinding.
       std::fprintf(stderr, "; %d running %s abandoned\n", abandoned,
@@ -407,8 +478,7 @@ int Run(const CliOptions& cli) {
   }
   std::sort(finished.begin(), finished.end());
   if (!cli.quiet) {
-    std::fprintf(stderr, "cwloc-localize: localized %d of %zu queries", localized.load(),
-                 sources.size());
+    std::fprintf(stderr, "cwloc-localize: localized %d of %zu queries", localized.load(), total);
     if (errors > 0) std::fprintf(stderr, " (%d bad input)", errors.load());
     if (internal_errors > 0)
       std::fprintf(stderr, " (%d out of memory or internal error)", internal_errors.load());
@@ -580,6 +650,15 @@ int main(int argc, char** argv) {
                  "Threads: queries localized in parallel, and a photo's SIFT gets those no other "
                  "query uses")
       ->capture_default_str();
+  app.add_option("--video", cli.video_path,
+                 "A video file (MP4, MOV, MKV, ...; FFmpeg reads it): its frames are a sequence "
+                 "(as --sequence), named FILE#FRAME_INDEX, the trajectory's timestamps their "
+                 "times; the camera from --camera or --focal, else only the frames' size")
+      ->group(kQueries);
+  app.add_option("--video-step", cli.video_step, "Every Nth frame of --video")
+      ->check(CLI::Range(1u, 1000000u))
+      ->capture_default_str()
+      ->group(kQueries);
   app.add_flag("--sequence", cli.sequence,
                "The queries are frames of one moving camera, in the order given: each is "
                "tracked from the frames before it, or localized from scratch when that fails "

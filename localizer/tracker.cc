@@ -122,6 +122,21 @@ std::optional<LocalizationResult> Tracker::TrackFrom(const Query& frame,
 LocalizationResult Tracker::Track(const Query& frame) {
   const Stopwatch time;
   TrackingInfo info;
+  if (frame.NumFeatures() == 0 && frame.descriptors.empty()) {
+    // A black or blurred frame is part of a stream, not bad input: it is lost.
+    LocalizationResult lost;
+    lost.name = frame.name;
+    lost.camera = frame.camera;
+    lost.photo = frame.photo;
+    lost.failure_reason = "the frame has no features";
+    lost.times.extraction = frame.photo ? frame.photo->extraction_seconds : 0.0;
+    if (last_) info.predicted_from = last_->name;
+    before_last_.reset();
+    info.seconds = time.Seconds();
+    lost.times.total = info.seconds + lost.times.extraction;
+    lost.tracking = std::move(info);
+    return lost;
+  }
   std::optional<LocalizationResult> result;
   std::optional<CameraPose> first_prediction;
   if (last_) {

@@ -69,6 +69,7 @@ case "$mode" in
     # The device configuration links nothing beyond the C/C++ runtime and small C libraries
     # (clang links the sanitizer's runtime statically, so ldd shows what a device build needs).
     forbidden='sqlite|libvl\.|ceres|glog|gflags|lapack|blas|atlas|gfortran|cholmod|spqr|metis|gomp'
+    forbidden+='|libav|libsw'  # FFmpeg
     for binary in build-tsan/bin/cwloc-localize build-tsan/lib/libcwloc.so; do
       if ldd "$binary" | grep -E "$forbidden"; then
         echo "device build: $binary links one of: $forbidden" >&2

@@ -9,6 +9,9 @@ packages=(
   libsqlite3-dev sqlite3 nlohmann-json3-dev libcli11-dev
   libgtest-dev libgmock-dev libbenchmark-dev libvlfeat-dev libstb-dev
   libjpeg62-turbo-dev libpng-dev libexif-dev
+  # Video files (cwloc-localize --video; never in the device build), and ffmpeg to make the
+  # tests' videos.
+  libavformat-dev libavcodec-dev libavutil-dev libswscale-dev ffmpeg
   colmap hyperfine valgrind time python3 python3-jsonschema python3-matplotlib clang-format
   # The Python module (docs/python.md): pybind11 and Python's headers, numpy, its tests, pip's
   # offline build in a venv; Dask.

@@ -139,6 +139,26 @@ TEST_F(TrackerTest, AFrameOfAnotherPlaceIsLostAndTheNextIsFound) {
   EXPECT_LE(PositionError(next), 0.01);
 }
 
+// A black frame (no features) is part of a stream: lost, not bad input, and the next frame is
+// found again.
+TEST_F(TrackerTest, ABlackFrameIsLostAndTheNextIsFound) {
+  const Localizer localizer(*index_);
+  Tracker tracker(localizer, LocalizerOptions{});
+  ASSERT_TRUE(tracker.Track(Frame(frames_[0])).success);
+  Query black = Frame(frames_[1]);
+  black.name = "black";
+  black.keypoints.clear();
+  black.descriptors.clear();
+  const LocalizationResult lost = tracker.Track(black);
+  EXPECT_FALSE(lost.success);
+  EXPECT_EQ(lost.failure_reason, "the frame has no features");
+  EXPECT_EQ(lost.tracking->mode, TrackingMode::kLost);
+  EXPECT_EQ(lost.tracking->predicted_from, frames_[0]);
+  const LocalizationResult next = tracker.Track(Frame(frames_[1]));
+  ASSERT_TRUE(next.success) << next.failure_reason;
+  EXPECT_LE(PositionError(next), 0.01);
+}
+
 TEST_F(TrackerTest, ResetStartsFromScratch) {
   const Localizer localizer(*index_);
   Tracker tracker(localizer, LocalizerOptions{});

@@ -1,0 +1,192 @@
+#include "photo/video/video_frames.h"
+
+extern "C" {
+#include <libavcodec/avcodec.h>
+#include <libavformat/avformat.h>
+#include <libavutil/imgutils.h>
+#include <libswscale/swscale.h>
+}
+
+#include <cmath>
+#include <string>
+
+#include "base/error.h"
+#include "photo/image_decode.h"
+
+namespace cwloc {
+namespace {
+
+std::string AvError(int code) {
+  char text[AV_ERROR_MAX_STRING_SIZE] = {};
+  av_strerror(code, text, sizeof(text));
+  return text;
+}
+
+// COLMAP's grey from 8-bit RGB (image_decode.h): (uint8)(0.2126 R + 0.7152 G + 0.0722 B + 0.5).
+uint8_t Grey(uint8_t r, uint8_t g, uint8_t b) {
+  return static_cast<uint8_t>(0.2126f * r + 0.7152f * g + 0.0722f * b + 0.5f);
+}
+
+}  // namespace
+
+struct VideoFrames::Impl {
+  std::filesystem::path path;
+  uint64_t max_pixels = 0;
+  AVFormatContext* format = nullptr;
+  AVCodecContext* codec = nullptr;
+  AVPacket* packet = nullptr;
+  AVFrame* frame = nullptr;
+  SwsContext* to_rgb = nullptr;
+  int stream = -1;
+  uint32_t width = 0, height = 0;  // the stream's, which every frame must keep
+  uint64_t next_index = 0;
+  bool flushing = false;  // the file is read: the decoder gives what it still holds
+  int broken = 0;         // the error that ended the reading, thrown after the flush
+  bool done = false;
+  std::vector<uint8_t> rgb;
+
+  ~Impl() {
+    sws_freeContext(to_rgb);
+    av_frame_free(&frame);
+    av_packet_free(&packet);
+    avcodec_free_context(&codec);
+    avformat_close_input(&format);
+  }
+
+  [[noreturn]] void Fail(const std::string& what) const {
+    throw InputError(path.string() + ": " + what);
+  }
+
+  // The decoder's next frame, or false at the end of the stream. A read or decoding error
+  // first lets the decoder give the frames it holds, then throws.
+  bool Decode() {
+    while (true) {
+      const int received = avcodec_receive_frame(codec, frame);
+      if (received == 0) return true;
+      if (received != AVERROR_EOF && received != AVERROR(EAGAIN)) {
+        if (!flushing)
+          Flush(received);
+        else
+          Fail("frame " + std::to_string(next_index) + ": " + AvError(received));
+        continue;
+      }
+      if (received == AVERROR_EOF || flushing) {
+        if (broken != 0) Fail("frame " + std::to_string(next_index) + ": " + AvError(broken));
+        return false;
+      }
+      const int read = av_read_frame(format, packet);
+      if (read == AVERROR_EOF) {
+        Flush(0);
+        continue;
+      }
+      if (read < 0) {
+        Flush(read);
+        continue;
+      }
+      if (packet->stream_index == stream) {
+        const int sent = avcodec_send_packet(codec, packet);
+        if (sent < 0 && sent != AVERROR(EAGAIN)) Flush(sent);
+      }
+      av_packet_unref(packet);
+    }
+  }
+
+  // No more packets: the decoder gives what it holds; `error` (if not 0) is thrown after.
+  void Flush(int error) {
+    flushing = true;
+    broken = error;
+    avcodec_send_packet(codec, nullptr);
+  }
+
+  GreyImage ToGrey() {
+    to_rgb = sws_getCachedContext(
+        to_rgb, frame->width, frame->height, static_cast<AVPixelFormat>(frame->format),
+        frame->width, frame->height, AV_PIX_FMT_RGB24, SWS_BILINEAR, nullptr, nullptr, nullptr);
+    if (to_rgb == nullptr) Fail("frame " + std::to_string(next_index) + ": unsupported pixels");
+    rgb.resize(size_t{width} * height * 3);
+    uint8_t* planes[4] = {rgb.data(), nullptr, nullptr, nullptr};
+    int strides[4] = {static_cast<int>(width * 3), 0, 0, 0};
+    sws_scale(to_rgb, frame->data, frame->linesize, 0, frame->height, planes, strides);
+    GreyImage grey;
+    grey.width = width;
+    grey.height = height;
+    grey.pixels.resize(size_t{width} * height);
+    for (size_t i = 0; i < grey.pixels.size(); ++i)
+      grey.pixels[i] = Grey(rgb[3 * i], rgb[3 * i + 1], rgb[3 * i + 2]);
+    return grey;
+  }
+};
+
+VideoFrames::VideoFrames(const std::filesystem::path& path, uint64_t max_pixels)
+    : impl_(std::make_unique<Impl>()) {
+  av_log_set_level(AV_LOG_QUIET);  // errors come back as InputError, not on stderr
+  Impl& v = *impl_;
+  v.path = path;
+  v.max_pixels = max_pixels;
+  if (!std::filesystem::exists(path)) v.Fail("no such file");
+  if (!std::filesystem::is_regular_file(path)) v.Fail("not a regular file");
+  int status = avformat_open_input(&v.format, path.c_str(), nullptr, nullptr);
+  if (status < 0) v.Fail("not a video FFmpeg can read (" + AvError(status) + ")");
+  status = avformat_find_stream_info(v.format, nullptr);
+  if (status < 0) v.Fail("no stream information (" + AvError(status) + ")");
+  const AVCodec* decoder = nullptr;
+  v.stream = av_find_best_stream(v.format, AVMEDIA_TYPE_VIDEO, -1, -1, &decoder, 0);
+  if (v.stream == AVERROR_STREAM_NOT_FOUND) v.Fail("no video stream");
+  if (v.stream < 0 || decoder == nullptr) v.Fail("no decoder for its video stream");
+  const AVCodecParameters* parameters = v.format->streams[v.stream]->codecpar;
+  if (parameters->width < int(kMinImageSide) || parameters->height < int(kMinImageSide)) {
+    v.Fail(std::to_string(parameters->width) + " x " + std::to_string(parameters->height) +
+           " frames, smaller than " + std::to_string(kMinImageSide) + " pixels a side");
+  }
+  if (uint64_t(parameters->width) * uint64_t(parameters->height) > max_pixels) {
+    v.Fail(std::to_string(parameters->width) + " x " + std::to_string(parameters->height) +
+           " frames, more than --max-image-pixels " + std::to_string(max_pixels));
+  }
+  v.width = static_cast<uint32_t>(parameters->width);
+  v.height = static_cast<uint32_t>(parameters->height);
+  v.codec = avcodec_alloc_context3(decoder);
+  v.packet = av_packet_alloc();
+  v.frame = av_frame_alloc();
+  if (v.codec == nullptr || v.packet == nullptr || v.frame == nullptr) throw std::bad_alloc();
+  avcodec_parameters_to_context(v.codec, parameters);
+  v.codec->thread_count = 1;  // the frames' features use the threads
+  status = avcodec_open2(v.codec, decoder, nullptr);
+  if (status < 0) v.Fail("cannot open its decoder (" + AvError(status) + ")");
+}
+
+VideoFrames::~VideoFrames() = default;
+
+std::optional<VideoFrame> VideoFrames::Next(uint32_t step) {
+  Impl& v = *impl_;
+  if (v.done) return std::nullopt;
+  while (v.Decode()) {
+    const uint64_t index = v.next_index++;
+    if (step > 1 && index % step != 0) continue;
+    if (uint32_t(v.frame->width) != v.width || uint32_t(v.frame->height) != v.height) {
+      v.Fail("frame " + std::to_string(index) + ": its size changed to " +
+             std::to_string(v.frame->width) + " x " + std::to_string(v.frame->height));
+    }
+    VideoFrame out;
+    out.index = index;
+    const AVRational base = v.format->streams[v.stream]->time_base;
+    const int64_t start = v.format->streams[v.stream]->start_time;
+    const int64_t pts = v.frame->best_effort_timestamp;
+    out.seconds = pts == AV_NOPTS_VALUE
+                      ? 0.0
+                      : double(pts - (start == AV_NOPTS_VALUE ? 0 : start)) * av_q2d(base);
+    out.image = v.ToGrey();
+    return out;
+  }
+  v.done = true;
+  return std::nullopt;
+}
+
+uint32_t VideoFrames::width() const { return impl_->width; }
+uint32_t VideoFrames::height() const { return impl_->height; }
+
+uint64_t VideoFrames::estimated_frames() const {
+  const int64_t frames = impl_->format->streams[impl_->stream]->nb_frames;
+  return frames > 0 ? uint64_t(frames) : 0;
+}
+
+}  // namespace cwloc
