@@ -34,6 +34,8 @@ inline constexpr InputKind kFeatureFile{"a feature file", 1'000'000'000};
 inline constexpr InputKind kQueryListFile{"a query or image list", 256'000'000};
 // Priors files (--priors): a position and a gravity line for a million queries.
 inline constexpr InputKind kPriorsFile{"a priors file", 256'000'000};
+// Motion files (--motion): a million frames at 256 bytes a line.
+inline constexpr InputKind kMotionFile{"a motion file", 256'000'000};
 // Georef files (cwloc-index --georef): a million images at 256 bytes a line.
 inline constexpr InputKind kGeorefFile{"a georef file", 256'000'000};
 // Clustering files (cwloc-index --cluster-file): a million images at 256 bytes a line.

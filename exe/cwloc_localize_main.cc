@@ -19,6 +19,8 @@
 #include <span>
 #include <sstream>
 #include <thread>
+#include <unordered_map>
+#include <unordered_set>
 #include <variant>
 
 #include "base/checkpointed_file.h"
@@ -28,6 +30,7 @@
 #include "exe/tool_main.h"
 #include "format/index.h"
 #include "io/camera_spec.h"
+#include "io/motion_file.h"
 #include "io/option_table.h"
 #include "io/photo_query.h"
 #include "io/query_assembly.h"
@@ -67,8 +70,9 @@ struct CliOptions {
   std::string poses_path;
   std::string trajectory_path;  // --sequence's poses in the TUM format
   int threads = 1;
-  bool sequence = false;   // the queries are frames of one camera, in order
-  std::string video_path;  // --video: a sequence of a video file's frames
+  bool sequence = false;    // the queries are frames of one camera, in order
+  std::string video_path;   // --video: a sequence of a video file's frames
+  std::string motion_path;  // --motion: the frames' motion from VIO
   uint32_t video_step = 1;
   bool verify = false;
   bool quiet = false;
@@ -335,6 +339,8 @@ int Run(const CliOptions& cli) {
   if (cli.threads < 1 || cli.threads > 1024)
     throw InputError("--threads must be between 1 and 1024");
   const bool sequence = cli.sequence || !cli.video_path.empty();
+  if (!cli.motion_path.empty() && !sequence)
+    throw InputError("--motion needs --sequence or --video (a motion is between frames)");
   if (!cli.trajectory_path.empty() && !sequence)
     throw InputError("--trajectory needs --sequence (a trajectory is a sequence's frames)");
 #ifndef CWLOC_WITH_VIDEO
@@ -347,6 +353,29 @@ int Run(const CliOptions& cli) {
     index.Validate();
   }
   const std::vector<QuerySource> sources = CollectQueries(cli);
+  std::unordered_map<std::string, MotionLine> motions;
+  if (!cli.motion_path.empty()) {
+    motions = ReadMotionFile(cli.motion_path);
+    // Every line names a frame: a query of the sequence, or VIDEO#INDEX for a video's.
+    std::unordered_set<std::string> names;
+    for (const QuerySource& source : sources) names.insert(source.name);
+    const std::string video_prefix = cli.video_path + "#";
+    for (const auto& [name, motion] : motions) {
+      const bool video_frame =
+          !cli.video_path.empty() && name.rfind(video_prefix, 0) == 0 &&
+          name.size() > video_prefix.size() &&
+          name.find_first_not_of("0123456789", video_prefix.size()) == std::string::npos;
+      if (!names.count(name) && !video_frame) {
+        throw InputError(cli.motion_path + ":" + std::to_string(motion.line) + ": frame '" + name +
+                         "' is not in the sequence");
+      }
+    }
+  }
+  const auto motion_of = [&](const std::string& name) -> std::optional<FrameMotion> {
+    const auto found = motions.find(name);
+    if (found == motions.end()) return std::nullopt;
+    return found->second.motion;
+  };
   // --threads goes to queries first; a photo's SIFT gets the threads no other query uses (one
   // photo and --threads 4: four threads inside it). Its features do not depend on them.
   // A sequence's frames are tracked in order, one after the other.
@@ -367,8 +396,8 @@ int Run(const CliOptions& cli) {
                            const std::function<Query()>& load, double timestamp) {
     try {
       const Query query = load();
-      const LocalizationResult result =
-          tracker ? tracker->Track(query) : localizer.Localize(query, options);
+      const LocalizationResult result = tracker ? tracker->Track(query, motion_of(query.name))
+                                                : localizer.Localize(query, options);
       if (result.tracking) ++modes[static_cast<size_t>(result.tracking->mode)];
       (result.success ? localized : failed)++;
       sink.Write(result, cli.options, timestamp);
@@ -658,6 +687,12 @@ int main(int argc, char** argv) {
   app.add_option("--video-step", cli.video_step, "Every Nth frame of --video")
       ->check(CLI::Range(1u, 1000000u))
       ->capture_default_str()
+      ->group(kQueries);
+  app.add_option("--motion", cli.motion_path,
+                 "With --sequence or --video: each frame's camera motion since the previous "
+                 "frame from VIO, lines 'NAME QW QX QY QZ TX TY TZ' (the frame's camera from the "
+                 "previous one's, metres: model units by a georeferenced index's scale, else only "
+                 "the direction counts); it predicts the frame's pose")
       ->group(kQueries);
   app.add_flag("--sequence", cli.sequence,
                "The queries are frames of one moving camera, in the order given: each is "

@@ -58,6 +58,23 @@ Tracker::Tracker(const Localizer& localizer, const LocalizerOptions& options,
   rough_options_.pose.refine = false;
 }
 
+CameraPose Tracker::Moved(const CameraPose& pose, const FrameMotion& motion) const {
+  Eigen::Vector3d step = motion.relative.translation;
+  const auto& geo = localizer_.geo();
+  if (motion.metric && geo) {
+    step /= geo->frame().georeference().scale;  // metres to model units
+  } else if (before_last_) {
+    // Up to scale: the direction, at the length of the last step between camera centres.
+    const double length = (last_->pose.Center() - before_last_->pose.Center()).norm();
+    const double norm = step.norm();
+    step = norm > 0 ? Eigen::Vector3d(step * (length / norm)) : Eigen::Vector3d::Zero();
+  } else {
+    step.setZero();  // no step to take the length from: the rotation alone
+  }
+  return {motion.relative.rotation * pose.rotation,
+          motion.relative.rotation * pose.translation + step};
+}
+
 void Tracker::Reset() {
   last_.reset();
   before_last_.reset();
@@ -119,7 +136,7 @@ std::optional<LocalizationResult> Tracker::TrackFrom(const Query& frame,
   return result;
 }
 
-LocalizationResult Tracker::Track(const Query& frame) {
+LocalizationResult Tracker::Track(const Query& frame, const std::optional<FrameMotion>& motion) {
   const Stopwatch time;
   TrackingInfo info;
   if (frame.NumFeatures() == 0 && frame.descriptors.empty()) {
@@ -141,9 +158,12 @@ LocalizationResult Tracker::Track(const Query& frame) {
   std::optional<CameraPose> first_prediction;
   if (last_) {
     info.predicted_from = last_->name;
-    // The last motion repeated, then the last pose alone (a camera that stopped or turned).
+    // The given motion or the last step repeated, then the last pose alone (a camera that
+    // stopped or turned).
     std::vector<CameraPose> predictions;
-    if (before_last_) {
+    if (motion) {
+      predictions.push_back(Moved(last_->pose, *motion));
+    } else if (before_last_) {
       const Eigen::Quaterniond motion_rotation =
           last_->pose.rotation * before_last_->pose.rotation.conjugate();
       const Eigen::Vector3d motion_translation =

@@ -28,6 +28,17 @@ struct TrackerOptions {
   double max_relative_position_change = 0.25;
 };
 
+// What the device knows of its own motion since the previous frame (visual-inertial
+// odometry): the frame's camera from the previous frame's camera, COLMAP's convention
+// (X_cam = R X_previous_cam + t). Its translation is in metres when `metric`: on a
+// georeferenced index it becomes model units by the georeference's scale; otherwise (or on
+// an index without one) only its direction counts, at the length of the last step between
+// poses (the scale of a map without a georeference is unknown).
+struct FrameMotion {
+  CameraPose relative;
+  bool metric = false;
+};
+
 // Frames of one camera, in order: a frame's pose is predicted from the frames before it (the
 // last pose moved by the last motion, or the last pose alone), the frame is matched near that
 // prediction for a rough pose, then near the rough pose, and its pose fit to those matches with
@@ -41,8 +52,9 @@ class Tracker {
   Tracker(const Localizer& localizer, const LocalizerOptions& options,
           const TrackerOptions& tracker_options = {});
 
-  // The frame's result, with its `tracking` set. Throws InputError as Localizer::Localize does.
-  LocalizationResult Track(const Query& frame);
+  // The frame's result, with its `tracking` set. With a motion the prediction is the last pose
+  // moved by it, instead of by the last step. Throws InputError as Localizer::Localize does.
+  LocalizationResult Track(const Query& frame, const std::optional<FrameMotion>& motion = {});
   // Forgets the frames so far: the next frame is localized from scratch.
   void Reset();
 
@@ -53,6 +65,8 @@ class Tracker {
     PoseHypothesis camera_and_pose;
     std::vector<uint32_t> inlier_views;
   };
+  // The last pose moved by the motion, its translation in model units.
+  CameraPose Moved(const CameraPose& pose, const FrameMotion& motion) const;
   std::optional<LocalizationResult> TrackFrom(const Query& frame, const CameraPose& predicted,
                                               TrackingInfo* info) const;
 
