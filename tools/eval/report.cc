@@ -123,6 +123,39 @@ const char* QueryStatusName(QueryStatus status) {
   return "missing";
 }
 
+namespace {
+
+// The frames' modes in the file's order; nothing when no result has one.
+std::optional<SequenceReport> EvaluateSequence(const RunResults& run,
+                                               const std::vector<QueryOutcome>& outcomes) {
+  std::unordered_map<std::string, const QueryOutcome*> by_name;
+  for (const QueryOutcome& outcome : outcomes) by_name.emplace(outcome.name, &outcome);
+  SequenceReport sequence;
+  std::vector<double> tracked_errors, relocalized_errors;
+  int without_pose = 0;
+  for (const QueryResult& result : run.queries) {
+    if (result.tracking_mode.empty()) continue;
+    ++sequence.frames;
+    const bool tracked = result.tracking_mode == "tracked";
+    const bool relocalized = result.tracking_mode == "relocalized";
+    sequence.tracked += tracked;
+    sequence.relocalized += relocalized;
+    sequence.lost += !tracked && !relocalized;
+    without_pose = tracked || relocalized ? 0 : without_pose + 1;
+    sequence.longest_without_pose = std::max(sequence.longest_without_pose, without_pose);
+    const auto outcome = by_name.find(result.name);
+    if (outcome == by_name.end() || outcome->second->status != QueryStatus::kLocalized) continue;
+    (tracked ? tracked_errors : relocalized_errors).push_back(outcome->second->position_error);
+  }
+  if (sequence.frames == 0) return std::nullopt;
+  sequence.tracked_error = ComputeQuartiles(std::move(tracked_errors));
+  sequence.relocalized_error = ComputeQuartiles(std::move(relocalized_errors));
+  sequence.with_pose_share = double(sequence.tracked + sequence.relocalized) / sequence.frames;
+  return sequence;
+}
+
+}  // namespace
+
 RunReport EvaluateRun(const std::vector<NamedPose>& ground_truth, const RunResults& run,
                       double scale, const std::string& label, const GeoTruth& geo) {
   RunReport report;
@@ -207,6 +240,7 @@ RunReport EvaluateRun(const std::vector<NamedPose>& ground_truth, const RunResul
     for (size_t s = 0; s < kStageNames.size(); ++s)
       stage_values[s].push_back((*result.times_ms)[s]);
   }
+  report.sequence = EvaluateSequence(run, report.per_query);
   report.position_error = ComputeQuartiles(std::move(position_errors));
   report.rotation_error_deg = ComputeQuartiles(std::move(rotation_errors));
   report.ground_error = ComputeQuartiles(std::move(ground_errors));
@@ -297,6 +331,16 @@ nlohmann::ordered_json ReportToJson(const EvalReport& report) {
         {"with_covariance", run.with_covariance},
         {"inside", run.inside95},
         {"share", run.with_covariance ? double(run.inside95) / run.with_covariance : 0.0}};
+    if (const auto& sequence = run.sequence) {
+      r["sequence"] = {{"frames", sequence->frames},
+                       {"tracked", sequence->tracked},
+                       {"relocalized", sequence->relocalized},
+                       {"lost", sequence->lost},
+                       {"tracked_position_error", QuartilesJson(sequence->tracked_error)},
+                       {"relocalized_position_error", QuartilesJson(sequence->relocalized_error)},
+                       {"longest_without_pose", sequence->longest_without_pose},
+                       {"with_pose_share", sequence->with_pose_share}};
+    }
     r["timed_records"] = run.timed_records;
     if (run.times_ms) {
       ordered_json times;
@@ -392,6 +436,21 @@ std::string FormatTable(const EvalReport& report) {
       out << "  warning: " << run.label << ": " << run.unknown_names
           << " result(s) for names not in the ground truth (ignored)\n";
     }
+  }
+
+  // A sequence's frames by how they got their pose (docs/algorithm.md, "Sequences").
+  for (const RunReport& run : report.runs) {
+    if (!run.sequence) continue;
+    const SequenceReport& s = *run.sequence;
+    const auto median = [](const std::optional<Quartiles>& q) {
+      return q ? Number(q->median) : std::string("-");
+    };
+    out << "  " << run.label << ": sequence of " << s.frames << " frames: " << s.tracked
+        << " tracked, " << s.relocalized << " relocalized, " << s.lost << " lost; "
+        << Percent(s.tracked + s.relocalized, s.frames) << " with a pose, at most "
+        << s.longest_without_pose << " in a row without; median position error tracked "
+        << median(s.tracked_error) << ", relocalized " << median(s.relocalized_error) << " ("
+        << report.Unit() << ")\n";
   }
 
   // How often the truth lies where the covariance says it should (docs/algorithm.md).

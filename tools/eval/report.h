@@ -76,6 +76,17 @@ struct GeoComparison {
   int within = 0;  // compared queries with a 3D error <= kGeoWithinMetres
 };
 
+// A sequence's frames (results with "tracking", cwloc-localize --sequence or --video).
+struct SequenceReport {
+  int frames = 0;  // results with a tracking mode, in the file's order
+  int tracked = 0, relocalized = 0, lost = 0;
+  // Position errors of the ground-truth frames by the mode that gave their pose.
+  std::optional<Quartiles> tracked_error;
+  std::optional<Quartiles> relocalized_error;
+  int longest_without_pose = 0;  // consecutive frames without a pose, the most
+  double with_pose_share = 0;    // (tracked + relocalized) / frames
+};
+
 struct RunReport {
   std::string label;
   std::filesystem::path path;
@@ -102,6 +113,7 @@ struct RunReport {
   // the 95 % ellipsoid it gives: the covariance's coverage.
   int with_covariance = 0;
   int inside95 = 0;
+  std::optional<SequenceReport> sequence;  // when the results are a sequence's frames
 };
 
 struct EvalReport {

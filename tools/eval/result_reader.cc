@@ -112,6 +112,14 @@ QueryResult ParseJsonLine(const std::string& line, const std::string& where) {
     }
     result.times_ms = stage_times;
   }
+  if (const auto tracking = record.find("tracking"); tracking != record.end()) {
+    const auto mode = tracking->is_object() ? tracking->find("mode") : tracking->end();
+    if (mode == tracking->end() || !mode->is_string() ||
+        (*mode != "tracked" && *mode != "relocalized" && *mode != "lost")) {
+      throw InputError(where + "\"tracking.mode\" must be tracked, relocalized or lost");
+    }
+    result.tracking_mode = mode->get<std::string>();
+  }
   if (const auto ranked = record.find("ranked_images"); ranked != record.end()) {
     if (!ranked->is_array()) throw InputError(where + "\"ranked_images\" must be an array");
     for (const auto& image : *ranked) {

@@ -31,6 +31,7 @@ struct QueryResult {
   // The camera centre's covariance (the lower-right 3 x 3 of "covariance.pose"), model units.
   std::optional<Eigen::Matrix3d> position_covariance;
   std::vector<uint32_t> ranked_image_ids;  // "ranked_images", best first (JSON lines only)
+  std::string tracking_mode;               // a sequence frame's "tracking.mode"; empty otherwise
   int line = 0;
 };
 

@@ -182,6 +182,59 @@ TEST(Report, CoverageCountsTruthsInsideTheCovariancesEllipsoid) {
             (dir / "bad.jsonl").string() + ":1: \"covariance.pose\" must be 6 x 6 finite numbers");
 }
 
+// Frames of a sequence (records with "tracking"): counted by mode in the file's order, errors by
+// the mode that gave the pose, the longest run without a pose.
+TEST(Report, ASequenceIsCountedByModeInTheFilesOrder) {
+  cwloc::test::TempDir dir;
+  // Six frames at centres (i, 0, 0), identity rotations.
+  std::ofstream gt(dir / "gt.txt");
+  for (int i = 0; i < 6; ++i)
+    gt << "f" << i << " 1 0 0 0 " << -i << " 0 0 SIMPLE_PINHOLE 100 100 50 50 50\n";
+  gt.close();
+  // Found at centre (i + offset, 0, 0); frames 2 and 3 lost, frame 4 not in the ground truth's
+  // order but the file's.
+  const auto frame = [](int i, const char* mode, double offset) {
+    if (offset < 0)
+      return "{\"name\": \"f" + std::to_string(i) +
+             "\", \"success\": false, \"tracking\": {\"mode\": \"" + mode + "\"}}\n";
+    return "{\"name\": \"f" + std::to_string(i) +
+           "\", \"success\": true, \"pose\": {\"qvec\": [1, 0, 0, 0], \"tvec\": [" +
+           std::to_string(-(i + offset)) + ", 0, 0]}, \"tracking\": {\"mode\": \"" + mode +
+           "\"}}\n";
+  };
+  std::ofstream(dir / "run.jsonl")
+      << frame(0, "relocalized", 0.0) << frame(1, "tracked", 0.1) << frame(2, "lost", -1)
+      << frame(3, "lost", -1) << frame(4, "tracked", 0.3) << frame(5, "relocalized", 0.2);
+  const RunReport r =
+      EvaluateRun(ReadGroundTruth(dir / "gt.txt"), ReadResults(dir / "run.jsonl"), 1.0, "run");
+  ASSERT_TRUE(r.sequence);
+  EXPECT_EQ(r.sequence->frames, 6);
+  EXPECT_EQ(r.sequence->tracked, 2);
+  EXPECT_EQ(r.sequence->relocalized, 2);
+  EXPECT_EQ(r.sequence->lost, 2);
+  EXPECT_EQ(r.sequence->longest_without_pose, 2);
+  EXPECT_DOUBLE_EQ(r.sequence->with_pose_share, 4.0 / 6.0);
+  EXPECT_NEAR(r.sequence->tracked_error->median, 0.2, 1e-9);      // {0.1, 0.3}
+  EXPECT_NEAR(r.sequence->relocalized_error->median, 0.1, 1e-9);  // {0, 0.2}
+  EvalReport report;
+  report.runs.push_back(r);
+  EXPECT_EQ(ReportToJson(report)["runs"][0]["sequence"]["longest_without_pose"], 2);
+  EXPECT_THAT(FormatTable(report),
+              testing::HasSubstr("run: sequence of 6 frames: 2 tracked, 2 relocalized, 2 lost; "
+                                 "66.7% with a pose, at most 2 in a row without; median position "
+                                 "error tracked 0.200, relocalized 0.100 (model units)"));
+  // Plain queries have no sequence.
+  std::ofstream(dir / "plain.jsonl") << "{\"name\": \"f0\", \"success\": false}\n";
+  EXPECT_FALSE(
+      EvaluateRun(ReadGroundTruth(dir / "gt.txt"), ReadResults(dir / "plain.jsonl"), 1.0, "run")
+          .sequence);
+  std::ofstream(dir / "bad.jsonl")
+      << "{\"name\": \"f0\", \"success\": false, \"tracking\": {\"mode\": \"drifting\"}}\n";
+  EXPECT_EQ(
+      InputErrorOf([&] { ReadResults(dir / "bad.jsonl"); }),
+      (dir / "bad.jsonl").string() + ":1: \"tracking.mode\" must be tracked, relocalized or lost");
+}
+
 TEST(Report, ScaleMultipliesDistancesOnly) {
   cwloc::test::TempDir dir;
   const Scenario s;
