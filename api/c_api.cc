@@ -95,6 +95,14 @@ cwloc_status RunQuery(Handle* handle, cwloc_result** out,
   return Guarded([&] { *out = new cwloc_result{query(), georeferenced}; });
 }
 
+std::optional<cwloc::api::Motion> ToMotion(const cwloc_motion* motion) {
+  if (motion == nullptr) return std::nullopt;
+  cwloc::api::Motion out;
+  std::copy_n(motion->rotation_wxyz, 4, out.rotation.begin());
+  std::copy_n(motion->translation, 3, out.translation.begin());
+  return out;
+}
+
 // A query's features from C's arrays, which must be there when there are features.
 cwloc::api::Features FeaturesOf(const float* keypoints, const uint8_t* descriptors,
                                 uint32_t num_features) {
@@ -269,28 +277,31 @@ cwloc_status cwloc_tracker_reset(cwloc_tracker* tracker) {
 
 cwloc_status cwloc_track_features(cwloc_tracker* tracker, const float* keypoints,
                                   const uint8_t* descriptors, uint32_t num_features,
-                                  const cwloc_camera* camera, cwloc_result** out) {
+                                  const cwloc_camera* camera, const cwloc_motion* motion,
+                                  cwloc_result** out) {
   return RunQuery(tracker, out, [&] {
     cwloc::api::Features features = FeaturesOf(keypoints, descriptors, num_features);
-    return tracker->tracker.Track(features, RequiredCamera(camera, "features need a camera"));
+    return tracker->tracker.Track(features, RequiredCamera(camera, "features need a camera"),
+                                  ToMotion(motion));
   });
 }
 
 cwloc_status cwloc_track_photo(cwloc_tracker* tracker, const char* path, const cwloc_camera* camera,
-                               cwloc_result** out) {
+                               const cwloc_motion* motion, cwloc_result** out) {
   return RunQuery(tracker, out, [&] {
     if (path == nullptr)
       throw cwloc::api::Error(cwloc::api::ErrorCode::kInvalidArgument, "path is NULL");
-    return tracker->tracker.TrackPhoto(path, ToCamera(camera));
+    return tracker->tracker.TrackPhoto(path, ToCamera(camera), ToMotion(motion));
   });
 }
 
 cwloc_status cwloc_track_grey_image(cwloc_tracker* tracker, const uint8_t* pixels, uint32_t width,
                                     uint32_t height, size_t stride, const cwloc_camera* camera,
-                                    cwloc_result** out) {
+                                    const cwloc_motion* motion, cwloc_result** out) {
   return RunQuery(tracker, out, [&] {
     return tracker->tracker.TrackGreyImage(pixels, width, height, stride,
-                                           RequiredCamera(camera, "a grey image needs a camera"));
+                                           RequiredCamera(camera, "a grey image needs a camera"),
+                                           ToMotion(motion));
   });
 }
 

@@ -229,26 +229,45 @@ void Options::Set(const std::string& name, double value) {
   });
 }
 
+// A tracker's frame: the tracker, and the motion the caller gives.
+struct TrackedFrame {
+  cwloc::Tracker* tracker = nullptr;
+  std::optional<FrameMotion> motion;
+};
+
+std::optional<FrameMotion> ToFrameMotion(const std::optional<Motion>& motion) {
+  if (!motion) return std::nullopt;
+  const auto& q = motion->rotation;
+  const Eigen::Quaterniond rotation(q[0], q[1], q[2], q[3]);
+  const auto& t = motion->translation;
+  if (!(std::abs(rotation.norm() - 1.0) <= 1e-3) || !std::isfinite(t[0] + t[1] + t[2])) {
+    throw InvalidArgument(
+        "motion: expected a unit quaternion (w, x, y, z) and a finite "
+        "translation");
+  }
+  return FrameMotion{CameraPose(rotation.normalized(), Eigen::Vector3d(t[0], t[1], t[2])), true};
+}
+
 struct Localizer::Impl {
   explicit Impl(Index opened) : index(std::move(opened)), localizer(index) {}
 
   Result Run(Query query, const QuerySource& source, const CallOptions& call,
-             cwloc::Tracker* tracker) const {
+             const TrackedFrame* frame) const {
     call.Complete(source, &query);
-    return Localize(query, call, tracker);
+    return Localize(query, call, frame);
   }
 
-  // A complete query: localized alone, or as the next frame of `tracker`.
-  Result Localize(const Query& query, const CallOptions& call, cwloc::Tracker* tracker) const {
+  // A complete query: localized alone, or as the next frame of a tracker.
+  Result Localize(const Query& query, const CallOptions& call, const TrackedFrame* frame) const {
     ValidateOrThrowInvalidArgument([&] { localizer.ValidatePriors(query); });
-    const LocalizationResult result = tracker != nullptr
-                                          ? tracker->Track(query)
+    const LocalizationResult result = frame != nullptr
+                                          ? frame->tracker->Track(query, frame->motion)
                                           : localizer.Localize(query, call.options.localizer);
     return ToResult(result, query, index, call.options);
   }
 
   Result FromFeatures(const Features& features, const Camera& camera, const Options& options,
-                      cwloc::Tracker* tracker) const {
+                      const TrackedFrame* frame) const {
     return Translated([&] {
       const CallOptions call(options, camera);
       Query query;
@@ -256,22 +275,22 @@ struct Localizer::Impl {
       query.source = "features";
       query.keypoints = features.keypoints;
       query.descriptors = features.descriptors;
-      return Run(std::move(query), {"query", QuerySource::Kind::kFeatures}, call, tracker);
+      return Run(std::move(query), {"query", QuerySource::Kind::kFeatures}, call, frame);
     });
   }
 
   Result FromPhoto(const std::string& photo, const std::optional<Camera>& camera,
-                   const Options& options, cwloc::Tracker* tracker) const {
+                   const Options& options, const TrackedFrame* frame) const {
     return Translated([&] {
       const CallOptions call(options, camera);
       const QuerySource source{photo, QuerySource::Kind::kPhoto, photo};
-      return Run(call.assembler.Read(source), source, call, tracker);
+      return Run(call.assembler.Read(source), source, call, frame);
     });
   }
 
   Result FromGreyImage(const uint8_t* pixels, uint32_t width, uint32_t height, size_t stride,
                        const Camera& camera, const Options& options,
-                       cwloc::Tracker* tracker) const {
+                       const TrackedFrame* frame) const {
     return Translated([&] {
       if (pixels == nullptr) throw InvalidArgument("grey image: null pointer");
       if (width == 0 || height == 0 || stride < width) {
@@ -301,7 +320,7 @@ struct Localizer::Impl {
         std::copy_n(pixels + y * stride, width, image.pixels.data() + size_t{y} * width);
       }
       ExtractPhotoFeatures(std::move(image), photo_options, &query);
-      return Localize(query, call, tracker);
+      return Localize(query, call, frame);
     });
   }
 
@@ -391,18 +410,30 @@ Tracker::Tracker(Tracker&&) noexcept = default;
 Tracker& Tracker::operator=(Tracker&&) noexcept = default;
 Tracker::~Tracker() = default;
 
-Result Tracker::Track(const Features& features, const Camera& camera) {
-  return impl_->localizer.FromFeatures(features, camera, impl_->options, &impl_->tracker);
+Result Tracker::Track(const Features& features, const Camera& camera,
+                      const std::optional<Motion>& motion) {
+  return Translated([&] {
+    const TrackedFrame frame{&impl_->tracker, ToFrameMotion(motion)};
+    return impl_->localizer.FromFeatures(features, camera, impl_->options, &frame);
+  });
 }
 
-Result Tracker::TrackPhoto(const std::string& path, const std::optional<Camera>& camera) {
-  return impl_->localizer.FromPhoto(path, camera, impl_->options, &impl_->tracker);
+Result Tracker::TrackPhoto(const std::string& path, const std::optional<Camera>& camera,
+                           const std::optional<Motion>& motion) {
+  return Translated([&] {
+    const TrackedFrame frame{&impl_->tracker, ToFrameMotion(motion)};
+    return impl_->localizer.FromPhoto(path, camera, impl_->options, &frame);
+  });
 }
 
 Result Tracker::TrackGreyImage(const uint8_t* pixels, uint32_t width, uint32_t height,
-                               size_t stride, const Camera& camera) {
-  return impl_->localizer.FromGreyImage(pixels, width, height, stride, camera, impl_->options,
-                                        &impl_->tracker);
+                               size_t stride, const Camera& camera,
+                               const std::optional<Motion>& motion) {
+  return Translated([&] {
+    const TrackedFrame frame{&impl_->tracker, ToFrameMotion(motion)};
+    return impl_->localizer.FromGreyImage(pixels, width, height, stride, camera, impl_->options,
+                                          &frame);
+  });
 }
 
 void Tracker::Reset() { impl_->tracker.Reset(); }

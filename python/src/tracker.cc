@@ -1,6 +1,8 @@
 // cwloc.Tracker: a stream's frames in order (api::Tracker), inputs converted with the GIL held
 // and the frame run without it; a lock keeps one frame at a time per tracker.
+#include <array>
 #include <mutex>
+#include <utility>
 
 #include "python/src/bindings.h"
 
@@ -14,35 +16,50 @@ struct Tracker {
   std::mutex frame;  // one frame at a time, whatever the Python threads do
 };
 
+// motion: None, or ((w, x, y, z), (tx, ty, tz)), the frame's camera from the previous one's.
+std::optional<api::Motion> ToMotion(py::handle motion) {
+  if (motion.is_none()) return std::nullopt;
+  try {
+    const auto parts = motion.cast<std::pair<std::array<double, 4>, std::array<double, 3>>>();
+    return api::Motion{parts.first, parts.second};
+  } catch (const py::cast_error&) {
+    throw py::type_error("motion: expected ((w, x, y, z), (tx, ty, tz)) or None");
+  }
+}
+
 std::unique_ptr<Tracker> Create(const api::Localizer& localizer, const py::kwargs& kwargs) {
   return std::make_unique<Tracker>(localizer, ToOptions(kwargs));
 }
 
-api::Result TrackPhoto(Tracker& tracker, py::handle photo, py::handle camera) {
+api::Result TrackPhoto(Tracker& tracker, py::handle photo, py::handle camera,
+                       py::handle motion_in) {
   const std::string path = ToPath(photo, "photo");
   std::optional<api::Camera> frame_camera;
   if (!camera.is_none()) frame_camera = ToCamera(camera, "camera");
+  const std::optional<api::Motion> motion = ToMotion(motion_in);
   py::gil_scoped_release release;
   const std::lock_guard lock(tracker.frame);
-  return tracker.tracker.TrackPhoto(path, frame_camera);
+  return tracker.tracker.TrackPhoto(path, frame_camera, motion);
 }
 
 api::Result TrackFeatures(Tracker& tracker, py::handle keypoints, py::handle descriptors,
-                          py::handle camera) {
+                          py::handle camera, py::handle motion_in) {
   const api::Features features = ToFeatures(keypoints, descriptors);
   const api::Camera frame_camera = ToCamera(camera, "camera");
+  const std::optional<api::Motion> motion = ToMotion(motion_in);
   py::gil_scoped_release release;
   const std::lock_guard lock(tracker.frame);
-  return tracker.tracker.Track(features, frame_camera);
+  return tracker.tracker.Track(features, frame_camera, motion);
 }
 
-api::Result TrackGrey(Tracker& tracker, py::handle image, py::handle camera) {
+api::Result TrackGrey(Tracker& tracker, py::handle image, py::handle camera, py::handle motion_in) {
   const GreyImage grey = ToGreyImage(image);
   const api::Camera frame_camera = ToCamera(camera, "camera");
+  const std::optional<api::Motion> motion = ToMotion(motion_in);
   py::gil_scoped_release release;
   const std::lock_guard lock(tracker.frame);
   return tracker.tracker.TrackGreyImage(grey.pixels, grey.width, grey.height, grey.stride,
-                                        frame_camera);
+                                        frame_camera, motion);
 }
 
 }  // namespace
@@ -57,11 +74,16 @@ void BindTracker(py::module_& m) {
                       "run on several threads.")
       .def(py::init(&Create), py::arg("localizer"), py::keep_alive<1, 2>())
       .def("track_photo", &TrackPhoto, py::arg("photo"), py::arg("camera") = py::none(),
-           "The next frame as a JPEG or PNG file (a str or os.PathLike), as localize_photo.")
+           py::arg("motion") = py::none(),
+           "The next frame as a JPEG or PNG file (a str or os.PathLike), as localize_photo. "
+           "motion: the camera's motion since the previous frame, ((w, x, y, z), (tx, ty, tz)) "
+           "of the frame's camera from the previous one's, metres (cwloc-localize --motion).")
       .def("track_features", &TrackFeatures, py::arg("keypoints"), py::arg("descriptors"),
-           py::arg("camera"), "The next frame's SIFT features, as localize_features.")
+           py::arg("camera"), py::arg("motion") = py::none(),
+           "The next frame's SIFT features, as localize_features; motion as track_photo.")
       .def("track_grey", &TrackGrey, py::arg("image"), py::arg("camera"),
-           "The next frame as an 8-bit grey image, as localize_grey.")
+           py::arg("motion") = py::none(),
+           "The next frame as an 8-bit grey image, as localize_grey; motion as track_photo.")
       .def(
           "reset",
           [](Tracker& tracker) {

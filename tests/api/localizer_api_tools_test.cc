@@ -447,6 +447,103 @@ TEST_F(LocalizerApiGeoToolsTest, ExifGpsIsThePositionPriorUnlessOneIsGiven) {
   EXPECT_EQ(cli_given["success"].get<bool>(), given.success);
 }
 
+// With the frames' motion (--motion, api::Motion, cwloc_motion): the C++ and C trackers give
+// cwloc-localize's poses bit for bit.
+TEST(TrackerApiTest, AMotionPredictsAsCwlocLocalizeMotionDoes) {
+  const auto shared = test::BuildSharedDataIndex("fox_video");
+  if (!shared) GTEST_SKIP() << "shared data 'fox_video' not found";
+  const test::TempDir dir;
+  const auto truth = test::ReadGroundTruth(shared->data / "queries_gt.txt");
+  std::vector<std::pair<std::string, std::string>> frames;
+  std::ifstream intrinsics(shared->data / "queries_with_intrinsics.txt");
+  std::ofstream list(dir.path() / "frames.txt"), motions(dir.path() / "motion.txt");
+  motions.precision(17);
+  std::vector<std::optional<api::Motion>> frame_motions;
+  for (std::string line;
+       std::getline(intrinsics, line) && frames.size() < (test::kSanitized ? 6u : 25u);) {
+    const size_t space = line.find(' ');
+    frames.emplace_back(line.substr(0, space), line.substr(space + 1));
+    list << line << "\n";
+    if (frames.size() == 1) {
+      frame_motions.emplace_back();
+      continue;
+    }
+    // The true motion, from COLMAP's poses of this frame and the one before.
+    const test::CameraPose& from = truth.at(frames[frames.size() - 2].first).pose;
+    const test::CameraPose& to = truth.at(frames.back().first).pose;
+    const Eigen::Quaterniond q = to.rotation * from.rotation.conjugate();
+    const Eigen::Vector3d t = to.translation - q * from.translation;
+    motions << frames.back().first << " " << q.w() << " " << q.x() << " " << q.y() << " " << q.z()
+            << " " << t.x() << " " << t.y() << " " << t.z() << "\n";
+    frame_motions.push_back(api::Motion{{q.w(), q.x(), q.y(), q.z()}, {t.x(), t.y(), t.z()}});
+  }
+  list.close();
+  motions.close();
+  std::string output;
+  ASSERT_EQ(test::RunCommand(test::Quote(test::ToolPath("cwloc-localize")) + " --index " +
+                                 test::Quote(shared->index) + " --database " +
+                                 test::Quote(shared->data / "database.db") + " --query-list " +
+                                 test::Quote(dir.path() / "frames.txt") + " --sequence --motion " +
+                                 test::Quote(dir.path() / "motion.txt") + " -q",
+                             &output),
+            0)
+      << output;
+  std::istringstream records(output);
+  const api::Localizer localizer = api::Localizer::Open(shared->index.string());
+  api::Tracker tracker(localizer);
+  cwloc_localizer* c_localizer = nullptr;
+  ASSERT_EQ(cwloc_localizer_open(shared->index.c_str(), 0, &c_localizer), CWLOC_OK);
+  cwloc_tracker* c_tracker = nullptr;
+  ASSERT_EQ(cwloc_tracker_create(c_localizer, nullptr, &c_tracker), CWLOC_OK);
+  const colmap::DatabaseReader db(shared->data / "database.db");
+  for (size_t i = 0; i < frames.size(); ++i) {
+    SCOPED_TRACE(frames[i].first);
+    std::string line;
+    ASSERT_TRUE(std::getline(records, line));
+    const nlohmann::json cli = nlohmann::json::parse(line);
+    const api::Features features = DatabaseFeatures(db, frames[i].first);
+    const api::Camera camera = ParseCamera(frames[i].second);
+    const api::Result result = tracker.Track(features, camera, frame_motions[i]);
+    ASSERT_TRUE(result.success);
+    EXPECT_EQ(result.rotation, (cli["pose"]["qvec"].get<std::array<double, 4>>()));
+    EXPECT_EQ(result.translation, (cli["pose"]["tvec"].get<std::array<double, 3>>()));
+
+    const cwloc_camera c_camera{camera.model.c_str(), camera.width,
+                                camera.height,        camera.params.data(),
+                                camera.params.size(), CWLOC_CALIBRATION_KNOWN};
+    std::optional<cwloc_motion> c_motion;
+    if (const auto& m = frame_motions[i]) {
+      c_motion = cwloc_motion{{m->rotation[0], m->rotation[1], m->rotation[2], m->rotation[3]},
+                              {m->translation[0], m->translation[1], m->translation[2]}};
+    }
+    cwloc_result* c_result = nullptr;
+    ASSERT_EQ(
+        cwloc_track_features(c_tracker, features.keypoints.data(), features.descriptors.data(),
+                             uint32_t(features.keypoints.size() / 2), &c_camera,
+                             c_motion ? &*c_motion : nullptr, &c_result),
+        CWLOC_OK)
+        << cwloc_last_error();
+    std::array<double, 4> rotation;
+    std::array<double, 3> translation, center;
+    cwloc_result_pose(c_result, rotation.data(), translation.data(), center.data());
+    EXPECT_EQ(rotation, result.rotation);
+    EXPECT_EQ(translation, result.translation);
+    cwloc_result_destroy(c_result);
+  }
+  // A motion that is no rotation is the caller's mistake.
+  try {
+    tracker.Track(DatabaseFeatures(db, frames[0].first), ParseCamera(frames[0].second),
+                  api::Motion{{2, 0, 0, 0}, {0, 0, 0}});
+    ADD_FAILURE() << "expected an error";
+  } catch (const api::Error& e) {
+    EXPECT_EQ(e.code(), api::ErrorCode::kInvalidArgument);
+    EXPECT_STREQ(e.what(),
+                 "motion: expected a unit quaternion (w, x, y, z) and a finite translation");
+  }
+  cwloc_tracker_destroy(c_tracker);
+  cwloc_localizer_close(c_localizer);
+}
+
 // api::Tracker is cwloc-localize --sequence: the same modes, poses and counts, bit for bit, on
 // the frames of a real video (../shared/data/fox_video, skipped without it); Reset starts over.
 TEST(TrackerApiTest, TracksAVideoAsCwlocLocalizeSequenceDoes) {
@@ -503,10 +600,10 @@ TEST(TrackerApiTest, TracksAVideoAsCwlocLocalizeSequenceDoes) {
                                 frame_camera.height,        frame_camera.params.data(),
                                 frame_camera.params.size(), CWLOC_CALIBRATION_KNOWN};
     cwloc_result* c_result = nullptr;
-    ASSERT_EQ(
-        cwloc_track_features(c_tracker, features.keypoints.data(), features.descriptors.data(),
-                             uint32_t(features.keypoints.size() / 2), &c_camera, &c_result),
-        CWLOC_OK)
+    ASSERT_EQ(cwloc_track_features(
+                  c_tracker, features.keypoints.data(), features.descriptors.data(),
+                  uint32_t(features.keypoints.size() / 2), &c_camera, nullptr, &c_result),
+              CWLOC_OK)
         << cwloc_last_error();
     cwloc_tracking c_tracking;
     ASSERT_EQ(cwloc_result_tracking(c_result, &c_tracking), CWLOC_OK);

@@ -94,6 +94,13 @@ typedef struct cwloc_tracking {
   double seconds; /* the tracker's whole time on the frame */
 } cwloc_tracking;
 
+/* A camera's motion since the previous frame (VIO), as the C++ Motion: the frame's camera from
+ * the previous frame's camera, rotation w, x, y, z and translation in metres. */
+typedef struct cwloc_motion {
+  double rotation_wxyz[4];
+  double translation[3];
+} cwloc_motion;
+
 typedef struct cwloc_localizer cwloc_localizer;
 typedef struct cwloc_options cwloc_options;
 typedef struct cwloc_result cwloc_result;
@@ -159,14 +166,18 @@ CWLOC_C_API cwloc_status cwloc_tracker_create(const cwloc_localizer* localizer,
                                               const cwloc_options* options, cwloc_tracker** out);
 CWLOC_C_API void cwloc_tracker_destroy(cwloc_tracker* tracker);
 CWLOC_C_API cwloc_status cwloc_tracker_reset(cwloc_tracker* tracker);
+/* motion may be NULL (the device does not know it). */
 CWLOC_C_API cwloc_status cwloc_track_features(cwloc_tracker* tracker, const float* keypoints,
                                               const uint8_t* descriptors, uint32_t num_features,
-                                              const cwloc_camera* camera, cwloc_result** out);
+                                              const cwloc_camera* camera,
+                                              const cwloc_motion* motion, cwloc_result** out);
 CWLOC_C_API cwloc_status cwloc_track_photo(cwloc_tracker* tracker, const char* path,
-                                           const cwloc_camera* camera, cwloc_result** out);
+                                           const cwloc_camera* camera, const cwloc_motion* motion,
+                                           cwloc_result** out);
 CWLOC_C_API cwloc_status cwloc_track_grey_image(cwloc_tracker* tracker, const uint8_t* pixels,
                                                 uint32_t width, uint32_t height, size_t stride,
-                                                const cwloc_camera* camera, cwloc_result** out);
+                                                const cwloc_camera* camera,
+                                                const cwloc_motion* motion, cwloc_result** out);
 
 /* Results: read with these accessors, then destroy. Pointers they return live as long as the
  * result. */

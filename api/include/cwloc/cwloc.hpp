@@ -234,6 +234,15 @@ class CWLOC_API Localizer {
   std::unique_ptr<Impl> impl_;
 };
 
+// What a device knows of its camera's motion since the previous frame (visual-inertial
+// odometry), as cwloc-localize --motion takes it: the frame's camera from the previous frame's
+// camera (X_cam = R(rotation) X_previous_cam + translation), metres. On a georeferenced index
+// the metres become model units by its scale; otherwise only the translation's direction counts.
+struct Motion {
+  std::array<double, 4> rotation{1, 0, 0, 0};  // w, x, y, z
+  std::array<double, 3> translation{};
+};
+
 // The frames of one moving camera, in order (cwloc-localize --sequence): each frame is tracked
 // from the frames before it, or localized from scratch when that fails, or lost (no pose);
 // every Result has `tracking`. One Tracker per stream, its calls one at a time; trackers on one
@@ -245,11 +254,15 @@ class CWLOC_API Tracker {
   Tracker& operator=(Tracker&&) noexcept;
   ~Tracker();
 
-  // The next frame, as Localizer's Localize, LocalizePhoto and LocalizeGreyImage take a query.
-  Result Track(const Features& features, const Camera& camera);
-  Result TrackPhoto(const std::string& path, const std::optional<Camera>& camera = std::nullopt);
+  // The next frame, as Localizer's Localize, LocalizePhoto and LocalizeGreyImage take a query,
+  // with the camera's motion since the previous frame when the device knows it (Motion: it then
+  // predicts the frame's pose).
+  Result Track(const Features& features, const Camera& camera,
+               const std::optional<Motion>& motion = std::nullopt);
+  Result TrackPhoto(const std::string& path, const std::optional<Camera>& camera = std::nullopt,
+                    const std::optional<Motion>& motion = std::nullopt);
   Result TrackGreyImage(const uint8_t* pixels, uint32_t width, uint32_t height, size_t stride,
-                        const Camera& camera);
+                        const Camera& camera, const std::optional<Motion>& motion = std::nullopt);
   // Forgets the frames so far: the next frame is localized from scratch.
   void Reset();
 
