@@ -44,6 +44,9 @@ echo "0 128" >"$corpus/feature_file/none.txt"
 cp "$scene/queries_with_intrinsics.txt" "$corpus/query_list/with-cameras.txt"
 cp "$scene/query_list.txt" "$corpus/query_list/names.txt"
 cp "$scene/query_priors.txt" "$corpus/query_list/priors.txt"
+# A --motion file: frames' relative motion from VIO.
+printf '# VIO\n0004.jpg 0.99999 0.0033 -0.0024 -0.0015 0.185 0.019 -0.060\n0007.jpg 1 0 0 0 -0.59 0.10 -0.08\n' \
+  >"$corpus/query_list/motion.txt"
 
 cp tests/data/photos/* "$corpus/photo/"
 # A real iPhone photo's EXIF (focal length and GPS) in front of a small JPEG.

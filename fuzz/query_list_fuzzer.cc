@@ -1,10 +1,11 @@
 // What a batch names besides its features: a query or image list with its cameras
-// (`NAME [MODEL W H PARAMS]`), and the same bytes as a --priors file.
+// (`NAME [MODEL W H PARAMS]`), and the same bytes as a --priors file and a --motion file.
 #include <cstdint>
 
 #include "base/error.h"
 #include "fuzz/fuzz_file.h"
 #include "io/camera_spec.h"
+#include "io/motion_file.h"
 #include "io/query_list.h"
 #include "io/query_priors.h"
 
@@ -22,6 +23,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   }
   try {
     ReadPriorsFile(path);
+  } catch (const InputError&) {
+  }
+  try {
+    ReadMotionFile(path);
   } catch (const InputError&) {
   }
   return 0;
