@@ -135,15 +135,9 @@ MatcherOutput MatchClusterWise(const Index& index, const ClusterMembers& cluster
 std::vector<FeatureMatch> NearestImageVotes(const Index& index, const FramePrediction& prediction,
                                             uint32_t count) {
   const CameraPose& pose = prediction.hypothesis.pose;
-  std::vector<double> depths;
-  for (const uint32_t point : prediction.seen_points) {
-    if (point >= index.num_points()) continue;
-    const auto xyz = index.PointXyz(point);
-    depths.push_back(pose.Apply(Eigen::Vector3d(xyz[0], xyz[1], xyz[2])).z());
-  }
-  if (depths.empty()) return {};
-  std::nth_element(depths.begin(), depths.begin() + depths.size() / 2, depths.end());
-  const double depth = std::max(depths[depths.size() / 2], 1e-9);
+  const std::optional<double> median = MedianPointDepth(index, prediction.seen_points, pose);
+  if (!median) return {};
+  const double depth = std::max(*median, 1e-9);
   const Eigen::Vector3d center = pose.Center();
   const Eigen::Vector3d axis = pose.rotation.conjugate() * Eigen::Vector3d::UnitZ();
   std::vector<std::pair<double, uint32_t>> nearest;  // (distance, image)

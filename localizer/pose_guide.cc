@@ -7,6 +7,21 @@
 
 namespace cwloc {
 
+std::optional<double> MedianPointDepth(const Index& index, std::span<const uint32_t> points,
+                                       const CameraPose& pose) {
+  std::vector<double> depths;
+  depths.reserve(points.size());
+  for (const uint32_t point : points) {
+    if (point >= index.num_points()) continue;
+    const auto xyz = index.PointXyz(point);
+    depths.push_back(pose.Apply(Eigen::Vector3d(xyz[0], xyz[1], xyz[2])).z());
+  }
+  if (depths.empty()) return std::nullopt;
+  const auto middle = depths.begin() + depths.size() / 2;
+  std::nth_element(depths.begin(), middle, depths.end());
+  return *middle;
+}
+
 PoseGuide::PoseGuide(const Query& query, PoseHypothesis hypothesis, double radius_px)
     : query_(query),
       hypothesis_(std::move(hypothesis)),

@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <optional>
+#include <span>
 #include <vector>
 
 #include "camera/camera_models.h"
@@ -21,6 +22,11 @@ struct PoseHypothesis {
   CameraModelId model_id = CameraModelId::kSimplePinhole;
   std::vector<double> params;
 };
+
+// The median depth of the index's `points` (rows) in the camera `pose` (cam_from_world), rows
+// out of range left out; nothing when none is left.
+std::optional<double> MedianPointDepth(const Index& index, std::span<const uint32_t> points,
+                                       const CameraPose& pose);
 
 // The query's features on a grid of radius-sized cells, to find those near a pixel fast.
 class PoseGuide {

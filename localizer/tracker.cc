@@ -26,20 +26,17 @@ double RotationAngleDeg(const CameraPose& a, const CameraPose& b) {
   return a.rotation.angularDistance(b.rotation) * 180.0 / std::numbers::pi;
 }
 
-// The median depth of the result's inlier points in its camera: the scale a centre's change is
-// measured against.
-double MedianInlierDepth(const Index& index, const LocalizationResult& result,
-                         const CameraPose& pose) {
-  std::vector<double> depths;
-  depths.reserve(result.inliers.size());
-  for (const InlierMatch& inlier : result.inliers) {
-    const auto xyz = index.PointXyz(inlier.point);
-    depths.push_back(pose.Apply(Eigen::Vector3d(xyz[0], xyz[1], xyz[2])).z());
-  }
-  if (depths.empty()) return 0.0;
-  auto middle = depths.begin() + depths.size() / 2;
-  std::nth_element(depths.begin(), middle, depths.end());
-  return *middle;
+std::vector<uint32_t> InlierPoints(const LocalizationResult& result) {
+  std::vector<uint32_t> points;
+  points.reserve(result.inliers.size());
+  for (const InlierMatch& inlier : result.inliers) points.push_back(inlier.point);
+  return points;
+}
+
+// `pose` moved by `relative` (both cam_from_something): relative * pose.
+CameraPose Then(const CameraPose& pose, const CameraPose& relative) {
+  return {relative.rotation * pose.rotation,
+          relative.rotation * pose.translation + relative.translation};
 }
 
 }  // namespace
@@ -71,8 +68,7 @@ CameraPose Tracker::Moved(const CameraPose& pose, const FrameMotion& motion) con
   } else {
     step.setZero();  // no step to take the length from: the rotation alone
   }
-  return {motion.relative.rotation * pose.rotation,
-          motion.relative.rotation * pose.translation + step};
+  return Then(pose, CameraPose(motion.relative.rotation, step));
 }
 
 void Tracker::Reset() {
@@ -107,16 +103,16 @@ std::optional<LocalizationResult> Tracker::TrackFrom(const Query& frame,
   CameraPose around = PoseOf(rough);
   const LocalizationResult* before = &rough;
   std::optional<LocalizationResult> result;
+  double depth = 0;
   for (int round = 0; round < kMaxMatchingRounds; ++round) {
     prediction.hypothesis.pose = around;
     if (!frame.camera.FocalKnown()) prediction.hypothesis.params = before->camera.params;
-    prediction.seen_points.clear();
-    for (const InlierMatch& inlier : before->inliers)
-      prediction.seen_points.push_back(inlier.point);
+    prediction.seen_points = InlierPoints(*before);
     result = localizer_.Localize(frame, tracking_options_, &prediction);
     if (!result->success) return std::nullopt;
     const CameraPose pose = PoseOf(*result);
-    const double depth = MedianInlierDepth(localizer_.index(), *result, pose);
+    // A successful pose has inliers, whose rows the localizer checked.
+    depth = *MedianPointDepth(localizer_.index(), InlierPoints(*result), pose);
     const bool still = RotationAngleDeg(pose, around) <= kStillDeg &&
                        (pose.Center() - around.Center()).norm() <= kStillDepthShare * depth;
     around = pose;
@@ -124,10 +120,9 @@ std::optional<LocalizationResult> Tracker::TrackFrom(const Query& frame,
     if (still) break;
   }
 
-  const CameraPose pose = PoseOf(*result);
-  const double rotation_deg = RotationAngleDeg(pose, predicted);
-  const double distance = (pose.Center() - predicted.Center()).norm();
-  const double depth = MedianInlierDepth(localizer_.index(), *result, pose);
+  // `around` is the last round's pose, `depth` its inliers' median depth.
+  const double rotation_deg = RotationAngleDeg(around, predicted);
+  const double distance = (around.Center() - predicted.Center()).norm();
   info->prediction_error = distance;
   info->prediction_error_deg = rotation_deg;
   if (!(rotation_deg <= tracker_options_.max_rotation_change_deg) ||
@@ -164,12 +159,12 @@ LocalizationResult Tracker::Track(const Query& frame, const std::optional<FrameM
     if (motion) {
       predictions.push_back(Moved(last_->pose, *motion));
     } else if (before_last_) {
-      const Eigen::Quaterniond motion_rotation =
+      // The step from the frame before: last * before^-1.
+      const Eigen::Quaterniond rotation =
           last_->pose.rotation * before_last_->pose.rotation.conjugate();
-      const Eigen::Vector3d motion_translation =
-          last_->pose.translation - motion_rotation * before_last_->pose.translation;
-      predictions.emplace_back(motion_rotation * last_->pose.rotation,
-                               motion_rotation * last_->pose.translation + motion_translation);
+      predictions.push_back(
+          Then(last_->pose, CameraPose(rotation, last_->pose.translation -
+                                                     rotation * before_last_->pose.translation)));
     }
     predictions.push_back(last_->pose);
     first_prediction = predictions.front();
