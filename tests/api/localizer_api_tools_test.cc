@@ -447,182 +447,124 @@ TEST_F(LocalizerApiGeoToolsTest, ExifGpsIsThePositionPriorUnlessOneIsGiven) {
   EXPECT_EQ(cli_given["success"].get<bool>(), given.success);
 }
 
-// With the frames' motion (--motion, api::Motion, cwloc_motion): the C++ and C trackers give
-// cwloc-localize's poses bit for bit.
-TEST(TrackerApiTest, AMotionPredictsAsCwlocLocalizeMotionDoes) {
-  const auto shared = test::BuildSharedDataIndex("fox_video");
-  if (!shared) GTEST_SKIP() << "shared data 'fox_video' not found";
-  const test::TempDir dir;
-  const auto truth = test::ReadGroundTruth(shared->data / "queries_gt.txt");
-  std::vector<std::pair<std::string, std::string>> frames;
-  std::ifstream intrinsics(shared->data / "queries_with_intrinsics.txt");
-  std::ofstream list(dir.path() / "frames.txt"), motions(dir.path() / "motion.txt");
-  motions.precision(17);
-  std::vector<std::optional<api::Motion>> frame_motions;
-  for (std::string line;
-       std::getline(intrinsics, line) && frames.size() < (test::kSanitized ? 6u : 25u);) {
-    const size_t space = line.find(' ');
-    frames.emplace_back(line.substr(0, space), line.substr(space + 1));
-    list << line << "\n";
-    if (frames.size() == 1) {
-      frame_motions.emplace_back();
-      continue;
+// api::Tracker and C's tracker against cwloc-localize --sequence on the first frames of a real
+// video (../shared/data/fox_video, skipped without it), with each frame's stored features and
+// the camera COLMAP found.
+class TrackerApiTest : public testing::Test {
+ protected:
+  void SetUp() override {
+    shared_ = test::BuildSharedDataIndex("fox_video");
+    if (!shared_) GTEST_SKIP() << "shared data 'fox_video' not found";
+    // In time order, 8 under a sanitizer.
+    std::ifstream intrinsics(shared_->data / "queries_with_intrinsics.txt");
+    std::ofstream list(dir_.path() / "frames.txt");
+    for (std::string line;
+         std::getline(intrinsics, line) && frames_.size() < (test::kSanitized ? 8u : 25u);) {
+      const size_t space = line.find(' ');
+      frames_.emplace_back(line.substr(0, space), line.substr(space + 1));
+      list << line << "\n";
     }
-    // The true motion, from COLMAP's poses of this frame and the one before.
-    const test::CameraPose& from = truth.at(frames[frames.size() - 2].first).pose;
-    const test::CameraPose& to = truth.at(frames.back().first).pose;
-    const Eigen::Quaterniond q = to.rotation * from.rotation.conjugate();
-    const Eigen::Vector3d t = to.translation - q * from.translation;
-    motions << frames.back().first << " " << q.w() << " " << q.x() << " " << q.y() << " " << q.z()
-            << " " << t.x() << " " << t.y() << " " << t.z() << "\n";
-    frame_motions.push_back(api::Motion{{q.w(), q.x(), q.y(), q.z()}, {t.x(), t.y(), t.z()}});
   }
-  list.close();
-  motions.close();
-  std::string output;
-  ASSERT_EQ(test::RunCommand(test::Quote(test::ToolPath("cwloc-localize")) + " --index " +
-                                 test::Quote(shared->index) + " --database " +
-                                 test::Quote(shared->data / "database.db") + " --query-list " +
-                                 test::Quote(dir.path() / "frames.txt") + " --sequence --motion " +
-                                 test::Quote(dir.path() / "motion.txt") + " -q",
-                             &output),
-            0)
-      << output;
-  std::istringstream records(output);
-  const api::Localizer localizer = api::Localizer::Open(shared->index.string());
-  api::Tracker tracker(localizer);
-  cwloc_localizer* c_localizer = nullptr;
-  ASSERT_EQ(cwloc_localizer_open(shared->index.c_str(), 0, &c_localizer), CWLOC_OK);
-  cwloc_tracker* c_tracker = nullptr;
-  ASSERT_EQ(cwloc_tracker_create(c_localizer, nullptr, &c_tracker), CWLOC_OK);
-  const colmap::DatabaseReader db(shared->data / "database.db");
-  for (size_t i = 0; i < frames.size(); ++i) {
-    SCOPED_TRACE(frames[i].first);
-    std::string line;
-    ASSERT_TRUE(std::getline(records, line));
-    const nlohmann::json cli = nlohmann::json::parse(line);
-    const api::Features features = DatabaseFeatures(db, frames[i].first);
-    const api::Camera camera = ParseCamera(frames[i].second);
-    const api::Result result = tracker.Track(features, camera, frame_motions[i]);
-    ASSERT_TRUE(result.success);
-    EXPECT_EQ(result.rotation, (cli["pose"]["qvec"].get<std::array<double, 4>>()));
-    EXPECT_EQ(result.translation, (cli["pose"]["tvec"].get<std::array<double, 3>>()));
 
-    const cwloc_camera c_camera{camera.model.c_str(), camera.width,
-                                camera.height,        camera.params.data(),
-                                camera.params.size(), CWLOC_CALIBRATION_KNOWN};
-    std::optional<cwloc_motion> c_motion;
-    if (const auto& m = frame_motions[i]) {
-      c_motion = cwloc_motion{{m->rotation[0], m->rotation[1], m->rotation[2], m->rotation[3]},
-                              {m->translation[0], m->translation[1], m->translation[2]}};
+  // cwloc-localize --sequence with `flags`, `tracker` and a C tracker of its own on the frames,
+  // with `motions` (one per frame, or none): C++ gives the CLI's modes, inlier counts and poses
+  // bit for bit, C gives C++'s. The C++ results.
+  std::vector<api::Result> TrackAsTheCliDoes(
+      api::Tracker& tracker, const std::string& flags,
+      const std::vector<std::optional<api::Motion>>& motions) {
+    std::string output;
+    EXPECT_EQ(
+        test::RunCommand(test::Quote(test::ToolPath("cwloc-localize")) + " --index " +
+                             test::Quote(shared_->index) + " --database " +
+                             test::Quote(shared_->data / "database.db") + " --query-list " +
+                             test::Quote(dir_.path() / "frames.txt") + " --sequence -q " + flags,
+                         &output),
+        0)
+        << output;
+    std::istringstream records(output);
+    cwloc_localizer* c_localizer = nullptr;
+    EXPECT_EQ(cwloc_localizer_open(shared_->index.c_str(), 0, &c_localizer), CWLOC_OK);
+    cwloc_tracker* c_tracker = nullptr;
+    EXPECT_EQ(cwloc_tracker_create(c_localizer, nullptr, &c_tracker), CWLOC_OK);
+    const colmap::DatabaseReader db(shared_->data / "database.db");
+    std::vector<api::Result> results;
+    for (size_t i = 0; i < frames_.size(); ++i) {
+      SCOPED_TRACE(frames_[i].first);
+      std::string line;
+      if (!std::getline(records, line)) {
+        ADD_FAILURE() << "cwloc-localize wrote " << i << " records";
+        break;
+      }
+      const nlohmann::json cli = nlohmann::json::parse(line);
+      const api::Features features = DatabaseFeatures(db, frames_[i].first);
+      const api::Camera camera = ParseCamera(frames_[i].second);
+      const std::optional<api::Motion> motion = motions.empty() ? std::nullopt : motions[i];
+      const api::Result& result = results.emplace_back(tracker.Track(features, camera, motion));
+      EXPECT_TRUE(result.success);
+      EXPECT_TRUE(result.tracking.has_value());
+      if (!result.success || !result.tracking) continue;
+      const char* modes[] = {"tracked", "relocalized", "lost"};
+      EXPECT_EQ(modes[static_cast<int>(result.tracking->mode)], cli["tracking"]["mode"]);
+      EXPECT_EQ(result.num_inliers, cli["num_inliers"].get<uint32_t>());
+      EXPECT_EQ(result.rotation, (cli["pose"]["qvec"].get<std::array<double, 4>>()));
+      EXPECT_EQ(result.translation, (cli["pose"]["tvec"].get<std::array<double, 3>>()));
+
+      const cwloc_camera c_camera{camera.model.c_str(), camera.width,
+                                  camera.height,        camera.params.data(),
+                                  camera.params.size(), CWLOC_CALIBRATION_KNOWN};
+      std::optional<cwloc_motion> c_motion;
+      if (motion) {
+        c_motion = cwloc_motion{
+            {motion->rotation[0], motion->rotation[1], motion->rotation[2], motion->rotation[3]},
+            {motion->translation[0], motion->translation[1], motion->translation[2]}};
+      }
+      cwloc_result* c_result = nullptr;
+      EXPECT_EQ(
+          cwloc_track_features(c_tracker, features.keypoints.data(), features.descriptors.data(),
+                               uint32_t(features.keypoints.size() / 2), &c_camera,
+                               c_motion ? &*c_motion : nullptr, &c_result),
+          CWLOC_OK)
+          << cwloc_last_error();
+      if (c_result == nullptr) continue;
+      cwloc_tracking c_tracking;
+      EXPECT_EQ(cwloc_result_tracking(c_result, &c_tracking), CWLOC_OK);
+      EXPECT_EQ(int(c_tracking.mode), int(result.tracking->mode));
+      EXPECT_EQ(c_tracking.predicted_from, result.tracking->predicted_from);
+      EXPECT_EQ(c_tracking.has_prediction_error, result.tracking->prediction_error.has_value());
+      std::array<double, 4> rotation;
+      std::array<double, 3> translation, center;
+      cwloc_result_pose(c_result, rotation.data(), translation.data(), center.data());
+      EXPECT_EQ(rotation, result.rotation);
+      EXPECT_EQ(translation, result.translation);
+      cwloc_result_destroy(c_result);
     }
-    cwloc_result* c_result = nullptr;
-    ASSERT_EQ(
-        cwloc_track_features(c_tracker, features.keypoints.data(), features.descriptors.data(),
-                             uint32_t(features.keypoints.size() / 2), &c_camera,
-                             c_motion ? &*c_motion : nullptr, &c_result),
-        CWLOC_OK)
-        << cwloc_last_error();
-    std::array<double, 4> rotation;
-    std::array<double, 3> translation, center;
-    cwloc_result_pose(c_result, rotation.data(), translation.data(), center.data());
-    EXPECT_EQ(rotation, result.rotation);
-    EXPECT_EQ(translation, result.translation);
-    cwloc_result_destroy(c_result);
+    EXPECT_EQ(cwloc_tracker_reset(c_tracker), CWLOC_OK);
+    cwloc_tracker_destroy(c_tracker);
+    cwloc_localizer_close(c_localizer);
+    return results;
   }
-  // A motion that is no rotation is the caller's mistake.
-  try {
-    tracker.Track(DatabaseFeatures(db, frames[0].first), ParseCamera(frames[0].second),
-                  api::Motion{{2, 0, 0, 0}, {0, 0, 0}});
-    ADD_FAILURE() << "expected an error";
-  } catch (const api::Error& e) {
-    EXPECT_EQ(e.code(), api::ErrorCode::kInvalidArgument);
-    EXPECT_STREQ(e.what(),
-                 "motion: expected a unit quaternion (w, x, y, z) and a finite translation");
-  }
-  cwloc_tracker_destroy(c_tracker);
-  cwloc_localizer_close(c_localizer);
-}
 
-// api::Tracker is cwloc-localize --sequence: the same modes, poses and counts, bit for bit, on
-// the frames of a real video (../shared/data/fox_video, skipped without it); Reset starts over.
-TEST(TrackerApiTest, TracksAVideoAsCwlocLocalizeSequenceDoes) {
-  const auto shared = test::BuildSharedDataIndex("fox_video");
-  if (!shared) GTEST_SKIP() << "shared data 'fox_video' not found";
-  const test::TempDir dir;
-  // The first frames in time order (8 under a sanitizer), with the cameras COLMAP found.
-  std::vector<std::pair<std::string, std::string>> frames;
-  std::ifstream intrinsics(shared->data / "queries_with_intrinsics.txt");
-  std::ofstream list(dir.path() / "frames.txt");
-  for (std::string line;
-       std::getline(intrinsics, line) && frames.size() < (test::kSanitized ? 8u : 25u);) {
-    const size_t space = line.find(' ');
-    frames.emplace_back(line.substr(0, space), line.substr(space + 1));
-    list << line << "\n";
-  }
-  list.close();
-  std::string output;
-  ASSERT_EQ(test::RunCommand(test::Quote(test::ToolPath("cwloc-localize")) + " --index " +
-                                 test::Quote(shared->index) + " --database " +
-                                 test::Quote(shared->data / "database.db") + " --query-list " +
-                                 test::Quote(dir.path() / "frames.txt") + " --sequence -q",
-                             &output),
-            0)
-      << output;
-  std::istringstream records(output);
-  const api::Localizer localizer = api::Localizer::Open(shared->index.string());
+  std::optional<test::SharedDataIndex> shared_;
+  const test::TempDir dir_;
+  std::vector<std::pair<std::string, std::string>> frames_;  // name, camera
+};
+
+TEST_F(TrackerApiTest, TracksAVideoAsCwlocLocalizeSequenceDoes) {
+  const api::Localizer localizer = api::Localizer::Open(shared_->index.string());
   api::Tracker tracker(localizer);
-  // And C's tracker, on a localizer of its own.
-  cwloc_localizer* c_localizer = nullptr;
-  ASSERT_EQ(cwloc_localizer_open(shared->index.c_str(), 0, &c_localizer), CWLOC_OK);
-  cwloc_tracker* c_tracker = nullptr;
-  ASSERT_EQ(cwloc_tracker_create(c_localizer, nullptr, &c_tracker), CWLOC_OK);
-  const colmap::DatabaseReader db(shared->data / "database.db");
+  const std::vector<api::Result> results = TrackAsTheCliDoes(tracker, "", {});
+  ASSERT_EQ(results.size(), frames_.size());
   int tracked = 0;
-  for (const auto& [name, camera] : frames) {
-    SCOPED_TRACE(name);
-    std::string line;
-    ASSERT_TRUE(std::getline(records, line));
-    const nlohmann::json cli = nlohmann::json::parse(line);
-    const api::Features features = DatabaseFeatures(db, name);
-    const api::Camera frame_camera = ParseCamera(camera);
-    const api::Result result = tracker.Track(features, frame_camera);
-    ASSERT_TRUE(result.tracking.has_value());
-    ASSERT_TRUE(result.success);
-    const char* modes[] = {"tracked", "relocalized", "lost"};
-    EXPECT_EQ(modes[static_cast<int>(result.tracking->mode)], cli["tracking"]["mode"]);
-    tracked += result.tracking->mode == api::TrackingMode::kTracked;
-    EXPECT_EQ(result.num_inliers, cli["num_inliers"].get<uint32_t>());
-    EXPECT_EQ(result.rotation, (cli["pose"]["qvec"].get<std::array<double, 4>>()));
-    EXPECT_EQ(result.translation, (cli["pose"]["tvec"].get<std::array<double, 3>>()));
+  for (const api::Result& result : results)
+    tracked += result.tracking && result.tracking->mode == api::TrackingMode::kTracked;
+  EXPECT_GE(tracked, 3);
 
-    const cwloc_camera c_camera{frame_camera.model.c_str(), frame_camera.width,
-                                frame_camera.height,        frame_camera.params.data(),
-                                frame_camera.params.size(), CWLOC_CALIBRATION_KNOWN};
-    cwloc_result* c_result = nullptr;
-    ASSERT_EQ(cwloc_track_features(
-                  c_tracker, features.keypoints.data(), features.descriptors.data(),
-                  uint32_t(features.keypoints.size() / 2), &c_camera, nullptr, &c_result),
-              CWLOC_OK)
-        << cwloc_last_error();
-    cwloc_tracking c_tracking;
-    ASSERT_EQ(cwloc_result_tracking(c_result, &c_tracking), CWLOC_OK);
-    EXPECT_EQ(int(c_tracking.mode), int(result.tracking->mode));
-    EXPECT_EQ(c_tracking.predicted_from, result.tracking->predicted_from);
-    EXPECT_EQ(c_tracking.has_prediction_error, result.tracking->prediction_error.has_value());
-    std::array<double, 4> rotation;
-    std::array<double, 3> translation, center;
-    cwloc_result_pose(c_result, rotation.data(), translation.data(), center.data());
-    EXPECT_EQ(rotation, result.rotation);
-    EXPECT_EQ(translation, result.translation);
-    cwloc_result_destroy(c_result);
-  }
-  ASSERT_EQ(cwloc_tracker_reset(c_tracker), CWLOC_OK);
-  cwloc_tracker_destroy(c_tracker);
   // A query localized alone has no tracking to report.
+  cwloc_localizer* c_localizer = nullptr;
+  ASSERT_EQ(cwloc_localizer_open(shared_->index.c_str(), 0, &c_localizer), CWLOC_OK);
   cwloc_result* alone = nullptr;
   ASSERT_EQ(
-      cwloc_localize_photo(c_localizer, (shared->data / "query_images" / frames[0].first).c_str(),
+      cwloc_localize_photo(c_localizer, (shared_->data / "query_images" / frames_[0].first).c_str(),
                            nullptr, nullptr, &alone),
       CWLOC_OK);
   cwloc_tracking none;
@@ -630,12 +572,50 @@ TEST(TrackerApiTest, TracksAVideoAsCwlocLocalizeSequenceDoes) {
   EXPECT_STREQ(cwloc_last_error(), "tracking: the query was not a tracker's frame");
   cwloc_result_destroy(alone);
   cwloc_localizer_close(c_localizer);
-  EXPECT_GE(tracked, 3);
+
   tracker.Reset();
+  const colmap::DatabaseReader db(shared_->data / "database.db");
   const api::Result after_reset =
-      tracker.Track(DatabaseFeatures(db, frames[1].first), ParseCamera(frames[1].second));
+      tracker.Track(DatabaseFeatures(db, frames_[1].first), ParseCamera(frames_[1].second));
   EXPECT_EQ(after_reset.tracking->mode, api::TrackingMode::kRelocalized);
   EXPECT_EQ(after_reset.tracking->predicted_from, "");
+}
+
+// With each frame's true motion (from COLMAP's poses), in --motion's file and as api::Motion and
+// cwloc_motion: the same poses everywhere.
+TEST_F(TrackerApiTest, AMotionPredictsAsCwlocLocalizeMotionDoes) {
+  const auto truth = test::ReadGroundTruth(shared_->data / "queries_gt.txt");
+  std::ofstream file(dir_.path() / "motion.txt");
+  file.precision(17);
+  std::vector<std::optional<api::Motion>> motions(1);
+  for (size_t i = 1; i < frames_.size(); ++i) {
+    const test::CameraPose& from = truth.at(frames_[i - 1].first).pose;
+    const test::CameraPose& to = truth.at(frames_[i].first).pose;
+    const Eigen::Quaterniond q = to.rotation * from.rotation.conjugate();
+    const Eigen::Vector3d t = to.translation - q * from.translation;
+    file << frames_[i].first << " " << q.w() << " " << q.x() << " " << q.y() << " " << q.z() << " "
+         << t.x() << " " << t.y() << " " << t.z() << "\n";
+    motions.push_back(api::Motion{{q.w(), q.x(), q.y(), q.z()}, {t.x(), t.y(), t.z()}});
+  }
+  file.close();
+  const api::Localizer localizer = api::Localizer::Open(shared_->index.string());
+  api::Tracker tracker(localizer);
+  EXPECT_EQ(
+      TrackAsTheCliDoes(tracker, "--motion " + test::Quote(dir_.path() / "motion.txt"), motions)
+          .size(),
+      frames_.size());
+
+  // A motion that is no rotation is the caller's mistake.
+  const colmap::DatabaseReader db(shared_->data / "database.db");
+  try {
+    tracker.Track(DatabaseFeatures(db, frames_[0].first), ParseCamera(frames_[0].second),
+                  api::Motion{{2, 0, 0, 0}, {0, 0, 0}});
+    ADD_FAILURE() << "expected an error";
+  } catch (const api::Error& e) {
+    EXPECT_EQ(e.code(), api::ErrorCode::kInvalidArgument);
+    EXPECT_STREQ(e.what(),
+                 "motion: expected a unit quaternion (w, x, y, z) and a finite translation");
+  }
 }
 
 }  // namespace
