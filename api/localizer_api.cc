@@ -171,10 +171,7 @@ Result ToResult(const LocalizationResult& r, const Query& query, const Index& in
   }
   result.gravity = r.priors.gravity;
   result.gravity_error_deg = r.priors.gravity_error_deg;
-  if (const auto& t = r.tracking) {
-    result.tracking = Tracking{static_cast<TrackingMode>(t->mode), t->predicted_from,
-                               t->prediction_error, t->prediction_error_deg, t->seconds};
-  }
+  result.tracking = r.tracking;
   return result;
 }
 

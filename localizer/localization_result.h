@@ -4,7 +4,6 @@
 #include <cstdint>
 #include <optional>
 #include <string>
-#include <string_view>
 #include <vector>
 
 #include "localizer/localizer_options.h"
@@ -27,24 +26,6 @@ struct PriorUse {
   std::optional<std::array<double, 3>> gravity;
   // Angle between the prior gravity and the localized pose's; set when both exist.
   std::optional<double> gravity_error_deg;
-};
-
-// How a frame of a sequence got its pose (tracker.h).
-enum class TrackingMode {
-  kTracked,      // matched near the pose predicted from the frames before it
-  kRelocalized,  // localized from scratch: the first frame, or tracking failed its checks
-  kLost,         // neither gave a pose
-};
-inline constexpr std::array<std::string_view, 3> kTrackingModeNames = {"tracked", "relocalized",
-                                                                       "lost"};
-
-struct TrackingInfo {
-  TrackingMode mode = TrackingMode::kLost;
-  std::string predicted_from;  // the frame the prediction started from; empty without one
-  // How far the pose is from the prediction (model units, degrees); set when both exist.
-  std::optional<double> prediction_error;
-  std::optional<double> prediction_error_deg;
-  double seconds = 0;  // the tracker's whole time on the frame, relocalization included
 };
 
 struct LocalizationResult {

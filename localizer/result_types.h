@@ -8,7 +8,9 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
+#include <string_view>
 
 namespace cwloc {
 
@@ -24,6 +26,25 @@ struct StageTimes {
 #define CWLOC_STAGE_TIME(name, help) double name = 0;
 #include "stage_times.inc"
 #undef CWLOC_STAGE_TIME
+};
+
+// How a frame of a sequence got its pose (tracker.h, docs/algorithm.md "Sequences").
+enum class TrackingMode : int {
+  kTracked = 0,      // matched near the pose predicted from the frames before it
+  kRelocalized = 1,  // localized from scratch: the first frame, or tracking failed its checks
+  kLost = 2,         // neither gave a pose
+};
+// The JSON's and Python's names, in enum order.
+inline constexpr std::array<std::string_view, 3> kTrackingModeNames = {"tracked", "relocalized",
+                                                                       "lost"};
+
+struct TrackingInfo {
+  TrackingMode mode = TrackingMode::kLost;
+  std::string predicted_from;  // the frame the prediction started from; empty without one
+  // How far the pose is from the prediction (model units, degrees); set when both exist.
+  std::optional<double> prediction_error;
+  std::optional<double> prediction_error_deg;
+  double seconds = 0;  // the tracker's whole time on the frame, relocalization included
 };
 
 // A localized camera on the globe, when the index is georeferenced (docs/geo.md defines the

@@ -124,8 +124,7 @@ void BindParts(py::module_& m) {
       .def_property_readonly(
           "mode",
           [](const api::Tracking& t) {
-            constexpr const char* kModes[] = {"tracked", "relocalized", "lost"};
-            return std::string(kModes[static_cast<int>(t.mode)]);
+            return std::string(kTrackingModeNames[static_cast<size_t>(t.mode)]);
           },
           "'tracked' (matched near the predicted pose), 'relocalized' (from scratch) or 'lost' "
           "(no pose)")

@@ -503,8 +503,8 @@ class TrackerApiTest : public testing::Test {
       EXPECT_TRUE(result.success);
       EXPECT_TRUE(result.tracking.has_value());
       if (!result.success || !result.tracking) continue;
-      const char* modes[] = {"tracked", "relocalized", "lost"};
-      EXPECT_EQ(modes[static_cast<int>(result.tracking->mode)], cli["tracking"]["mode"]);
+      EXPECT_EQ(kTrackingModeNames[static_cast<size_t>(result.tracking->mode)],
+                cli["tracking"]["mode"].get<std::string>());
       EXPECT_EQ(result.num_inliers, cli["num_inliers"].get<uint32_t>());
       EXPECT_EQ(result.rotation, (cli["pose"]["qvec"].get<std::array<double, 4>>()));
       EXPECT_EQ(result.translation, (cli["pose"]["tvec"].get<std::array<double, 3>>()));

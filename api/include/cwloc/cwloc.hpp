@@ -108,6 +108,10 @@ struct CWLOC_API Options {
 using cwloc::GeoPose;
 using cwloc::RankedImage;
 using cwloc::StageTimes;
+// How a Tracker's frame got its pose: mode (kTracked, kRelocalized, kLost), predicted_from,
+// prediction_error (model units), prediction_error_deg, seconds.
+using cwloc::TrackingMode;
+using Tracking = cwloc::TrackingInfo;
 
 // A RANSAC inlier of the reported pose.
 struct Inlier {
@@ -131,22 +135,6 @@ struct PoseCovariance {
   // east-north-up frame at the camera, and its 95 % radius in metres.
   std::optional<std::array<double, 9>> enu_position;
   std::optional<double> position_radius95_m;
-};
-
-// How a frame of a stream got its pose (Tracker; docs/algorithm.md, "Sequences").
-enum class TrackingMode : int {
-  kTracked = 0,      // matched near the pose predicted from the frames before it
-  kRelocalized = 1,  // localized from scratch: the first frame, or tracking failed its checks
-  kLost = 2,         // neither gave a pose
-};
-
-struct Tracking {
-  TrackingMode mode = TrackingMode::kLost;
-  std::string predicted_from;  // the frame the prediction started from; empty without one
-  // How far the pose is from the prediction (model units, degrees); set when both exist.
-  std::optional<double> prediction_error;
-  std::optional<double> prediction_error_deg;
-  double seconds = 0;  // the tracker's whole time on the frame, relocalization included
 };
 
 struct Result {
