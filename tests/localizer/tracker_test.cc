@@ -262,6 +262,10 @@ TEST_F(TrackerTest, TheCliTracksAQueryListAsASequence) {
   EXPECT_EQ(test::RunCommand(localize + " --sequence --motion " + motion.string(), &output), 2);
   EXPECT_EQ(output, "cwloc-localize: error: " + motion.string() +
                         ":2: frame 'nope.jpg' is not in the sequence\n");
+  EXPECT_EQ(test::RunCommand(localize + " --motion " + motion.string(), &output), 2);
+  EXPECT_EQ(output,
+            "cwloc-localize: error: --motion needs --sequence or --video (a motion is between "
+            "frames)\n");
 
   EXPECT_EQ(test::RunCommand(
                 localize + " -o " + out.string() + " --trajectory " + trajectory.string(), &output),
