@@ -37,6 +37,7 @@
 #include "io/query_list.h"
 #include "io/query_priors.h"
 #include "io/result_json.h"
+#include "io/trajectory_file.h"
 #include "localizer/localizer.h"
 #include "localizer/tracker.h"
 #ifdef CWLOC_WITH_VIDEO
@@ -68,7 +69,8 @@ struct CliOptions {
   QueryOptions options;        // the option table's
   std::string output_path;
   std::string poses_path;
-  std::string trajectory_path;  // --sequence's poses in the TUM format
+  std::string trajectory_path;  // --sequence's poses
+  std::string trajectory_format = "tum";
   int threads = 1;
   bool sequence = false;    // the queries are frames of one camera, in order
   std::string video_path;   // --video: a sequence of a video file's frames
@@ -225,12 +227,16 @@ class ResultSink {
     if (!cli.output_path.empty() && cli.output_path != "-")
       json_file_ = std::make_unique<CheckpointedFile>(cli.output_path);
     if (!cli.poses_path.empty()) poses_file_ = std::make_unique<CheckpointedFile>(cli.poses_path);
-    if (!cli.trajectory_path.empty())
+    if (!cli.trajectory_path.empty()) {
       trajectory_file_ = std::make_unique<CheckpointedFile>(cli.trajectory_path);
+      trajectory_format_ = TrajectoryFormatNamed(cli.trajectory_format);
+      const std::string header = TrajectoryHeader(trajectory_format_);
+      if (!header.empty()) Guard([&] { trajectory_file_->Append(header); });
+    }
   }
 
-  // `timestamp`: a sequence frame's, for --trajectory.
-  void Write(const LocalizationResult& result, const QueryOptions& options, double timestamp) {
+  // `stamp`: a sequence frame's, for --trajectory.
+  void Write(const LocalizationResult& result, const QueryOptions& options, FrameStamp stamp) {
     std::lock_guard lock(mutex_);
     if (closed_) return;  // a query abandoned by a stopped batch
     EmitJsonLine(ResultToJson(result, options).dump());
@@ -251,7 +257,7 @@ class ResultSink {
     }
     if (poses_file_ && result.success) Append(*poses_file_, PoseLine(result));
     if (trajectory_file_ && result.success)
-      Append(*trajectory_file_, TrajectoryLine(result, timestamp));
+      Append(*trajectory_file_, TrajectoryLine(result, stamp, trajectory_format_));
   }
 
   void WriteError(const std::string& name, const std::string& error) {
@@ -308,6 +314,7 @@ class ResultSink {
   std::unique_ptr<CheckpointedFile> json_file_;
   std::unique_ptr<CheckpointedFile> poses_file_;
   std::unique_ptr<CheckpointedFile> trajectory_file_;
+  TrajectoryFormat trajectory_format_ = TrajectoryFormat::kTum;
   std::mutex mutex_;
   std::atomic<bool> failed_{false};
   bool closed_ = false;
@@ -343,6 +350,7 @@ int Run(const CliOptions& cli) {
     throw InputError("--motion needs --sequence or --video (a motion is between frames)");
   if (!cli.trajectory_path.empty() && !sequence)
     throw InputError("--trajectory needs --sequence (a trajectory is a sequence's frames)");
+  TrajectoryFormatNamed(cli.trajectory_format);  // refused before any work
 #ifndef CWLOC_WITH_VIDEO
   if (!cli.video_path.empty())
     throw InputError("--video: this cwloc-localize was built without FFmpeg (CWLOC_WITH_VIDEO)");
@@ -393,14 +401,14 @@ int Run(const CliOptions& cli) {
   std::atomic<int> localized{0}, failed{0}, errors{0}, internal_errors{0};
   // One query: read, localized or tracked, written; its seconds, or -1 when it was an error.
   const auto process = [&](const std::string& name, const std::string& label,
-                           const std::function<Query()>& load, double timestamp) {
+                           const std::function<Query()>& load, FrameStamp stamp) {
     try {
       const Query query = load();
       const LocalizationResult result = tracker ? tracker->Track(query, motion_of(query.name))
                                                 : localizer.Localize(query, options);
       if (result.tracking) ++modes[static_cast<size_t>(result.tracking->mode)];
       (result.success ? localized : failed)++;
-      sink.Write(result, cli.options, timestamp);
+      sink.Write(result, cli.options, stamp);
       return result.times.total;
     } catch (const InputError& e) {
       ++errors;
@@ -439,7 +447,7 @@ int Run(const CliOptions& cli) {
       const std::string name = cli.video_path + "#" + std::to_string(frame->index);
       times.push_back(process(
           name, name, [&] { return loader.LoadFrame(name, std::move(frame->image)); },
-          frame->seconds));
+          FrameStamp{frame->seconds, true}));
       progress.Advance();
     }
     total = times.size();
@@ -457,7 +465,7 @@ int Run(const CliOptions& cli) {
            i = next++) {
         times[i] = process(
             sources[i].name, sources[i].Label(), [&] { return loader.Load(sources[i]); },
-            double(i));  // a list's frames: their place
+            FrameStamp{double(i), false});  // a list's frames: their place
         progress.Advance();
       }
     };
@@ -670,9 +678,17 @@ int main(int argc, char** argv) {
                  "is)")
       ->group(kOutput);
   app.add_option("--trajectory", cli.trajectory_path,
-                 "With --sequence: also write the frames' poses as a TUM trajectory, "
-                 "'TIMESTAMP TX TY TZ QX QY QZ QW' (the camera in the world; the timestamp is "
-                 "the frame's place in the sequence, from 0), as evo reads it (saved as -o is)")
+                 "With --sequence: also write the frames' poses as a trajectory in "
+                 "--trajectory-format (the timestamp is a video frame's time, else the frame's "
+                 "place in the sequence, from 0; saved as -o is)")
+      ->group(kOutput);
+  app.add_option("--trajectory-format", cli.trajectory_format,
+                 "tum: 'TIMESTAMP TX TY TZ QX QY QZ QW', the camera in the world, as evo reads "
+                 "it; kapture: its trajectories.txt, 'TIMESTAMP, camera, QW, QX, QY, QZ, TX, TY, "
+                 "TZ', the world in the camera; lamar: LaMAR's trajectories.txt, the camera in "
+                 "the world and its 6 x 6 covariance (docs/cli.md); kapture and lamar write "
+                 "microseconds")
+      ->capture_default_str()
       ->group(kOutput);
   app.add_flag("-q,--quiet", cli.quiet, "No summary or readable lines")->group(kOutput);
   app.add_option("--threads", cli.threads,

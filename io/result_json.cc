@@ -156,14 +156,4 @@ std::string PoseLine(const LocalizationResult& result) {
   return buffer;
 }
 
-std::string TrajectoryLine(const LocalizationResult& result, double timestamp) {
-  // world_from_camera's rotation is cam_from_world's inverse: the conjugate quaternion.
-  const auto& q = result.rotation;
-  const auto& c = result.center;
-  char buffer[512];
-  std::snprintf(buffer, sizeof(buffer), "%.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g",
-                timestamp, c[0], c[1], c[2], -q[1], -q[2], -q[3], q[0]);
-  return buffer;
-}
-
 }  // namespace cwloc

@@ -18,10 +18,6 @@ nlohmann::ordered_json ErrorToJson(const std::string& name, const std::string& e
 // "NAME QW QX QY QZ TX TY TZ" (the visuallocalization.net submission format).
 std::string PoseLine(const LocalizationResult& result);
 
-// "TIMESTAMP TX TY TZ QX QY QZ QW": the TUM trajectory format (evo, rpg_trajectory_evaluation),
-// the camera's pose in the world (world_from_camera: its centre and the inverse rotation).
-std::string TrajectoryLine(const LocalizationResult& result, double timestamp);
-
 // Every option of the table by its name (OptionSpec::name), as a result records them.
 nlohmann::ordered_json OptionsToJson(const QueryOptions& options);
 

@@ -252,6 +252,77 @@ TEST_F(TrackerTest, TheCliTracksAQueryListAsASequence) {
   }
   EXPECT_EQ(frame, records.size());
 
+  // kapture's trajectories.txt: camera_from_world as the record has it. LaMAR's: world_from_camera
+  // and the covariance of v and omega in T Exp(omega, v), so that the centre moves by R v (R the
+  // line's own world_from_camera rotation) and the rotation by R omega: the record's (theta, C)
+  // covariance turned into the camera's axes.
+  for (const std::string format : {"kapture", "lamar"}) {
+    const auto path = dir.path() / (format + ".txt");
+    ASSERT_EQ(test::RunCommand(localize + " --sequence -q -o " + out.string() + " --trajectory " +
+                                   path.string() + " --trajectory-format " + format,
+                               &output),
+              0)
+        << output;
+    std::ifstream file(path);
+    std::string line;
+    if (format == "kapture") {
+      ASSERT_TRUE(std::getline(file, line));
+      EXPECT_EQ(line, "# kapture format: 1.1");
+    }
+    ASSERT_TRUE(std::getline(file, line));
+    EXPECT_EQ(line, format == "kapture"
+                        ? "# timestamp, device_id, qw, qx, qy, qz, tx, ty, tz"
+                        : "# timestamp, device_id, qw, qx, qy, qz, tx, ty, tz, *covar");
+    const std::vector<nlohmann::json> again = test::ReadJsonLines(out);
+    for (frame = 0; std::getline(file, line); ++frame) {
+      std::replace(line.begin(), line.end(), ',', ' ');
+      std::istringstream fields(line);
+      long long timestamp;
+      std::string device;
+      std::vector<double> numbers;
+      ASSERT_TRUE(fields >> timestamp >> device) << line;
+      for (double value; fields >> value;) numbers.push_back(value);
+      const nlohmann::json& pose = again[frame]["pose"];
+      EXPECT_EQ(timestamp, static_cast<long long>(frame));
+      EXPECT_EQ(device, "camera");
+      if (format == "kapture") {
+        ASSERT_EQ(numbers.size(), 7u) << line;
+        for (int i = 0; i < 4; ++i) EXPECT_EQ(numbers[i], pose["qvec"][i].get<double>());
+        for (int i = 0; i < 3; ++i) EXPECT_EQ(numbers[4 + i], pose["tvec"][i].get<double>());
+        continue;
+      }
+      ASSERT_EQ(numbers.size(), 7u + 36u) << line;
+      EXPECT_EQ(numbers[0], pose["qvec"][0].get<double>());
+      for (int i = 1; i < 4; ++i) EXPECT_EQ(numbers[i], -pose["qvec"][i].get<double>());
+      for (int i = 0; i < 3; ++i) EXPECT_EQ(numbers[4 + i], pose["center"][i].get<double>());
+      const Eigen::Matrix3d world_from_camera =
+          Eigen::Quaterniond(numbers[0], numbers[1], numbers[2], numbers[3]).toRotationMatrix();
+      Eigen::Matrix<double, 6, 6> lamar, ours;
+      for (int r = 0; r < 6; ++r) {
+        for (int c = 0; c < 6; ++c) {
+          lamar(r, c) = numbers[7 + 6 * r + c];
+          ours(r, c) = again[frame]["covariance"]["pose"][r][c].get<double>();
+        }
+      }
+      Eigen::Matrix<double, 6, 6> turn = Eigen::Matrix<double, 6, 6>::Zero();
+      turn.topLeftCorner<3, 3>() = world_from_camera;
+      turn.bottomRightCorner<3, 3>() = world_from_camera;
+      const Eigen::Matrix<double, 6, 6> back = turn * lamar * turn.transpose();
+      EXPECT_LE((back - ours).norm(), 1e-9 * ours.norm()) << "frame " << frame;
+      // The centre's covariance keeps its size in any axes.
+      const double lamar_trace = lamar.bottomRightCorner<3, 3>().trace();
+      const double our_trace = ours.bottomRightCorner<3, 3>().trace();
+      EXPECT_NEAR(lamar_trace, our_trace, 1e-9 * ours.norm());
+    }
+    EXPECT_EQ(frame, again.size()) << format;
+  }
+  EXPECT_EQ(test::RunCommand(localize + " --sequence --trajectory " + trajectory.string() +
+                                 " --trajectory-format kaptur",
+                             &output),
+            2);
+  EXPECT_EQ(output,
+            "cwloc-localize: error: --trajectory-format kaptur: expected tum, kapture or lamar\n");
+
   // --motion's lines: seven numbers, and a frame of the sequence.
   const auto motion = dir.path() / "motion.txt";
   std::ofstream(motion) << "# VIO\n0004.jpg 1 0 0 0 0.1 0 0\n0007.jpg 1 0 0 0 0.1 0\n";

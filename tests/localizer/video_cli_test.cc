@@ -111,12 +111,15 @@ TEST_F(VideoCliTest, AVideosFramesAreTrackedWithTheirTimes) {
   }
 }
 
-// Every second frame, the focal length unknown: estimated on each frame near COLMAP's.
+// Every second frame, the focal length unknown: estimated on each frame near COLMAP's; the
+// kapture trajectory's timestamps are the frames' times in microseconds.
 TEST_F(VideoCliTest, EveryNthFrameWithAnUnknownFocalLength) {
-  const auto out = dir_->path() / "step.jsonl";
+  const auto out = dir_->path() / "step.jsonl", trajectory = dir_->path() / "step.txt";
   int status = 0;
   const std::string output =
-      Localize("--video " + Video().string() + " --video-step 2 -q -o " + out.string(), &status);
+      Localize("--video " + Video().string() + " --video-step 2 -q -o " + out.string() +
+                   " --trajectory " + trajectory.string() + " --trajectory-format kapture",
+               &status);
   if (output.find("built without FFmpeg") != std::string::npos) GTEST_SKIP() << output;
   ASSERT_EQ(status, 0) << output;
   const std::vector<nlohmann::json> records = test::ReadJsonLines(out);
@@ -128,6 +131,14 @@ TEST_F(VideoCliTest, EveryNthFrameWithAnUnknownFocalLength) {
     EXPECT_EQ(records[i]["camera"]["calibration"], "unknown");
     EXPECT_NEAR(records[i]["camera"]["params"][0].get<double>(), 692.745, 7.0);
     EXPECT_LE(Error(records[i], 2 * i), 0.04);  // measured: 0.002-0.025
+  }
+  std::ifstream lines(trajectory);
+  lines.ignore(1000, '\n').ignore(1000, '\n');  // the two comment lines
+  for (size_t i = 0; i < records.size(); ++i) {
+    long long timestamp = -1;
+    ASSERT_TRUE(lines >> timestamp);
+    lines.ignore(1000, '\n');
+    EXPECT_EQ(timestamp, 1000000LL * static_cast<long long>(i));  // frame 2i of a 2 fps video
   }
 }
 
