@@ -570,6 +570,13 @@ def cmd_compact(args):
     return EXIT_OK
 
 
+
+def cmd_trajectory(args):
+    """cwloc-plot trajectory, in cwloc_plot_trajectory.py next to this script."""
+    sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
+    import cwloc_plot_trajectory
+    return cwloc_plot_trajectory.run(args, sys.modules[__name__])
+
 # ---------------------------------------------------------------------------------------------
 # Command line
 
@@ -692,6 +699,21 @@ def build_parser():
                               "of its run; repeat")
     common(compact)
     compact.set_defaults(func=cmd_compact)
+
+    trajectory = commands.add_parser(
+        "trajectory", formatter_class=formatter, help="a sequence's poses over the map, coloured by tracking mode",
+        description="A sequence's camera centres seen from above (up: the frames' mean camera up direction),\n"
+                    "joined in frame order and coloured by how each got its pose (tracked, relocalized), over\n"
+                    "the COLMAP model's points near them and, with --truth, the true path. Reads cwloc-localize\n"
+                    "--sequence (or --video) JSON lines; prints the frames per mode.",
+        epilog="example:\n  cwloc-plot trajectory --results frames.jsonl --model sparse/0 \\\n"
+               "      --truth queries_gt.txt -o trajectory.png")
+    trajectory.add_argument("--results", required=True, metavar="JSONL", help="cwloc-localize's -o output")
+    trajectory.add_argument("--model", metavar="DIR", help="a COLMAP model folder whose points3D are drawn")
+    trajectory.add_argument("--truth", metavar="FILE",
+                            help="true poses, 'NAME QW QX QY QZ TX TY TZ' (camera_from_world) per line")
+    common(trajectory)
+    trajectory.set_defaults(func=cmd_trajectory)
     return parser
 
 

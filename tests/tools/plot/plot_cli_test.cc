@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -320,6 +321,66 @@ TEST(PlotCli, CompactPrintsErrorAndShareByBytesPerView) {
                 dir, &out, &err),
       2);
   EXPECT_NE(err.find("expected DATASET:BYTES_PER_VIEW:REPORT"), std::string::npos) << err;
+  EXPECT_TRUE(TempFiles(dir.path()).empty());
+}
+
+// A sequence of six frames around the origin (four tracked, one relocalized, one lost) over a
+// COLMAP model's points3D.txt, with the true path: the frames per mode, and a clear error for a
+// localized record without its pose, a folder without points and results without any pose.
+TEST(PlotCli, TrajectoryDrawsTheFramesByModeOverTheMap) {
+  test::TempDir dir;
+  {
+    std::ofstream results(dir / "frames.jsonl"), truth(dir / "gt.txt");
+    const char* modes[] = {"relocalized", "tracked", "tracked", "lost", "tracked", "tracked"};
+    for (int i = 0; i < 6; ++i) {
+      const std::string name = "f" + std::to_string(i) + ".jpg";
+      const double angle = i * 0.5, x = 3 * std::cos(angle), y = 3 * std::sin(angle);
+      nlohmann::json record = {{"name", name}, {"success", std::string(modes[i]) != "lost"}};
+      record["tracking"] = {{"mode", modes[i]}};
+      // Cameras at height 0 with their y axis down (-z): cam_from_world = [x; -z; y] rotation.
+      const double h = std::sqrt(0.5);
+      if (record["success"]) record["pose"] = {{"qvec", {h, h, 0, 0}}, {"center", {x, y, 0}}};
+      results << record.dump() << "\n";
+      truth << name << " " << h << " " << h << " 0 0 " << -x << " 0 " << y << "\n";
+    }
+    std::ofstream points(dir / "points3D.txt");
+    points << "# POINT3D_ID X Y Z R G B ERROR TRACK[]\n1 0 0 0.5 255 0 0 0.1 1 0\n"
+              "2 0.5 0.2 0 0 255 0 0.2 1 1\n";
+  }
+  std::string out, err;
+  ASSERT_EQ(PlotSplit("trajectory --results " + Quote(dir / "frames.jsonl") + " --model " +
+                          Quote(dir.path()) + " --truth " + Quote(dir / "gt.txt") + " -o " +
+                          Quote(dir / "trajectory.png"),
+                      dir, &out, &err),
+            0)
+      << err;
+  EXPECT_EQ(out, "cwloc-plot trajectory: " + (dir / "frames.jsonl").string() +
+                     "\n"
+                     "  frames  with a pose  lost  relocalized  tracked\n"
+                     "  6       5            1     1            4\n");
+  EXPECT_EQ(err, "cwloc-plot: wrote " + (dir / "trajectory.png").string() + " (6 frames)\n");
+  EXPECT_EQ(PngSize(dir / "trajectory.png"), std::make_pair(960u, 600u));
+
+  std::ofstream(dir / "bad.jsonl") << "{\"name\": \"a.jpg\", \"success\": true}\n";
+  EXPECT_EQ(Plot("trajectory --results " + Quote(dir / "bad.jsonl") + " -o " + Quote(dir / "x.png"),
+                 &err),
+            2);
+  EXPECT_EQ(err, "cwloc-plot: error: " + (dir / "bad.jsonl").string() +
+                     ":1: a localized record without pose.center and pose.qvec\n");
+  std::ofstream(dir / "none.jsonl") << "{\"name\": \"a.jpg\", \"success\": false}\n";
+  EXPECT_EQ(
+      Plot("trajectory --results " + Quote(dir / "none.jsonl") + " -o " + Quote(dir / "x.png"),
+           &err),
+      2);
+  EXPECT_EQ(err, "cwloc-plot: error: " + (dir / "none.jsonl").string() +
+                     ": no frame with a pose to draw\n");
+  EXPECT_EQ(Plot("trajectory --results " + Quote(dir / "frames.jsonl") + " --model " +
+                     Quote(dir / "nowhere") + " -o " + Quote(dir / "x.png"),
+                 &err),
+            2);
+  EXPECT_EQ(err, "cwloc-plot: error: " + (dir / "nowhere").string() +
+                     ": no points3D.bin or points3D.txt (expected a COLMAP model folder)\n");
+  EXPECT_FALSE(fs::exists(dir / "x.png"));
   EXPECT_TRUE(TempFiles(dir.path()).empty());
 }
 
