@@ -95,6 +95,10 @@ cwloc_status RunQuery(Handle* handle, cwloc_result** out,
   return Guarded([&] { *out = new cwloc_result{query(), georeferenced}; });
 }
 
+std::optional<double> ToTimestamp(const double* timestamp) {
+  return timestamp != nullptr ? std::optional<double>(*timestamp) : std::nullopt;
+}
+
 std::optional<cwloc::api::Motion> ToMotion(const cwloc_motion* motion) {
   if (motion == nullptr) return std::nullopt;
   cwloc::api::Motion out;
@@ -277,31 +281,34 @@ cwloc_status cwloc_tracker_reset(cwloc_tracker* tracker) {
 
 cwloc_status cwloc_track_features(cwloc_tracker* tracker, const float* keypoints,
                                   const uint8_t* descriptors, uint32_t num_features,
-                                  const cwloc_camera* camera, const cwloc_motion* motion,
-                                  cwloc_result** out) {
+                                  const cwloc_camera* camera, const double* timestamp,
+                                  const cwloc_motion* motion, cwloc_result** out) {
   return RunQuery(tracker, out, [&] {
     cwloc::api::Features features = FeaturesOf(keypoints, descriptors, num_features);
     return tracker->tracker.Track(features, RequiredCamera(camera, "features need a camera"),
-                                  ToMotion(motion));
+                                  ToTimestamp(timestamp), ToMotion(motion));
   });
 }
 
 cwloc_status cwloc_track_photo(cwloc_tracker* tracker, const char* path, const cwloc_camera* camera,
-                               const cwloc_motion* motion, cwloc_result** out) {
+                               const double* timestamp, const cwloc_motion* motion,
+                               cwloc_result** out) {
   return RunQuery(tracker, out, [&] {
     if (path == nullptr)
       throw cwloc::api::Error(cwloc::api::ErrorCode::kInvalidArgument, "path is NULL");
-    return tracker->tracker.TrackPhoto(path, ToCamera(camera), ToMotion(motion));
+    return tracker->tracker.TrackPhoto(path, ToCamera(camera), ToTimestamp(timestamp),
+                                       ToMotion(motion));
   });
 }
 
 cwloc_status cwloc_track_grey_image(cwloc_tracker* tracker, const uint8_t* pixels, uint32_t width,
                                     uint32_t height, size_t stride, const cwloc_camera* camera,
-                                    const cwloc_motion* motion, cwloc_result** out) {
+                                    const double* timestamp, const cwloc_motion* motion,
+                                    cwloc_result** out) {
   return RunQuery(tracker, out, [&] {
     return tracker->tracker.TrackGreyImage(pixels, width, height, stride,
                                            RequiredCamera(camera, "a grey image needs a camera"),
-                                           ToMotion(motion));
+                                           ToTimestamp(timestamp), ToMotion(motion));
   });
 }
 

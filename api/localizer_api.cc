@@ -229,8 +229,15 @@ void Options::Set(const std::string& name, double value) {
 // A tracker's frame: the tracker, and the motion the caller gives.
 struct TrackedFrame {
   cwloc::Tracker* tracker = nullptr;
+  std::optional<double> seconds;
   std::optional<FrameMotion> motion;
 };
+
+std::optional<double> ToSeconds(std::optional<double> timestamp) {
+  if (timestamp && !std::isfinite(*timestamp))
+    throw InvalidArgument("timestamp: expected a finite number of seconds");
+  return timestamp;
+}
 
 std::optional<FrameMotion> ToFrameMotion(const std::optional<Motion>& motion) {
   if (!motion) return std::nullopt;
@@ -257,9 +264,9 @@ struct Localizer::Impl {
   // A complete query: localized alone, or as the next frame of a tracker.
   Result Localize(const Query& query, const CallOptions& call, const TrackedFrame* frame) const {
     ValidateOrThrowInvalidArgument([&] { localizer.ValidatePriors(query); });
-    const LocalizationResult result = frame != nullptr
-                                          ? frame->tracker->Track(query, frame->motion)
-                                          : localizer.Localize(query, call.options.localizer);
+    const LocalizationResult result =
+        frame != nullptr ? frame->tracker->Track(query, frame->seconds, frame->motion)
+                         : localizer.Localize(query, call.options.localizer);
     return ToResult(result, query, index, call.options);
   }
 
@@ -408,26 +415,26 @@ Tracker& Tracker::operator=(Tracker&&) noexcept = default;
 Tracker::~Tracker() = default;
 
 Result Tracker::Track(const Features& features, const Camera& camera,
-                      const std::optional<Motion>& motion) {
+                      std::optional<double> timestamp, const std::optional<Motion>& motion) {
   return Translated([&] {
-    const TrackedFrame frame{&impl_->tracker, ToFrameMotion(motion)};
+    const TrackedFrame frame{&impl_->tracker, ToSeconds(timestamp), ToFrameMotion(motion)};
     return impl_->localizer.FromFeatures(features, camera, impl_->options, &frame);
   });
 }
 
 Result Tracker::TrackPhoto(const std::string& path, const std::optional<Camera>& camera,
-                           const std::optional<Motion>& motion) {
+                           std::optional<double> timestamp, const std::optional<Motion>& motion) {
   return Translated([&] {
-    const TrackedFrame frame{&impl_->tracker, ToFrameMotion(motion)};
+    const TrackedFrame frame{&impl_->tracker, ToSeconds(timestamp), ToFrameMotion(motion)};
     return impl_->localizer.FromPhoto(path, camera, impl_->options, &frame);
   });
 }
 
 Result Tracker::TrackGreyImage(const uint8_t* pixels, uint32_t width, uint32_t height,
-                               size_t stride, const Camera& camera,
+                               size_t stride, const Camera& camera, std::optional<double> timestamp,
                                const std::optional<Motion>& motion) {
   return Translated([&] {
-    const TrackedFrame frame{&impl_->tracker, ToFrameMotion(motion)};
+    const TrackedFrame frame{&impl_->tracker, ToSeconds(timestamp), ToFrameMotion(motion)};
     return impl_->localizer.FromGreyImage(pixels, width, height, stride, camera, impl_->options,
                                           &frame);
   });

@@ -404,8 +404,11 @@ int Run(const CliOptions& cli) {
                            const std::function<Query()>& load, FrameStamp stamp) {
     try {
       const Query query = load();
-      const LocalizationResult result = tracker ? tracker->Track(query, motion_of(query.name))
-                                                : localizer.Localize(query, options);
+      const LocalizationResult result =
+          tracker ? tracker->Track(
+                        query, stamp.seconds ? std::optional<double>(stamp.value) : std::nullopt,
+                        motion_of(query.name))
+                  : localizer.Localize(query, options);
       if (result.tracking) ++modes[static_cast<size_t>(result.tracking->mode)];
       (result.success ? localized : failed)++;
       sink.Write(result, cli.options, stamp);

@@ -15,6 +15,9 @@ namespace {
 constexpr int kMaxMatchingRounds = 3;
 constexpr double kStillDeg = 0.1;
 constexpr double kStillDepthShare = 0.002;
+// The last step is repeated at most this many times over (a frame after a gap in the stream):
+// beyond, the prediction is a guess and the last pose alone does as well.
+constexpr double kMaxStepScale = 4.0;
 
 CameraPose PoseOf(const LocalizationResult& result) {
   const auto& q = result.rotation;
@@ -69,6 +72,24 @@ CameraPose Tracker::Moved(const CameraPose& pose, const FrameMotion& motion) con
     step.setZero();  // no step to take the length from: the rotation alone
   }
   return Then(pose, CameraPose(motion.relative.rotation, step));
+}
+
+CameraPose Tracker::LastStepRepeated(std::optional<double> seconds) const {
+  // The step from the frame before: last * before^-1.
+  Eigen::Quaterniond rotation = last_->pose.rotation * before_last_->pose.rotation.conjugate();
+  Eigen::Vector3d translation = last_->pose.translation - rotation * before_last_->pose.translation;
+  if (seconds && last_->seconds && before_last_->seconds) {
+    const double last_step = *last_->seconds - *before_last_->seconds;
+    const double this_step = *seconds - *last_->seconds;
+    if (last_step > 0 && this_step >= 0 && this_step != last_step) {
+      // The step's rotation angle and translation scaled alike (its first-order power).
+      const double scale = std::min(this_step / last_step, kMaxStepScale);
+      const Eigen::AngleAxisd turn(rotation);
+      rotation = Eigen::Quaterniond(Eigen::AngleAxisd(turn.angle() * scale, turn.axis()));
+      translation *= scale;
+    }
+  }
+  return Then(last_->pose, CameraPose(rotation, translation));
 }
 
 void Tracker::Reset() {
@@ -131,7 +152,8 @@ std::optional<LocalizationResult> Tracker::TrackFrom(const Query& frame,
   return result;
 }
 
-LocalizationResult Tracker::Track(const Query& frame, const std::optional<FrameMotion>& motion) {
+LocalizationResult Tracker::Track(const Query& frame, std::optional<double> seconds,
+                                  const std::optional<FrameMotion>& motion) {
   const Stopwatch time;
   TrackingInfo info;
   if (frame.NumFeatures() == 0 && frame.descriptors.empty()) {
@@ -159,12 +181,7 @@ LocalizationResult Tracker::Track(const Query& frame, const std::optional<FrameM
     if (motion) {
       predictions.push_back(Moved(last_->pose, *motion));
     } else if (before_last_) {
-      // The step from the frame before: last * before^-1.
-      const Eigen::Quaterniond rotation =
-          last_->pose.rotation * before_last_->pose.rotation.conjugate();
-      predictions.push_back(
-          Then(last_->pose, CameraPose(rotation, last_->pose.translation -
-                                                     rotation * before_last_->pose.translation)));
+      predictions.push_back(LastStepRepeated(seconds));
     }
     predictions.push_back(last_->pose);
     first_prediction = predictions.front();
@@ -194,6 +211,7 @@ LocalizationResult Tracker::Track(const Query& frame, const std::optional<FrameM
     PosedFrame posed;
     posed.name = frame.name;
     posed.pose = PoseOf(*result);
+    posed.seconds = seconds;
     posed.camera_and_pose.pose = posed.pose;
     posed.camera_and_pose.model_id = result->camera.model_id;
     posed.camera_and_pose.params = result->camera.params;

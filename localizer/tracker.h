@@ -17,15 +17,15 @@ struct TrackerOptions {
   // pose. The frame is then matched around that pose in the model images nearest it, as
   // guided back-matching matches a query around its first pose (with
   // LocalizerOptions::guide_radius_px), until the pose stops moving.
-  double radius_px = 80.0;
+  double radius_px = 200.0;
   uint32_t rough_views = 300;
   // RANSAC's iterations on a tracked frame, whose matches near the prediction are mostly inliers.
   uint32_t max_ransac_iterations = 100;
   // A tracked pose farther than this from its prediction is not trusted and the frame is
   // localized from scratch: the rotation between them, and the distance between the centres
   // over the median depth of the frame's inliers.
-  double max_rotation_change_deg = 10.0;
-  double max_relative_position_change = 0.25;
+  double max_rotation_change_deg = 30.0;
+  double max_relative_position_change = 0.6;
 };
 
 // What the device knows of its own motion since the previous frame (visual-inertial
@@ -53,8 +53,11 @@ class Tracker {
           const TrackerOptions& tracker_options = {});
 
   // The frame's result, with its `tracking` set. With a motion the prediction is the last pose
-  // moved by it, instead of by the last step. Throws InputError as Localizer::Localize does.
-  LocalizationResult Track(const Query& frame, const std::optional<FrameMotion>& motion = {});
+  // moved by it, instead of by the last step. `seconds`, when the frame was seen: with those of
+  // the two frames before, the last step is scaled to the time since the last frame (frames
+  // without them are taken as evenly spaced). Throws InputError as Localizer::Localize does.
+  LocalizationResult Track(const Query& frame, std::optional<double> seconds = std::nullopt,
+                           const std::optional<FrameMotion>& motion = std::nullopt);
   // Forgets the frames so far: the next frame is localized from scratch.
   void Reset();
 
@@ -62,11 +65,15 @@ class Tracker {
   struct PosedFrame {
     std::string name;
     CameraPose pose;  // cam_from_world
+    std::optional<double> seconds;
     PoseHypothesis camera_and_pose;
     std::vector<uint32_t> inlier_views;
   };
   // The last pose moved by the motion, its translation in model units.
   CameraPose Moved(const CameraPose& pose, const FrameMotion& motion) const;
+  // The last pose moved by the last step, scaled to the time since the last frame when the
+  // three frames' times are known.
+  CameraPose LastStepRepeated(std::optional<double> seconds) const;
   std::optional<LocalizationResult> TrackFrom(const Query& frame, const CameraPose& predicted,
                                               TrackingInfo* info) const;
 

@@ -31,35 +31,49 @@ std::unique_ptr<Tracker> Create(const api::Localizer& localizer, const py::kwarg
   return std::make_unique<Tracker>(localizer, ToOptions(kwargs));
 }
 
+// timestamp: None, or the frame's time in seconds.
+std::optional<double> ToTimestamp(py::handle timestamp) {
+  if (timestamp.is_none()) return std::nullopt;
+  try {
+    return timestamp.cast<double>();
+  } catch (const py::cast_error&) {
+    throw py::type_error("timestamp: expected a number of seconds or None");
+  }
+}
+
 api::Result TrackPhoto(Tracker& tracker, py::handle photo, py::handle camera,
-                       py::handle motion_in) {
+                       py::handle timestamp_in, py::handle motion_in) {
   const std::string path = ToPath(photo, "photo");
   std::optional<api::Camera> frame_camera;
   if (!camera.is_none()) frame_camera = ToCamera(camera, "camera");
+  const std::optional<double> timestamp = ToTimestamp(timestamp_in);
   const std::optional<api::Motion> motion = ToMotion(motion_in);
   py::gil_scoped_release release;
   const std::lock_guard lock(tracker.frame);
-  return tracker.tracker.TrackPhoto(path, frame_camera, motion);
+  return tracker.tracker.TrackPhoto(path, frame_camera, timestamp, motion);
 }
 
 api::Result TrackFeatures(Tracker& tracker, py::handle keypoints, py::handle descriptors,
-                          py::handle camera, py::handle motion_in) {
+                          py::handle camera, py::handle timestamp_in, py::handle motion_in) {
   const api::Features features = ToFeatures(keypoints, descriptors);
   const api::Camera frame_camera = ToCamera(camera, "camera");
+  const std::optional<double> timestamp = ToTimestamp(timestamp_in);
   const std::optional<api::Motion> motion = ToMotion(motion_in);
   py::gil_scoped_release release;
   const std::lock_guard lock(tracker.frame);
-  return tracker.tracker.Track(features, frame_camera, motion);
+  return tracker.tracker.Track(features, frame_camera, timestamp, motion);
 }
 
-api::Result TrackGrey(Tracker& tracker, py::handle image, py::handle camera, py::handle motion_in) {
+api::Result TrackGrey(Tracker& tracker, py::handle image, py::handle camera,
+                      py::handle timestamp_in, py::handle motion_in) {
   const GreyImage grey = ToGreyImage(image);
   const api::Camera frame_camera = ToCamera(camera, "camera");
+  const std::optional<double> timestamp = ToTimestamp(timestamp_in);
   const std::optional<api::Motion> motion = ToMotion(motion_in);
   py::gil_scoped_release release;
   const std::lock_guard lock(tracker.frame);
   return tracker.tracker.TrackGreyImage(grey.pixels, grey.width, grey.height, grey.stride,
-                                        frame_camera, motion);
+                                        frame_camera, timestamp, motion);
 }
 
 }  // namespace
@@ -74,16 +88,20 @@ void BindTracker(py::module_& m) {
                       "run on several threads.")
       .def(py::init(&Create), py::arg("localizer"), py::keep_alive<1, 2>())
       .def("track_photo", &TrackPhoto, py::arg("photo"), py::arg("camera") = py::none(),
-           py::arg("motion") = py::none(),
+           py::arg("timestamp") = py::none(), py::arg("motion") = py::none(),
            "The next frame as a JPEG or PNG file (a str or os.PathLike), as localize_photo. "
-           "motion: the camera's motion since the previous frame, ((w, x, y, z), (tx, ty, tz)) "
-           "of the frame's camera from the previous one's, metres (cwloc-localize --motion).")
+           "timestamp: when it was seen, seconds (with the two frames' before, the last step is "
+           "scaled to the time since the last frame). motion: the camera's motion since the "
+           "previous frame, ((w, x, y, z), (tx, ty, tz)) of the frame's camera from the previous "
+           "one's, metres (cwloc-localize --motion).")
       .def("track_features", &TrackFeatures, py::arg("keypoints"), py::arg("descriptors"),
-           py::arg("camera"), py::arg("motion") = py::none(),
-           "The next frame's SIFT features, as localize_features; motion as track_photo.")
+           py::arg("camera"), py::arg("timestamp") = py::none(), py::arg("motion") = py::none(),
+           "The next frame's SIFT features, as localize_features; timestamp and motion as "
+           "track_photo.")
       .def("track_grey", &TrackGrey, py::arg("image"), py::arg("camera"),
-           py::arg("motion") = py::none(),
-           "The next frame as an 8-bit grey image, as localize_grey; motion as track_photo.")
+           py::arg("timestamp") = py::none(), py::arg("motion") = py::none(),
+           "The next frame as an 8-bit grey image, as localize_grey; timestamp and motion as "
+           "track_photo.")
       .def(
           "reset",
           [](Tracker& tracker) {

@@ -8,6 +8,7 @@
 #include <Eigen/Geometry>
 #include <cstdlib>
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -499,7 +500,8 @@ class TrackerApiTest : public testing::Test {
       const api::Features features = DatabaseFeatures(db, frames_[i].first);
       const api::Camera camera = ParseCamera(frames_[i].second);
       const std::optional<api::Motion> motion = motions.empty() ? std::nullopt : motions[i];
-      const api::Result& result = results.emplace_back(tracker.Track(features, camera, motion));
+      const api::Result& result =
+          results.emplace_back(tracker.Track(features, camera, std::nullopt, motion));
       EXPECT_TRUE(result.success);
       EXPECT_TRUE(result.tracking.has_value());
       if (!result.success || !result.tracking) continue;
@@ -521,7 +523,7 @@ class TrackerApiTest : public testing::Test {
       cwloc_result* c_result = nullptr;
       EXPECT_EQ(
           cwloc_track_features(c_tracker, features.keypoints.data(), features.descriptors.data(),
-                               uint32_t(features.keypoints.size() / 2), &c_camera,
+                               uint32_t(features.keypoints.size() / 2), &c_camera, nullptr,
                                c_motion ? &*c_motion : nullptr, &c_result),
           CWLOC_OK)
           << cwloc_last_error();
@@ -609,12 +611,21 @@ TEST_F(TrackerApiTest, AMotionPredictsAsCwlocLocalizeMotionDoes) {
   const colmap::DatabaseReader db(shared_->data / "database.db");
   try {
     tracker.Track(DatabaseFeatures(db, frames_[0].first), ParseCamera(frames_[0].second),
-                  api::Motion{{2, 0, 0, 0}, {0, 0, 0}});
+                  std::nullopt, api::Motion{{2, 0, 0, 0}, {0, 0, 0}});
     ADD_FAILURE() << "expected an error";
   } catch (const api::Error& e) {
     EXPECT_EQ(e.code(), api::ErrorCode::kInvalidArgument);
     EXPECT_STREQ(e.what(),
                  "motion: expected a unit quaternion (w, x, y, z) and a finite translation");
+  }
+  // So is a time that is no number of seconds.
+  try {
+    tracker.Track(DatabaseFeatures(db, frames_[0].first), ParseCamera(frames_[0].second),
+                  std::numeric_limits<double>::quiet_NaN());
+    ADD_FAILURE() << "expected an error";
+  } catch (const api::Error& e) {
+    EXPECT_EQ(e.code(), api::ErrorCode::kInvalidArgument);
+    EXPECT_STREQ(e.what(), "timestamp: expected a finite number of seconds");
   }
 }
 

@@ -60,3 +60,8 @@ def test_the_tracker_is_the_cli_sequence(fox, tmp_path):
     assert moved.success and moved.tracking.predicted_from is not None
     with pytest.raises(TypeError, match=r"motion: expected \(\(w, x, y, z\), \(tx, ty, tz\)\) or None"):
         tracker.track_photo(data / "query_images" / frames[3][0], frames[3][1], motion=(1, 2))
+    # The frame's time in seconds, or None; anything else is a TypeError.
+    timed = tracker.track_photo(data / "query_images" / frames[3][0], frames[3][1], timestamp=1.5)
+    assert timed.success and timed.tracking.predicted_from is not None
+    with pytest.raises(TypeError, match=r"timestamp: expected a number of seconds or None"):
+        tracker.track_photo(data / "query_images" / frames[4][0], frames[4][1], timestamp="now")

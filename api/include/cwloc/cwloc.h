@@ -166,17 +166,18 @@ CWLOC_C_API cwloc_status cwloc_tracker_create(const cwloc_localizer* localizer,
                                               const cwloc_options* options, cwloc_tracker** out);
 CWLOC_C_API void cwloc_tracker_destroy(cwloc_tracker* tracker);
 CWLOC_C_API cwloc_status cwloc_tracker_reset(cwloc_tracker* tracker);
-/* motion may be NULL (the device does not know it). */
+/* timestamp: when the frame was seen, seconds (any origin; as the C++ Tracker::Track takes it);
+ * it and motion may be NULL (the device does not know them). */
 CWLOC_C_API cwloc_status cwloc_track_features(cwloc_tracker* tracker, const float* keypoints,
                                               const uint8_t* descriptors, uint32_t num_features,
-                                              const cwloc_camera* camera,
+                                              const cwloc_camera* camera, const double* timestamp,
                                               const cwloc_motion* motion, cwloc_result** out);
 CWLOC_C_API cwloc_status cwloc_track_photo(cwloc_tracker* tracker, const char* path,
-                                           const cwloc_camera* camera, const cwloc_motion* motion,
-                                           cwloc_result** out);
+                                           const cwloc_camera* camera, const double* timestamp,
+                                           const cwloc_motion* motion, cwloc_result** out);
 CWLOC_C_API cwloc_status cwloc_track_grey_image(cwloc_tracker* tracker, const uint8_t* pixels,
                                                 uint32_t width, uint32_t height, size_t stride,
-                                                const cwloc_camera* camera,
+                                                const cwloc_camera* camera, const double* timestamp,
                                                 const cwloc_motion* motion, cwloc_result** out);
 
 /* Results: read with these accessors, then destroy. Pointers they return live as long as the

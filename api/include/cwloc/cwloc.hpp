@@ -243,14 +243,19 @@ class CWLOC_API Tracker {
   ~Tracker();
 
   // The next frame, as Localizer's Localize, LocalizePhoto and LocalizeGreyImage take a query,
-  // with the camera's motion since the previous frame when the device knows it (Motion: it then
-  // predicts the frame's pose).
+  // with when it was seen (seconds, any origin: with the two frames' before, the last step is
+  // scaled to the time since the last frame; without, frames count as evenly spaced) and the
+  // camera's motion since the previous frame when the device knows it (Motion: it then predicts
+  // the frame's pose).
   Result Track(const Features& features, const Camera& camera,
+               std::optional<double> timestamp = std::nullopt,
                const std::optional<Motion>& motion = std::nullopt);
   Result TrackPhoto(const std::string& path, const std::optional<Camera>& camera = std::nullopt,
+                    std::optional<double> timestamp = std::nullopt,
                     const std::optional<Motion>& motion = std::nullopt);
   Result TrackGreyImage(const uint8_t* pixels, uint32_t width, uint32_t height, size_t stride,
-                        const Camera& camera, const std::optional<Motion>& motion = std::nullopt);
+                        const Camera& camera, std::optional<double> timestamp = std::nullopt,
+                        const std::optional<Motion>& motion = std::nullopt);
   // Forgets the frames so far: the next frame is localized from scratch.
   void Reset();
 
