@@ -18,7 +18,7 @@ struct TrackerOptions {
   // guided back-matching matches a query around its first pose (with
   // LocalizerOptions::guide_radius_px), until the pose stops moving.
   double radius_px = 200.0;
-  uint32_t rough_views = 300;
+  uint32_t rough_views = 100;
   // RANSAC's iterations on a tracked frame, whose matches near the prediction are mostly inliers.
   uint32_t max_ransac_iterations = 100;
   // A tracked pose farther than this from its prediction is not trusted and the frame is
