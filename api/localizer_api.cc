@@ -400,11 +400,12 @@ struct Tracker::Impl {
   Impl(const Localizer::Impl& localizer_impl, const Options& tracker_options)
       : localizer(localizer_impl),
         options(tracker_options),
-        tracker(localizer_impl.localizer,
-                Translated([&] { return ToQueryOptions(tracker_options).localizer; })) {}
+        query_options(Translated([&] { return ToQueryOptions(tracker_options); })),
+        tracker(localizer_impl.localizer, query_options.localizer, query_options.tracker) {}
 
   const Localizer::Impl& localizer;
   const Options options;
+  const QueryOptions query_options;
   cwloc::Tracker tracker;
 };
 

@@ -395,7 +395,7 @@ int Run(const CliOptions& cli) {
   ResultSink sink(cli);
   const Localizer localizer(index);
   std::optional<Tracker> tracker;
-  if (sequence) tracker.emplace(localizer, options);
+  if (sequence) tracker.emplace(localizer, options, cli.options.tracker);
   std::atomic<int> modes[kTrackingModeNames.size()] = {};
 
   std::atomic<int> localized{0}, failed{0}, errors{0}, internal_errors{0};

@@ -13,6 +13,7 @@
 #include "io/photo_query.h"
 #include "io/query_priors.h"
 #include "localizer/localizer_options.h"
+#include "localizer/tracker.h"
 
 namespace cwloc {
 
@@ -20,6 +21,7 @@ namespace cwloc {
 // become features, and whether a photo's EXIF GPS becomes a prior. Defaults are the members'.
 struct QueryOptions {
   LocalizerOptions localizer;
+  TrackerOptions tracker;  // a sequence's frames
   PhotoOptions photo;
   bool use_exif_gps = false;
   double exif_gps_radius_m = kDefaultExifGpsRadiusM;
