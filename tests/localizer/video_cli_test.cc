@@ -111,15 +111,16 @@ TEST_F(VideoCliTest, AVideosFramesAreTrackedWithTheirTimes) {
   }
 }
 
-// Every second frame, the focal length unknown: estimated on each frame near COLMAP's; the
-// kapture trajectory's timestamps are the frames' times in microseconds.
+// Every second frame, the focal length unknown, shrunk for SIFT (the frames are 540 x 960):
+// estimated on each frame near COLMAP's; the kapture trajectory's timestamps are the frames'
+// times in microseconds.
 TEST_F(VideoCliTest, EveryNthFrameWithAnUnknownFocalLength) {
   const auto out = dir_->path() / "step.jsonl", trajectory = dir_->path() / "step.txt";
   int status = 0;
-  const std::string output =
-      Localize("--video " + Video().string() + " --video-step 2 -q -o " + out.string() +
-                   " --trajectory " + trajectory.string() + " --trajectory-format kapture",
-               &status);
+  const std::string output = Localize(
+      "--video " + Video().string() + " --video-step 2 --max-image-size 800 -q -o " + out.string() +
+          " --trajectory " + trajectory.string() + " --trajectory-format kapture",
+      &status);
   if (output.find("built without FFmpeg") != std::string::npos) GTEST_SKIP() << output;
   ASSERT_EQ(status, 0) << output;
   const std::vector<nlohmann::json> records = test::ReadJsonLines(out);
@@ -129,6 +130,8 @@ TEST_F(VideoCliTest, EveryNthFrameWithAnUnknownFocalLength) {
     EXPECT_EQ(records[i]["name"], Video().string() + "#" + std::to_string(2 * i));
     ASSERT_TRUE(records[i]["success"].get<bool>());
     EXPECT_EQ(records[i]["camera"]["calibration"], "unknown");
+    EXPECT_EQ(records[i]["photo"]["extraction_width"], 450);  // 540 x 960 at 800 / 960
+    EXPECT_EQ(records[i]["photo"]["extraction_height"], 800);
     EXPECT_NEAR(records[i]["camera"]["params"][0].get<double>(), 692.745, 7.0);
     EXPECT_LE(Error(records[i], 2 * i), 0.04);  // measured: 0.002-0.025
   }
