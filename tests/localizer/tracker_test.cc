@@ -127,7 +127,9 @@ TEST_F(TrackerTest, TimestampsScaleTheLastStepToTheGap) {
     }
   }
   // Measured on the 25 frames: median 0.71 model units by time against 0.78 by place (the
-  // frames spread over 8.2 units, 0.2-5.5 apart); 20 tracked either way.
+  // frames spread over 8.2 units, 0.2-5.5 apart); 20 tracked either way. The first 8 alone (a
+  // sanitizer's sample) have too few gaps to compare: there only the path runs.
+  if (test::kSanitized) return;
   EXPECT_LT(Median(error_by_time), 0.95 * Median(error_by_place));
   EXPECT_GE(tracked_by_time, tracked_by_place);
 }
