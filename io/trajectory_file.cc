@@ -63,13 +63,15 @@ std::string TrajectoryLine(const LocalizationResult& result, FrameStamp stamp,
   const long long timestamp =
       stamp.seconds ? std::llround(stamp.value * 1e6) : std::llround(stamp.value);
   const std::string device(kTrajectoryDeviceId);
-  if (format == TrajectoryFormat::kKapture) {
-    return Format("%lld, %s, %.17g, %.17g, %.17g, %.17g, %.17g, %.17g, %.17g", timestamp,
-                  device.c_str(), q[0], q[1], q[2], q[3], t[0], t[1], t[2]);
-  }
-  std::string line = Format("%lld, %s, %.17g, %.17g, %.17g, %.17g, %.17g, %.17g, %.17g", timestamp,
-                            device.c_str(), q[0], -q[1], -q[2], -q[3], c[0], c[1], c[2]);
-  if (result.covariance) {
+  // kapture's camera_from_world as the record has it; LaMAR's world_from_camera: the conjugate
+  // quaternion and the centre.
+  const bool lamar = format == TrajectoryFormat::kLamar;
+  const double sign = lamar ? -1.0 : 1.0;
+  const auto& position = lamar ? c : t;
+  std::string line =
+      Format("%lld, %s, %.17g, %.17g, %.17g, %.17g, %.17g, %.17g, %.17g", timestamp, device.c_str(),
+             q[0], sign * q[1], sign * q[2], sign * q[3], position[0], position[1], position[2]);
+  if (lamar && result.covariance) {
     const Eigen::Matrix<double, 6, 6> covariance = LamarCovariance(result);
     for (int row = 0; row < 6; ++row) {
       for (int col = 0; col < 6; ++col) line += Format(", %.17g", covariance(row, col));
