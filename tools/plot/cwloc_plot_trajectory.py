@@ -23,15 +23,20 @@ def _rotation(q):
             [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]]
 
 
+def _read_lines(path):
+    """The lines of a UTF-8 text file; InputError naming it when it cannot be read."""
+    try:
+        with open(path, encoding="utf-8") as f:
+            return f.read().splitlines()
+    except (OSError, UnicodeDecodeError) as e:
+        raise plot.InputError(f"{path}: cannot read ({getattr(e, 'strerror', None) or 'not UTF-8 text'})") from None
+
+
 def _read_frames(path):
     """[(name, mode, centre, camera_from_world rotation)] of a cwloc-localize --sequence output;
     mode is tracked, relocalized or lost (centre None), or localized for a record of a run
     without --sequence."""
-    try:
-        with open(path, encoding="utf-8") as f:
-            lines = f.read().splitlines()
-    except (OSError, UnicodeDecodeError) as e:
-        raise plot.InputError(f"{path}: cannot read ({getattr(e, 'strerror', None) or 'not UTF-8 text'})") from None
+    lines = _read_lines(path)
     frames = []
     for number, line in enumerate(lines, 1):
         if not line.strip():
@@ -65,11 +70,7 @@ def _read_frames(path):
 def _read_truth(path):
     """{name: centre} of a ground truth file, 'NAME QW QX QY QZ TX TY TZ ...' (camera_from_world)."""
     truth = {}
-    try:
-        with open(path, encoding="utf-8") as f:
-            lines = f.read().splitlines()
-    except (OSError, UnicodeDecodeError) as e:
-        raise plot.InputError(f"{path}: cannot read ({getattr(e, 'strerror', None) or 'not UTF-8 text'})") from None
+    lines = _read_lines(path)
     for number, line in enumerate(lines, 1):
         fields = line.split()
         if not fields or fields[0].startswith("#"):
@@ -107,15 +108,14 @@ def _read_points(model):
         return points
     if not os.path.isfile(text):
         raise plot.InputError(f"{model}: no points3D.bin or points3D.txt (expected a COLMAP model folder)")
-    with open(text, encoding="utf-8", errors="replace") as f:
-        for number, line in enumerate(f, 1):
-            fields = line.split()
-            if not fields or fields[0].startswith("#"):
-                continue
-            try:
-                points.append(tuple(float(v) for v in fields[1:4]))
-            except ValueError:
-                raise plot.InputError(f"{text}:{number}: expected 'POINT3D_ID X Y Z ...'") from None
+    for number, line in enumerate(_read_lines(text), 1):
+        fields = line.split()
+        if not fields or fields[0].startswith("#"):
+            continue
+        try:
+            points.append(tuple(float(v) for v in fields[1:4]))
+        except ValueError:
+            raise plot.InputError(f"{text}:{number}: expected 'POINT3D_ID X Y Z ...'") from None
     return points
 
 
