@@ -123,17 +123,18 @@ std::optional<LocalizationResult> Tracker::TrackFrom(const Query& frame,
   prediction.radius_px = options_.guide_radius_px;
   CameraPose around = PoseOf(rough);
   const LocalizationResult* before = &rough;
+  prediction.seen_points = InlierPoints(rough);
   std::optional<LocalizationResult> result;
   double depth = 0;
   for (int round = 0; round < kMaxMatchingRounds; ++round) {
     prediction.hypothesis.pose = around;
     if (!frame.camera.FocalKnown()) prediction.hypothesis.params = before->camera.params;
-    prediction.seen_points = InlierPoints(*before);
     result = localizer_.Localize(frame, tracking_options_, &prediction);
     if (!result->success) return std::nullopt;
     const CameraPose pose = PoseOf(*result);
-    // A successful pose has inliers, whose rows the localizer checked.
-    depth = *MedianPointDepth(localizer_.index(), InlierPoints(*result), pose);
+    // The next round's points; a successful pose has inliers, whose rows the localizer checked.
+    prediction.seen_points = InlierPoints(*result);
+    depth = *MedianPointDepth(localizer_.index(), prediction.seen_points, pose);
     const bool still = RotationAngleDeg(pose, around) <= kStillDeg &&
                        (pose.Center() - around.Center()).norm() <= kStillDepthShare * depth;
     around = pose;
