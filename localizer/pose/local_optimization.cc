@@ -1,7 +1,9 @@
 #include "localizer/pose/local_optimization.h"
 
-#include <Eigen/Dense>
+#include <Eigen/Geometry>
 #include <cmath>
+
+#include "localizer/pose/cholesky.h"
 
 namespace cwloc {
 namespace {
@@ -99,8 +101,9 @@ int Optimize(const LmProblem<kNumParams>& problem, int max_iterations, CameraPos
     if (!(cost > 0.0)) break;
     Hessian damped = jtj;
     damped.diagonal() += lambda * jtj.diagonal().cwiseMax(1e-12);
-    const Gradient step = -damped.ldlt().solve(jtr);
-    if (!step.allFinite()) break;
+    Gradient step;
+    if (!SolveCholesky(kNumParams, damped.data(), kNumParams, jtr.data(), step.data())) break;
+    step = -step;
     const Eigen::Quaterniond q_new = (ExpQuaternion(step.template head<3>()) * q).normalized();
     const Eigen::Vector3d t_new = t + step.template segment<3>(3);
     double f_new = f;

@@ -41,6 +41,44 @@ struct Candidate {
   double error = 0.0;  // RMS reprojection error on the four points, normalised units
 };
 
+// An orthonormal basis of the vectors orthogonal to a's columns (kRows > kCols, a of full
+// column rank): the last kRows - kCols columns of Q in a = QR, by Householder reflections.
+// Plain loops: Eigen's fixed-size HouseholderQR took half of this file's compile time.
+template <int kRows, int kCols>
+Eigen::Matrix<double, kRows, kRows - kCols> OrthogonalComplement(
+    Eigen::Matrix<double, kRows, kCols> a) {
+  double v[kCols][kRows] = {};  // reflection k: I - tau[k] v[k] v[k]^T, v[k][k] = 1
+  double tau[kCols] = {};
+  for (int k = 0; k < kCols; ++k) {
+    double tail = 0.0;
+    for (int i = k + 1; i < kRows; ++i) tail += a(i, k) * a(i, k);
+    v[k][k] = 1.0;
+    if (!(tail > 0.0)) continue;  // already zero below the diagonal: no reflection
+    const double c0 = a(k, k);
+    const double beta = c0 >= 0.0 ? -std::sqrt(c0 * c0 + tail) : std::sqrt(c0 * c0 + tail);
+    for (int i = k + 1; i < kRows; ++i) v[k][i] = a(i, k) / (c0 - beta);
+    tau[k] = (beta - c0) / beta;
+    for (int j = k + 1; j < kCols; ++j) {
+      double dot = 0.0;
+      for (int i = k; i < kRows; ++i) dot += v[k][i] * a(i, j);
+      for (int i = k; i < kRows; ++i) a(i, j) -= tau[k] * v[k][i] * dot;
+    }
+  }
+  // Column j of Q is H_0 H_1 ... H_{kCols-1} e_j.
+  Eigen::Matrix<double, kRows, kRows - kCols> complement;
+  for (int j = kCols; j < kRows; ++j) {
+    double x[kRows] = {};
+    x[j] = 1.0;
+    for (int k = kCols - 1; k >= 0; --k) {
+      double dot = 0.0;
+      for (int i = k; i < kRows; ++i) dot += v[k][i] * x[i];
+      for (int i = k; i < kRows; ++i) x[i] -= tau[k] * v[k][i] * dot;
+    }
+    for (int i = 0; i < kRows; ++i) complement(i, j - kCols) = x[i];
+  }
+  return complement;
+}
+
 // Projection equations linear in P ~ diag(fx, fy, 1) [R | t]; orthogonal rows of its left
 // block give three quadrics in the null space coordinates.
 void SolveGeneral(const NormalizedProblem& np, std::vector<Candidate>* candidates) {
@@ -55,9 +93,7 @@ void SolveGeneral(const NormalizedProblem& np, std::vector<Candidate>* candidate
     at.block<4, 1>(4, 2 * i + 1) = h;
     at.block<4, 1>(8, 2 * i + 1) = -np.image[i](1) * h;
   }
-  const Eigen::HouseholderQR<Eigen::Matrix<double, 12, 8>> qr(at);
-  const Eigen::Matrix<double, 12, 12> q = qr.householderQ();
-  const Eigen::Matrix<double, 12, 4> null = q.rightCols<4>();
+  const Eigen::Matrix<double, 12, 4> null = OrthogonalComplement(at);
 
   // P(c) = sum_k c_k null_k with c = (x, y, z, 1). Row a's left block m_a(c) is linear in c, so
   // m_a . m_b = c^T S c with S_kl = null_k^a . null_l^b.
@@ -117,11 +153,9 @@ void SolvePlanar(const NormalizedProblem& np, const Matrix3d& axes,
     at.block<3, 1>(3, 2 * i + 1) = h;
     at.block<3, 1>(6, 2 * i + 1) = -np.image[i](1) * h;
   }
-  const Eigen::HouseholderQR<Eigen::Matrix<double, 9, 8>> qr(at);
-  const Eigen::Matrix<double, 9, 9> q = qr.householderQ();
+  const Eigen::Matrix<double, 9, 1> h = OrthogonalComplement(at);
   Matrix3d hom;
-  hom << q.block<3, 1>(0, 8).transpose(), q.block<3, 1>(3, 8).transpose(),
-      q.block<3, 1>(6, 8).transpose();
+  hom << h.segment<3>(0).transpose(), h.segment<3>(3).transpose(), h.segment<3>(6).transpose();
 
   // r1.r2 = 0 and |r1|^2 - |r2|^2 = 0 with r_j ~ diag(1/f, 1/f, 1) h_j: a_k w + b_k = 0 in
   // w = 1/f^2, solved in the least squares sense.

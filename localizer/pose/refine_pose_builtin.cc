@@ -21,13 +21,14 @@
 #include <cmath>
 #include <limits>
 
+#include "localizer/pose/cholesky.h"
 #include "localizer/pose/refine_pose_solver.h"
 #include "localizer/pose/reprojection_residual.h"
 
 namespace cwloc {
 namespace {
 
-constexpr int kMaxParams = 8;  // rotation 3, translation 3, focal length, k
+constexpr int kMaxParams = kMaxCholeskySize;  // rotation 3, translation 3, focal length, k
 
 // Ceres' Solver::Options defaults, and the tolerances refine_pose_ceres.cc sets.
 constexpr double kFunctionTolerance = 1e-10;
@@ -330,39 +331,6 @@ double GradientMaxNorm(const RefinementProblem& problem, const RefinementParamet
   return AmbientDistance(problem, x, Plus(problem, x, minus_gradient), /*max_norm=*/true);
 }
 
-// Solves a y = rhs for a symmetric positive definite a by Cholesky (on the normal equations,
-// where Ceres' DENSE_QR factors [J; D]: the same step up to rounding). False on a non-positive
-// pivot or a non-finite solution, which the caller treats as Ceres treats a failed linear
-// solve: an invalid step.
-bool SolveCholesky(int n, const Matrix& a, const double* rhs, double* y) {
-  Matrix l = {};
-  for (int j = 0; j < n; ++j) {
-    double d = a[j][j];
-    for (int k = 0; k < j; ++k) d -= l[j][k] * l[j][k];
-    if (!(d > 0.0)) return false;
-    l[j][j] = std::sqrt(d);
-    for (int i = j + 1; i < n; ++i) {
-      double s = a[i][j];
-      for (int k = 0; k < j; ++k) s -= l[i][k] * l[j][k];
-      l[i][j] = s / l[j][j];
-    }
-  }
-  for (int i = 0; i < n; ++i) {
-    double s = rhs[i];
-    for (int k = 0; k < i; ++k) s -= l[i][k] * y[k];
-    y[i] = s / l[i][i];
-  }
-  for (int i = n - 1; i >= 0; --i) {
-    double s = y[i];
-    for (int k = i + 1; k < n; ++k) s -= l[k][i] * y[k];
-    y[i] = s / l[i][i];
-  }
-  for (int i = 0; i < n; ++i) {
-    if (!std::isfinite(y[i])) return false;
-  }
-  return true;
-}
-
 template <typename Model>
 bool Minimize(const RefinementProblem& problem, RefinementParameters* parameters,
               PoseRefinementSummary* summary) {
@@ -414,7 +382,9 @@ bool Minimize(const RefinementProblem& problem, RefinementParameters* parameters
       damped[i][i] += std::clamp(h[i][i], kMinDiagonal, kMaxDiagonal) / radius;
     }
     double step[kMaxParams];
-    bool valid = SolveCholesky(n, damped, g, step);
+    // Cholesky on the normal equations, where Ceres' DENSE_QR factors [J; D]: the same step up
+    // to rounding; a failed solve is what Ceres calls an invalid step.
+    bool valid = SolveCholesky(n, &damped[0][0], kMaxParams, g, step);
     double model_cost_change = 0.0;
     if (valid) {
       for (int i = 0; i < n; ++i) step[i] = -step[i];

@@ -163,9 +163,8 @@ bool Polish(const Coeffs& c, Eigen::Vector3d* point) {
     jac.col(0) = 2.0 * c.col(0) * x + c.col(1) * y + c.col(2) * z + c.col(6);
     jac.col(1) = c.col(1) * x + 2.0 * c.col(3) * y + c.col(4) * z + c.col(7);
     jac.col(2) = c.col(2) * x + c.col(4) * y + 2.0 * c.col(5) * z + c.col(8);
-    const Eigen::PartialPivLU<Eigen::Matrix3d> lu(jac);
-    if (!(std::abs(lu.determinant()) > 0.0)) break;
-    const Eigen::Vector3d p_new = p - lu.solve(r);
+    if (!(std::abs(jac.determinant()) > 0.0)) break;
+    const Eigen::Vector3d p_new = p - jac.inverse() * r;  // a 3x3 inverse is closed form
     const Eigen::Vector3d r_new = Evaluate(c, p_new);
     if (!(r_new.squaredNorm() < r.squaredNorm())) break;
     p = p_new;
