@@ -17,6 +17,12 @@ if(CWLOC_SANITIZE)
   if(CWLOC_SANITIZE MATCHES "undefined")
     # A UBSan finding fails the test or the fuzz run instead of printing and going on.
     list(APPEND sanitize_flags -fno-sanitize-recover=all)
+    if(CWLOC_SANITIZE MATCHES "address")
+      # Not UBSan's object-size check, which ASan's redzones make redundant, nor its vptr check
+      # (dynamic types of polymorphic objects, which the library hardly has): the pose library
+      # compiles in 71 s instead of 80 (clang 14, one core).
+      list(APPEND sanitize_flags -fno-sanitize=object-size,vptr)
+    endif()
   endif()
   add_compile_options(${sanitize_flags})
   add_link_options(-fsanitize=${CWLOC_SANITIZE})

@@ -10,9 +10,7 @@
 #                                    a batch of queries on one index with 4 threads through
 #                                    cwloc-localize, the library's concurrent-use tests, and
 #                                    SIFT on several threads inside one photo; and what the
-#                                    device build links (ldd, on x86-64 only here); its files
-#                                    compiled one at a time (CWLOC_UNITY_BUILD=OFF), so that
-#                                    each compiles without the others of its batch
+#                                    device build links (ldd, on x86-64 only here)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 mode="${1:-}"
@@ -53,7 +51,7 @@ case "$mode" in
     ;;
   tsan)
     cmake -S . -B build-tsan -G Ninja "${clang[@]}" -DCWLOC_SANITIZE=thread "${device_options[@]}" \
-      -DCWLOC_BUILD_BENCHMARKS=OFF -DCWLOC_UNITY_BUILD=OFF >/dev/null
+      -DCWLOC_BUILD_BENCHMARKS=OFF >/dev/null
     cmake --build build-tsan -j "$jobs" --target cwloc_localize_exe api_tests sift_tests base_tests \
       >build-tsan/build.log 2>&1 || { tail -50 build-tsan/build.log; exit 1; }
     export TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1"
