@@ -4,10 +4,13 @@ extern "C" {
 #include <libavcodec/avcodec.h>
 #include <libavformat/avformat.h>
 #include <libavutil/imgutils.h>
+#include <libavutil/pixdesc.h>
 #include <libswscale/swscale.h>
 }
 
+#include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <string>
 
 #include "base/error.h"
@@ -25,6 +28,59 @@ std::string AvError(int code) {
 // COLMAP's grey from 8-bit RGB (image_decode.h): (uint8)(0.2126 R + 0.7152 G + 0.0722 B + 0.5).
 uint8_t Grey(uint8_t r, uint8_t g, uint8_t b) {
   return static_cast<uint8_t>(0.2126f * r + 0.7152f * g + 0.0722f * b + 0.5f);
+}
+
+// The frame's layout when it is 8-bit Y'CbCr (planar or semi-planar, as phones and cameras
+// record), else nullptr.
+const AVPixFmtDescriptor* ByteYCbCr(const AVFrame& frame) {
+  const AVPixFmtDescriptor* format = av_pix_fmt_desc_get(static_cast<AVPixelFormat>(frame.format));
+  if (format == nullptr || format->nb_components < 3) return nullptr;
+  const uint64_t not_ycbcr = AV_PIX_FMT_FLAG_RGB | AV_PIX_FMT_FLAG_PAL | AV_PIX_FMT_FLAG_BITSTREAM |
+                             AV_PIX_FMT_FLAG_HWACCEL | AV_PIX_FMT_FLAG_FLOAT | AV_PIX_FMT_FLAG_BE;
+  if ((format->flags & not_ycbcr) != 0) return nullptr;
+  for (int c = 0; c < 3; ++c) {
+    if (format->comp[c].depth != 8 || format->comp[c].shift != 0) return nullptr;
+  }
+  return format->comp[0].step == 1 ? format : nullptr;  // packed YUYV: through RGB
+}
+
+// Full range (JPEG's 0..255) or video's limited range (Y' 16..235, chroma 16..240), which is
+// also what a frame that does not say is in.
+bool IsFullRange(const AVFrame& frame) {
+  switch (frame.format) {
+    case AV_PIX_FMT_YUVJ420P:
+    case AV_PIX_FMT_YUVJ422P:
+    case AV_PIX_FMT_YUVJ444P:
+    case AV_PIX_FMT_YUVJ440P:
+    case AV_PIX_FMT_YUVJ411P:
+      return true;
+    default:
+      return frame.color_range == AVCOL_RANGE_JPEG;
+  }
+}
+
+// COLMAP's grey of the RGB that the frame's matrix decodes Y'CbCr to, as a linear form
+// grey = Y' + cb Cb + cr Cr (all normalised to a unit range). The rule's weights are BT.709's
+// luma weights, so for BT.709 frames cb = cr = 0. Frames that do not say are BT.601, as
+// FFmpeg's converter takes them.
+struct ChromaWeights {
+  double cb = 0.0, cr = 0.0;
+};
+ChromaWeights GreyChromaWeights(AVColorSpace matrix) {
+  double kr = 0.299, kb = 0.114;  // BT.601
+  if (matrix == AVCOL_SPC_BT709) kr = 0.2126, kb = 0.0722;
+  if (matrix == AVCOL_SPC_BT2020_NCL || matrix == AVCOL_SPC_BT2020_CL) kr = 0.2627, kb = 0.0593;
+  if (matrix == AVCOL_SPC_SMPTE240M) kr = 0.212, kb = 0.087;
+  if (matrix == AVCOL_SPC_FCC) kr = 0.30, kb = 0.11;
+  const double kg = 1.0 - kr - kb;
+  // R = Y' + 2 (1 - kr) Cr, B = Y' + 2 (1 - kb) Cb, G = Y' - 2 (kb (1 - kb) Cb + kr (1 - kr) Cr) /
+  // kg.
+  constexpr double wr = 0.2126, wg = 0.7152, wb = 0.0722;
+  ChromaWeights w;
+  w.cr = wr * 2.0 * (1.0 - kr) - wg * 2.0 * kr * (1.0 - kr) / kg;
+  w.cb = wb * 2.0 * (1.0 - kb) - wg * 2.0 * kb * (1.0 - kb) / kg;
+  if (std::abs(w.cr) < 1e-4 && std::abs(w.cb) < 1e-4) w = {};  // BT.709: the rule's own weights
+  return w;
 }
 
 }  // namespace
@@ -98,11 +154,16 @@ struct VideoFrames::Impl {
     avcodec_send_packet(codec, nullptr);
   }
 
+  // The frame's grey (video_frames.h): from Y'CbCr directly when it is 8-bit, else through RGB.
   GreyImage ToGrey() {
+    if (const AVPixFmtDescriptor* layout = ByteYCbCr(*frame)) return YCbCrToGrey(*layout);
     to_rgb = sws_getCachedContext(
         to_rgb, frame->width, frame->height, static_cast<AVPixelFormat>(frame->format),
         frame->width, frame->height, AV_PIX_FMT_RGB24, SWS_BILINEAR, nullptr, nullptr, nullptr);
     if (to_rgb == nullptr) Fail("frame " + std::to_string(next_index) + ": unsupported pixels");
+    // The frame's own matrix and range (FFmpeg's converter assumes BT.601, limited, otherwise).
+    sws_setColorspaceDetails(to_rgb, sws_getCoefficients(frame->colorspace), IsFullRange(*frame),
+                             sws_getCoefficients(SWS_CS_DEFAULT), 1, 0, 1 << 16, 1 << 16);
     rgb.resize(size_t{width} * height * 3);
     uint8_t* planes[4] = {rgb.data(), nullptr, nullptr, nullptr};
     int strides[4] = {static_cast<int>(width * 3), 0, 0, 0};
@@ -113,6 +174,48 @@ struct VideoFrames::Impl {
     grey.pixels.resize(size_t{width} * height);
     for (size_t i = 0; i < grey.pixels.size(); ++i)
       grey.pixels[i] = Grey(rgb[3 * i], rgb[3 * i + 1], rgb[3 * i + 2]);
+    return grey;
+  }
+
+  // grey = Y' + cb Cb + cr Cr in 0..255, rounded and clamped as the rule's (uint8) cast of RGB
+  // in 0..255 is; chroma from the sample whose block holds the pixel.
+  GreyImage YCbCrToGrey(const AVPixFmtDescriptor& layout) const {
+    const bool full_range = IsFullRange(*frame);
+    const double luma_scale = full_range ? 1.0 : 255.0 / 219.0;
+    const double luma_zero = full_range ? 0.0 : 16.0;
+    const double chroma_scale = full_range ? 1.0 : 255.0 / 224.0;
+    const ChromaWeights w = GreyChromaWeights(frame->colorspace);
+    // Y' in 0..255 (x 256) from a table; the chroma terms from two more.
+    int32_t luma[256], from_cb[256], from_cr[256];
+    for (int v = 0; v < 256; ++v) {
+      luma[v] = int32_t(std::lround(256.0 * (v - luma_zero) * luma_scale));
+      from_cb[v] = int32_t(std::lround(256.0 * w.cb * (v - 128) * chroma_scale));
+      from_cr[v] = int32_t(std::lround(256.0 * w.cr * (v - 128) * chroma_scale));
+    }
+    const bool chroma = w.cb != 0.0 || w.cr != 0.0;
+    const AVComponentDescriptor &cb = layout.comp[1], &cr = layout.comp[2];
+    GreyImage grey;
+    grey.width = width;
+    grey.height = height;
+    grey.pixels.resize(size_t{width} * height);
+    for (uint32_t row = 0; row < height; ++row) {
+      const uint8_t* y_row = frame->data[0] + ptrdiff_t{row} * frame->linesize[0];
+      const uint32_t chroma_row = row >> layout.log2_chroma_h;
+      const uint8_t* cb_row =
+          frame->data[cb.plane] + ptrdiff_t{chroma_row} * frame->linesize[cb.plane];
+      const uint8_t* cr_row =
+          frame->data[cr.plane] + ptrdiff_t{chroma_row} * frame->linesize[cr.plane];
+      uint8_t* out = grey.pixels.data() + size_t{row} * width;
+      for (uint32_t column = 0; column < width; ++column) {
+        int32_t value = luma[y_row[column]] + 128;  // + 0.5, x 256
+        if (chroma) {
+          const uint32_t c = column >> layout.log2_chroma_w;
+          value +=
+              from_cb[cb_row[c * cb.step + cb.offset]] + from_cr[cr_row[c * cr.step + cr.offset]];
+        }
+        out[column] = uint8_t(std::clamp(value >> 8, 0, 255));
+      }
+    }
     return grey;
   }
 };

@@ -9,8 +9,13 @@
 
 namespace cwloc {
 
-// A frame of a video file as grey pixels, converted from the decoder's colours to RGB and then
-// to grey by COLMAP's rule, as a photo of the frame would be (image_decode.h).
+// A frame of a video file as grey pixels: COLMAP's grey rule (image_decode.h) applied to the
+// RGB that the frame's matrix (BT.709, BT.601, BT.2020, ...; BT.601 when the stream does not
+// say) and range decode it to, as a photo of the frame would be. For 8-bit Y'CbCr frames (what
+// phones and cameras record) it is computed from Y'CbCr directly, grey = Y' + a Cb + b Cr, with
+// chroma from the sample that covers the pixel: the rule's weights are BT.709's, so a = b = 0
+// for BT.709 video and the conversion to RGB is skipped. Other frames (RGB, 10-bit) go through
+// FFmpeg's converter to RGB.
 struct VideoFrame {
   uint64_t index = 0;  // in decoding order, from 0
   double seconds = 0;  // its presentation time from the stream's start
