@@ -104,6 +104,8 @@ std::optional<cwloc::api::Motion> ToMotion(const cwloc_motion* motion) {
   cwloc::api::Motion out;
   std::copy_n(motion->rotation_wxyz, 4, out.rotation.begin());
   std::copy_n(motion->translation, 3, out.translation.begin());
+  out.sigma_rotation_deg = motion->sigma_rotation_deg;
+  out.sigma_position = motion->sigma_position;
   return out;
 }
 

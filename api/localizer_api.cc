@@ -249,7 +249,13 @@ std::optional<FrameMotion> ToFrameMotion(const std::optional<Motion>& motion) {
         "motion: expected a unit quaternion (w, x, y, z) and a finite "
         "translation");
   }
-  return FrameMotion{CameraPose(rotation.normalized(), Eigen::Vector3d(t[0], t[1], t[2])), true};
+  if (!(motion->sigma_rotation_deg >= 0.0) || !(motion->sigma_position >= 0.0) ||
+      !std::isfinite(motion->sigma_rotation_deg + motion->sigma_position))
+    throw InvalidArgument("motion: its sigmas are finite and at least 0 (0: not known)");
+  FrameMotion out{CameraPose(rotation.normalized(), Eigen::Vector3d(t[0], t[1], t[2])), true};
+  out.sigma_rotation_deg = motion->sigma_rotation_deg;
+  out.sigma_position = motion->sigma_position;
+  return out;
 }
 
 struct Localizer::Impl {

@@ -709,9 +709,11 @@ int main(int argc, char** argv) {
       ->group(kQueries);
   app.add_option("--motion", cli.motion_path,
                  "With --sequence or --video: each frame's camera motion since the previous "
-                 "frame from VIO, lines 'NAME QW QX QY QZ TX TY TZ' (the frame's camera from the "
-                 "previous one's, metres: model units by a georeferenced index's scale, else only "
-                 "the direction counts); it predicts the frame's pose")
+                 "frame from VIO, lines 'NAME QW QX QY QZ TX TY TZ [SIGMA_ROT_DEG SIGMA_POS]' "
+                 "(the frame's camera from the previous one's, metres: model units by a "
+                 "georeferenced index's scale, else only the direction counts; optionally its "
+                 "standard deviation per axis, which bounds how far the tracked pose may land "
+                 "from the prediction); it predicts the frame's pose")
       ->group(kQueries);
   app.add_flag("--sequence", cli.sequence,
                "The queries are frames of one moving camera, in the order given: each is "

@@ -24,8 +24,11 @@ std::unordered_map<std::string, MotionLine> ReadMotionFile(const std::filesystem
     std::string rest;
     std::getline(fields, rest);
     const auto v = ParseFiniteNumbers(rest);
-    if (!v || v->size() != 7)
-      throw InputError(where + ": expected 'NAME QW QX QY QZ TX TY TZ' (seven numbers)");
+    if (!v || (v->size() != 7 && v->size() != 9)) {
+      throw InputError(where +
+                       ": expected 'NAME QW QX QY QZ TX TY TZ [SIGMA_ROT_DEG SIGMA_POS]' (seven "
+                       "or nine numbers)");
+    }
     const Eigen::Quaterniond q((*v)[0], (*v)[1], (*v)[2], (*v)[3]);
     if (std::abs(q.norm() - 1.0) > 1e-3)
       throw InputError(where + ": the quaternion's length is " + std::to_string(q.norm()) +
@@ -33,6 +36,12 @@ std::unordered_map<std::string, MotionLine> ReadMotionFile(const std::filesystem
     FrameMotion motion;
     motion.relative = CameraPose(q.normalized(), Eigen::Vector3d((*v)[4], (*v)[5], (*v)[6]));
     motion.metric = true;
+    if (v->size() == 9) {
+      if (!((*v)[7] >= 0.0) || !((*v)[8] >= 0.0))
+        throw InputError(where + ": a motion's sigmas are at least 0 (0: not known)");
+      motion.sigma_rotation_deg = (*v)[7];
+      motion.sigma_position = (*v)[8];
+    }
     if (!motions.emplace(name, MotionLine{motion, number}).second)
       throw InputError(where + ": a second motion for '" + name + "'");
   }

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
+#include <utility>
 
 #include "base/stopwatch.h"
 
@@ -58,20 +60,19 @@ Tracker::Tracker(const Localizer& localizer, const LocalizerOptions& options,
   rough_options_.pose.refine = false;
 }
 
-CameraPose Tracker::Moved(const CameraPose& pose, const FrameMotion& motion) const {
-  Eigen::Vector3d step = motion.relative.translation;
+double Tracker::StepScale(const FrameMotion& motion) const {
   const auto& geo = localizer_.geo();
-  if (motion.metric && geo) {
-    step /= geo->frame().georeference().scale;  // metres to model units
-  } else if (before_last_) {
-    // Up to scale: the direction, at the length of the last step between camera centres.
-    const double length = (last_->pose.Center() - before_last_->pose.Center()).norm();
-    const double norm = step.norm();
-    step = norm > 0 ? Eigen::Vector3d(step * (length / norm)) : Eigen::Vector3d::Zero();
-  } else {
-    step.setZero();  // no step to take the length from: the rotation alone
-  }
-  return Then(pose, CameraPose(motion.relative.rotation, step));
+  if (motion.metric && geo) return 1.0 / geo->frame().georeference().scale;  // metres to model
+  if (!before_last_) return 0.0;  // no step to take the length from: the rotation alone
+  // Up to scale: the direction, at the length of the last step between camera centres.
+  const double norm = motion.relative.translation.norm();
+  const double length = (last_->pose.Center() - before_last_->pose.Center()).norm();
+  return norm > 0 ? length / norm : 0.0;
+}
+
+CameraPose Tracker::Moved(const CameraPose& pose, const FrameMotion& motion) const {
+  return Then(pose, CameraPose(motion.relative.rotation,
+                               Eigen::Vector3d(motion.relative.translation * StepScale(motion))));
 }
 
 CameraPose Tracker::LastStepRepeated(std::optional<double> seconds) const {
@@ -97,9 +98,9 @@ void Tracker::Reset() {
   before_last_.reset();
 }
 
-std::optional<LocalizationResult> Tracker::TrackFrom(const Query& frame,
-                                                     const CameraPose& predicted,
-                                                     TrackingInfo* info) const {
+std::optional<LocalizationResult> Tracker::TrackFrom(
+    const Query& frame, const CameraPose& predicted,
+    const std::optional<MotionUncertainty>& uncertainty, TrackingInfo* info) const {
   FramePrediction prediction;
   prediction.hypothesis = last_->camera_and_pose;
   prediction.hypothesis.pose = predicted;
@@ -147,9 +148,27 @@ std::optional<LocalizationResult> Tracker::TrackFrom(const Query& frame,
   const double distance = (around.Center() - predicted.Center()).norm();
   info->prediction_error = distance;
   info->prediction_error_deg = rotation_deg;
-  if (!(rotation_deg <= tracker_options_.max_rotation_change_deg) ||
-      !(distance <= tracker_options_.max_relative_position_change * depth))
-    return std::nullopt;
+  double max_rotation_deg = tracker_options_.max_rotation_change_deg;
+  double max_distance = tracker_options_.max_relative_position_change * depth;
+  if (uncertainty) {
+    // This pose's variance (each covariance block's trace bounds its largest eigenvalue) twice,
+    // for the last pose's, which the prediction started from.
+    double rotation_var = 0.0, position_var = 0.0;
+    if (result->covariance) {
+      rotation_var = result->covariance->pose.topLeftCorner<3, 3>().trace();
+      position_var = result->covariance->Position().trace();
+    }
+    const double rotation_sigma =
+        std::sqrt(uncertainty->rotation_rad * uncertainty->rotation_rad + 2.0 * rotation_var);
+    max_rotation_deg =
+        std::min(max_rotation_deg, kMotionSigmas * rotation_sigma * 180.0 / std::numbers::pi);
+    if (uncertainty->position) {
+      const double position_sigma =
+          std::sqrt(*uncertainty->position * *uncertainty->position + 2.0 * position_var);
+      max_distance = std::min(max_distance, kMotionSigmas * position_sigma);
+    }
+  }
+  if (!(rotation_deg <= max_rotation_deg) || !(distance <= max_distance)) return std::nullopt;
   return result;
 }
 
@@ -178,17 +197,30 @@ LocalizationResult Tracker::Track(const Query& frame, std::optional<double> seco
     info.predicted_from = last_->name;
     // The given motion or the last step repeated, then the last pose alone (a camera that
     // stopped or turned).
-    std::vector<CameraPose> predictions;
+    std::vector<std::pair<CameraPose, std::optional<MotionUncertainty>>> predictions;
     if (motion) {
-      predictions.push_back(Moved(last_->pose, *motion));
+      std::optional<MotionUncertainty> uncertainty;
+      if (motion->sigma_rotation_deg > 0 || motion->sigma_position > 0) {
+        // A sigma the device does not give is no bound: the tracker's own bounds hold.
+        uncertainty.emplace();
+        uncertainty->rotation_rad = motion->sigma_rotation_deg > 0
+                                        ? motion->sigma_rotation_deg * std::numbers::pi / 180.0
+                                        : std::numeric_limits<double>::infinity();
+        const double scale = StepScale(*motion);
+        if (motion->sigma_position > 0 && scale > 0)
+          uncertainty->position = motion->sigma_position * scale;
+      }
+      predictions.emplace_back(Moved(last_->pose, *motion), uncertainty);
     } else if (before_last_) {
-      predictions.push_back(LastStepRepeated(seconds));
+      predictions.emplace_back(LastStepRepeated(seconds), std::nullopt);
     }
-    predictions.push_back(last_->pose);
-    first_prediction = predictions.front();
-    for (const CameraPose& predicted : predictions) {
+    // A motion the device is sure of (its uncertainty given) rules that out.
+    if (predictions.empty() || !predictions.front().second)
+      predictions.emplace_back(last_->pose, std::nullopt);
+    first_prediction = predictions.front().first;
+    for (const auto& [predicted, uncertainty] : predictions) {
       TrackingInfo attempt = info;
-      result = TrackFrom(frame, predicted, &attempt);
+      result = TrackFrom(frame, predicted, uncertainty, &attempt);
       if (result) {
         info = attempt;
         info.mode = TrackingMode::kTracked;

@@ -37,7 +37,17 @@ struct TrackerOptions {
 struct FrameMotion {
   CameraPose relative;
   bool metric = false;
+  // How sure the device is of it, one standard deviation per axis, when it says (0: it does
+  // not): the rotation in degrees and the translation in its own units (metres when metric).
+  // The pose a tracked frame gets may then differ from the motion's prediction by at most
+  // kMotionSigmas of the combined uncertainty (of the motion, of this pose and of the last);
+  // a pose farther off is localized from scratch instead.
+  double sigma_rotation_deg = 0.0;
+  double sigma_position = 0.0;
 };
+// 99.9 % of a 3-D normal distribution lies within this many standard deviations per axis
+// (the chi-square quantile's square root).
+inline constexpr double kMotionSigmas = 4.03;
 
 // Frames of one camera, in order: a frame's pose is predicted from the frames before it (the
 // last pose moved by the last motion, or the last pose alone), the frame is matched near that
@@ -69,12 +79,22 @@ class Tracker {
     PoseHypothesis camera_and_pose;
     std::vector<uint32_t> inlier_views;
   };
+  // A motion's uncertainty in model units and radians; no position when its step is unknown.
+  struct MotionUncertainty {
+    double rotation_rad = 0.0;
+    std::optional<double> position;
+  };
+  // The factor that takes the motion's translation to model units (0: its length is unknown).
+  double StepScale(const FrameMotion& motion) const;
   // The last pose moved by the motion, its translation in model units.
   CameraPose Moved(const CameraPose& pose, const FrameMotion& motion) const;
   // The last pose moved by the last step, scaled to the time since the last frame when the
   // three frames' times are known.
   CameraPose LastStepRepeated(std::optional<double> seconds) const;
+  // The frame tracked from a prediction; with the uncertainty of the motion that made it, the
+  // pose must also lie within it.
   std::optional<LocalizationResult> TrackFrom(const Query& frame, const CameraPose& predicted,
+                                              const std::optional<MotionUncertainty>& uncertainty,
                                               TrackingInfo* info) const;
 
   const Localizer& localizer_;

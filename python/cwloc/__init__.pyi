@@ -165,7 +165,9 @@ class Localizer:
                           camera: _CameraLike, **options: Any) -> Result: ...
     def localize_grey(self, image: npt.ArrayLike, camera: _CameraLike, **options: Any) -> Result: ...
 
-_Motion = tuple[tuple[float, float, float, float], tuple[float, float, float]]
+_Motion = Union[tuple[tuple[float, float, float, float], tuple[float, float, float]],
+                tuple[tuple[float, float, float, float], tuple[float, float, float],
+                      tuple[float, float]]]
 
 class Tracker:
     def __init__(self, localizer: Localizer, **options: Any) -> None: ...

@@ -16,14 +16,25 @@ struct Tracker {
   std::mutex frame;  // one frame at a time, whatever the Python threads do
 };
 
-// motion: None, or ((w, x, y, z), (tx, ty, tz)), the frame's camera from the previous one's.
+// motion: None, or ((w, x, y, z), (tx, ty, tz)[, (sigma_rotation_deg, sigma_position)]), the
+// frame's camera from the previous one's and its standard deviations.
 std::optional<api::Motion> ToMotion(py::handle motion) {
   if (motion.is_none()) return std::nullopt;
   try {
-    const auto parts = motion.cast<std::pair<std::array<double, 4>, std::array<double, 3>>>();
-    return api::Motion{parts.first, parts.second};
+    if (!py::isinstance<py::sequence>(motion)) throw py::cast_error();
+    const auto parts = motion.cast<py::sequence>();
+    if (parts.size() != 2 && parts.size() != 3) throw py::cast_error();
+    api::Motion out{parts[0].cast<std::array<double, 4>>(), parts[1].cast<std::array<double, 3>>()};
+    if (parts.size() == 3) {
+      const auto sigmas = parts[2].cast<std::array<double, 2>>();
+      out.sigma_rotation_deg = sigmas[0];
+      out.sigma_position = sigmas[1];
+    }
+    return out;
   } catch (const py::cast_error&) {
-    throw py::type_error("motion: expected ((w, x, y, z), (tx, ty, tz)) or None");
+    throw py::type_error(
+        "motion: expected ((w, x, y, z), (tx, ty, tz)[, (sigma_rotation_deg, sigma_position)]) "
+        "or None");
   }
 }
 

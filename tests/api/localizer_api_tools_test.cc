@@ -518,7 +518,9 @@ class TrackerApiTest : public testing::Test {
       if (motion) {
         c_motion = cwloc_motion{
             {motion->rotation[0], motion->rotation[1], motion->rotation[2], motion->rotation[3]},
-            {motion->translation[0], motion->translation[1], motion->translation[2]}};
+            {motion->translation[0], motion->translation[1], motion->translation[2]},
+            motion->sigma_rotation_deg,
+            motion->sigma_position};
       }
       cwloc_result* c_result = nullptr;
       EXPECT_EQ(
@@ -583,8 +585,8 @@ TEST_F(TrackerApiTest, TracksAVideoAsCwlocLocalizeSequenceDoes) {
   EXPECT_EQ(after_reset.tracking->predicted_from, "");
 }
 
-// With each frame's true motion (from COLMAP's poses), in --motion's file and as api::Motion and
-// cwloc_motion: the same poses everywhere.
+// With each frame's true motion (from COLMAP's poses) and its sigmas, in --motion's file and as
+// api::Motion and cwloc_motion: the same poses everywhere.
 TEST_F(TrackerApiTest, AMotionPredictsAsCwlocLocalizeMotionDoes) {
   const auto truth = test::ReadGroundTruth(shared_->data / "queries_gt.txt");
   std::ofstream file(dir_.path() / "motion.txt");
@@ -596,8 +598,8 @@ TEST_F(TrackerApiTest, AMotionPredictsAsCwlocLocalizeMotionDoes) {
     const Eigen::Quaterniond q = to.rotation * from.rotation.conjugate();
     const Eigen::Vector3d t = to.translation - q * from.translation;
     file << frames_[i].first << " " << q.w() << " " << q.x() << " " << q.y() << " " << q.z() << " "
-         << t.x() << " " << t.y() << " " << t.z() << "\n";
-    motions.push_back(api::Motion{{q.w(), q.x(), q.y(), q.z()}, {t.x(), t.y(), t.z()}});
+         << t.x() << " " << t.y() << " " << t.z() << " 0.5 0.05\n";
+    motions.push_back(api::Motion{{q.w(), q.x(), q.y(), q.z()}, {t.x(), t.y(), t.z()}, 0.5, 0.05});
   }
   file.close();
   const api::Localizer localizer = api::Localizer::Open(shared_->index.string());
@@ -617,6 +619,15 @@ TEST_F(TrackerApiTest, AMotionPredictsAsCwlocLocalizeMotionDoes) {
     EXPECT_EQ(e.code(), api::ErrorCode::kInvalidArgument);
     EXPECT_STREQ(e.what(),
                  "motion: expected a unit quaternion (w, x, y, z) and a finite translation");
+  }
+  // And a negative sigma.
+  try {
+    tracker.Track(DatabaseFeatures(db, frames_[0].first), ParseCamera(frames_[0].second),
+                  std::nullopt, api::Motion{{1, 0, 0, 0}, {0, 0, 0}, -1.0, 0.0});
+    ADD_FAILURE() << "expected an error";
+  } catch (const api::Error& e) {
+    EXPECT_EQ(e.code(), api::ErrorCode::kInvalidArgument);
+    EXPECT_STREQ(e.what(), "motion: its sigmas are finite and at least 0 (0: not known)");
   }
   // So is a time that is no number of seconds.
   try {

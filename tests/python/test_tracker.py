@@ -53,13 +53,20 @@ def test_the_tracker_is_the_cli_sequence(fox, tmp_path):
     tracker.reset()
     again = tracker.track_photo(data / "query_images" / frames[1][0], frames[1][1])
     assert again.tracking.mode == "relocalized" and again.tracking.predicted_from is None
-    # VIO's motion since the previous frame: ((w, x, y, z), (tx, ty, tz)); anything else is a
-    # TypeError naming the form.
+    # VIO's motion since the previous frame: ((w, x, y, z), (tx, ty, tz)), optionally with its
+    # sigmas (degrees, metres); anything else is a TypeError naming the form.
     moved = tracker.track_photo(data / "query_images" / frames[2][0], frames[2][1],
                                 motion=((1.0, 0.0, 0.0, 0.0), (0.0, 0.0, 0.0)))
     assert moved.success and moved.tracking.predicted_from is not None
-    with pytest.raises(TypeError, match=r"motion: expected \(\(w, x, y, z\), \(tx, ty, tz\)\) or None"):
+    sure = tracker.track_photo(data / "query_images" / frames[2][0], frames[2][1],
+                               motion=((1.0, 0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (2.0, 0.1)))
+    assert sure.success
+    with pytest.raises(TypeError, match=r"motion: expected \(\(w, x, y, z\), \(tx, ty, tz\)\[, "
+                       r"\(sigma_rotation_deg, sigma_position\)\]\) or None"):
         tracker.track_photo(data / "query_images" / frames[3][0], frames[3][1], motion=(1, 2))
+    with pytest.raises(ValueError, match=r"motion: its sigmas are finite and at least 0"):
+        tracker.track_photo(data / "query_images" / frames[3][0], frames[3][1],
+                            motion=((1.0, 0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (-1.0, 0.1)))
     # The frame's time in seconds, or None; anything else is a TypeError.
     timed = tracker.track_photo(data / "query_images" / frames[3][0], frames[3][1], timestamp=1.5)
     assert timed.success and timed.tracking.predicted_from is not None

@@ -95,10 +95,13 @@ typedef struct cwloc_tracking {
 } cwloc_tracking;
 
 /* A camera's motion since the previous frame (VIO), as the C++ Motion: the frame's camera from
- * the previous frame's camera, rotation w, x, y, z and translation in metres. */
+ * the previous frame's camera, rotation w, x, y, z and translation in metres, and its standard
+ * deviations per axis in degrees and metres (0: not known). */
 typedef struct cwloc_motion {
   double rotation_wxyz[4];
   double translation[3];
+  double sigma_rotation_deg;
+  double sigma_position;
 } cwloc_motion;
 
 typedef struct cwloc_localizer cwloc_localizer;

@@ -226,9 +226,13 @@ class CWLOC_API Localizer {
 // odometry), as cwloc-localize --motion takes it: the frame's camera from the previous frame's
 // camera (X_cam = R(rotation) X_previous_cam + translation), metres. On a georeferenced index
 // the metres become model units by its scale; otherwise only the translation's direction counts.
+// Its standard deviations per axis, when the device knows them (0: it does not), bound how far
+// the tracked pose may land from the motion's prediction, as --motion's sigmas do.
 struct Motion {
   std::array<double, 4> rotation{1, 0, 0, 0};  // w, x, y, z
   std::array<double, 3> translation{};
+  double sigma_rotation_deg = 0.0;
+  double sigma_position = 0.0;  // metres
 };
 
 // The frames of one moving camera, in order (cwloc-localize --sequence): each frame is tracked
