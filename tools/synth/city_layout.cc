@@ -3,7 +3,9 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
+#include <vector>
 
 #include "base/angles.h"
 #include "tools/synth/sift_descriptors.h"
@@ -15,7 +17,13 @@ namespace {
 // left): the order of arguments and of operands is unspecified, and clang's differs.
 
 // Stream tags so that different uses of the same id never share random numbers.
-enum Stream : uint64_t { kGridStream = 1, kFacadeStream, kMappingStream, kQueryStream };
+enum Stream : uint64_t {
+  kGridStream = 1,
+  kFacadeStream,
+  kMappingStream,
+  kQueryStream,
+  kWalkStream
+};
 
 // Alternating street and block widths: edges[2i+1]..edges[2i+2] is block i.
 std::vector<double> MakeEdges(int blocks, const LayoutOptions& o, Rng& rng) {
@@ -189,6 +197,50 @@ std::vector<CameraPose> CityLayout::PlaceMappingCameras(uint64_t seed) const {
         cameras.push_back(pose);
       }
     }
+  }
+  return cameras;
+}
+
+std::vector<CameraPose> CityLayout::WalkCameras(uint64_t seed, size_t frames, double step) const {
+  Rng rng(Rng::Seed(seed, kWalkStream));
+  const double at = rng.Uniform(0, FacadeLength());
+  const uint32_t id = uint32_t(std::min<size_t>(
+      std::upper_bound(facade_cumulative_width_.begin(), facade_cumulative_width_.end(), at) -
+          facade_cumulative_width_.begin(),
+      facades_.size() - 1));
+  const Facade& f = facades_[id];
+  const double offset = rng.Uniform(2.0, f.street_width - 1.5);
+  const Eigen::Vector2d start =
+      f.origin + rng.Uniform(0, f.width) * f.direction + offset * f.normal;
+  // The street's stretch inside the city, 1 m from its edges: the walk turns back there.
+  double lowest = -std::numeric_limits<double>::infinity();
+  double highest = std::numeric_limits<double>::infinity();
+  const double extent[2] = {width(), depth()};
+  for (int axis = 0; axis < 2; ++axis) {
+    if (std::abs(f.direction[axis]) < 1e-9) continue;
+    const double a = (1.0 - start[axis]) / f.direction[axis];
+    const double b = (extent[axis] - 1.0 - start[axis]) / f.direction[axis];
+    lowest = std::max(lowest, std::min(a, b));
+    highest = std::min(highest, std::max(a, b));
+  }
+  const double span = std::max(highest - lowest, 1e-9);
+  const double facing = Heading(-f.normal);
+  constexpr double kTwoPi = 2.0 * std::numbers::pi;
+  std::vector<CameraPose> cameras;
+  cameras.reserve(frames);
+  for (size_t k = 0; k < frames; ++k) {
+    // Back and forth: the distance walked folded into [lowest, highest].
+    const double walked = std::fmod(-lowest + double(k) * step, 2.0 * span);
+    const double along = lowest + (walked <= span ? walked : 2.0 * span - walked);
+    const Eigen::Vector2d g = start + along * f.direction;
+    const double t = double(k);
+    const double yaw = facing + 35 * kDegree * std::sin(kTwoPi * t / 60.0);
+    const double pitch = (10 + 5 * std::sin(kTwoPi * t / 45.0)) * kDegree;
+    const double roll = 2 * kDegree * std::sin(kTwoPi * t / 23.0);
+    const double height = 1.6 + 0.03 * std::sin(kTwoPi * t / 7.0);
+    CameraPose pose = MakeCameraPose({g.x(), g.y(), height}, yaw, pitch, roll);
+    pose.facade = id;
+    cameras.push_back(pose);
   }
   return cameras;
 }

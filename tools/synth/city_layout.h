@@ -87,6 +87,12 @@ class CityLayout {
   // different candidate for the same seed.
   CameraPose DrawQueryCamera(uint64_t seed, uint64_t draw) const;
 
+  // The frames of one walk down a street, `step` metres apart (a camera path): along the
+  // street in front of a facade drawn by length, back and forth between the city's edges,
+  // looking at that side of the street and turning the head slowly (yaw +-35 degrees, pitch
+  // 5-15, a little roll, a walker's bob).
+  std::vector<CameraPose> WalkCameras(uint64_t seed, size_t frames, double step) const;
+
  private:
   LayoutOptions options_;
   std::vector<Block> blocks_;

@@ -155,12 +155,20 @@ CityScene CityScene::Generate(const SceneOptions& options, const Progress& progr
     if (view_count[p] >= 2) scene.point3D_ids_[p] = next_id++;
   }
 
-  // Queries: redraw a pose until it sees enough model points (keep the best draw otherwise).
+  // Queries: redraw a pose until it sees enough model points (keep the best draw otherwise), or
+  // the walk's frames as they come.
   const size_t num_queries = size_t(std::max(0, options.queries));
   std::vector<CameraPose> query_poses(num_queries);
   std::vector<std::vector<Observation>> query_observations(num_queries);
   report("queries", 0);
+  if (options.path_step > 0)
+    query_poses = scene.layout_.WalkCameras(options.seed, num_queries, options.path_step);
   ParallelFor(num_queries, options.threads, [&](size_t q) {
+    if (options.path_step > 0) {
+      query_observations[q] =
+          scene.Observe(query_poses[q], Rng::Seed(options.seed, kQueryObserveStream, q, 0), budget);
+      return;
+    }
     size_t best = 0;
     for (int draw = 0; draw < kMaxQueryDraws; ++draw) {
       const CameraPose pose =

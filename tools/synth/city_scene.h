@@ -38,7 +38,11 @@ struct SceneOptions {
   double max_distance = 60;        // metres
   double max_obliquity_deg = 70;   // between the viewing ray and the facade normal
   int min_query_points = 50;       // model points a query must see (redrawn otherwise)
-  colmap::Camera camera;           // shared by every image; camera_id 1
+  // 0: the queries are independent cameras; otherwise the frames of one walk down a street,
+  // this many metres apart, in order (CityLayout::WalkCameras), each as it comes: a frame that
+  // sees few model points is part of the walk.
+  double path_step = 0;
+  colmap::Camera camera;  // shared by every image; camera_id 1
   PatchModel patch;
   ViewNoiseModel view_noise;
   int threads = 0;  // 0: all cores

@@ -102,6 +102,7 @@ nlohmann::ordered_json Summary(const std::filesystem::path& output, const SynthK
                    {"blocks_x", o.layout.blocks_x},
                    {"blocks_y", o.layout.blocks_y},
                    {"queries", o.queries},
+                   {"path_step", o.path_step > 0 ? nlohmann::ordered_json(o.path_step) : nullptr},
                    {"features_per_image", o.features_per_image},
                    {"clutter_fraction", o.clutter_fraction},
                    {"repetition", o.repetition},
@@ -240,6 +241,9 @@ int main(int argc, char** argv) {
                  "Radial distortion k of SIMPLE_RADIAL / k1 of RADIAL [-0.01]");
   app.add_option("--camera-spacing", knobs.camera_spacing,
                  "Metres between mapping camera stations [3]");
+  app.add_option("--path-step", knobs.path_step,
+                 "The queries are the frames of one walk down a street, this many metres apart, "
+                 "in order (for cwloc-localize --sequence); unset: independent cameras");
   app.add_option("--keypoint-noise", knobs.keypoint_noise,
                  "Keypoint noise, pixels (sigma per axis) [0.7]");
   app.add_option(

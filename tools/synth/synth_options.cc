@@ -128,6 +128,11 @@ SceneOptions MakeSceneOptions(const SynthKnobs& knobs) {
   Require(queries >= 0 && queries <= 1000000,
           "--queries must be in [0, 1000000] (got " + Str(queries) + ")");
   o.queries = int(queries);
+  if (knobs.path_step) {
+    o.path_step = *knobs.path_step;
+    Require(o.path_step >= 0.01 && o.path_step <= 20,
+            "--path-step must be in [0.01, 20] metres (got " + Str(o.path_step) + ")");
+  }
   const int64_t features = Pick(knobs.features_per_image, preset.features_per_image, int64_t{1500});
   Require(features >= 20 && features <= 100000,
           "--features-per-image must be in [20, 100000] (got " + Str(features) + ")");

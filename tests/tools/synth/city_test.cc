@@ -117,6 +117,32 @@ TEST(CitySceneTest, SameSeedGivesTheSameSceneAndThreadsDoNotMatter) {
   EXPECT_NE(SceneHash(one_thread), SceneHash(CityScene::Generate(MakeSceneOptions(knobs))));
 }
 
+// --path-step: the queries are a walk's frames in order, each the step from the one before
+// (along a street, so only the back-and-forth turns make it shorter), at head height, the
+// same for the same seed; a step out of range is named.
+TEST(CitySceneTest, APathStepMakesTheQueriesOneWalk) {
+  SynthKnobs knobs = SmallKnobs();
+  knobs.features_per_image = 100;
+  knobs.queries = 40;
+  knobs.path_step = 0.5;
+  const CityScene scene = CityScene::Generate(MakeSceneOptions(knobs));
+  std::vector<Eigen::Vector3d> centres;
+  for (const SceneImage& image : scene.images())
+    if (image.query) centres.push_back(image.pose.centre);
+  ASSERT_EQ(centres.size(), 40u);
+  int full_steps = 0;
+  for (size_t i = 1; i < centres.size(); ++i) {
+    const Eigen::Vector2d step = (centres[i] - centres[i - 1]).head<2>();
+    EXPECT_LE(step.norm(), 0.5 + 1e-9) << i;
+    full_steps += std::abs(step.norm() - 0.5) < 1e-9;
+    EXPECT_NEAR(centres[i].z(), 1.6, 0.031);
+  }
+  EXPECT_GE(full_steps, 37);
+  EXPECT_EQ(SceneHash(scene), SceneHash(CityScene::Generate(MakeSceneOptions(knobs))));
+  knobs.path_step = 0.0;
+  EXPECT_EQ(ErrorOf(knobs), "--path-step must be in [0.01, 20] metres (got 0)");
+}
+
 // The same seed and knobs give the same scene whichever compiler built the generator. The
 // hashes were recorded from the GCC 12 build; clang's differed while expressions drew several
 // random numbers in an unspecified order. A deliberate change of the generator updates them.
