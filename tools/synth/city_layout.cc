@@ -225,7 +225,7 @@ std::vector<CameraPose> CityLayout::WalkCameras(uint64_t seed, size_t frames, do
   }
   const double span = std::max(highest - lowest, 1e-9);
   const double facing = Heading(-f.normal);
-  constexpr double kTwoPi = 2.0 * std::numbers::pi;
+  constexpr double kTurn = 2.0 * std::numbers::pi;  // radians
   std::vector<CameraPose> cameras;
   cameras.reserve(frames);
   for (size_t k = 0; k < frames; ++k) {
@@ -234,10 +234,10 @@ std::vector<CameraPose> CityLayout::WalkCameras(uint64_t seed, size_t frames, do
     const double along = lowest + (walked <= span ? walked : 2.0 * span - walked);
     const Eigen::Vector2d g = start + along * f.direction;
     const double t = double(k);
-    const double yaw = facing + 35 * kDegree * std::sin(kTwoPi * t / 60.0);
-    const double pitch = (10 + 5 * std::sin(kTwoPi * t / 45.0)) * kDegree;
-    const double roll = 2 * kDegree * std::sin(kTwoPi * t / 23.0);
-    const double height = 1.6 + 0.03 * std::sin(kTwoPi * t / 7.0);
+    const double yaw = facing + 35 * kDegree * std::sin(kTurn * t / 60.0);
+    const double pitch = (10 + 5 * std::sin(kTurn * t / 45.0)) * kDegree;
+    const double roll = 2 * kDegree * std::sin(kTurn * t / 23.0);
+    const double height = 1.6 + 0.03 * std::sin(kTurn * t / 7.0);
     CameraPose pose = MakeCameraPose({g.x(), g.y(), height}, yaw, pitch, roll);
     pose.facade = id;
     cameras.push_back(pose);
