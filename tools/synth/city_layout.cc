@@ -201,13 +201,17 @@ std::vector<CameraPose> CityLayout::PlaceMappingCameras(uint64_t seed) const {
   return cameras;
 }
 
+uint32_t CityLayout::DrawFacadeByLength(Rng& rng) const {
+  const double at = rng.Uniform(0, FacadeLength());
+  const size_t id =
+      std::upper_bound(facade_cumulative_width_.begin(), facade_cumulative_width_.end(), at) -
+      facade_cumulative_width_.begin();
+  return uint32_t(std::min(id, facades_.size() - 1));
+}
+
 std::vector<CameraPose> CityLayout::WalkCameras(uint64_t seed, size_t frames, double step) const {
   Rng rng(Rng::Seed(seed, kWalkStream));
-  const double at = rng.Uniform(0, FacadeLength());
-  const uint32_t id = uint32_t(std::min<size_t>(
-      std::upper_bound(facade_cumulative_width_.begin(), facade_cumulative_width_.end(), at) -
-          facade_cumulative_width_.begin(),
-      facades_.size() - 1));
+  const uint32_t id = DrawFacadeByLength(rng);
   const Facade& f = facades_[id];
   const double offset = rng.Uniform(2.0, f.street_width - 1.5);
   const Eigen::Vector2d start =
@@ -247,11 +251,8 @@ std::vector<CameraPose> CityLayout::WalkCameras(uint64_t seed, size_t frames, do
 
 CameraPose CityLayout::DrawQueryCamera(uint64_t seed, uint64_t draw) const {
   Rng rng(Rng::Seed(seed, kQueryStream, draw));
-  const double at = rng.Uniform(0, FacadeLength());
-  const uint32_t id = uint32_t(
-      std::upper_bound(facade_cumulative_width_.begin(), facade_cumulative_width_.end(), at) -
-      facade_cumulative_width_.begin());
-  const Facade& f = facades_[std::min<size_t>(id, facades_.size() - 1)];
+  const uint32_t id = DrawFacadeByLength(rng);
+  const Facade& f = facades_[id];
   const double u = rng.Uniform(0, f.width);
   const double offset = rng.Uniform(2.0, f.street_width - 1.5);
   const Eigen::Vector2d g = f.origin + u * f.direction + offset * f.normal;
@@ -260,7 +261,7 @@ CameraPose CityLayout::DrawQueryCamera(uint64_t seed, uint64_t draw) const {
   const double yaw = Heading(-f.normal) + rng.Uniform(-60, 60) * kDegree;
   const double height = rng.Uniform(1.4, 1.9);
   CameraPose pose = MakeCameraPose({g.x(), g.y(), height}, yaw, pitch, roll);
-  pose.facade = std::min<uint32_t>(id, uint32_t(facades_.size() - 1));
+  pose.facade = id;
   return pose;
 }
 

@@ -60,6 +60,8 @@ struct CameraPose {
 // pitch: up positive; roll: about the viewing direction.
 CameraPose MakeCameraPose(const Eigen::Vector3d& centre, double yaw, double pitch, double roll);
 
+class Rng;
+
 class CityLayout {
  public:
   CityLayout(const LayoutOptions& options, uint64_t seed);
@@ -94,6 +96,9 @@ class CityLayout {
   std::vector<CameraPose> WalkCameras(uint64_t seed, size_t frames, double step) const;
 
  private:
+  // A facade drawn with probability proportional to its width (a place on the streets' length).
+  uint32_t DrawFacadeByLength(Rng& rng) const;
+
   LayoutOptions options_;
   std::vector<Block> blocks_;
   std::vector<Facade> facades_;
