@@ -6,6 +6,7 @@
 #include <numbers>
 #include <utility>
 
+#include "base/angles.h"
 #include "base/stopwatch.h"
 
 namespace cwloc {
@@ -68,6 +69,18 @@ double Tracker::StepScale(const FrameMotion& motion) const {
   const double norm = motion.relative.translation.norm();
   const double length = (last_->pose.Center() - before_last_->pose.Center()).norm();
   return norm > 0 ? length / norm : 0.0;
+}
+
+std::optional<Tracker::MotionUncertainty> Tracker::UncertaintyOf(const FrameMotion& motion) const {
+  if (!(motion.sigma_rotation_deg > 0 || motion.sigma_position > 0)) return std::nullopt;
+  // A sigma the device does not give is no bound: the tracker's own bounds hold.
+  MotionUncertainty uncertainty;
+  uncertainty.rotation_rad = motion.sigma_rotation_deg > 0
+                                 ? motion.sigma_rotation_deg * kDegree
+                                 : std::numeric_limits<double>::infinity();
+  const double scale = StepScale(motion);
+  if (motion.sigma_position > 0 && scale > 0) uncertainty.position = motion.sigma_position * scale;
+  return uncertainty;
 }
 
 CameraPose Tracker::Moved(const CameraPose& pose, const FrameMotion& motion) const {
@@ -160,8 +173,7 @@ std::optional<LocalizationResult> Tracker::TrackFrom(
     }
     const double rotation_sigma =
         std::sqrt(uncertainty->rotation_rad * uncertainty->rotation_rad + 2.0 * rotation_var);
-    max_rotation_deg =
-        std::min(max_rotation_deg, kMotionSigmas * rotation_sigma * 180.0 / std::numbers::pi);
+    max_rotation_deg = std::min(max_rotation_deg, kMotionSigmas * rotation_sigma / kDegree);
     if (uncertainty->position) {
       const double position_sigma =
           std::sqrt(*uncertainty->position * *uncertainty->position + 2.0 * position_var);
@@ -199,18 +211,7 @@ LocalizationResult Tracker::Track(const Query& frame, std::optional<double> seco
     // stopped or turned).
     std::vector<std::pair<CameraPose, std::optional<MotionUncertainty>>> predictions;
     if (motion) {
-      std::optional<MotionUncertainty> uncertainty;
-      if (motion->sigma_rotation_deg > 0 || motion->sigma_position > 0) {
-        // A sigma the device does not give is no bound: the tracker's own bounds hold.
-        uncertainty.emplace();
-        uncertainty->rotation_rad = motion->sigma_rotation_deg > 0
-                                        ? motion->sigma_rotation_deg * std::numbers::pi / 180.0
-                                        : std::numeric_limits<double>::infinity();
-        const double scale = StepScale(*motion);
-        if (motion->sigma_position > 0 && scale > 0)
-          uncertainty->position = motion->sigma_position * scale;
-      }
-      predictions.emplace_back(Moved(last_->pose, *motion), uncertainty);
+      predictions.emplace_back(Moved(last_->pose, *motion), UncertaintyOf(*motion));
     } else if (before_last_) {
       predictions.emplace_back(LastStepRepeated(seconds), std::nullopt);
     }

@@ -86,6 +86,8 @@ class Tracker {
   };
   // The factor that takes the motion's translation to model units (0: its length is unknown).
   double StepScale(const FrameMotion& motion) const;
+  // Its sigmas in those units; nothing when the device gives none.
+  std::optional<MotionUncertainty> UncertaintyOf(const FrameMotion& motion) const;
   // The last pose moved by the motion, its translation in model units.
   CameraPose Moved(const CameraPose& pose, const FrameMotion& motion) const;
   // The last pose moved by the last step, scaled to the time since the last frame when the

@@ -9,10 +9,10 @@
 #include <fstream>
 #include <iostream>
 #include <map>
-#include <numbers>
 #include <sstream>
 #include <vector>
 
+#include "base/angles.h"
 #include "io/camera_spec.h"
 #include "io/database/database_queries.h"
 #include "tests/localization_check.h"
@@ -235,7 +235,7 @@ TEST_F(TrackerTest, AMotionsSigmaBoundsHowFarTheTrackedPoseMayLand) {
     Tracker tracker(localizer, LocalizerOptions{});
     Modes modes;
     const Eigen::Quaterniond turn(
-        Eigen::AngleAxisd(extra_turn_deg * std::numbers::pi / 180.0, Eigen::Vector3d::UnitY()));
+        Eigen::AngleAxisd(extra_turn_deg * kDegree, Eigen::Vector3d::UnitY()));
     for (size_t i = 0; i < 8; ++i) {
       std::optional<FrameMotion> motion;
       if (i > 0) {
