@@ -63,8 +63,10 @@ if [ -d "$data" ]; then
     -o "$work/herz_jesu.cwl" >/dev/null 2>&1
   feature_queries "$data/database.db" "$data/queries_with_intrinsics.txt" "$work/herz_features"
   compare herz_jesu_features --index "$work/herz_jesu.cwl" --query-list "$work/herz_features/list.txt"
-  # At 800 pixels: the same SIFT kernels as at the database's 1600 in half of qemu's time.
-  compare herz_jesu_photos --index "$work/herz_jesu.cwl" --image-list "$data/query_list.txt" \
+  # Three of the five photos at 800 pixels: the same SIFT kernels as all five at the database's
+  # 1600, in a sixth of qemu's time.
+  head -3 "$data/query_list.txt" >"$work/herz_photos.txt"
+  compare herz_jesu_photos --index "$work/herz_jesu.cwl" --image-list "$work/herz_photos.txt" \
     --image-dir "$data/query_images" --max-image-size 800 --max-features 6000 --threads "$(nproc)"
   "$native/bin/cwloc-index" build --model "$data/mapping_model/bin" --database "$data/database.db" \
     --compact -o "$work/herz_jesu_compact.cwl" >/dev/null 2>&1
