@@ -27,8 +27,8 @@ case "$mode" in
     cmake --build build-asan -j "$jobs" --target cwloc_test_suite cwloc_fuzzers \
       >build-asan/build.log 2>&1 || { tail -50 build-asan/build.log; exit 1; }
     # Left out: tests of accuracy on real data whose code paths other tests run sanitized (the
-    # sanitizers look for memory and undefined behaviour, not for a better pose or recall); 210 of
-    # the run's 780 test seconds. Each names the test that runs its path.
+    # sanitizers look for memory and undefined behaviour, not for a better pose or recall). Each
+    # names the test that runs its path.
     asan_skipped='^HerzJesuTest\.ExhaustivePerClusterMatchingLocalizesFromOneCluster$'  # ExhaustiveMatchingTest
     asan_skipped+='|^HerzJesuTest\.CompactIndexLocalizesEveryQueryInUnder32BytesPerView$'  # TileTest/Compact
     asan_skipped+='|^HerzJesuTest\.GlobalRatioBaselineAlsoLocalizesThisSmallModel$'  # EveryMatcherNameRuns
