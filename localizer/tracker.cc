@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <numbers>
 #include <utility>
 
 #include "base/angles.h"
@@ -29,7 +28,7 @@ CameraPose PoseOf(const LocalizationResult& result) {
 }
 
 double RotationAngleDeg(const CameraPose& a, const CameraPose& b) {
-  return a.rotation.angularDistance(b.rotation) * 180.0 / std::numbers::pi;
+  return a.rotation.angularDistance(b.rotation) / kDegree;
 }
 
 std::vector<uint32_t> InlierPoints(const LocalizationResult& result) {
