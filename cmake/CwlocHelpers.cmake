@@ -35,20 +35,28 @@ function(cwloc_add_library name)
   target_link_libraries(${name} PUBLIC ${ARG_PUBLIC_LINK} PRIVATE ${ARG_PRIVATE_LINK})
 endfunction()
 
-# cwloc_add_executable(NAME OUTPUT cwloc-foo SRCS main.cc LINK libs... [BENCHMARK]). A main
-# compiles at -O1 in optimised builds and at -O0 under a sanitizer, as the tests' own code does
-# (below): a command line's parsing and output run little and the libraries keep -O3. GCC
-# compiles cwloc-localize's main in 14 s at -O1 against 22 s at -O3; clang instruments
-# cwloc-index's main in 13 s at -O0 against 37 s at -O3 (35 s at -O1). A BENCHMARK keeps the
-# build's optimisation: it times code it compiles itself (FLANN's headers, inline kernels).
+# Code that runs little (the tests' own code, the tools' mains, the Python bindings) compiles at
+# -O1 in optimised builds: in less than half the time of -O3 (34 s -> 14 s for a typical test
+# file; cwloc-localize's main 22 -> 14 s with GCC), while the libraries it calls keep the build
+# type's optimisation. After CMake's -O3 on the command line, so it wins. Under a sanitizer at
+# -O0: clang instruments and compiles it in less than half the time of -O1 (66 s -> 29 s for
+# localizer_tests; cwloc-index's main 13 s at -O0 against 37 s at -O3, 35 s at -O1).
+if(CWLOC_SANITIZE)
+  set(CWLOC_LIGHT_CODE_OPTIMISATION -O0)
+else()
+  set(CWLOC_LIGHT_CODE_OPTIMISATION $<$<CONFIG:Release,RelWithDebInfo>:-O1>)
+endif()
+
+# cwloc_add_executable(NAME OUTPUT cwloc-foo SRCS main.cc LINK libs... [BENCHMARK]). A main is
+# code that runs little (CWLOC_LIGHT_CODE_OPTIMISATION). A BENCHMARK keeps the build's
+# optimisation, but under a sanitizer: it times code it compiles itself (FLANN's headers,
+# inline kernels).
 function(cwloc_add_executable name)
   cmake_parse_arguments(ARG "BENCHMARK" "OUTPUT" "SRCS;LINK" ${ARGN})
   add_executable(${name} ${ARG_SRCS})
   target_compile_options(${name} PRIVATE ${CWLOC_COMPILE_OPTIONS})
-  if(CWLOC_SANITIZE)
-    target_compile_options(${name} PRIVATE -O0)
-  elseif(NOT ARG_BENCHMARK)
-    target_compile_options(${name} PRIVATE $<$<CONFIG:Release,RelWithDebInfo>:-O1>)
+  if(CWLOC_SANITIZE OR NOT ARG_BENCHMARK)
+    target_compile_options(${name} PRIVATE ${CWLOC_LIGHT_CODE_OPTIMISATION})
   endif()
   target_link_libraries(${name} PRIVATE ${ARG_LINK})
   if(ARG_OUTPUT)
@@ -56,20 +64,11 @@ function(cwloc_add_executable name)
   endif()
 endfunction()
 
-# The tests' own code at -O1 in optimised builds: it compiles in less than half the time of -O3
-# (34 s -> 14 s for a typical test file) and runs little; the libraries under test keep the
-# build type's optimisation. After CMake's -O3 on the command line, so it wins. Under a
-# sanitizer at -O0: clang instruments and compiles it in less than half the time of -O1 (66 s
-# -> 29 s for localizer_tests); a test file whose own code computes its reference stays at -O1
-# (cwloc_test_computes_reference). GCC's -Wmaybe-uninitialized misreads
-# std::optional<std::string> at -O1 (GCC bug 80635).
-if(CWLOC_SANITIZE)
-  set(test_optimisation -O0)
-else()
-  set(test_optimisation $<$<CONFIG:Release,RelWithDebInfo>:-O1>)
-endif()
+# The tests' own code runs little (CWLOC_LIGHT_CODE_OPTIMISATION); a test file whose own code
+# computes its reference stays at -O1 under a sanitizer (cwloc_test_computes_reference). GCC's
+# -Wmaybe-uninitialized misreads std::optional<std::string> at -O1 (GCC bug 80635).
 set(CWLOC_TEST_COMPILE_OPTIONS ${CWLOC_COMPILE_OPTIONS}
-  ${test_optimisation} $<$<CXX_COMPILER_ID:GNU>:-Wno-maybe-uninitialized>)
+  ${CWLOC_LIGHT_CODE_OPTIMISATION} $<$<CXX_COMPILER_ID:GNU>:-Wno-maybe-uninitialized>)
 
 # cwloc_test_computes_reference(a_test.cc ...): test files whose own code computes a reference
 # (brute-force search, double-precision kernels, whole-database scans) keep -O1 under a

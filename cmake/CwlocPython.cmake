@@ -18,14 +18,13 @@ else()
 endif()
 
 # cwloc_add_python_module(NAME OUTPUT module SRCS a.cc LINK libs...): a pybind11 extension
-# module named `module`, with the project's warnings. Its own code, the bindings, compiles at -O1
-# in optimised builds, as a main does (cwloc_add_executable): it converts arguments and results,
-# and the libraries it calls keep -O3.
+# module named `module`, with the project's warnings. The bindings convert arguments and results:
+# code that runs little (CWLOC_LIGHT_CODE_OPTIMISATION).
 function(cwloc_add_python_module name)
   cmake_parse_arguments(ARG "" "OUTPUT" "SRCS;LINK" ${ARGN})
   pybind11_add_module(${name} MODULE NO_EXTRAS ${ARG_SRCS})
   target_compile_options(${name} PRIVATE ${CWLOC_COMPILE_OPTIONS}
-    $<$<CONFIG:Release,RelWithDebInfo>:-O1>)
+    ${CWLOC_LIGHT_CODE_OPTIMISATION})
   target_include_directories(${name} PRIVATE ${PROJECT_SOURCE_DIR})
   target_link_libraries(${name} PRIVATE ${ARG_LINK})
   set_target_properties(${name} PROPERTIES OUTPUT_NAME ${ARG_OUTPUT}

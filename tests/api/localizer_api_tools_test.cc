@@ -470,6 +470,12 @@ class TrackerApiTest : public testing::Test {
     }
   }
 
+  // C's view of a known camera; it points into `camera`, which must outlive it.
+  static cwloc_camera KnownCCamera(const api::Camera& camera) {
+    return {camera.model.c_str(), camera.width,         camera.height,
+            camera.params.data(), camera.params.size(), CWLOC_CALIBRATION_KNOWN};
+  }
+
   // cwloc-localize --sequence with `flags`, `tracker` and a C tracker of its own on the frames,
   // with `motions` (one per frame, or none): C++ gives the CLI's modes, inlier counts and poses
   // bit for bit, C gives C++'s. The C++ results.
@@ -514,9 +520,7 @@ class TrackerApiTest : public testing::Test {
       EXPECT_EQ(result.rotation, (cli["pose"]["qvec"].get<std::array<double, 4>>()));
       EXPECT_EQ(result.translation, (cli["pose"]["tvec"].get<std::array<double, 3>>()));
 
-      const cwloc_camera c_camera{camera.model.c_str(), camera.width,
-                                  camera.height,        camera.params.data(),
-                                  camera.params.size(), CWLOC_CALIBRATION_KNOWN};
+      const cwloc_camera c_camera = KnownCCamera(camera);
       std::optional<cwloc_motion> c_motion;
       if (motion) {
         c_motion = cwloc_motion{
@@ -570,8 +574,7 @@ TEST_F(TrackerApiTest, TracksAVideoAsCwlocLocalizeSequenceDoes) {
   const colmap::DatabaseReader db(shared_->data / "database.db");
   const api::Features features = DatabaseFeatures(db, frames_[0].first);
   const api::Camera camera = ParseCamera(frames_[0].second);
-  const cwloc_camera c_camera{camera.model.c_str(), camera.width,         camera.height,
-                              camera.params.data(), camera.params.size(), CWLOC_CALIBRATION_KNOWN};
+  const cwloc_camera c_camera = KnownCCamera(camera);
   cwloc_localizer* c_localizer = nullptr;
   ASSERT_EQ(cwloc_localizer_open(shared_->index.c_str(), 0, &c_localizer), CWLOC_OK);
   cwloc_result* alone = nullptr;
