@@ -50,8 +50,16 @@ PoseGuide::PoseGuide(const Query& query, PoseHypothesis hypothesis, double radiu
   }
   for (size_t c = 1; c < cell_start_.size(); ++c) cell_start_[c] += cell_start_[c - 1];
   features_.resize(num_features);
+  feature_xy_.resize(2 * size_t{num_features});
   std::vector<uint32_t> next(cell_start_.begin(), cell_start_.end() - 1);
-  for (uint32_t f = 0; f < num_features; ++f) features_[next[cell_of[f]]++] = f;
+  for (uint32_t f = 0; f < num_features; ++f) {
+    const uint32_t slot = next[cell_of[f]]++;
+    features_[slot] = f;
+    feature_xy_[2 * slot] = query.keypoints[2 * f];
+    feature_xy_[2 * slot + 1] = query.keypoints[2 * f + 1];
+  }
+  candidates_.resize(num_features);
+  distances_.resize(num_features);
 }
 
 std::optional<FeatureMatch> PoseGuide::Match(const Index& index, uint32_t view, double ratio) {
@@ -79,28 +87,32 @@ std::optional<FeatureMatch> PoseGuide::Match(const Index& index, uint32_t view, 
   const uint32_t row_begin = cell(y - reach_px_, rows_);
   const uint32_t row_end = cell(y + reach_px_, rows_);
   const double reach_squared = reach_px_ * reach_px_;
-  candidates_.clear();
+  // Locals, so that the compiler need not reload the members in the loops.
+  const float* xy = feature_xy_.data();
+  const uint32_t* features = features_.data();
+  uint32_t* candidates = candidates_.data();
+  uint32_t num_candidates = 0;
   for (uint32_t row = row_begin; row <= row_end; ++row) {
     const uint32_t first = cell_start_[row * columns_ + column_begin];
     const uint32_t last = cell_start_[row * columns_ + column_end + 1];
     for (uint32_t i = first; i < last; ++i) {
-      const uint32_t f = features_[i];
-      const double dx = query_.keypoints[2 * f] - x, dy = query_.keypoints[2 * f + 1] - y;
-      if (dx * dx + dy * dy <= reach_squared) candidates_.push_back(f);
+      const double dx = xy[2 * i] - x, dy = xy[2 * i + 1] - y;
+      candidates[num_candidates] = features[i];
+      num_candidates += dx * dx + dy * dy <= reach_squared;
     }
   }
-  if (candidates_.size() < 2) return std::nullopt;
-  distances_.resize(candidates_.size());
+  if (num_candidates < 2) return std::nullopt;
+  uint32_t* distances = distances_.data();
   BestDistanceFunctions().batch(index.ViewDescriptor(view, decoded_), query_.descriptors.data(),
-                                candidates_.data(), candidates_.size(), distances_.data());
+                                candidates, num_candidates, distances);
   // Nearest and second nearest in descriptor space; ties go to the lower feature index.
   const auto closer = [&](uint32_t a, uint32_t b) {
-    return distances_[a] < distances_[b] ||
-           (distances_[a] == distances_[b] && candidates_[a] < candidates_[b]);
+    return distances[a] < distances[b] ||
+           (distances[a] == distances[b] && candidates[a] < candidates[b]);
   };
   uint32_t best = 0, second = 1;
   if (closer(1, 0)) std::swap(best, second);
-  for (uint32_t i = 2; i < candidates_.size(); ++i) {
+  for (uint32_t i = 2; i < num_candidates; ++i) {
     if (closer(i, best)) {
       second = best;
       best = i;
@@ -108,11 +120,11 @@ std::optional<FeatureMatch> PoseGuide::Match(const Index& index, uint32_t view, 
       second = i;
     }
   }
-  if (!PassesRatioTest(distances_[best], distances_[second], ratio)) return std::nullopt;
-  const uint32_t feature = candidates_[best];
+  if (!PassesRatioTest(distances[best], distances[second], ratio)) return std::nullopt;
+  const uint32_t feature = candidates[best];
   const double dx = query_.keypoints[2 * feature] - x, dy = query_.keypoints[2 * feature + 1] - y;
   if (dx * dx + dy * dy > radius_px_ * radius_px_) return std::nullopt;
-  return FeatureMatch{candidates_[best], view, std::sqrt(float(distances_[best]))};
+  return FeatureMatch{feature, view, std::sqrt(float(distances[best]))};
 }
 
 }  // namespace cwloc

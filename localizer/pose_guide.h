@@ -51,7 +51,8 @@ class PoseGuide {
   uint32_t rows_ = 0;
   std::vector<uint32_t> cell_start_;  // features of cell c: features_[cell_start_[c] .. [c+1])
   std::vector<uint32_t> features_;
-  std::vector<uint32_t> candidates_;  // scratch
+  std::vector<float> feature_xy_;     // features_[i]'s keypoint at 2 i, 2 i + 1: read in order
+  std::vector<uint32_t> candidates_;  // scratch, one slot per feature
   std::vector<uint32_t> distances_;
   uint8_t decoded_[128];  // a coded index's view descriptor
 };
