@@ -20,6 +20,10 @@ constexpr double kStillDepthShare = 0.002;
 // The last step is repeated at most this many times over (a frame after a gap in the stream):
 // beyond, the prediction is a guess and the last pose alone does as well.
 constexpr double kMaxStepScale = 4.0;
+// A frame no prediction tracks is tried once more with the rough round's window this many
+// times wider: a prediction further off than the window, as after a sudden turn (ORB-SLAM's
+// motion-model tracking widens its window the same way).
+constexpr double kWiderWindow = 2.0;
 
 CameraPose PoseOf(const LocalizationResult& result) {
   const auto& q = result.rotation;
@@ -112,7 +116,8 @@ void Tracker::Reset() {
 
 std::optional<LocalizationResult> Tracker::TrackFrom(
     const Query& frame, const CameraPose& predicted,
-    const std::optional<MotionUncertainty>& uncertainty, TrackingInfo* info) const {
+    const std::optional<MotionUncertainty>& uncertainty, double radius_px,
+    TrackingInfo* info) const {
   FramePrediction prediction;
   prediction.hypothesis = last_->camera_and_pose;
   prediction.hypothesis.pose = predicted;
@@ -125,7 +130,7 @@ std::optional<LocalizationResult> Tracker::TrackFrom(
   const size_t step = std::max<size_t>(1, (seen.size() + tracker_options_.rough_views - 1) /
                                               std::max<uint32_t>(tracker_options_.rough_views, 1));
   for (size_t i = 0; i < seen.size(); i += step) prediction.views.push_back(seen[i]);
-  prediction.radius_px = tracker_options_.radius_px;
+  prediction.radius_px = radius_px;
   const LocalizationResult rough = localizer_.Localize(frame, rough_options_, &prediction);
   if (!rough.success) return std::nullopt;
 
@@ -218,14 +223,18 @@ LocalizationResult Tracker::Track(const Query& frame, std::optional<double> seco
     if (predictions.empty() || !predictions.front().second)
       predictions.emplace_back(last_->pose, std::nullopt);
     first_prediction = predictions.front().first;
-    for (const auto& [predicted, uncertainty] : predictions) {
-      TrackingInfo attempt = info;
-      result = TrackFrom(frame, predicted, uncertainty, &attempt);
-      if (result) {
-        info = attempt;
-        info.mode = TrackingMode::kTracked;
-        break;
+    const double radius_px = tracker_options_.radius_px;
+    for (const double radius : {radius_px, kWiderWindow * radius_px}) {
+      for (const auto& [predicted, uncertainty] : predictions) {
+        TrackingInfo attempt = info;
+        result = TrackFrom(frame, predicted, uncertainty, radius, &attempt);
+        if (result) {
+          info = attempt;
+          info.mode = TrackingMode::kTracked;
+          break;
+        }
       }
+      if (result) break;
     }
   }
   if (!result) {

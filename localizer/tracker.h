@@ -14,7 +14,8 @@ namespace cwloc {
 struct TrackerOptions {
   // The first matching's window around a point's projection under the predicted pose, pixels:
   // the views that matched the last frame's inliers, at most `rough_views` of them, give a rough
-  // pose. The frame is then matched around that pose in the model images nearest it, as
+  // pose (a frame no prediction tracks is tried again with the window twice as wide). The frame
+  // is then matched around that pose in the model images nearest it, as
   // guided back-matching matches a query around its first pose (with
   // LocalizerOptions::guide_radius_px), until the pose stops moving.
   double radius_px = 200.0;
@@ -97,7 +98,7 @@ class Tracker {
   // pose must also lie within it.
   std::optional<LocalizationResult> TrackFrom(const Query& frame, const CameraPose& predicted,
                                               const std::optional<MotionUncertainty>& uncertainty,
-                                              TrackingInfo* info) const;
+                                              double radius_px, TrackingInfo* info) const;
 
   const Localizer& localizer_;
   LocalizerOptions options_;

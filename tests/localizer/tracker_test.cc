@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <iostream>
 #include <map>
@@ -267,6 +268,41 @@ TEST_F(TrackerTest, AMotionsSigmaBoundsHowFarTheTrackedPoseMayLand) {
   EXPECT_EQ(sure_but_wrong.tracked, 0);
   EXPECT_EQ(sure_but_wrong.relocalized, 7);
   EXPECT_GE(sure.tracked, 4);
+}
+
+// A prediction further off than the rough round's window (the true motion turned 12 degrees
+// more about the camera's y axis: its points project ~290 pixels from where they are, beyond the
+// 200-pixel window) is tracked with the window twice as wide. The motion's 5-degree sigma rules
+// out the last pose alone as a prediction, so only the wider window can track these frames.
+TEST_F(TrackerTest, APredictionBeyondTheWindowIsTrackedWithAWiderOne) {
+  const Localizer localizer(*index_);
+  Tracker tracker(localizer, LocalizerOptions{});
+  const double extra_turn_deg = 12.0;
+  const double focal_px = 1385.5;
+  ASSERT_GT(focal_px * std::tan(extra_turn_deg * kDegree), TrackerOptions{}.radius_px);
+  const Eigen::Quaterniond turn(
+      Eigen::AngleAxisd(extra_turn_deg * kDegree, Eigen::Vector3d::UnitY()));
+  int tracked = 0;
+  for (size_t i = 0; i < 8; ++i) {
+    std::optional<FrameMotion> motion;
+    if (i > 0) {
+      const test::CameraPose& from = truth_.at(frames_[i - 1]).pose;
+      const test::CameraPose& to = truth_.at(frames_[i]).pose;
+      const Eigen::Quaterniond rotation = turn * to.rotation * from.rotation.conjugate();
+      motion =
+          FrameMotion{CameraPose(rotation, to.translation - rotation * from.translation), true};
+      motion->sigma_rotation_deg = 5.0;
+    }
+    const LocalizationResult result = tracker.Track(Frame(frames_[i]), std::nullopt, motion);
+    ASSERT_TRUE(result.success) << frames_[i];
+    EXPECT_LE(PositionError(result), 0.02) << frames_[i];
+    if (result.tracking->mode != TrackingMode::kTracked) continue;
+    ++tracked;
+    EXPECT_NEAR(result.tracking->prediction_error_deg.value(), extra_turn_deg, 0.5) << frames_[i];
+  }
+  // Measured: 5 of 7; 2 with the 200-pixel window alone (frames whose own turn takes back part
+  // of the 12 degrees).
+  EXPECT_GE(tracked, 4);
 }
 
 TEST_F(TrackerTest, ResetStartsFromScratch) {
