@@ -206,7 +206,21 @@ struct VideoFrames::Impl {
       const uint8_t* cr_row =
           frame->data[cr.plane] + ptrdiff_t{chroma_row} * frame->linesize[cr.plane];
       uint8_t* out = grey.pixels.data() + size_t{row} * width;
-      for (uint32_t column = 0; column < width; ++column) {
+      uint32_t column = 0;
+      if (chroma && layout.log2_chroma_w == 1 && cb.step == 1 && cr.step == 1) {
+        // Planar chroma, one sample per two columns (4:2:0, 4:2:2: most video): the pair's
+        // chroma term once; the same integer sums as below.
+        const uint8_t* cb_samples = cb_row + cb.offset;
+        const uint8_t* cr_samples = cr_row + cr.offset;
+        for (; column + 1 < width; column += 2) {
+          const int32_t from_chroma =
+              128 + from_cb[cb_samples[column >> 1]] + from_cr[cr_samples[column >> 1]];
+          out[column] = uint8_t(std::clamp((luma[y_row[column]] + from_chroma) >> 8, 0, 255));
+          out[column + 1] =
+              uint8_t(std::clamp((luma[y_row[column + 1]] + from_chroma) >> 8, 0, 255));
+        }
+      }
+      for (; column < width; ++column) {
         int32_t value = luma[y_row[column]] + 128;  // + 0.5, x 256
         if (chroma) {
           const uint32_t c = column >> layout.log2_chroma_w;
