@@ -73,6 +73,7 @@ void BackMatcher::Run(uint32_t back_matches) {
   const std::vector<uint32_t>& votes = result_.cluster_votes;
   while (result_.matches.size() < back_matches &&
          result_.visited.size() < options_.max_back_clusters && !result_.stopped_by_deadline) {
+    CastPendingVotes();
     uint32_t best = UINT32_MAX;
     for (uint32_t cluster : voted_) {
       if (!visited_[cluster] && (best == UINT32_MAX || votes[cluster] > votes[best] ||
@@ -100,23 +101,29 @@ void BackMatcher::Run(uint32_t back_matches) {
     }
     const uint32_t found_here = static_cast<uint32_t>(result_.matches.size() - first_match);
     result_.visited.push_back({best, votes[best], found_here});
-    if (found_here < options_.min_matches_to_vote) continue;
-    // Co-visibility votes: every other cluster that sees a matched 3D point, once per match.
-    for (size_t m = first_match; m < result_.matches.size(); ++m) {
-      track_clusters_.clear();
-      for (const uint32_t other_view :
-           index_.TrackOf(index_.view_points()[result_.matches[m].view])) {
-        const uint32_t cluster = ClusterOfView(index_, other_view);
-        if (cluster == best || cluster == UINT32_MAX) continue;
-        if (std::find(track_clusters_.begin(), track_clusters_.end(), cluster) ==
-            track_clusters_.end()) {
-          track_clusters_.push_back(cluster);
-          Vote(cluster);
-        }
+    if (found_here >= options_.min_matches_to_vote) pending_votes_ = {best, first_match};
+  }
+  result_.seconds_matching += stopwatch.Seconds();
+}
+
+void BackMatcher::CastPendingVotes() {
+  if (!pending_votes_) return;
+  const auto [voter, first_match] = *pending_votes_;
+  pending_votes_.reset();
+  // Co-visibility votes: every other cluster that sees a matched 3D point, once per match.
+  for (size_t m = first_match; m < result_.matches.size(); ++m) {
+    track_clusters_.clear();
+    for (const uint32_t other_view :
+         index_.TrackOf(index_.view_points()[result_.matches[m].view])) {
+      const uint32_t cluster = ClusterOfView(index_, other_view);
+      if (cluster == voter || cluster == UINT32_MAX) continue;
+      if (std::find(track_clusters_.begin(), track_clusters_.end(), cluster) ==
+          track_clusters_.end()) {
+        track_clusters_.push_back(cluster);
+        Vote(cluster);
       }
     }
   }
-  result_.seconds_matching += stopwatch.Seconds();
 }
 
 BackMatchingResult MatchBack(const Index& index, const ClusterMembers& clusters, const Query& query,

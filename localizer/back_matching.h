@@ -4,6 +4,7 @@
 #include <optional>
 #include <span>
 #include <unordered_set>
+#include <utility>
 #include <vector>
 
 #include "base/deadline.h"
@@ -25,7 +26,9 @@ struct VisitedCluster {
 struct BackMatchingResult {
   std::vector<FeatureMatch> matches;
   std::vector<VisitedCluster> visited;
-  std::vector<uint32_t> cluster_votes;  // final H_c
+  // H_c when the last cluster was chosen: the votes of the last cluster visited are cast only
+  // if the matching goes on (they choose the next cluster; most queries stop after one).
+  std::vector<uint32_t> cluster_votes;
   double seconds_query_tree = 0;
   double seconds_matching = 0;
   bool stopped_by_deadline = false;  // the latency budget ended it, possibly inside a cluster
@@ -60,6 +63,8 @@ class BackMatcher {
 
  private:
   void Vote(uint32_t cluster);
+  // The co-visibility votes of the last cluster visited, if it matched enough views to vote.
+  void CastPendingVotes();
   // The view's back-match, if it passes the ratio test.
   std::optional<FeatureMatch> MatchView(uint32_t view);
 
@@ -81,6 +86,8 @@ class BackMatcher {
   uint8_t decoded_[128];                       // a coded index's view descriptor
   std::unordered_set<uint32_t> tried_points_;  // a coded index's points back-matched so far
   bool started_ = false;                       // the first Run builds the query forest
+  // The cluster whose matches from this index on have votes to cast.
+  std::optional<std::pair<uint32_t, size_t>> pending_votes_;
 };
 
 // One BackMatcher run to options.back_matches.
