@@ -193,7 +193,7 @@ MatcherOutput MatchPredicted(const Index& index, const ClusterMembers& clusters,
   out.seconds_guide = guide_time.Seconds();
   out.back_matcher = std::make_unique<BackMatcher>(index, clusters, query, votes, options, allowed,
                                                    out.guide.get(), deadlines.back);
-  out.back_matcher->Run(options.back_matches);
+  out.back_matcher->Run(std::max(options.back_matches, prediction.min_back_matches));
   TakeBackMatches(index, &out);
   return out;
 }

@@ -25,6 +25,9 @@ struct FramePrediction {
   bool nearest_images_first = false;
   // Or only these views, each matched once (no clusters, no votes).
   std::vector<uint32_t> views;
+  // Back-matching goes on to the next cluster until it has at least this many matches (when
+  // more than LocalizerOptions::back_matches).
+  uint32_t min_back_matches = 0;
 };
 
 // Localizes queries against one index. Construction is O(images); Localize is const and

@@ -24,6 +24,11 @@ constexpr double kMaxStepScale = 4.0;
 // times wider: a prediction further off than the window, as after a sudden turn (ORB-SLAM's
 // motion-model tracking widens its window the same way).
 constexpr double kWiderWindow = 2.0;
+// A matching round goes on to the next nearest model image until it has at least this share of
+// the last frame's inliers: the nearest camera may look elsewhere (herz_jesu_p25's photos are
+// two passes along the facade; frame 0009's nearest camera is from the other pass and gave it
+// half the inliers and 12x the error it has alone, bench/sequence_benchmark.sh).
+constexpr double kMinShareOfLastInliers = 0.5;
 
 CameraPose PoseOf(const LocalizationResult& result) {
   const auto& q = result.rotation;
@@ -145,6 +150,7 @@ std::optional<LocalizationResult> Tracker::TrackFrom(
   prediction.views.clear();
   prediction.nearest_images_first = true;
   prediction.radius_px = options_.guide_radius_px;
+  prediction.min_back_matches = uint32_t(kMinShareOfLastInliers * double(seen.size()));
   CameraPose around = PoseOf(rough);
   const LocalizationResult* before = &rough;
   prediction.seen_points = InlierPoints(rough);

@@ -305,6 +305,34 @@ TEST_F(TrackerTest, APredictionBeyondTheWindowIsTrackedWithAWiderOne) {
   EXPECT_GE(tracked, 4);
 }
 
+// A prediction's min_back_matches takes guided back-matching past the nearest model image (the
+// tracker asks for half the last frame's inliers: the nearest camera may look elsewhere).
+TEST_F(TrackerTest, APredictionsMinimumOfBackMatchesVisitsTheNextImages) {
+  const Localizer localizer(*index_);
+  const Query frame = Frame(frames_[1]);
+  const LocalizationResult alone = localizer.Localize(frame, LocalizerOptions{});
+  ASSERT_TRUE(alone.success);
+  FramePrediction prediction;
+  prediction.hypothesis.pose =
+      CameraPose(Eigen::Quaterniond(alone.rotation[0], alone.rotation[1], alone.rotation[2],
+                                    alone.rotation[3]),
+                 Eigen::Vector3d(alone.translation[0], alone.translation[1], alone.translation[2]));
+  prediction.hypothesis.model_id = frame.camera.model_id;
+  prediction.hypothesis.params = frame.camera.params;
+  for (const InlierMatch& inlier : alone.inliers) prediction.seen_points.push_back(inlier.point);
+  prediction.nearest_images_first = true;
+  prediction.radius_px = LocalizerOptions{}.guide_radius_px;
+  const LocalizationResult nearest = localizer.Localize(frame, LocalizerOptions{}, &prediction);
+  ASSERT_TRUE(nearest.success);
+  EXPECT_EQ(nearest.back_matched_clusters, 1u);
+  prediction.min_back_matches = 2 * nearest.correspondences;
+  const LocalizationResult more = localizer.Localize(frame, LocalizerOptions{}, &prediction);
+  ASSERT_TRUE(more.success);
+  EXPECT_GE(more.back_matched_clusters, 2u);
+  EXPECT_GT(more.correspondences, nearest.correspondences);
+  EXPECT_LE(PositionError(more), 0.01);
+}
+
 TEST_F(TrackerTest, ResetStartsFromScratch) {
   const Localizer localizer(*index_);
   Tracker tracker(localizer, LocalizerOptions{});
