@@ -1,6 +1,7 @@
 #include "localizer/tracker.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <utility>
@@ -45,6 +46,31 @@ std::vector<uint32_t> InlierPoints(const LocalizationResult& result) {
   points.reserve(result.inliers.size());
   for (const InlierMatch& inlier : result.inliers) points.push_back(inlier.point);
   return points;
+}
+
+// How far the prediction put the frame's inliers from their keypoints, pixels: the median over
+// at most kSampledInliers of them, evenly spread.
+double PredictionErrorPx(const Index& index, const Query& frame, const LocalizationResult& result,
+                         const CameraPose& predicted) {
+  constexpr size_t kSampledInliers = 200;
+  const std::vector<InlierMatch>& inliers = result.inliers;
+  const size_t step = std::max<size_t>(1, inliers.size() / kSampledInliers);
+  std::vector<double> errors;
+  for (size_t i = 0; i < inliers.size(); i += step) {
+    const std::array<double, 3> xyz = index.PointXyz(inliers[i].point);
+    const Eigen::Vector3d in_camera = predicted.Apply(Eigen::Vector3d(xyz[0], xyz[1], xyz[2]));
+    std::array<double, 2> pixel;
+    if (!ProjectToPixel(result.camera.model_id, result.camera.params,
+                        {in_camera.x(), in_camera.y(), in_camera.z()}, &pixel)) {
+      errors.push_back(std::numeric_limits<double>::infinity());  // behind the predicted camera
+      continue;
+    }
+    errors.push_back(std::hypot(pixel[0] - frame.keypoints[2 * inliers[i].feature],
+                                pixel[1] - frame.keypoints[2 * inliers[i].feature + 1]));
+  }
+  if (errors.empty()) return std::numeric_limits<double>::infinity();
+  std::nth_element(errors.begin(), errors.begin() + errors.size() / 2, errors.end());
+  return errors[errors.size() / 2];
 }
 
 // `pose` moved by `relative` (both cam_from_something): relative * pose.
@@ -221,6 +247,7 @@ LocalizationResult Tracker::Track(const Query& frame, std::optional<double> seco
   }
   std::optional<LocalizationResult> result;
   std::optional<CameraPose> first_prediction;
+  std::optional<CameraPose> tracked_from;  // the prediction a tracked frame came from
   if (last_) {
     info.predicted_from = last_->name;
     // The given motion or the last step repeated, then the last pose alone (a camera that
@@ -235,14 +262,26 @@ LocalizationResult Tracker::Track(const Query& frame, std::optional<double> seco
     if (predictions.empty() || !predictions.front().second)
       predictions.emplace_back(last_->pose, std::nullopt);
     first_prediction = predictions.front().first;
+    // The windows from the smallest that holds twice the last prediction's error: a steady
+    // stream's prediction is a few pixels off and its frames are matched in the guided
+    // window at once, a jerky one's up to hundreds.
     const double radius_px = tracker_options_.radius_px;
-    for (const double radius : {radius_px, kWiderWindow * radius_px}) {
+    std::vector<double> windows = {options_.guide_radius_px, radius_px, kWiderWindow * radius_px};
+    std::sort(windows.begin(), windows.end());
+    windows.erase(std::unique(windows.begin(), windows.end()), windows.end());
+    const double needed =
+        last_->prediction_error_px ? 2.0 * *last_->prediction_error_px : radius_px;
+    const auto first = std::find_if(windows.begin(), windows.end() - 1,
+                                    [&](double window) { return window >= needed; });
+    windows.erase(windows.begin(), first);
+    for (const double radius : windows) {
       for (const auto& [predicted, uncertainty] : predictions) {
         TrackingInfo attempt = info;
         result = TrackFrom(frame, predicted, uncertainty, radius, &attempt);
         if (result) {
           info = attempt;
           info.mode = TrackingMode::kTracked;
+          tracked_from = predicted;
           break;
         }
       }
@@ -271,6 +310,9 @@ LocalizationResult Tracker::Track(const Query& frame, std::optional<double> seco
     posed.camera_and_pose.params = result->camera.params;
     posed.inlier_views.reserve(result->inliers.size());
     for (const InlierMatch& inlier : result->inliers) posed.inlier_views.push_back(inlier.view);
+    if (tracked_from)
+      posed.prediction_error_px =
+          PredictionErrorPx(localizer_.index(), frame, *result, *tracked_from);
     before_last_ = std::move(last_);
     last_ = std::move(posed);
   } else {

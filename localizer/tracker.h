@@ -79,6 +79,8 @@ class Tracker {
     std::optional<double> seconds;
     PoseHypothesis camera_and_pose;
     std::vector<uint32_t> inlier_views;
+    // How far its prediction was off (PredictionErrorPx), when it was tracked.
+    std::optional<double> prediction_error_px;
   };
   // A motion's uncertainty in model units and radians; no position when its step is unknown.
   struct MotionUncertainty {
