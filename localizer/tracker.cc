@@ -262,18 +262,16 @@ LocalizationResult Tracker::Track(const Query& frame, std::optional<double> seco
     if (predictions.empty() || !predictions.front().second)
       predictions.emplace_back(last_->pose, std::nullopt);
     first_prediction = predictions.front().first;
-    // The windows from the smallest that holds twice the last prediction's error: a steady
-    // stream's prediction is a few pixels off and its frames are matched in the guided
-    // window at once, a jerky one's up to hundreds.
+    // The windows from --track-radius's, or from the guided one when that holds twice the last
+    // prediction's error: a steady stream's prediction is a few pixels off and its frames are
+    // matched there at once. A jerky stream's errors do not carry over from frame to frame:
+    // starting wider after a frame that needed it made herz_jesu_p25's photos slower.
     const double radius_px = tracker_options_.radius_px;
-    std::vector<double> windows = {options_.guide_radius_px, radius_px, kWiderWindow * radius_px};
-    std::sort(windows.begin(), windows.end());
-    windows.erase(std::unique(windows.begin(), windows.end()), windows.end());
-    const double needed =
-        last_->prediction_error_px ? 2.0 * *last_->prediction_error_px : radius_px;
-    const auto first = std::find_if(windows.begin(), windows.end() - 1,
-                                    [&](double window) { return window >= needed; });
-    windows.erase(windows.begin(), first);
+    std::vector<double> windows = {radius_px, kWiderWindow * radius_px};
+    const double guided_px = options_.guide_radius_px;
+    if (guided_px < radius_px && last_->prediction_error_px &&
+        2.0 * *last_->prediction_error_px <= guided_px)
+      windows.insert(windows.begin(), guided_px);
     for (const double radius : windows) {
       for (const auto& [predicted, uncertainty] : predictions) {
         TrackingInfo attempt = info;
