@@ -53,6 +53,21 @@ class TrackerTest : public testing::Test {
     query.camera = ParseCameraSpec(truth_.at(name).camera, "queries_gt.txt");
     return query;
   }
+  // The true motion into frame i from frame i - 1 (COLMAP's poses), as VIO would give it, turned
+  // `extra_turn_deg` more about the camera's y axis; none into the first frame. fox_video is not
+  // georeferenced, so only the translation's direction counts (FrameMotion).
+  std::optional<FrameMotion> TrueMotion(size_t i, double extra_turn_deg = 0.0,
+                                        double sigma_rotation_deg = 0.0) const {
+    if (i == 0) return std::nullopt;
+    const Eigen::Quaterniond turn(
+        Eigen::AngleAxisd(extra_turn_deg * kDegree, Eigen::Vector3d::UnitY()));
+    const test::CameraPose& from = truth_.at(frames_[i - 1]).pose;
+    const test::CameraPose& to = truth_.at(frames_[i]).pose;
+    const Eigen::Quaterniond rotation = turn * to.rotation * from.rotation.conjugate();
+    FrameMotion motion{CameraPose(rotation, to.translation - rotation * from.translation), true};
+    motion.sigma_rotation_deg = sigma_rotation_deg;
+    return motion;
+  }
   double PositionError(const LocalizationResult& result) const {
     const Eigen::Vector3d center(result.center[0], result.center[1], result.center[2]);
     return (center - truth_.at(result.name).pose.Center()).norm();
@@ -194,23 +209,14 @@ TEST_F(TrackerTest, ABlackFrameIsLostAndTheNextIsFound) {
   EXPECT_LE(PositionError(next), 0.01);
 }
 
-// The true motion between frames (from COLMAP's poses), as VIO would give it: the predicted
-// rotation is then the true one, and frames the last step mispredicts are tracked. fox_video is
-// not georeferenced, so only the translation's direction counts (FrameMotion).
+// The true motion between frames, as VIO would give it: the predicted rotation is then the true
+// one, and frames the last step mispredicts are tracked.
 TEST_F(TrackerTest, AGivenMotionPredictsTheRotation) {
   const Localizer localizer(*index_);
   Tracker tracker(localizer, LocalizerOptions{});
   int exact = 0;
   for (size_t i = 0; i < frames_.size(); ++i) {
-    std::optional<FrameMotion> motion;
-    if (i > 0) {
-      const test::CameraPose& from = truth_.at(frames_[i - 1]).pose;
-      const test::CameraPose& to = truth_.at(frames_[i]).pose;
-      const Eigen::Quaterniond rotation = to.rotation * from.rotation.conjugate();
-      motion =
-          FrameMotion{CameraPose(rotation, to.translation - rotation * from.translation), true};
-    }
-    const LocalizationResult result = tracker.Track(Frame(frames_[i]), std::nullopt, motion);
+    const LocalizationResult result = tracker.Track(Frame(frames_[i]), std::nullopt, TrueMotion(i));
     ASSERT_TRUE(result.success) << frames_[i];
     EXPECT_LE(PositionError(result), 0.02) << frames_[i];
     // A tracked frame predicted by the motion is off by COLMAP's own rotation error only
@@ -235,19 +241,9 @@ TEST_F(TrackerTest, AMotionsSigmaBoundsHowFarTheTrackedPoseMayLand) {
   const auto run = [&](double extra_turn_deg, double sigma_rotation_deg) {
     Tracker tracker(localizer, LocalizerOptions{});
     Modes modes;
-    const Eigen::Quaterniond turn(
-        Eigen::AngleAxisd(extra_turn_deg * kDegree, Eigen::Vector3d::UnitY()));
     for (size_t i = 0; i < 8; ++i) {
-      std::optional<FrameMotion> motion;
-      if (i > 0) {
-        const test::CameraPose& from = truth_.at(frames_[i - 1]).pose;
-        const test::CameraPose& to = truth_.at(frames_[i]).pose;
-        const Eigen::Quaterniond rotation = turn * to.rotation * from.rotation.conjugate();
-        motion =
-            FrameMotion{CameraPose(rotation, to.translation - rotation * from.translation), true};
-        motion->sigma_rotation_deg = sigma_rotation_deg;
-      }
-      const LocalizationResult result = tracker.Track(Frame(frames_[i]), std::nullopt, motion);
+      const LocalizationResult result = tracker.Track(
+          Frame(frames_[i]), std::nullopt, TrueMotion(i, extra_turn_deg, sigma_rotation_deg));
       EXPECT_TRUE(result.success) << frames_[i];
       if (!result.success) continue;
       EXPECT_LE(PositionError(result), 0.02) << frames_[i];
@@ -280,20 +276,10 @@ TEST_F(TrackerTest, APredictionBeyondTheWindowIsTrackedWithAWiderOne) {
   const double extra_turn_deg = 12.0;
   const double focal_px = 1385.5;
   ASSERT_GT(focal_px * std::tan(extra_turn_deg * kDegree), TrackerOptions{}.radius_px);
-  const Eigen::Quaterniond turn(
-      Eigen::AngleAxisd(extra_turn_deg * kDegree, Eigen::Vector3d::UnitY()));
   int tracked = 0;
   for (size_t i = 0; i < 8; ++i) {
-    std::optional<FrameMotion> motion;
-    if (i > 0) {
-      const test::CameraPose& from = truth_.at(frames_[i - 1]).pose;
-      const test::CameraPose& to = truth_.at(frames_[i]).pose;
-      const Eigen::Quaterniond rotation = turn * to.rotation * from.rotation.conjugate();
-      motion =
-          FrameMotion{CameraPose(rotation, to.translation - rotation * from.translation), true};
-      motion->sigma_rotation_deg = 5.0;
-    }
-    const LocalizationResult result = tracker.Track(Frame(frames_[i]), std::nullopt, motion);
+    const LocalizationResult result =
+        tracker.Track(Frame(frames_[i]), std::nullopt, TrueMotion(i, extra_turn_deg, 5.0));
     ASSERT_TRUE(result.success) << frames_[i];
     EXPECT_LE(PositionError(result), 0.02) << frames_[i];
     if (result.tracking->mode != TrackingMode::kTracked) continue;
