@@ -151,10 +151,9 @@ void Tracker::Reset() {
   before_last_.reset();
 }
 
-std::optional<LocalizationResult> Tracker::TrackFrom(
-    const Query& frame, const CameraPose& predicted,
-    const std::optional<MotionUncertainty>& uncertainty, double radius_px,
-    TrackingInfo* info) const {
+std::optional<Tracker::MatchedFrame> Tracker::MatchNear(const Query& frame,
+                                                        const CameraPose& predicted,
+                                                        double radius_px) const {
   FramePrediction prediction;
   prediction.hypothesis = last_->camera_and_pose;
   prediction.hypothesis.pose = predicted;
@@ -198,20 +197,26 @@ std::optional<LocalizationResult> Tracker::TrackFrom(
     if (still) break;
   }
 
-  // `around` is the last round's pose, `depth` its inliers' median depth.
-  const double rotation_deg = RotationAngleDeg(around, predicted);
-  const double distance = (around.Center() - predicted.Center()).norm();
+  return MatchedFrame{std::move(*result), depth};
+}
+
+bool Tracker::Trusted(const MatchedFrame& matched, const CameraPose& predicted,
+                      const std::optional<MotionUncertainty>& uncertainty,
+                      TrackingInfo* info) const {
+  const CameraPose pose = PoseOf(matched.result);
+  const double rotation_deg = RotationAngleDeg(pose, predicted);
+  const double distance = (pose.Center() - predicted.Center()).norm();
   info->prediction_error = distance;
   info->prediction_error_deg = rotation_deg;
   double max_rotation_deg = tracker_options_.max_rotation_change_deg;
-  double max_distance = tracker_options_.max_relative_position_change * depth;
+  double max_distance = tracker_options_.max_relative_position_change * matched.depth;
   if (uncertainty) {
     // This pose's variance (each covariance block's trace bounds its largest eigenvalue) twice,
     // for the last pose's, which the prediction started from.
     double rotation_var = 0.0, position_var = 0.0;
-    if (result->covariance) {
-      rotation_var = result->covariance->pose.topLeftCorner<3, 3>().trace();
-      position_var = result->covariance->Position().trace();
+    if (const auto& covariance = matched.result.covariance) {
+      rotation_var = covariance->pose.topLeftCorner<3, 3>().trace();
+      position_var = covariance->Position().trace();
     }
     const double rotation_sigma =
         std::sqrt(uncertainty->rotation_rad * uncertainty->rotation_rad + 2.0 * rotation_var);
@@ -222,8 +227,7 @@ std::optional<LocalizationResult> Tracker::TrackFrom(
       max_distance = std::min(max_distance, kMotionSigmas * position_sigma);
     }
   }
-  if (!(rotation_deg <= max_rotation_deg) || !(distance <= max_distance)) return std::nullopt;
-  return result;
+  return rotation_deg <= max_rotation_deg && distance <= max_distance;
 }
 
 LocalizationResult Tracker::Track(const Query& frame, std::optional<double> seconds,
@@ -272,16 +276,24 @@ LocalizationResult Tracker::Track(const Query& frame, std::optional<double> seco
     if (guided_px < radius_px && last_->prediction_error_px &&
         2.0 * *last_->prediction_error_px <= guided_px)
       windows.insert(windows.begin(), guided_px);
+    std::optional<MatchedFrame> matched;  // the last pose the matching found
     for (const double radius : windows) {
       for (const auto& [predicted, uncertainty] : predictions) {
         TrackingInfo attempt = info;
-        result = TrackFrom(frame, predicted, uncertainty, radius, &attempt);
-        if (result) {
-          info = attempt;
-          info.mode = TrackingMode::kTracked;
-          tracked_from = predicted;
-          break;
+        // A pose matched from another prediction, which its checks refused, may pass this
+        // one's: matching from here would find it again (herz_jesu_p25's frame 0017, after the
+        // jump between its passes, did so at twice the time).
+        if (!matched || !Trusted(*matched, predicted, uncertainty, &attempt)) {
+          std::optional<MatchedFrame> fresh = MatchNear(frame, predicted, radius);
+          if (!fresh) continue;
+          matched = std::move(fresh);
+          if (!Trusted(*matched, predicted, uncertainty, &attempt)) continue;
         }
+        result = std::move(matched->result);
+        info = attempt;
+        info.mode = TrackingMode::kTracked;
+        tracked_from = predicted;
+        break;
       }
       if (result) break;
     }

@@ -96,11 +96,19 @@ class Tracker {
   // The last pose moved by the last step, scaled to the time since the last frame when the
   // three frames' times are known.
   CameraPose LastStepRepeated(std::optional<double> seconds) const;
-  // The frame tracked from a prediction; with the uncertainty of the motion that made it, the
-  // pose must also lie within it.
-  std::optional<LocalizationResult> TrackFrom(const Query& frame, const CameraPose& predicted,
-                                              const std::optional<MotionUncertainty>& uncertainty,
-                                              double radius_px, TrackingInfo* info) const;
+  // A frame's pose matched near a prediction, and the median depth of its inliers.
+  struct MatchedFrame {
+    LocalizationResult result;
+    double depth = 0.0;
+  };
+  // The frame matched near a prediction: a rough pose in the window of `radius_px`, then
+  // rounds around it until it stops moving; nothing when a round finds no pose.
+  std::optional<MatchedFrame> MatchNear(const Query& frame, const CameraPose& predicted,
+                                        double radius_px) const;
+  // Whether the pose may be the frame's tracked pose from this prediction (the checks of
+  // TrackerOptions and, with the motion's uncertainty, within it); sets the prediction errors.
+  bool Trusted(const MatchedFrame& matched, const CameraPose& predicted,
+               const std::optional<MotionUncertainty>& uncertainty, TrackingInfo* info) const;
 
   const Localizer& localizer_;
   LocalizerOptions options_;
