@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <new>
 #include <span>
+#include <variant>
 #include <vector>
 
 #include "base/error.h"
@@ -241,21 +242,11 @@ std::optional<double> ToSeconds(std::optional<double> timestamp) {
 
 std::optional<FrameMotion> ToFrameMotion(const std::optional<Motion>& motion) {
   if (!motion) return std::nullopt;
-  const auto& q = motion->rotation;
-  const Eigen::Quaterniond rotation(q[0], q[1], q[2], q[3]);
-  const auto& t = motion->translation;
-  if (!(std::abs(rotation.norm() - 1.0) <= 1e-3) || !std::isfinite(t[0] + t[1] + t[2])) {
-    throw InvalidArgument(
-        "motion: expected a unit quaternion (w, x, y, z) and a finite "
-        "translation");
-  }
-  if (!(motion->sigma_rotation_deg >= 0.0) || !(motion->sigma_position >= 0.0) ||
-      !std::isfinite(motion->sigma_rotation_deg + motion->sigma_position))
-    throw InvalidArgument("motion: its sigmas are finite and at least 0 (0: not known)");
-  FrameMotion out{CameraPose(rotation.normalized(), Eigen::Vector3d(t[0], t[1], t[2])), true};
-  out.sigma_rotation_deg = motion->sigma_rotation_deg;
-  out.sigma_position = motion->sigma_position;
-  return out;
+  std::variant<FrameMotion, std::string> frame_motion = MetricMotion(
+      motion->rotation, motion->translation, motion->sigma_rotation_deg, motion->sigma_position);
+  if (const auto* problem = std::get_if<std::string>(&frame_motion))
+    throw InvalidArgument("motion: " + *problem);
+  return std::get<FrameMotion>(frame_motion);
 }
 
 struct Localizer::Impl {

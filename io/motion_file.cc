@@ -3,6 +3,7 @@
 #include <cmath>
 #include <fstream>
 #include <sstream>
+#include <variant>
 
 #include "base/bounded_file.h"
 #include "base/error.h"
@@ -29,20 +30,13 @@ std::unordered_map<std::string, MotionLine> ReadMotionFile(const std::filesystem
                        ": expected 'NAME QW QX QY QZ TX TY TZ [SIGMA_ROT_DEG SIGMA_POS]' (seven "
                        "or nine numbers)");
     }
-    const Eigen::Quaterniond q((*v)[0], (*v)[1], (*v)[2], (*v)[3]);
-    if (std::abs(q.norm() - 1.0) > 1e-3)
-      throw InputError(where + ": the quaternion's length is " + std::to_string(q.norm()) +
-                       ", not 1");
-    FrameMotion motion;
-    motion.relative = CameraPose(q.normalized(), Eigen::Vector3d((*v)[4], (*v)[5], (*v)[6]));
-    motion.metric = true;
-    if (v->size() == 9) {
-      if (!((*v)[7] >= 0.0) || !((*v)[8] >= 0.0))
-        throw InputError(where + ": a motion's sigmas are at least 0 (0: not known)");
-      motion.sigma_rotation_deg = (*v)[7];
-      motion.sigma_position = (*v)[8];
-    }
-    if (!motions.emplace(name, MotionLine{motion, number}).second)
+    const bool sigmas = v->size() == 9;
+    std::variant<FrameMotion, std::string> motion =
+        MetricMotion({(*v)[0], (*v)[1], (*v)[2], (*v)[3]}, {(*v)[4], (*v)[5], (*v)[6]},
+                     sigmas ? (*v)[7] : 0.0, sigmas ? (*v)[8] : 0.0);
+    if (const auto* problem = std::get_if<std::string>(&motion))
+      throw InputError(where + ": " + *problem);
+    if (!motions.emplace(name, MotionLine{std::get<FrameMotion>(motion), number}).second)
       throw InputError(where + ": a second motion for '" + name + "'");
   }
   return motions;

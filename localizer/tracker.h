@@ -1,7 +1,9 @@
 #pragma once
 
+#include <array>
 #include <optional>
 #include <string>
+#include <variant>
 #include <vector>
 
 #include "localizer/localization_result.h"
@@ -46,6 +48,15 @@ struct FrameMotion {
   double sigma_rotation_deg = 0.0;
   double sigma_position = 0.0;
 };
+// A metric motion from its parts as a motion file's line and the API give them: a rotation
+// quaternion (w, x, y, z) of unit length within 1e-3 (then normalised), a finite translation in
+// metres and sigmas finite and at least 0 (0: not known); else why not, for the caller to say
+// where the motion came from.
+std::variant<FrameMotion, std::string> MetricMotion(const std::array<double, 4>& rotation_wxyz,
+                                                    const std::array<double, 3>& translation,
+                                                    double sigma_rotation_deg = 0.0,
+                                                    double sigma_position = 0.0);
+
 // 99.9 % of a 3-D normal distribution lies within this many standard deviations per axis
 // (the chi-square quantile's square root).
 inline constexpr double kMotionSigmas = 4.03;

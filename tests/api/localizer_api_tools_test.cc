@@ -627,8 +627,7 @@ TEST_F(TrackerApiTest, AMotionPredictsAsCwlocLocalizeMotionDoes) {
     ADD_FAILURE() << "expected an error";
   } catch (const api::Error& e) {
     EXPECT_EQ(e.code(), api::ErrorCode::kInvalidArgument);
-    EXPECT_STREQ(e.what(),
-                 "motion: expected a unit quaternion (w, x, y, z) and a finite translation");
+    EXPECT_STREQ(e.what(), "motion: the quaternion (w, x, y, z) has length 2, not 1");
   }
   // And a negative sigma.
   try {
@@ -637,7 +636,7 @@ TEST_F(TrackerApiTest, AMotionPredictsAsCwlocLocalizeMotionDoes) {
     ADD_FAILURE() << "expected an error";
   } catch (const api::Error& e) {
     EXPECT_EQ(e.code(), api::ErrorCode::kInvalidArgument);
-    EXPECT_STREQ(e.what(), "motion: its sigmas are finite and at least 0 (0: not known)");
+    EXPECT_STREQ(e.what(), "motion: the sigmas are finite and at least 0 (0: not known)");
   }
   // So is a time that is no number of seconds.
   try {

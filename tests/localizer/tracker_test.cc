@@ -470,7 +470,7 @@ TEST_F(TrackerTest, TheCliTracksAQueryListAsASequence) {
   std::ofstream(motion) << "0004.jpg 1 0 0 0 0.1 0 0 0.5 -0.01\n";
   EXPECT_EQ(test::RunCommand(localize + " --sequence --motion " + motion.string(), &output), 2);
   EXPECT_EQ(output, "cwloc-localize: error: " + motion.string() +
-                        ":1: a motion's sigmas are at least 0 (0: not known)\n");
+                        ":1: the sigmas are finite and at least 0 (0: not known)\n");
   std::ofstream(motion) << "0004.jpg 1 0 0 0 0.1 0 0\nnope.jpg 1 0 0 0 0.1 0 0\n";
   EXPECT_EQ(test::RunCommand(localize + " --sequence --motion " + motion.string(), &output), 2);
   EXPECT_EQ(output, "cwloc-localize: error: " + motion.string() +

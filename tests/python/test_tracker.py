@@ -64,7 +64,7 @@ def test_the_tracker_is_the_cli_sequence(fox, tmp_path):
     with pytest.raises(TypeError, match=r"motion: expected \(\(w, x, y, z\), \(tx, ty, tz\)\[, "
                        r"\(sigma_rotation_deg, sigma_position\)\]\) or None"):
         tracker.track_photo(data / "query_images" / frames[3][0], frames[3][1], motion=(1, 2))
-    with pytest.raises(ValueError, match=r"motion: its sigmas are finite and at least 0"):
+    with pytest.raises(ValueError, match=r"motion: the sigmas are finite and at least 0"):
         tracker.track_photo(data / "query_images" / frames[3][0], frames[3][1],
                             motion=((1.0, 0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (-1.0, 0.1)))
     # The frame's time in seconds, or None; anything else is a TypeError.
