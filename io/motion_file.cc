@@ -1,6 +1,5 @@
 #include "io/motion_file.h"
 
-#include <cmath>
 #include <fstream>
 #include <sstream>
 #include <variant>

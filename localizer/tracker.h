@@ -54,8 +54,8 @@ struct FrameMotion {
 // where the motion came from.
 std::variant<FrameMotion, std::string> MetricMotion(const std::array<double, 4>& rotation_wxyz,
                                                     const std::array<double, 3>& translation,
-                                                    double sigma_rotation_deg = 0.0,
-                                                    double sigma_position = 0.0);
+                                                    double sigma_rotation_deg,
+                                                    double sigma_position);
 
 // 99.9 % of a 3-D normal distribution lies within this many standard deviations per axis
 // (the chi-square quantile's square root).

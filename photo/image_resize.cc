@@ -52,6 +52,24 @@ inline uint8_t RoundToByte(double value) {
   return static_cast<uint8_t>(std::clamp(static_cast<int>(value + 0.5), 0, 255));
 }
 
+// Rows y .. y + kRows - 1 of `image` resized along x into `out` (as wide as the weights say):
+// the rows share each output column's weights, and every pixel sums its terms in order.
+template <int kRows>
+void ResizeRowsAlongX(const GreyImage& image, const Contributions& c, uint32_t y, GreyImage* out) {
+  const size_t stride = image.width, width = out->width;
+  const uint8_t* in = &image.pixels[y * stride];
+  uint8_t* rows = &out->pixels[y * width];
+  for (size_t x = 0; x < width; ++x) {
+    const double* w = &c.weights[x * c.window];
+    const uint8_t* p = in + c.first[x];
+    double sums[kRows] = {};
+    for (uint32_t i = 0; i < c.count[x]; ++i) {
+      for (int r = 0; r < kRows; ++r) sums[r] += w[i] * double(p[r * stride + i]);
+    }
+    for (int r = 0; r < kRows; ++r) rows[r * width + x] = RoundToByte(sums[r]);
+  }
+}
+
 }  // namespace
 
 ImageSize ExtractionSize(uint32_t width, uint32_t height, uint32_t max_image_size) {
@@ -69,40 +87,9 @@ GreyImage ResizeBilinear(const GreyImage& image, uint32_t width, uint32_t height
     rows_done.width = width;
     rows_done.height = image.height;
     rows_done.pixels.resize(size_t{width} * image.height);
-    // Four rows at a time share each output column's weights; every pixel still sums its
-    // terms in the same order.
-    const size_t stride = image.width;
     uint32_t y = 0;
-    for (; y + 4 <= image.height; y += 4) {
-      const uint8_t* in = &image.pixels[size_t{y} * stride];
-      uint8_t* out = &rows_done.pixels[size_t{y} * width];
-      for (uint32_t x = 0; x < width; ++x) {
-        const double* w = &c.weights[size_t{x} * c.window];
-        const uint8_t* p = in + c.first[x];
-        double v0 = 0.0, v1 = 0.0, v2 = 0.0, v3 = 0.0;
-        for (uint32_t i = 0; i < c.count[x]; ++i) {
-          v0 += w[i] * double(p[i]);
-          v1 += w[i] * double(p[stride + i]);
-          v2 += w[i] * double(p[2 * stride + i]);
-          v3 += w[i] * double(p[3 * stride + i]);
-        }
-        out[x] = RoundToByte(v0);
-        out[width + x] = RoundToByte(v1);
-        out[2 * size_t{width} + x] = RoundToByte(v2);
-        out[3 * size_t{width} + x] = RoundToByte(v3);
-      }
-    }
-    for (; y < image.height; ++y) {
-      const uint8_t* in = &image.pixels[size_t{y} * stride];
-      uint8_t* out = &rows_done.pixels[size_t{y} * width];
-      for (uint32_t x = 0; x < width; ++x) {
-        const double* w = &c.weights[size_t{x} * c.window];
-        const uint8_t* p = in + c.first[x];
-        double value = 0.0;
-        for (uint32_t i = 0; i < c.count[x]; ++i) value += w[i] * double(p[i]);
-        out[x] = RoundToByte(value);
-      }
-    }
+    for (; y + 4 <= image.height; y += 4) ResizeRowsAlongX<4>(image, c, y, &rows_done);
+    for (; y < image.height; ++y) ResizeRowsAlongX<1>(image, c, y, &rows_done);
   }
   if (height == image.height) return rows_done;
   GreyImage out;
