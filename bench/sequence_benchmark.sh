@@ -13,6 +13,11 @@
 # full_model/bin split (herz_jesu_p25's photos are a walk around a church): the odd-numbered
 # photos in name order are the frames, the others the map (colmap image_deleter, no
 # re-adjustment, so the frames' poses in full_model are their ground truth).
+# PHOTO_FLAGS, when set: a set as shipped is localized from its photos (query_images/, each
+# frame's camera from queries_with_intrinsics.txt) with these extraction flags ("" for COLMAP's
+# settings; "--first-octave 0 --max-image-size 960 --max-features 2000" for the frame settings),
+# and the times are the records': a tracked frame's tracking.time_ms against the same frame's
+# times_ms.total minus extraction alone.
 # Writes WORKDIR/NAME[-odd]/{map,index.cwl,frames.txt,gt.txt,alone.jsonl,sequence.jsonl}.
 set -euo pipefail
 top="$(cd "$(dirname "$0")/.." && pwd)"
@@ -70,9 +75,16 @@ for set in "${sets[@]}"; do
     fi
     split="its odd-numbered photos against a map of the others"
   fi
+  source=(--database "$data/database.db" --query-list "$out/frames.txt")
+  if [ -n "${PHOTO_FLAGS+set}" ]; then
+    [ "$set" = "${set%:odd}" ] || { echo "$0: PHOTO_FLAGS needs a set as shipped (its query_images/)" >&2; exit 2; }
+    # shellcheck disable=SC2206
+    source=(--image-list "$out/frames.txt" --image-dir "$data/query_images" $PHOTO_FLAGS)
+    split="$split, from its photos ${PHOTO_FLAGS:-at the COLMAP settings}"
+  fi
   [ -f "$out/index.cwl" ] ||
     "$bin/cwloc-index" build --model "$model" --database "$data/database.db" -o "$out/index.cwl" >"$out/index.log"
-  frames=(--index "$out/index.cwl" --database "$data/database.db" --query-list "$out/frames.txt")
+  frames=(--index "$out/index.cwl" "${source[@]}")
   "$bin/cwloc-localize" "${frames[@]}" --threads 1 -q -o "$out/alone.jsonl"
   "$bin/cwloc-localize" "${frames[@]}" --threads 1 --sequence -q -o "$out/sequence.jsonl"
 
@@ -80,7 +92,7 @@ for set in "${sets[@]}"; do
   echo "### $name: $(wc -l <"$out/frames.txt") frames, $split"
   "$bin/cwloc-eval" --results "$out/alone.jsonl" --label alone --results "$out/sequence.jsonl" \
     --label sequence --gt "$out/gt.txt" --scale "$data/scale_to_metres.txt"
-  python3 - "$out" "$data/scale_to_metres.txt" <<'PY'
+  python3 - "$out" "$data/scale_to_metres.txt" "${PHOTO_FLAGS+photos}" <<'PY'
 import json, math, statistics, sys
 out = sys.argv[1]
 # Metres, as cwloc-eval reports them: the similarity's scale ("scale S" line).
@@ -109,6 +121,16 @@ if tracked:
     theirs = statistics.median(alone[n][0] for n in tracked)
     print(f"tracked frames: median position error {mine:.3g} m, the same {len(tracked)} frames "
           f"localized alone {theirs:.3g} m ({mine / theirs:.2f}x)")
+if sys.argv[3] == "photos" and tracked:
+    records = {}
+    for run in ("alone", "sequence"):
+        records[run] = {r["name"]: r for r in map(json.loads, open(f"{out}/{run}.jsonl"))}
+    mine = statistics.median(records["sequence"][n]["tracking"]["time_ms"] for n in tracked)
+    theirs = statistics.median(records["alone"][n]["times_ms"]["total"] -
+                               records["alone"][n]["times_ms"]["extraction"] for n in tracked)
+    features = statistics.median(r["matches"]["features"] for r in records["sequence"].values())
+    print(f"tracked frame after features {mine:.2f} ms, the same frames alone {theirs:.2f} ms "
+          f"({mine / theirs:.2f}); median {features:.0f} features")
 PY
-  "$bin/cwloc-sequence-bench" "${frames[@]}" --rounds "$rounds"
+  [ -n "${PHOTO_FLAGS+set}" ] || "$bin/cwloc-sequence-bench" "${frames[@]}" --rounds "$rounds"
 done
