@@ -342,6 +342,8 @@ void StopOnInterrupt() {
 }
 
 int Run(const CliOptions& cli) {
+  // First: a signal while the index and queries are read stops the batch before its first query.
+  StopOnInterrupt();
   const LocalizerOptions& options = cli.options.localizer;
   if (cli.threads < 1 || cli.threads > 1024)
     throw InputError("--threads must be between 1 and 1024");
@@ -430,7 +432,6 @@ int Run(const CliOptions& cli) {
   std::vector<double> times(sources.size(), -1);
   size_t total = sources.size();
   int abandoned = 0;
-  StopOnInterrupt();
   if (!cli.video_path.empty()) {
 #ifdef CWLOC_WITH_VIDEO
     // The frames as they are decoded, on this thread; a stream that breaks ends the run once

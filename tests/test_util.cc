@@ -216,6 +216,22 @@ bool KillAfter(pid_t pid, std::chrono::steady_clock::duration delay) {
   return Wait(pid) >= 0;
 }
 
+bool WaitUntilCatching(pid_t pid, int signal_number, std::chrono::steady_clock::duration limit) {
+  const auto give_up = std::chrono::steady_clock::now() + limit;
+  const std::string status_path = "/proc/" + std::to_string(pid) + "/status";
+  do {
+    std::ifstream status(status_path);
+    std::string line;
+    while (std::getline(status, line)) {
+      if (line.rfind("SigCgt:", 0) != 0) continue;
+      const uint64_t caught = std::stoull(line.substr(7), nullptr, 16);
+      if ((caught >> (signal_number - 1)) & 1) return true;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  } while (std::chrono::steady_clock::now() < give_up);
+  return false;
+}
+
 bool IsKilledWritersTemporary(const std::string& name, const std::string& destination,
                               const std::vector<pid_t>& killed) {
   return std::any_of(killed.begin(), killed.end(), [&](pid_t pid) {

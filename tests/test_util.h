@@ -128,6 +128,9 @@ pid_t Spawn(const std::vector<std::string>& args, const std::filesystem::path& o
 int Wait(pid_t pid);
 // Sleeps for `delay`, kills it with SIGKILL and reaps it; true when it had exited before.
 bool KillAfter(pid_t pid, std::chrono::steady_clock::duration delay);
+// Waits until the process catches `signal_number` (its handler installed, as
+// /proc/PID/status's SigCgt says), for at most `limit`; whether it does.
+bool WaitUntilCatching(pid_t pid, int signal_number, std::chrono::steady_clock::duration limit);
 // True when `name` is a temporary `<destination>.tmp-<pid>-...` of one of the `killed` writers.
 // A writer killed before its own clean-up ran keeps every earlier killed writer's temporaries.
 bool IsKilledWritersTemporary(const std::string& name, const std::string& destination,

@@ -629,8 +629,11 @@ TEST_F(LocalizeInterruptTest, AnInterruptedRunKeepsEveryFinishedRecord) {
     const int signal_number = interrupt % 2 == 0 ? SIGINT : SIGTERM;
     std::ofstream(json_) << "{\"name\": \"a previous run\"}\n";
     const pid_t pid = test::Spawn(args_, log);
-    // 5-45 % into the run measured once under the same load: a run up to twice as fast as
-    // that one is still running when the signal comes.
+    // Once it catches the signal (before that, as for any process, the signal ends it before it
+    // has written anything; under load that can take longer than the delay below), then 5-45 %
+    // into the run measured once under the same load: a run up to twice as fast as that one is
+    // still running when the signal comes.
+    ASSERT_TRUE(test::WaitUntilCatching(pid, signal_number, std::chrono::seconds(30)));
     std::this_thread::sleep_for(duration_ * (50 + static_cast<int>(rng() % 400)) / 1000);
     ::kill(pid, signal_number);
     EXPECT_EQ(test::Wait(pid), 128 + signal_number);
@@ -675,6 +678,7 @@ TEST(LocalizeInterrupt, AQueryRunningASecondAfterTheSignalIsAbandoned) {
                                          json.string(),
                                          "-q"};
   const pid_t pid = test::Spawn(args, log);
+  ASSERT_TRUE(test::WaitUntilCatching(pid, SIGTERM, std::chrono::seconds(30)));
   std::this_thread::sleep_for(std::chrono::milliseconds(300));
   const auto signalled = std::chrono::steady_clock::now();
   ::kill(pid, SIGTERM);
