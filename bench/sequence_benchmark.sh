@@ -18,6 +18,12 @@
 # settings; "--first-octave 0 --max-image-size 960 --max-features 2000" for the frame settings),
 # and the times are the records': a tracked frame's tracking.time_ms against the same frame's
 # times_ms.total minus extraction alone.
+# VIDEO_FLAGS, when set: as PHOTO_FLAGS, from the set's frames encoded in query_list.txt's order
+# into an H.264 video (WORKDIR/NAME/frames.mp4, 2 frames per second, ffmpeg -crf 18) and read
+# with --video and the first frame's camera; frame by frame, the video's frames as ffmpeg
+# decodes them to grey PNGs. The ground truth is renamed to the video's frame names
+# (frames.mp4#INDEX), and the whole frame's time, decoding included, is the run's wall time
+# over its frames on one thread.
 # Writes WORKDIR/NAME[-odd]/{map,index.cwl,frames.txt,gt.txt,alone.jsonl,sequence.jsonl}.
 set -euo pipefail
 top="$(cd "$(dirname "$0")/.." && pwd)"
@@ -28,6 +34,8 @@ work="$(realpath -m "$1")"
 shift
 sets=("$@")
 [ ${#sets[@]} -gt 0 ] || sets=(fox_video herz_jesu_p25:odd)
+[ -z "${PHOTO_FLAGS+set}" ] || [ -z "${VIDEO_FLAGS+set}" ] ||
+  { echo "$0: PHOTO_FLAGS or VIDEO_FLAGS, not both" >&2; exit 2; }
 for tool in cwloc-index cwloc-localize cwloc-eval cwloc-sequence-bench; do
   [ -x "$bin/$tool" ] || { echo "$0: $bin/$tool not found (build first, or set CWLOC_BIN)" >&2; exit 2; }
 done
@@ -76,7 +84,36 @@ for set in "${sets[@]}"; do
     split="its odd-numbered photos against a map of the others"
   fi
   source=(--database "$data/database.db" --query-list "$out/frames.txt")
-  if [ -n "${PHOTO_FLAGS+set}" ]; then
+  if [ -n "${VIDEO_FLAGS+set}" ]; then
+    [ "$set" = "${set%:odd}" ] || { echo "$0: VIDEO_FLAGS needs a set as shipped (its query_images/)" >&2; exit 2; }
+    command -v ffmpeg >/dev/null || { echo "$0: ffmpeg not found (needed to encode $name)" >&2; exit 2; }
+    video="$out/frames.mp4"
+    if [ ! -f "$video" ]; then
+      rm -rf "$out/video_frames"
+      mkdir -p "$out/video_frames"
+      awk '{ printf "%s %05d.jpg\n", $1, NR - 1 }' "$out/frames.txt" | while read -r photo frame; do
+        ln -s "$data/query_images/$photo" "$out/video_frames/$frame"
+      done
+      ffmpeg -loglevel error -framerate 2 -i "$out/video_frames/%05d.jpg" -c:v libx264 -crf 18 \
+        -pix_fmt yuv420p -f mp4 "$video.part"
+      # Its frames as ffmpeg decodes them, for the frame-by-frame run (--video always tracks).
+      rm -rf "$out/video_png"
+      mkdir -p "$out/video_png"
+      ffmpeg -loglevel error -i "$video.part" -pix_fmt gray -start_number 0 "$out/video_png/%05d.png"
+      mv "$video.part" "$video"
+    fi
+    awk '{ $1 = sprintf("%05d.png", NR - 1); print }' "$out/frames.txt" >"$out/video_png.txt"
+    # The frames' names in the video, in the ground truth's lines.
+    awk -v video="$video" 'NR == FNR { index_of[$1] = FNR - 1; next }
+         /^#/ || !NF { print; next } { $1 = video "#" index_of[$1]; print }' \
+      "$out/frames.txt" "$data/queries_gt.txt" >"$out/gt.txt"
+    camera="$(awk 'NR == 1 { $1 = ""; print substr($0, 2) }' "$out/frames.txt")"
+    # shellcheck disable=SC2206
+    source=(--image-list "$out/video_png.txt" --image-dir "$out/video_png" $VIDEO_FLAGS)
+    # shellcheck disable=SC2206
+    sequence=(--video "$video" --camera "$camera" $VIDEO_FLAGS)
+    split="$split, as an H.264 video ${VIDEO_FLAGS:-at the COLMAP settings}"
+  elif [ -n "${PHOTO_FLAGS+set}" ]; then
     [ "$set" = "${set%:odd}" ] || { echo "$0: PHOTO_FLAGS needs a set as shipped (its query_images/)" >&2; exit 2; }
     # shellcheck disable=SC2206
     source=(--image-list "$out/frames.txt" --image-dir "$data/query_images" $PHOTO_FLAGS)
@@ -86,13 +123,30 @@ for set in "${sets[@]}"; do
     "$bin/cwloc-index" build --model "$model" --database "$data/database.db" -o "$out/index.cwl" >"$out/index.log"
   frames=(--index "$out/index.cwl" "${source[@]}")
   "$bin/cwloc-localize" "${frames[@]}" --threads 1 -q -o "$out/alone.jsonl"
-  "$bin/cwloc-localize" "${frames[@]}" --threads 1 --sequence -q -o "$out/sequence.jsonl"
+  [ -n "${VIDEO_FLAGS+set}" ] || sequence=("${source[@]}" --sequence)
+  start=$(date +%s%N)
+  "$bin/cwloc-localize" --index "$out/index.cwl" "${sequence[@]}" --threads 1 -q -o "$out/sequence.jsonl"
+  wall_ms=$((($(date +%s%N) - start) / 1000000))
+  if [ -n "${VIDEO_FLAGS+set}" ]; then
+    # The decoded frames' records under the video's frame names.
+    python3 - "$out" "$video" <<'PY'
+import json, sys
+out, video = sys.argv[1:3]
+index_of = {line.split()[0]: i for i, line in enumerate(open(f"{out}/video_png.txt"))}
+records = [json.loads(line) for line in open(f"{out}/alone.jsonl")]
+with open(f"{out}/alone.jsonl", "w") as f:
+    for r in records:
+        r["name"] = f"{video}#{index_of[r['name']]}"
+        f.write(json.dumps(r) + "\n")
+PY
+  fi
 
   echo
   echo "### $name: $(wc -l <"$out/frames.txt") frames, $split"
   "$bin/cwloc-eval" --results "$out/alone.jsonl" --label alone --results "$out/sequence.jsonl" \
     --label sequence --gt "$out/gt.txt" --scale "$data/scale_to_metres.txt"
-  python3 - "$out" "$data/scale_to_metres.txt" "${PHOTO_FLAGS+photos}" <<'PY'
+  python3 - "$out" "$data/scale_to_metres.txt" "${PHOTO_FLAGS+photos}${VIDEO_FLAGS+photos}" \
+    "${VIDEO_FLAGS+$wall_ms}" <<'PY'
 import json, math, statistics, sys
 out = sys.argv[1]
 # Metres, as cwloc-eval reports them: the similarity's scale ("scale S" line).
@@ -131,6 +185,11 @@ if sys.argv[3] == "photos" and tracked:
     features = statistics.median(r["matches"]["features"] for r in records["sequence"].values())
     print(f"tracked frame after features {mine:.2f} ms, the same frames alone {theirs:.2f} ms "
           f"({mine / theirs:.2f}); median {features:.0f} features")
+    if sys.argv[4]:
+        extraction = statistics.median(r["times_ms"]["extraction"]
+                                       for r in records["sequence"].values())
+        print(f"whole frame, decoding included: {float(sys.argv[4]) / len(records['sequence']):.0f} ms "
+              f"(the run's wall time over its frames, one thread); extraction {extraction:.0f} ms")
 PY
-  [ -n "${PHOTO_FLAGS+set}" ] || "$bin/cwloc-sequence-bench" "${frames[@]}" --rounds "$rounds"
+  [ -n "${PHOTO_FLAGS+set}${VIDEO_FLAGS+set}" ] || "$bin/cwloc-sequence-bench" "${frames[@]}" --rounds "$rounds"
 done
