@@ -41,6 +41,7 @@
 #include "localizer/localizer.h"
 #include "localizer/tracker.h"
 #ifdef CWLOC_WITH_VIDEO
+#include "photo/video/frames_ahead.h"
 #include "photo/video/video_frames.h"
 #endif
 #ifdef CWLOC_WITH_COLMAP_DB
@@ -388,11 +389,13 @@ int Run(const CliOptions& cli) {
   };
   // --threads goes to queries first; a photo's SIFT gets the threads no other query uses (one
   // photo and --threads 4: four threads inside it). Its features do not depend on them.
-  // A sequence's frames are tracked in order, one after the other.
+  // A sequence's frames are tracked in order, one after the other; a video's next frame is
+  // decoded meanwhile on a thread of its own when there are two.
   const int threads =
       sequence ? 1 : std::max(1, std::min<int>(cli.threads, static_cast<int>(sources.size())));
+  const bool decode_ahead = !cli.video_path.empty() && cli.threads > 1;
   QueryOptions query_options = cli.options;
-  query_options.photo.sift.num_threads = cli.threads / threads;
+  query_options.photo.sift.num_threads = (cli.threads - decode_ahead) / threads;
   const QueryLoader loader(cli, query_options);
   ResultSink sink(cli);
   const Localizer localizer(index);
@@ -434,15 +437,18 @@ int Run(const CliOptions& cli) {
   int abandoned = 0;
   if (!cli.video_path.empty()) {
 #ifdef CWLOC_WITH_VIDEO
-    // The frames as they are decoded, on this thread; a stream that breaks ends the run once
-    // the frames before the break are written (exit 2).
+    // The frames as they are decoded: on this thread, or with --threads 2 and more on a thread
+    // of their own, the next frame while this one is tracked; a stream that breaks ends the run
+    // once the frames before the break are written (exit 2).
     VideoFrames video(cli.video_path, query_options.photo.max_image_pixels);
+    std::optional<FramesDecodedAhead> ahead;
+    if (decode_ahead) ahead.emplace(video, cli.video_step);
     Progress progress("tracking", std::max<uint64_t>(video.estimated_frames() / cli.video_step, 1));
     std::string broken;
     while (!sink.failed() && stop_signal == 0) {
       std::optional<VideoFrame> frame;
       try {
-        frame = video.Next(cli.video_step);
+        frame = ahead ? ahead->Next() : video.Next(cli.video_step);
       } catch (const InputError& e) {
         broken = e.what();
         break;
@@ -697,7 +703,7 @@ int main(int argc, char** argv) {
   app.add_flag("-q,--quiet", cli.quiet, "No summary or readable lines")->group(kOutput);
   app.add_option("--threads", cli.threads,
                  "Threads: queries localized in parallel, and a photo's SIFT gets those no other "
-                 "query uses")
+                 "query uses (with --video: one decodes the next frame, SIFT gets the rest)")
       ->capture_default_str();
   app.add_option("--video", cli.video_path,
                  "A video file (MP4, MOV, MKV, ...; FFmpeg reads it): its frames are a sequence "

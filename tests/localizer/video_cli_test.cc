@@ -111,6 +111,22 @@ TEST_F(VideoCliTest, AVideosFramesAreTrackedWithTheirTimes) {
     lines.ignore(1000, '\n');
     EXPECT_DOUBLE_EQ(timestamp, 0.5 * double(i));
   }
+
+  // Two threads: the next frame decoded while this one is tracked, the same poses bit for bit.
+  const auto two = dir_->path() / "two_threads.jsonl";
+  Localize("--video " + Video().string() +
+               " --camera 'SIMPLE_RADIAL 540 960 692.745 270 480 0.0030128' "
+               "--first-octave 0 --max-features 2000 --threads 2 -q -o " +
+               two.string(),
+           &status);
+  ASSERT_EQ(status, 0);
+  const std::vector<nlohmann::json> two_records = test::ReadJsonLines(two);
+  ASSERT_EQ(two_records.size(), records.size());
+  for (size_t i = 0; i < records.size(); ++i) {
+    EXPECT_EQ(two_records[i]["name"], records[i]["name"]);
+    EXPECT_EQ(two_records[i]["pose"], records[i]["pose"]);
+    EXPECT_EQ(two_records[i]["tracking"]["mode"], records[i]["tracking"]["mode"]);
+  }
 }
 
 // Every second frame, the focal length unknown, shrunk for SIFT (the frames are 540 x 960):
@@ -176,6 +192,14 @@ TEST_F(VideoCliTest, BrokenVideosAreNamedAndTheFramesBeforeACutStay) {
   EXPECT_GE(records.size(), 1u);
   EXPECT_LT(records.size(), frames_->size());
   for (const nlohmann::json& record : records) EXPECT_TRUE(record["success"].get<bool>());
+  // Decoded ahead on a thread of its own: the same frames, then the same error.
+  const auto cut_two = dir_->path() / "cut_two.jsonl";
+  const std::string two_output = Localize(
+      "--video " + cut.string() + " --first-octave 0 --threads 2 -q -o " + cut_two.string(),
+      &status);
+  EXPECT_EQ(status, 2);
+  EXPECT_EQ(two_output, output);
+  EXPECT_EQ(test::ReadJsonLines(cut_two).size(), records.size());
 
   output = Localize("--video " + Video().string() + " --image x.jpg -q", &status);
   EXPECT_EQ(status, 2);

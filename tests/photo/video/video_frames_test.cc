@@ -6,9 +6,13 @@
 #include <gtest/gtest.h>
 
 #include <cstdlib>
+#include <functional>
 #include <string>
+#include <vector>
 
+#include "base/error.h"
 #include "photo/image_decode.h"
+#include "photo/video/frames_ahead.h"
 #include "tests/test_util.h"
 
 namespace cwloc {
@@ -118,6 +122,76 @@ TEST_F(VideoFramesTest, SubsampledChromaDoesNotMatterForBt709) {
 // RGB frames go through FFmpeg's converter: the rule on the pictures' own pixels.
 TEST_F(VideoFramesTest, RgbVideoGivesThePicturesGreyExactly) {
   EXPECT_EQ(LargestDifference(Encode("rgb.mkv", "-c:v png -pix_fmt rgb24")), 0);
+}
+
+// A video's frames as a reader gives them out (index, time and grey), and the error it ends with.
+struct FramesRead {
+  std::vector<VideoFrame> frames;
+  std::string error;
+};
+FramesRead ReadAll(const std::function<std::optional<VideoFrame>()>& next) {
+  FramesRead read;
+  try {
+    while (std::optional<VideoFrame> frame = next()) read.frames.push_back(std::move(*frame));
+  } catch (const InputError& e) {
+    read.error = e.what();
+  }
+  return read;
+}
+void ExpectSameFrames(const FramesRead& ahead, const FramesRead& here) {
+  ASSERT_EQ(ahead.frames.size(), here.frames.size());
+  for (size_t i = 0; i < here.frames.size(); ++i) {
+    EXPECT_EQ(ahead.frames[i].index, here.frames[i].index);
+    EXPECT_EQ(ahead.frames[i].seconds, here.frames[i].seconds);
+    EXPECT_EQ(ahead.frames[i].image.pixels, here.frames[i].image.pixels);
+  }
+  EXPECT_EQ(ahead.error, here.error);
+}
+
+// Decoded on a thread of their own: the same frames, every one or every second, and a video
+// cut short gives the frames before the cut, then the same error.
+TEST_F(VideoFramesTest, FramesDecodedAheadAreTheSameFramesAndError) {
+  const std::filesystem::path video = Encode("ahead.mp4", "-c:v libx264 -pix_fmt yuv420p");
+  for (const uint32_t step : {1u, 2u}) {
+    SCOPED_TRACE(step);
+    VideoFrames direct(video, kDefaultMaxImagePixels);
+    const FramesRead here = ReadAll([&] { return direct.Next(step); });
+    EXPECT_EQ(here.frames.size(), step == 1 ? 3u : 2u);
+    VideoFrames decoded(video, kDefaultMaxImagePixels);
+    FramesDecodedAhead ahead(decoded, step, 1);
+    ExpectSameFrames(ReadAll([&] { return ahead.Next(); }), here);
+    EXPECT_EQ(ahead.Next(), std::nullopt);  // and stays at the end
+  }
+
+  // Cut in its last frame's data: the moov atom first, so that the cut is in the frames.
+  const std::filesystem::path whole =
+      Encode("whole.mp4", "-c:v libx264 -pix_fmt yuv420p -movflags +faststart");
+  const std::vector<uint8_t> bytes = test::ReadBytes(whole);
+  const std::filesystem::path cut = dir_->path() / "cut.mp4";
+  test::WriteBytes(cut, std::span(bytes).first(bytes.size() * 9 / 10));
+  VideoFrames direct(cut, kDefaultMaxImagePixels);
+  const FramesRead here = ReadAll([&] { return direct.Next(1); });
+  ASSERT_FALSE(here.error.empty());
+  ASSERT_GE(here.frames.size(), 1u);
+  VideoFrames decoded(cut, kDefaultMaxImagePixels);
+  FramesDecodedAhead ahead(decoded, 1);
+  ExpectSameFrames(ReadAll([&] { return ahead.Next(); }), here);
+}
+
+// Dropped before the end: the decoder stops without the frames being read.
+TEST_F(VideoFramesTest, FramesDecodedAheadStopWhenDropped) {
+  const std::filesystem::path video = Encode("dropped.mp4", "-c:v libx264 -pix_fmt yuv420p");
+  VideoFrames decoded(video, kDefaultMaxImagePixels);
+  {
+    FramesDecodedAhead ahead(decoded, 1, 1);
+    const std::optional<VideoFrame> first = ahead.Next();
+    ASSERT_TRUE(first);
+    EXPECT_EQ(first->index, 0u);
+  }
+  // The frames the decoder had not taken are still the file's.
+  const std::optional<VideoFrame> next = decoded.Next(1);
+  ASSERT_TRUE(next);
+  EXPECT_GE(next->index, 1u);
 }
 
 }  // namespace
