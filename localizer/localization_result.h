@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "localizer/localizer_options.h"
+#include "localizer/matching.h"
 #include "localizer/query.h"
 #include "localizer/result_types.h"
 
@@ -48,6 +49,8 @@ struct LocalizationResult {
   // ("forward", "back_matching", "ransac", "refinement").
   std::vector<std::string> budget_cut;
   std::vector<InlierMatch> inliers;  // on success, in feature order
+  // RANSAC's input, unique per feature, when LocalizerOptions::keep_correspondences.
+  std::vector<FeatureMatch> kept_correspondences;
   std::vector<RankedImage> ranked_images;
   std::optional<GeoPose> geo;  // on success with a georeferenced index
   // On success (refine_pose.h), and with a georeferenced index the centre's covariance in

@@ -473,6 +473,7 @@ LocalizationResult Localizer::Localize(const Query& query, const LocalizerOption
   result.photo = query.photo;
   ReportMatching(index_, query, matched, options, &result);
   ReportPose(index_, geo_, query, matched, fit, &result);
+  if (options.keep_correspondences) result.kept_correspondences = matched.correspondences;
   if (query.gravity && fit.pose.success) priors.gravity_error_deg = fit.pose.gravity_angle_deg;
   result.priors = priors;
   if (options.budget_ms > 0) {

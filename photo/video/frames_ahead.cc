@@ -10,8 +10,7 @@
 namespace cwloc {
 
 FramesDecodedAhead::FramesDecodedAhead(VideoFrames& video, uint32_t step, size_t depth)
-    : depth_(std::max<size_t>(depth, 1)),
-      decoder_([this, &video, step] { Decode(video, step); }) {}
+    : depth_(std::max<size_t>(depth, 1)), decoder_([this, &video, step] { Decode(video, step); }) {}
 
 FramesDecodedAhead::~FramesDecodedAhead() {
   {

@@ -11,6 +11,7 @@
 #include "io/camera_spec.h"
 #include "io/database/database_queries.h"
 #include "localizer/localizer.h"
+#include "localizer/query_pose.h"
 #include "tests/shared_data_index.h"
 #include "tests/test_util.h"
 
@@ -138,6 +139,33 @@ TEST_F(HerzJesuTest, AllQueriesLocalizeWithUnknownFocalAndRecoverIt) {
     ASSERT_TRUE(result.focal_estimated);
     EXPECT_NEAR(result.camera.params[0], kColmapFocal, 0.02 * kColmapFocal) << name;
   }
+}
+
+// keep_correspondences hands out what the pose was fit to (bench/cross_estimation.sh fits them
+// with COLMAP's estimator): as many as the result counts, each a pair the index knows, and
+// fitting them again gives the pose bit for bit. Without it, nothing is kept.
+TEST_F(HerzJesuTest, KeptCorrespondencesAreWhatThePoseWasFitTo) {
+  const DatabaseQueries queries(data_ / "database.db");
+  const Localizer localizer(*index_);
+  const std::string name = truth_.begin()->first;
+  const Query query = queries.Load(name);  // the focal length unknown, so with the N_B growth
+  LocalizerOptions options;
+  EXPECT_TRUE(localizer.Localize(query, options).kept_correspondences.empty());
+  options.keep_correspondences = true;
+  const LocalizationResult result = localizer.Localize(query, options);
+  ASSERT_TRUE(result.success);
+  ASSERT_EQ(result.kept_correspondences.size(), result.correspondences);
+  for (const FeatureMatch& match : result.kept_correspondences) {
+    ASSERT_LT(match.feature, query.NumFeatures());
+    ASSERT_LT(match.view, index_->num_views());
+  }
+  const QueryPose refit = EstimateQueryPose(*index_, query, result.kept_correspondences, options);
+  ASSERT_TRUE(refit.pose.success);
+  EXPECT_EQ(refit.pose.num_inliers, int(result.num_inliers));
+  const Eigen::Vector3d center = refit.pose.pose.Center();
+  EXPECT_EQ(std::vector<double>({center.x(), center.y(), center.z()}),
+            std::vector<double>(result.center.begin(), result.center.end()));
+  EXPECT_EQ(refit.pose.focal_length_px, result.camera.params[0]);
 }
 
 TEST_F(HerzJesuTest, DatabaseCameraIsTheExtractorsGuessAndIsEstimated) {
