@@ -20,6 +20,7 @@
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -60,25 +61,32 @@ int Run(const std::string& index_path, const std::string& database, const std::s
         const std::string& pairs_path) {
   const Index index = Index::Open(index_path);
   if (index.view_keypoints().empty())
-    throw InputError(index_path + ": no view keypoints (build it with cwloc-index build --keypoints)");
+    throw InputError(index_path +
+                     ": no view keypoints (build it with cwloc-index build --keypoints)");
   const DatabaseQueries queries(database);
   const colmap::Reconstruction mapping = colmap::ReadReconstruction(mapping_path);
   const colmap::Reconstruction registered = colmap::ReadReconstruction(colmap_path);
 
-  // Index views by their image and keypoint, and mapping keypoints by theirs.
-  std::map<KeypointKey, uint32_t> view_of;
+  // Index views by their image and keypoint, and mapping keypoints with a 3D point by theirs.
+  // SIFT gives one place several orientations, so a key may hold several: the one whose 3D
+  // point is the other side's is taken.
+  std::multimap<KeypointKey, uint32_t> views_at;
   for (const IndexImage& image : index.images()) {
     for (uint32_t view = image.first_view; view < image.first_view + image.num_views; ++view) {
       const ViewKeypoint& keypoint = index.view_keypoints()[view];
-      view_of[{image.image_id, keypoint.x, keypoint.y}] = view;
+      views_at.insert({{image.image_id, keypoint.x, keypoint.y}, view});
     }
   }
-  std::map<KeypointKey, uint32_t> point2D_of;
+  std::multimap<KeypointKey, uint32_t> points2D_at;
   for (const auto& [image_id, image] : mapping.images) {
     for (uint32_t i = 0; i < image.points2D.size(); ++i) {
-      point2D_of[{image_id, float(image.points2D[i].x), float(image.points2D[i].y)}] = i;
+      if (image.points2D[i].point3D_id == kInvalidPoint3DId) continue;
+      points2D_at.insert({{image_id, float(image.points2D[i].x), float(image.points2D[i].y)}, i});
     }
   }
+  const auto same_place = [](const std::array<double, 3>& a, const std::array<double, 3>& b) {
+    return std::abs(a[0] - b[0]) + std::abs(a[1] - b[1]) + std::abs(a[2] - b[2]) < 1e-6;
+  };
 
   LocalizerOptions options;
   options.keep_correspondences = true;
@@ -102,9 +110,15 @@ int Run(const std::string& index_path, const std::string& database, const std::s
       const uint32_t image_index = index.ImageOfView(match.view);
       const uint32_t image_id = index.images()[image_index].image_id;
       const ViewKeypoint& keypoint = index.view_keypoints()[match.view];
-      const auto found = point2D_of.find({image_id, keypoint.x, keypoint.y});
-      if (found == point2D_of.end()) continue;  // not in the mapping model: cannot happen
-      pairs << name << ' ' << match.feature << ' ' << image_id << ' ' << found->second << '\n';
+      const std::array<double, 3> xyz = index.PointXyz(index.view_points()[match.view]);
+      const auto [first, last] = points2D_at.equal_range({image_id, keypoint.x, keypoint.y});
+      for (auto at = first; at != last; ++at) {
+        const colmap::Image& image = mapping.images.at(image_id);
+        const point3D_t point_id = image.points2D[at->second].point3D_id;
+        if (!same_place(mapping.points3D.at(point_id).xyz, xyz)) continue;
+        pairs << name << ' ' << match.feature << ' ' << image_id << ' ' << at->second << '\n';
+        break;
+      }
     }
 
     // COLMAP's correspondences: its registered query's 2D points with a 3D point.
@@ -118,14 +132,19 @@ int Run(const std::string& index_path, const std::string& database, const std::s
         ++colmap_pairs;
         const auto point = mapping.points3D.find(point_id);
         if (point == mapping.points3D.end()) continue;
+        std::optional<uint32_t> view;
         for (const colmap::TrackElement& element : point->second.track) {
           const colmap::Point2D& seen =
               mapping.images.at(element.image_id).points2D.at(element.point2D_idx);
-          const auto view = view_of.find({element.image_id, float(seen.x), float(seen.y)});
-          if (view == view_of.end()) continue;
-          theirs.push_back({feature, view->second, 0.0f});
-          break;
+          const auto [first, last] =
+              views_at.equal_range({element.image_id, float(seen.x), float(seen.y)});
+          for (auto at = first; at != last && !view; ++at) {
+            if (same_place(index.PointXyz(index.view_points()[at->second]), point->second.xyz))
+              view = at->second;
+          }
+          if (view) break;
         }
+        if (view) theirs.push_back({feature, *view, 0.0f});
       }
     }
     record["colmap_pairs"] = colmap_pairs;
