@@ -13,14 +13,26 @@ constexpr uint32_t kViewsPerDeadlineCheck = 32;
 
 }  // namespace
 
+double BackMatchingRatio(const LocalizerOptions& options, const QueryCamera& camera) {
+  return camera.calibration == Calibration::kUnknown ? options.unknown_focal_back_ratio
+                                                     : options.ratio;
+}
+
+uint32_t BackMatchingTarget(const LocalizerOptions& options, const QueryCamera& camera) {
+  return camera.calibration == Calibration::kUnknown
+             ? std::max(options.back_matches, options.max_back_matches)
+             : options.back_matches;
+}
+
 BackMatcher::BackMatcher(const Index& index, const ClusterMembers& clusters, const Query& query,
                          std::span<const FeatureMatch> forward_matches,
-                         const LocalizerOptions& options, ClusterMask allowed, PoseGuide* guide,
-                         const Deadline& stop)
+                         const LocalizerOptions& options, double ratio, ClusterMask allowed,
+                         PoseGuide* guide, const Deadline& stop)
     : index_(index),
       clusters_(clusters),
       query_(query),
       options_(options),
+      ratio_(ratio),
       allowed_(allowed),
       guide_(guide),
       stop_(stop),
@@ -37,12 +49,11 @@ void BackMatcher::Vote(uint32_t cluster) {
 }
 
 std::optional<FeatureMatch> BackMatcher::MatchView(uint32_t view) {
-  if (guide_ != nullptr) return guide_->Match(index_, view, options_.ratio);
+  if (guide_ != nullptr) return guide_->Match(index_, view, ratio_);
   const KdSearchResult found =
       searcher_->Search(index_.ViewDescriptor(view, decoded_), search_options_, neighbors_);
   if (found.num_neighbors < 2) return std::nullopt;
-  if (!PassesRatioTest(neighbors_[0].distance, neighbors_[1].distance, options_.ratio))
-    return std::nullopt;
+  if (!PassesRatioTest(neighbors_[0].distance, neighbors_[1].distance, ratio_)) return std::nullopt;
   return FeatureMatch{neighbors_[0].index, view,
                       std::sqrt(static_cast<float>(neighbors_[0].distance))};
 }
@@ -130,8 +141,9 @@ BackMatchingResult MatchBack(const Index& index, const ClusterMembers& clusters,
                              std::span<const FeatureMatch> forward_matches,
                              const LocalizerOptions& options, ClusterMask allowed, PoseGuide* guide,
                              const Deadline& stop) {
-  BackMatcher matcher(index, clusters, query, forward_matches, options, allowed, guide, stop);
-  matcher.Run(options.back_matches);
+  BackMatcher matcher(index, clusters, query, forward_matches, options,
+                      BackMatchingRatio(options, query.camera), allowed, guide, stop);
+  matcher.Run(BackMatchingTarget(options, query.camera));
   return matcher.TakeResult();
 }
 

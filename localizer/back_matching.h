@@ -45,18 +45,25 @@ struct BackMatchingResult {
 //
 // A BackMatcher keeps its votes and visited clusters, so that a query whose pose the first N_B
 // matches leave weakly constrained can continue with a larger N_B where it stopped.
+// Back-matching's ratio test and N_B for this query: `ratio` and `back_matches`, or for a query
+// whose focal length is unknown LocalizerOptions::unknown_focal_back_ratio and
+// max_back_matches.
+double BackMatchingRatio(const LocalizerOptions& options, const QueryCamera& camera);
+uint32_t BackMatchingTarget(const LocalizerOptions& options, const QueryCamera& camera);
+
 class BackMatcher {
  public:
   // The index, the clusters, the query, the options and the guide must outlive the matcher;
   // the forward matches are read here, for their votes.
   BackMatcher(const Index& index, const ClusterMembers& clusters, const Query& query,
               std::span<const FeatureMatch> forward_matches, const LocalizerOptions& options,
-              ClusterMask allowed = {}, PoseGuide* guide = nullptr, const Deadline& stop = {});
+              double ratio, ClusterMask allowed = {}, PoseGuide* guide = nullptr,
+              const Deadline& stop = {});
   BackMatcher(const BackMatcher&) = delete;
   BackMatcher& operator=(const BackMatcher&) = delete;
 
-  // Back-matches until the result holds back_matches matches (or a stop above): first
-  // options.back_matches (N_B), then, to continue where it stopped, a larger target.
+  // Back-matches until the result holds back_matches matches (or a stop above): first N_B
+  // (BackMatchingTarget), then, to continue where it stopped, a larger target.
   void Run(uint32_t back_matches);
   const BackMatchingResult& result() const { return result_; }
   BackMatchingResult TakeResult() { return std::move(result_); }
@@ -72,6 +79,7 @@ class BackMatcher {
   const ClusterMembers& clusters_;
   const Query& query_;
   const LocalizerOptions& options_;
+  const double ratio_;  // the views' ratio test (BackMatchingRatio for a query alone)
   ClusterMask allowed_;
   PoseGuide* guide_;
   Deadline stop_;

@@ -124,8 +124,9 @@ MatcherOutput MatchClusterWise(const Index& index, const ClusterMembers& cluster
   out.seconds_guide = guide_time.Seconds();
   out.guided = out.guide != nullptr;
   out.back_matcher = std::make_unique<BackMatcher>(index, clusters, query, out.forward, options,
+                                                   BackMatchingRatio(options, query.camera),
                                                    allowed, out.guide.get(), deadlines.back);
-  out.back_matcher->Run(options.back_matches);
+  out.back_matcher->Run(BackMatchingTarget(options, query.camera));
   TakeBackMatches(index, &out);
   return out;
 }
@@ -191,8 +192,10 @@ MatcherOutput MatchPredicted(const Index& index, const ClusterMembers& clusters,
   out.guide = std::make_unique<PoseGuide>(query, prediction.hypothesis, prediction.radius_px);
   out.guided = true;
   out.seconds_guide = guide_time.Seconds();
-  out.back_matcher = std::make_unique<BackMatcher>(index, clusters, query, votes, options, allowed,
-                                                   out.guide.get(), deadlines.back);
+  // A frame near its prediction keeps the paper's ratio test, whatever its camera.
+  out.back_matcher =
+      std::make_unique<BackMatcher>(index, clusters, query, votes, options, options.ratio, allowed,
+                                    out.guide.get(), deadlines.back);
   out.back_matcher->Run(std::max(options.back_matches, prediction.min_back_matches));
   TakeBackMatches(index, &out);
   return out;

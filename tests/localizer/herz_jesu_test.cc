@@ -190,13 +190,19 @@ TEST_F(HerzJesuTest, DatabaseCameraIsTheExtractorsGuessAndIsEstimated) {
 }
 
 // The central third of each photo (512 x 341 at f = 1376 px, as a telephoto shot): the stored
-// features inside it, shifted into the window, with only the window's size known.
-TEST_F(HerzJesuTest, ZoomedQueriesThatAreWeaklyConstrainedBackMatchMore) {
+// features inside it, shifted into the window, with only the window's size known. A query whose
+// focal length is unknown back-matches past N_B, into more images, at the 0.8 ratio
+// (LocalizerOptions::unknown_focal_back_ratio): more correspondences than the paper's N_B = 200
+// at 0.7 gives, which pin its focal length better (docs/benchmarks.md, "Internet photos":
+// COLMAP's registrator fit such correspondences, and cwloc's pose stage on them was as accurate
+// as COLMAP's).
+TEST_F(HerzJesuTest, ZoomedQueriesWithAnUnknownFocalLengthBackMatchPastNb) {
   const DatabaseQueries queries(data_ / "database.db");
   const Localizer localizer(*index_);
-  LocalizerOptions fixed;
-  fixed.max_back_matches = fixed.back_matches;  // N_B never grows
-  int weak = 0;
+  LocalizerOptions paper;
+  paper.max_back_matches = paper.back_matches;  // N_B never grows
+  paper.unknown_focal_back_ratio = paper.ratio;
+  double std_sum = 0, paper_std_sum = 0;
   for (const auto& [name, truth] : truth_) {
     const Query photo = queries.Load(name);
     Query zoomed = photo;
@@ -213,26 +219,22 @@ TEST_F(HerzJesuTest, ZoomedQueriesThatAreWeaklyConstrainedBackMatchMore) {
     zoomed.camera.width = 512;
     zoomed.camera.height = 341;
     zoomed.camera = WithUnknownFocal(zoomed.camera);
-    const LocalizationResult once = localizer.Localize(zoomed, fixed);
-    const LocalizationResult grown = localizer.Localize(zoomed, LocalizerOptions{});
-    // Measured: 0.02-0.25 m with and without growth (COLMAP's registrator: 0.03-0.23 m).
-    ExpectPoseClose(once, truth, 0.5, 0.5);
-    ExpectPoseClose(grown, truth, 0.5, 0.5);
-    ASSERT_TRUE(once.focal_depth.has_value() && grown.focal_depth.has_value()) << name;
-    if (!WeaklyConstrained(*once.focal_depth, once.camera.params[0])) {
-      // Well constrained after N_B: nothing more is matched.
-      EXPECT_EQ(grown.back_matches, once.back_matches) << name;
-      continue;
-    }
-    ++weak;
-    // Weakly constrained after N_B: back-matching went on, into more images, and the larger
-    // set constrains the focal length better.
-    EXPECT_GT(grown.back_matches, once.back_matches) << name;
-    EXPECT_GT(grown.back_matched_clusters, once.back_matched_clusters) << name;
-    EXPECT_GT(grown.correspondences, once.correspondences) << name;
-    EXPECT_LT(grown.focal_depth->focal_std_px, once.focal_depth->focal_std_px) << name;
+    const LocalizationResult as_paper = localizer.Localize(zoomed, paper);
+    const LocalizationResult result = localizer.Localize(zoomed, LocalizerOptions{});
+    // Measured: 0.03-0.23 m as the paper, 0.008-0.30 m now (COLMAP's registrator on these crops,
+    // bench/internet_benchmark.sh's herz_jesu_zoom3: 0.009-0.22 m).
+    ExpectPoseClose(as_paper, truth, 0.5, 0.5);
+    ExpectPoseClose(result, truth, 0.5, 0.5);
+    EXPECT_GT(result.back_matched_clusters, as_paper.back_matched_clusters) << name;
+    EXPECT_GT(result.correspondences, as_paper.correspondences) << name;
+    ASSERT_TRUE(result.focal_depth.has_value() && as_paper.focal_depth.has_value()) << name;
+    // Measured: the focal length's standard deviation 3-18 % lower on four, 0.5 % higher on
+    // 0017.jpg (4.37 against 4.35 px), with 1.5-1.9x the correspondences from 3-12 images.
+    EXPECT_LT(result.focal_depth->focal_std_px, 1.02 * as_paper.focal_depth->focal_std_px) << name;
+    std_sum += result.focal_depth->focal_std_px;
+    paper_std_sum += as_paper.focal_depth->focal_std_px;
   }
-  EXPECT_GE(weak, 1);  // measured: 2 of the 5
+  EXPECT_LT(std_sum, 0.95 * paper_std_sum);
 }
 
 TEST_F(HerzJesuTest, GlobalRatioBaselineAlsoLocalizesThisSmallModel) {
