@@ -111,9 +111,9 @@ int Run(const std::string& index_path, const std::string& database, const std::s
       const uint32_t image_id = index.images()[image_index].image_id;
       const ViewKeypoint& keypoint = index.view_keypoints()[match.view];
       const std::array<double, 3> xyz = index.PointXyz(index.view_points()[match.view]);
+      const colmap::Image& image = mapping.images.at(image_id);
       const auto [first, last] = points2D_at.equal_range({image_id, keypoint.x, keypoint.y});
       for (auto at = first; at != last; ++at) {
-        const colmap::Image& image = mapping.images.at(image_id);
         const point3D_t point_id = image.points2D[at->second].point3D_id;
         if (!same_place(mapping.points3D.at(point_id).xyz, xyz)) continue;
         pairs << name << ' ' << match.feature << ' ' << image_id << ' ' << at->second << '\n';

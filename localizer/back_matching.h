@@ -34,10 +34,16 @@ struct BackMatchingResult {
   bool stopped_by_deadline = false;  // the latency budget ended it, possibly inside a cluster
 };
 
+// Back-matching's ratio test and N_B for this query: `ratio` and `back_matches`, or for a query
+// whose focal length is unknown LocalizerOptions::unknown_focal_back_ratio and
+// max_back_matches.
+double BackMatchingRatio(const LocalizerOptions& options, const QueryCamera& camera);
+uint32_t BackMatchingTarget(const LocalizerOptions& options, const QueryCamera& camera);
+
 // Algorithm 3: forward matches vote for their clusters; the most voted unvisited cluster's
-// views are matched back against a kd-forest of the query's features (1-ratio test); a cluster
-// with at least options.min_matches_to_vote back-matches votes, through each matched view's
-// 3D point, for every cluster that sees that point. Stops at N_B matches or
+// views are matched back against a kd-forest of the query's features (1-ratio test at
+// `ratio`); a cluster with at least options.min_matches_to_vote back-matches votes, through each
+// matched view's 3D point, for every cluster that sees that point. Stops at N_B matches or
 // options.max_back_clusters clusters, or when no cluster has votes left. Clusters outside
 // `allowed` get no votes, so they are never back-matched. With `guide`, views are matched near
 // their projection (pose_guide.h) instead of in a kd-forest of the query's features. Stops
@@ -45,12 +51,6 @@ struct BackMatchingResult {
 //
 // A BackMatcher keeps its votes and visited clusters, so that a query whose pose the first N_B
 // matches leave weakly constrained can continue with a larger N_B where it stopped.
-// Back-matching's ratio test and N_B for this query: `ratio` and `back_matches`, or for a query
-// whose focal length is unknown LocalizerOptions::unknown_focal_back_ratio and
-// max_back_matches.
-double BackMatchingRatio(const LocalizerOptions& options, const QueryCamera& camera);
-uint32_t BackMatchingTarget(const LocalizerOptions& options, const QueryCamera& camera);
-
 class BackMatcher {
  public:
   // The index, the clusters, the query, the options and the guide must outlive the matcher;
