@@ -473,6 +473,25 @@ cwloc_status cwloc_result_covariance(const cwloc_result* result, double pose[36]
   return CWLOC_OK;
 }
 
+cwloc_status cwloc_result_covariance_calibration(const cwloc_result* result, double* rotation_scale,
+                                                 double* position_scale) {
+  if (result == nullptr) return Fail(CWLOC_ERROR_INVALID_ARGUMENT, "result is NULL");
+  const auto& covariance = result->result.covariance;
+  if (!covariance) {
+    return NotAvailable("covariance calibration", result->result.success
+                                                      ? "the pose's refinement problem is singular"
+                                                      : "the query was not localized");
+  }
+  if (!covariance->calibration) {
+    return NotAvailable("covariance calibration",
+                        "the index has none for the query's calibration mode");
+  }
+  if (rotation_scale != nullptr) *rotation_scale = covariance->calibration->rotation;
+  if (position_scale != nullptr) *position_scale = covariance->calibration->position;
+  last_error.clear();
+  return CWLOC_OK;
+}
+
 cwloc_status cwloc_result_enu_covariance(const cwloc_result* result, double enu_position[9],
                                          double* position_radius95_m) {
   if (result == nullptr) return Fail(CWLOC_ERROR_INVALID_ARGUMENT, "result is NULL");

@@ -164,6 +164,7 @@ Result ToResult(const LocalizationResult& r, const Query& query, const Index& in
     Eigen::Map<Eigen::Matrix<double, 6, 6, Eigen::RowMajor>>(covariance.pose.data()) = c->pose;
     covariance.position_radius95 = Radius95(c->Position());
     covariance.focal_std_px = c->focal_std_px;
+    covariance.calibration = r.covariance_calibration;
     if (const auto& enu = r.enu_position_covariance) {
       Eigen::Map<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(
           covariance.enu_position.emplace().data()) = *enu;

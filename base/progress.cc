@@ -2,14 +2,23 @@
 
 #include <unistd.h>
 
+#include <atomic>
 #include <cstdio>
 #include <cstdlib>
 
 namespace cwloc {
 
+namespace {
+std::atomic<int> silences{0};
+}  // namespace
+
 bool Progress::Enabled() {
-  return ::isatty(STDERR_FILENO) == 1 && std::getenv("CWLOC_NO_PROGRESS") == nullptr;
+  return silences.load() == 0 && ::isatty(STDERR_FILENO) == 1 &&
+         std::getenv("CWLOC_NO_PROGRESS") == nullptr;
 }
+
+Progress::Silence::Silence() { ++silences; }
+Progress::Silence::~Silence() { --silences; }
 
 Progress::Progress(std::string label, uint64_t total)
     : label_(std::move(label)), total_(total), enabled_(Enabled()) {}

@@ -20,7 +20,18 @@ class Progress {
   void Advance(uint64_t amount = 1);
   void Finish();
 
-  static bool Enabled();  // stderr is a terminal and CWLOC_NO_PROGRESS is unset
+  // stderr is a terminal, CWLOC_NO_PROGRESS is unset and no Silence is alive.
+  static bool Enabled();
+
+  // While one lives, bars made after it stay quiet (work repeated inside a longer task that
+  // shows its own bar); bars made before it draw on.
+  class Silence {
+   public:
+    Silence();
+    ~Silence();
+    Silence(const Silence&) = delete;
+    Silence& operator=(const Silence&) = delete;
+  };
 
  private:
   void Draw(bool final_draw);

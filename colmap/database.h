@@ -46,6 +46,9 @@ struct Descriptors {
   const uint8_t* Row(uint32_t i) const { return data.data() + size_t{i} * kDescriptorDim; }
 };
 
+// x0, y0, x1, y1, ...: the keypoints' positions as a query holds them.
+std::vector<float> KeypointPositions(const std::vector<Keypoint>& keypoints);
+
 // Keypoints and descriptors of one image; ReadFeatures checks that they have the same rows.
 struct ImageFeatures {
   std::vector<Keypoint> keypoints;

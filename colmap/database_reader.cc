@@ -20,6 +20,16 @@ namespace cwloc::colmap {
 // do we (x86-64, ARM64).
 static_assert(std::endian::native == std::endian::little, "database blobs are little-endian");
 
+std::vector<float> KeypointPositions(const std::vector<Keypoint>& keypoints) {
+  std::vector<float> positions;
+  positions.reserve(keypoints.size() * 2);
+  for (const Keypoint& keypoint : keypoints) {
+    positions.push_back(keypoint.x);
+    positions.push_back(keypoint.y);
+  }
+  return positions;
+}
+
 float Keypoint::Scale() const {
   return (std::sqrt(a11 * a11 + a21 * a21) + std::sqrt(a12 * a12 + a22 * a22)) / 2.0f;
 }

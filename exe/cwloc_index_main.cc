@@ -56,11 +56,11 @@ int RunBuild(const IndexBuildOptions& options, bool json) {
       report.num_clusters, report.num_covisibility_edges);
   std::printf(
       "%.1f MB, %.1f bytes per view; %.2f s (read %.2f, co-visibility %.2f, clustering %.2f, "
-      "codes %.2f, v_NN %.2f, kd-forest %.2f, write %.2f)\n",
+      "covariance calibration %.2f, codes %.2f, v_NN %.2f, kd-forest %.2f, write %.2f)\n",
       report.file_bytes / 1e6, double(report.file_bytes) / double(report.num_views),
       report.seconds_total, report.seconds_read, report.seconds_covisibility,
-      report.seconds_clustering, report.seconds_point_codes, report.seconds_neighbor_distances,
-      report.seconds_kd_forest, report.seconds_write);
+      report.seconds_clustering, report.seconds_calibration, report.seconds_point_codes,
+      report.seconds_neighbor_distances, report.seconds_kd_forest, report.seconds_write);
   if (!report.georeference.is_null()) PrintGeoreference(report.georeference);
   return kExitOk;
 }
@@ -176,8 +176,9 @@ int RunInfo(const std::string& path, bool json) {
 
 int RunVerify(const std::string& path) {
   const Stopwatch stopwatch;
+  // Checksums first: a flipped byte is named as one even where Index::Open checks the value.
+  IndexFile::Open(path).VerifyChecksums();
   const Index index = Index::Open(path);
-  index.file().VerifyChecksums();
   index.Validate();
   ParseManifest(index);
   const double seconds = stopwatch.Seconds();

@@ -37,6 +37,22 @@ void ValidateGeoreference(const IndexGeoreference& g, const std::string& name) {
     fail("unknown source " + std::to_string(g.source));
 }
 
+// Checked at open (one element): the localizer scales every covariance by it.
+void ValidateCovarianceCalibration(const IndexCovarianceCalibration& c, const std::string& name) {
+  for (int mode = 0; mode < 3; ++mode) {
+    for (const float scale : {c.rotation_scale[mode], c.position_scale[mode]}) {
+      if (!(std::isfinite(scale) && scale >= 0)) {
+        throw InputError(name + ": section 'PCAL': scale " + std::to_string(scale) +
+                         " is not a finite number >= 0");
+      }
+    }
+    if (c.localized[mode] > c.sampled) {
+      throw InputError(name + ": section 'PCAL': " + std::to_string(c.localized[mode]) +
+                       " samples localized of " + std::to_string(c.sampled));
+    }
+  }
+}
+
 }  // namespace
 
 Index Index::Open(const std::filesystem::path& path) {
@@ -109,6 +125,16 @@ Index Index::Open(const std::filesystem::path& path) {
     }
     ValidateGeoreference(georeference[0], name);
     index.georeference_ = georeference.data();
+  }
+  if (file.FindSection(section::kCovarianceCalibration) != nullptr) {
+    const auto calibration =
+        file.Section<IndexCovarianceCalibration>(section::kCovarianceCalibration);
+    if (calibration.size() != 1) {
+      throw InputError(name + ": section 'PCAL' has " + std::to_string(calibration.size()) +
+                       " elements, expected 1");
+    }
+    ValidateCovarianceCalibration(calibration[0], name);
+    index.covariance_calibration_ = calibration.data();
   }
   index.kd_forest_ = {file.Section<KdNode>(section::kKdNodes),
                       file.Section<uint32_t>(section::kKdRoots),

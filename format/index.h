@@ -55,6 +55,10 @@ class Index {
   std::span<const CovisibilityEdge> covisibility_edges() const { return covisibility_edges_; }
   // nullptr unless the index was georeferenced (format 1.1's optional GEOR section).
   const IndexGeoreference* georeference() const { return georeference_; }
+  // nullptr unless the build calibrated the pose covariance (format 1.3's optional PCAL).
+  const IndexCovarianceCalibration* covariance_calibration() const {
+    return covariance_calibration_;
+  }
 
   // The global kd-forest over all view descriptors, searched in place.
   const KdForestView& kd_forest() const { return kd_forest_; }
@@ -108,6 +112,7 @@ class Index {
   std::span<const uint32_t> covisibility_offsets_;
   std::span<const CovisibilityEdge> covisibility_edges_;
   const IndexGeoreference* georeference_ = nullptr;
+  const IndexCovarianceCalibration* covariance_calibration_ = nullptr;
   KdForestView kd_forest_;
 };
 

@@ -18,7 +18,7 @@ static_assert(
 inline constexpr char kIndexMagic[8] = {'C', 'W', 'L', 'O', 'C', 'I', 'D', 'X'};
 inline constexpr uint32_t kByteOrderMark = 0x01020304;
 inline constexpr uint16_t kFormatMajor = 1;
-inline constexpr uint16_t kFormatMinor = 2;
+inline constexpr uint16_t kFormatMinor = 3;
 inline constexpr uint64_t kSectionAlignment = 64;
 
 // Feature bits: a reader refuses a file with a required bit it does not know.
@@ -92,11 +92,19 @@ inline constexpr uint32_t kPointNeighbor = SectionTag("PVNN");  // v_NN distance
 // ... and its points as float offsets from one double origin, instead of PNTS.
 inline constexpr uint32_t kPointOrigin = SectionTag("PORG");   // one IndexPointOrigin
 inline constexpr uint32_t kPointOffsets = SectionTag("PNTF");  // IndexPointOffset per point
-inline constexpr uint32_t kAll[] = {
-    kManifest,      kCameras,      kImages,        kStrings,      kPoints,   kTracks,
-    kDescriptors,   kViewPoint,    kViewKeypoints, kViewNeighbor, kKdNodes,  kKdLeaves,
-    kKdRoots,       kCovisOffsets, kCovisEdges,    kGeoreference, kCodebook, kPointCodes,
-    kPointNeighbor, kPointOrigin,  kPointOffsets};
+// Optional (format 1.3): the pose covariance's calibration on the model.
+inline constexpr uint32_t kCovarianceCalibration = SectionTag("PCAL");
+inline constexpr uint32_t kAll[] = {kManifest,      kCameras,
+                                    kImages,        kStrings,
+                                    kPoints,        kTracks,
+                                    kDescriptors,   kViewPoint,
+                                    kViewKeypoints, kViewNeighbor,
+                                    kKdNodes,       kKdLeaves,
+                                    kKdRoots,       kCovisOffsets,
+                                    kCovisEdges,    kGeoreference,
+                                    kCodebook,      kPointCodes,
+                                    kPointNeighbor, kPointOrigin,
+                                    kPointOffsets,  kCovarianceCalibration};
 }  // namespace section
 
 // "DESC" for a tag, with non-printable bytes escaped, for messages.

@@ -105,4 +105,20 @@ enum class GeoreferenceSource : uint32_t {
   kEnuModel = 4,   // --model-frame enu:LAT,LON,H
 };
 
+// PCAL (optional, format 1.3): how far the pose covariance is from the truth on this model,
+// measured when the index was built by localizing model images with their observations left
+// out (docs/algorithm.md, "Pose uncertainty"). Entry m is the query calibration mode m (0 a
+// known camera, 1 a focal prior, 2 an unknown focal length); a scale of 0 means the mode was
+// not measured, and the localizer then reports the covariance unscaled.
+struct IndexCovarianceCalibration {
+  float rotation_scale[3];  // multiplies the covariance's rotation block
+  float position_scale[3];  // multiplies its centre block (the cross terms take the root of both)
+  uint32_t localized[3];    // samples localized in each mode, of `sampled` (gross failures not)
+  uint32_t sampled;         // model images left out and localized
+  uint32_t reserved[6];     // zero
+};
+static_assert(sizeof(IndexCovarianceCalibration) == 64 &&
+              std::is_trivially_copyable_v<IndexCovarianceCalibration>);
+static_assert(offsetof(IndexCovarianceCalibration, sampled) == 36);
+
 }  // namespace cwloc

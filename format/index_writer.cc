@@ -22,6 +22,7 @@ uint16_t FormatMinorOf(std::span<const SectionData> sections) {
         section.tag == section::kPointNeighbor || section.tag == section::kPointOrigin ||
         section.tag == section::kPointOffsets)
       minor = std::max<uint16_t>(minor, 2);
+    if (section.tag == section::kCovarianceCalibration) minor = std::max<uint16_t>(minor, 3);
   }
   return minor;
 }

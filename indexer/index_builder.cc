@@ -10,6 +10,7 @@
 #include "cwloc/version.h"
 #include "format/xxhash64.h"
 #include "indexer/build_option_table.h"
+#include "indexer/covariance_calibration.h"
 #include "indexer/covisibility.h"
 #include "indexer/index_contents.h"
 #include "indexer/model_views.h"
@@ -46,7 +47,6 @@ IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
   IndexBuildReport report;
   ValidateBuildOptions(options);
   const bool coded = options.code_bytes != 0;
-  const int threads = ResolveThreads(options.threads);
   // The small inputs are read after the model; refuse a bad one before minutes of reading.
   if (!options.georeferencing.georef_file.empty())
     CheckInputFile(options.georeferencing.georef_file, kGeorefFile);
@@ -73,6 +73,7 @@ IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
   const std::optional<ModelGeoreference> georeference = GeoreferenceModel(views, georeferencing);
   report.seconds_read = stage.Seconds();
 
+  const int threads = ResolveThreads(options.threads);
   stage.Restart();
   const CovisibilityGraph graph =
       BuildCovisibilityGraph(views.images, views.points, views.tracks, views.view_points, threads);
@@ -86,11 +87,38 @@ IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
     views.images[i].cluster = clustering.cluster_of_image[i];
   report.seconds_clustering = stage.Seconds();
 
+  std::optional<CovarianceCalibration> calibration;
+  if (options.calibration_samples > 0) {
+    stage.Restart();
+    calibration = CalibrateCovariance(views, clustering.method, database, options);
+    report.seconds_calibration = stage.Seconds();
+  }
+
+  const nlohmann::ordered_json source = {{"model",
+                                          {{"path", options.model_dir.string()},
+                                           {"layout", model.rigs.empty() ? "classic" : "rigs"},
+                                           {"fingerprint", FingerprintModel(options.model_dir)}}},
+                                         {"database", {{"path", options.database_path.string()}}}};
+  WriteIndexOfViews(std::move(views), clustering, graph, options,
+                    georeference ? &*georeference : nullptr, calibration ? &*calibration : nullptr,
+                    source, options.output_path, &report);
+  report.seconds_total = total.Seconds();
+  return report;
+}
+
+void WriteIndexOfViews(ModelViews views, const Clustering& clustering,
+                       const CovisibilityGraph& graph, const IndexBuildOptions& options,
+                       const ModelGeoreference* georeference,
+                       const CovarianceCalibration* calibration,
+                       const nlohmann::ordered_json& source, const std::filesystem::path& output,
+                       IndexBuildReport* report) {
+  const bool coded = options.code_bytes != 0;
+  const int threads = ResolveThreads(options.threads);
+  Stopwatch stage;
   PointCodes point_codes;
   if (coded) {
-    stage.Restart();
     point_codes = CodePointDescriptors(views, options.code_bytes, options.seed, threads);
-    report.seconds_point_codes = stage.Seconds();
+    report->seconds_point_codes = stage.Seconds();
   }
 
   stage.Restart();
@@ -99,27 +127,27 @@ IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
   const std::vector<float> neighbor_distances =
       coded ? ComputePointNeighborDistances(&views, point_codes, clustering, threads)
             : ComputeViewNeighborDistances(views, clustering, threads);
-  report.seconds_neighbor_distances = stage.Seconds();
+  report->seconds_neighbor_distances = stage.Seconds();
 
   stage.Restart();
   // The forest's rows: views, or the compact index's points (as the localizer decodes them).
   const KdForest forest = BuildIndexForest(coded ? point_codes.decoded : views.descriptors,
                                            options.forest, options.seed, threads);
-  report.seconds_kd_forest = stage.Seconds();
+  report->seconds_kd_forest = stage.Seconds();
 
-  report.num_cameras = views.cameras.size();
-  report.num_images = views.images.size();
-  report.num_points = views.points.size();
-  report.num_views = views.num_views();
-  report.num_clusters = clustering.num_clusters;
-  report.num_covisibility_edges = graph.edges.size();
+  report->num_cameras = views.cameras.size();
+  report->num_images = views.images.size();
+  report->num_points = views.points.size();
+  report->num_views = views.num_views();
+  report->num_clusters = clustering.num_clusters;
+  report->num_covisibility_edges = graph.edges.size();
 
   nlohmann::ordered_json manifest;
   // Set once the sections are known (FormatMinorOf).
   manifest["format_version"] = "";  // set by WriteIndex
   manifest["tool"] = "cwloc-index";
   manifest["tool_version"] = kToolVersion;
-  manifest["counts"] = CountsJson(report);
+  manifest["counts"] = CountsJson(*report);
   manifest["counts"]["kd_nodes"] = forest.nodes.size();
   nlohmann::ordered_json clustering_json = {{"method", clustering.method},
                                             {"num_clusters", clustering.num_clusters}};
@@ -143,13 +171,11 @@ IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
                                                    {"code", "product quantization"},
                                                    {"code_bytes", options.code_bytes}};
   }
-  manifest["source"] = {{"model",
-                         {{"path", options.model_dir.string()},
-                          {"layout", model.rigs.empty() ? "classic" : "rigs"},
-                          {"fingerprint", FingerprintModel(options.model_dir)}}},
-                        {"database", {{"path", options.database_path.string()}}}};
+  manifest["source"] = source;
   manifest["georeference"] = georeference ? georeference->manifest : nlohmann::ordered_json();
-  report.georeference = manifest["georeference"];
+  report->georeference = manifest["georeference"];
+  // Absent: not calibrated, as before format 1.3.
+  if (calibration) manifest["covariance_calibration"] = calibration->manifest;
 
   stage.Restart();
   const PointOffsets point_offsets = coded ? OffsetPoints(views.points) : PointOffsets{};
@@ -175,11 +201,10 @@ IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
   }
   if (options.keypoints) contents.view_keypoints = views.view_keypoints;
   if (georeference) contents.georeference = &georeference->section;
-  WriteIndex(options.output_path, contents, std::move(manifest));
-  report.seconds_write = stage.Seconds();
-  report.file_bytes = std::filesystem::file_size(options.output_path);
-  report.seconds_total = total.Seconds();
-  return report;
+  if (calibration) contents.covariance_calibration = &calibration->section;
+  WriteIndex(output, contents, std::move(manifest));
+  report->seconds_write = stage.Seconds();
+  report->file_bytes = std::filesystem::file_size(output);
 }
 
 nlohmann::ordered_json CountsJson(const IndexBuildReport& report) {

@@ -6,7 +6,9 @@
 #include <string>
 
 #include "indexer/clustering.h"
+#include "indexer/covisibility.h"
 #include "indexer/georeferencing.h"
+#include "indexer/model_views.h"
 #include "kdtree/kd_forest_builder.h"
 
 namespace cwloc {
@@ -32,6 +34,9 @@ struct IndexBuildOptions {
   uint32_t code_bytes = 0;
   GeoreferencingOptions georeferencing;  // its fit seed is set from `seed`
   int threads = 0;                       // 0 = all cores
+  // Model images left out and localized to calibrate the pose covariance (PCAL;
+  // indexer/covariance_calibration.h); 0 = no calibration.
+  uint32_t calibration_samples = 30;
 };
 
 struct IndexBuildReport {
@@ -39,7 +44,8 @@ struct IndexBuildReport {
   size_t num_clusters = 0, num_covisibility_edges = 0;
   uint64_t file_bytes = 0;
   nlohmann::ordered_json georeference;  // the manifest's; null when not georeferenced
-  double seconds_read = 0, seconds_covisibility = 0, seconds_clustering = 0;
+  double seconds_read = 0, seconds_calibration = 0, seconds_covisibility = 0,
+         seconds_clustering = 0;
   double seconds_point_codes = 0;
   double seconds_neighbor_distances = 0, seconds_kd_forest = 0, seconds_write = 0,
          seconds_total = 0;
@@ -48,6 +54,19 @@ struct IndexBuildReport {
 // Reads the model and database, computes every section, writes the index atomically.
 // Throws InputError on bad input.
 IndexBuildReport BuildIndex(const IndexBuildOptions& options);
+
+struct CovarianceCalibration;
+
+// BuildIndex's steps after the clustering: the codes, v_NN and the kd-forest of `views` (whose
+// images hold their clusters), written to `output` with their co-visibility graph, the
+// manifest's `source` and the optional sections given (null: not written). The calibration's
+// folds run it too.
+void WriteIndexOfViews(ModelViews views, const Clustering& clustering,
+                       const CovisibilityGraph& graph, const IndexBuildOptions& options,
+                       const ModelGeoreference* georeference,
+                       const CovarianceCalibration* calibration,
+                       const nlohmann::ordered_json& source, const std::filesystem::path& output,
+                       IndexBuildReport* report);
 
 // The counts of a build, as the manifest (which adds kd_nodes) and `cwloc-index build --json`
 // report them: cameras, images, points, views, clusters, covisibility_edges.

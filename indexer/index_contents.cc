@@ -52,6 +52,12 @@ void WriteIndex(const std::filesystem::path& path, const IndexContents& contents
                                    std::span<const IndexGeoreference>(contents.georeference, 1),
                                    /*flags=*/0));
   }
+  if (contents.covariance_calibration != nullptr) {
+    sections.push_back(
+        MakeSection(section::kCovarianceCalibration,
+                    std::span<const IndexCovarianceCalibration>(contents.covariance_calibration, 1),
+                    /*flags=*/0));
+  }
   manifest["format_version"] =
       std::to_string(kFormatMajor) + "." + std::to_string(FormatMinorOf(sections));
   const std::string manifest_text = manifest.dump(2) + "\n";

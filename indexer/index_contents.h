@@ -33,6 +33,7 @@ struct IndexContents {
   std::span<const CovisibilityEdge> covisibility_edges;
   std::span<const ViewKeypoint> view_keypoints;     // optional section; empty: not written
   const IndexGeoreference* georeference = nullptr;  // optional section
+  const IndexCovarianceCalibration* covariance_calibration = nullptr;  // optional section
 };
 
 // Writes the sections atomically, `manifest` first with its format_version set from them.

@@ -260,6 +260,7 @@ IndexExtractReport ExtractIndex(const IndexExtractOptions& options) {
   contents.covisibility_edges = tile.covisibility_edges;
   contents.view_keypoints = tile.view_keypoints;
   contents.georeference = parent.georeference();
+  contents.covariance_calibration = parent.covariance_calibration();
   IndexPointOrigin origin{};
   if (parent.coded()) {
     origin = parent.point_origin();

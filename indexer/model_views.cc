@@ -142,4 +142,68 @@ ModelViews GatherModelViews(const colmap::Reconstruction& model,
   return views;
 }
 
+ModelViews WithoutImages(const ModelViews& views, const std::vector<bool>& left_out) {
+  const auto image_of_view = [&] {
+    std::vector<uint32_t> image(views.num_views());
+    for (uint32_t i = 0; i < views.images.size(); ++i) {
+      const IndexImage& row = views.images[i];
+      std::fill_n(image.begin() + row.first_view, row.num_views, i);
+    }
+    return image;
+  }();
+  // A point stays with two or more views left (or all of its views, when it had fewer).
+  std::vector<uint32_t> new_point(views.points.size(), UINT32_MAX);
+  ModelViews out;
+  out.cameras = views.cameras;
+  out.strings = views.strings;
+  for (uint32_t p = 0; p < views.points.size(); ++p) {
+    const IndexPoint& point = views.points[p];
+    uint32_t kept = 0;
+    for (uint32_t t = 0; t < point.track_length; ++t)
+      kept += !left_out[image_of_view[views.tracks[point.first_track + t]]];
+    if (kept < std::min<uint32_t>(2, point.track_length)) continue;
+    new_point[p] = static_cast<uint32_t>(out.points.size());
+    out.points.push_back(point);
+    out.point_ids.push_back(views.point_ids[p]);
+  }
+  std::vector<uint32_t> new_view(views.num_views(), UINT32_MAX);
+  const bool keypoints = !views.view_keypoints.empty();
+  for (uint32_t i = 0; i < views.images.size(); ++i) {
+    if (left_out[i]) continue;
+    IndexImage row = views.images[i];
+    row.first_view = static_cast<uint32_t>(out.view_points.size());
+    for (uint32_t v = views.images[i].first_view; v < views.images[i].first_view + row.num_views;
+         ++v) {
+      const uint32_t point = new_point[views.view_points[v]];
+      if (point == UINT32_MAX) continue;
+      new_view[v] = static_cast<uint32_t>(out.view_points.size());
+      out.view_points.push_back(point);
+      if (keypoints) out.view_keypoints.push_back(views.view_keypoints[v]);
+      const uint8_t* descriptor = views.descriptors.data() + size_t{v} * kDescriptorBytes;
+      out.descriptors.insert(out.descriptors.end(), descriptor, descriptor + kDescriptorBytes);
+    }
+    row.num_views = static_cast<uint32_t>(out.view_points.size()) - row.first_view;
+    out.images.push_back(row);
+  }
+  std::vector<uint32_t> new_cluster;
+  uint32_t num_clusters = 0;
+  for (IndexImage& image : out.images) {
+    if (image.cluster >= new_cluster.size()) new_cluster.resize(image.cluster + 1, UINT32_MAX);
+    if (new_cluster[image.cluster] == UINT32_MAX) new_cluster[image.cluster] = num_clusters++;
+    image.cluster = new_cluster[image.cluster];
+  }
+  // Tracks keep their order: a point's first kept view first.
+  for (uint32_t p = 0; p < views.points.size(); ++p) {
+    if (new_point[p] == UINT32_MAX) continue;
+    IndexPoint& point = out.points[new_point[p]];
+    const uint32_t first = views.points[p].first_track, length = views.points[p].track_length;
+    point.first_track = static_cast<uint32_t>(out.tracks.size());
+    for (uint32_t t = first; t < first + length; ++t) {
+      if (new_view[views.tracks[t]] != UINT32_MAX) out.tracks.push_back(new_view[views.tracks[t]]);
+    }
+    point.track_length = static_cast<uint32_t>(out.tracks.size()) - point.first_track;
+  }
+  return out;
+}
+
 }  // namespace cwloc

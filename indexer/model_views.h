@@ -38,4 +38,10 @@ struct ModelViews {
 ModelViews GatherModelViews(const colmap::Reconstruction& model,
                             const colmap::DatabaseReader& database);
 
+// The views of the model without the images whose rows `left_out` marks, as `colmap
+// image_deleter` takes images out of a model: their views go, and so does every 3D point left
+// with fewer than two views (with its last view). Cameras and image names stay; the images
+// keep their clusters, renumbered densely in their order.
+ModelViews WithoutImages(const ModelViews& views, const std::vector<bool>& left_out);
+
 }  // namespace cwloc

@@ -100,13 +100,7 @@ QueryCamera ParseImageSize(const std::string& spec, const std::string& what) {
 
 QueryCamera ImageSizeCamera(uint32_t width, uint32_t height, const std::string& what) {
   CheckImageSize(width, height, what);
-  QueryCamera camera;
-  camera.model_id = CameraModelId::kSimplePinhole;
-  camera.width = width;
-  camera.height = height;
-  camera.params = {0.0, width / 2.0, height / 2.0};
-  camera.calibration = Calibration::kUnknown;
-  return camera;
+  return UnknownFocalCamera(width, height, IntrinsicsSource::kCameraOption);
 }
 
 QueryCamera WithUnknownFocal(const QueryCamera& camera) {

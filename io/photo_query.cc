@@ -8,18 +8,6 @@
 
 namespace cwloc {
 
-QueryCamera FocalPriorCamera(double focal_length_px, uint32_t width, uint32_t height,
-                             IntrinsicsSource source) {
-  QueryCamera camera;
-  camera.model_id = CameraModelId::kSimpleRadial;
-  camera.width = width;
-  camera.height = height;
-  camera.params = {focal_length_px, width / 2.0, height / 2.0, 0.0};
-  camera.calibration = Calibration::kFocalPrior;
-  camera.source = source;
-  return camera;
-}
-
 Query LoadPhotoQuery(const std::filesystem::path& path, const std::string& name,
                      const PhotoOptions& options) {
   const Stopwatch time;
@@ -41,12 +29,7 @@ Query PhotoQueryFromBytes(std::span<const uint8_t> bytes, const std::string& sou
   if (const auto exif = ReadExifFocal(bytes, width, height)) {
     query.camera = FocalPriorCamera(exif->focal_length_px, width, height, IntrinsicsSource::kExif);
   } else {
-    query.camera.model_id = CameraModelId::kSimplePinhole;
-    query.camera.width = width;
-    query.camera.height = height;
-    query.camera.params = {0.0, width / 2.0, height / 2.0};
-    query.camera.calibration = Calibration::kUnknown;
-    query.camera.source = IntrinsicsSource::kNone;
+    query.camera = UnknownFocalCamera(width, height, IntrinsicsSource::kNone);
   }
   ExtractPhotoFeatures(std::move(image), options, &query);
   if (const auto gps = ReadExifGps(bytes))

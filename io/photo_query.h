@@ -36,8 +36,4 @@ Query PhotoQueryFromBytes(std::span<const uint8_t> bytes, const std::string& sou
 // Throws InputError naming query->Source() when no feature is found.
 void ExtractPhotoFeatures(GreyImage image, const PhotoOptions& options, Query* query);
 
-// The camera of a focal prior for a width x height image: SIMPLE_RADIAL (f, w/2, h/2, 0).
-QueryCamera FocalPriorCamera(double focal_length_px, uint32_t width, uint32_t height,
-                             IntrinsicsSource source);
-
 }  // namespace cwloc

@@ -60,7 +60,7 @@ std::unordered_map<std::string, QueryPriors> ReadPriorsFile(const std::filesyste
       query.position = {
           CheckedGeoRegion((*v)[0], (*v)[1], no_height ? std::nullopt : std::optional((*v)[2]),
                            (*v)[3], where),
-          PriorSource::kPriorsFile};
+          PriorSource::kFile};
     } else if (kind == "gravity") {
       const auto v = ParseFiniteNumbers(rest);
       if (!v) throw InputError(where + ": a gravity field is not a number");

@@ -37,11 +37,16 @@ nlohmann::ordered_json Rows(const Eigen::MatrixXd& matrix) {
 }
 
 nlohmann::ordered_json CovarianceToJson(const PoseCovariance& covariance,
+                                        const std::optional<CovarianceScales>& calibration,
                                         const std::optional<Eigen::Matrix3d>& enu_position) {
   nlohmann::ordered_json out;
   out["pose"] = Rows(covariance.pose);
   out["position_radius95"] = Radius95(covariance.Position());
   if (covariance.focal_std_px) out["focal_std_px"] = *covariance.focal_std_px;
+  out["calibration"] = calibration
+                           ? nlohmann::ordered_json{{"rotation_scale", calibration->rotation},
+                                                    {"position_scale", calibration->position}}
+                           : nlohmann::ordered_json();
   if (enu_position) {
     out["enu_position"] = Rows(*enu_position);
     out["position_radius95_m"] = Radius95(*enu_position);
@@ -75,7 +80,8 @@ nlohmann::ordered_json ResultToJson(const LocalizationResult& result, const Quer
         {"weakly_constrained", WeaklyConstrained(*coupling, result.camera.params.at(0))}};
   }
   if (const auto& covariance = result.covariance) {
-    out["covariance"] = CovarianceToJson(*covariance, result.enu_position_covariance);
+    out["covariance"] = CovarianceToJson(*covariance, result.covariance_calibration,
+                                         result.enu_position_covariance);
   }
   if (result.geo) {
     const GeoPose& g = *result.geo;

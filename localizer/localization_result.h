@@ -56,6 +56,9 @@ struct LocalizationResult {
   // On success (refine_pose.h), and with a georeferenced index the centre's covariance in
   // square metres in the local east-north-up frame at the camera.
   std::optional<PoseCovariance> covariance;
+  // The index's calibration that `covariance` holds; empty when the index has none for the
+  // query's calibration mode (the covariance then knows the keypoints' noise only).
+  std::optional<CovarianceScales> covariance_calibration;
   std::optional<Eigen::Matrix3d> enu_position_covariance;
   PriorUse priors;
   std::optional<PhotoInfo> photo;

@@ -327,6 +327,22 @@ void ReportMatching(const Index& index, const Query& query, const MatcherOutput&
 
 // The pose stage's answer, into the result: the pose, its inliers, the camera as estimated, the
 // covariance and, on a georeferenced index, the pose on the globe; or why there is none.
+// Widens the covariance by the index's calibration for the query's calibration mode (PCAL);
+// empty when the index has none for it.
+std::optional<CovarianceScales> ApplyCovarianceCalibration(
+    const IndexCovarianceCalibration* calibration, Calibration mode, PoseCovariance* covariance) {
+  const auto m = static_cast<size_t>(mode);
+  if (calibration == nullptr || calibration->position_scale[m] <= 0 ||
+      calibration->rotation_scale[m] <= 0)
+    return std::nullopt;
+  const CovarianceScales scales{calibration->rotation_scale[m], calibration->position_scale[m]};
+  Eigen::Matrix<double, 6, 1> root;
+  root << Eigen::Vector3d::Constant(std::sqrt(scales.rotation)),
+      Eigen::Vector3d::Constant(std::sqrt(scales.position));
+  covariance->pose = root.asDiagonal() * covariance->pose * root.asDiagonal();
+  return scales;
+}
+
 void ReportPose(const Index& index, const std::optional<IndexGeo>& geo, const Query& query,
                 const MatcherOutput& matched, const QueryPose& fit, LocalizationResult* result) {
   const AbsolutePoseResult& pose = fit.pose;
@@ -346,8 +362,14 @@ void ReportPose(const Index& index, const std::optional<IndexGeo>& geo, const Qu
   result->center = {center.x(), center.y(), center.z()};
   if (geo) result->geo = geo->PoseOnGlobe(p.rotation, center);
   result->covariance = pose.covariance;
-  if (geo && pose.covariance)
-    result->enu_position_covariance = geo->LocalEnuCovariance(center, pose.covariance->Position());
+  if (result->covariance) {
+    result->covariance_calibration = ApplyCovarianceCalibration(
+        index.covariance_calibration(), query.camera.calibration, &*result->covariance);
+  }
+  if (geo && result->covariance) {
+    result->enu_position_covariance =
+        geo->LocalEnuCovariance(center, result->covariance->Position());
+  }
   for (size_t i = 0; i < pose.inliers.size(); ++i) {
     if (!pose.inliers[i]) continue;
     const FeatureMatch& match = matched.correspondences[fit.used[i]];

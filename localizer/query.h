@@ -61,6 +61,23 @@ struct QueryCamera {
   std::array<double, 2> ImageCenter() const { return {width / 2.0, height / 2.0}; }
 };
 
+// The camera of a focal prior for a width x height image: SIMPLE_RADIAL (f, w/2, h/2, 0).
+inline QueryCamera FocalPriorCamera(double focal_length_px, uint32_t width, uint32_t height,
+                                    IntrinsicsSource source) {
+  return {CameraModelId::kSimpleRadial,
+          width,
+          height,
+          {focal_length_px, width / 2.0, height / 2.0, 0.0},
+          Calibration::kFocalPrior,
+          source};
+}
+
+// A width x height image's camera when only its size is known: SIMPLE_PINHOLE (0, w/2, h/2).
+inline QueryCamera UnknownFocalCamera(uint32_t width, uint32_t height, IntrinsicsSource source) {
+  return {CameraModelId::kSimplePinhole, width, height, {0.0, width / 2.0, height / 2.0},
+          Calibration::kUnknown,         source};
+}
+
 // A photo's EXIF GPS position (its altitude, above mean sea level, is not kept).
 struct GpsFix {
   double latitude_deg = 0;
@@ -78,7 +95,7 @@ struct PhotoInfo {
 };
 
 // Where a query's prior came from, reported in the JSON.
-enum class PriorSource { kOption, kPriorsFile, kExif };
+enum class PriorSource { kOption, kFile, kExif };
 inline constexpr std::array<std::string_view, 3> kPriorSourceNames = {"option", "priors-file",
                                                                       "exif"};
 

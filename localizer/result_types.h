@@ -47,6 +47,14 @@ struct TrackingInfo {
   double seconds = 0;  // the tracker's whole time on the frame, relocalization included
 };
 
+// How much the index's calibration (built with the index from model images left out and
+// localized, docs/algorithm.md "Pose uncertainty") widened a pose's covariance: its rotation
+// block by `rotation`, its centre block by `position`, the cross terms by the root of both.
+struct CovarianceScales {
+  double rotation = 1;
+  double position = 1;
+};
+
 // A localized camera on the globe, when the index is georeferenced (docs/geo.md defines the
 // angles).
 struct GeoPose {

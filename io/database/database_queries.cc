@@ -38,11 +38,7 @@ Query DatabaseQueries::Load(const std::string& name) const {
   query.camera.calibration = prior != prior_focal_lengths_.end() && !prior->second
                                  ? Calibration::kUnknown
                                  : Calibration::kFocalPrior;
-  query.keypoints.reserve(features.keypoints.size() * 2);
-  for (const colmap::Keypoint& keypoint : features.keypoints) {
-    query.keypoints.push_back(keypoint.x);
-    query.keypoints.push_back(keypoint.y);
-  }
+  query.keypoints = colmap::KeypointPositions(features.keypoints);
   query.descriptors = std::move(features.descriptors.data);
   return query;
 }

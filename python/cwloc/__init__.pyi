@@ -93,11 +93,16 @@ class GeoPose:
     pitch_deg: float
     roll_deg: float
 
+class CovarianceScales:
+    rotation: float
+    position: float
+
 class PoseCovariance:
     pose: npt.NDArray[np.float64]
     position: npt.NDArray[np.float64]
     position_radius95: float
     focal_std_px: Optional[float]
+    calibration: Optional[CovarianceScales]
     enu_position: Optional[npt.NDArray[np.float64]]
     position_radius95_m: Optional[float]
 

@@ -87,6 +87,12 @@ void BindParts(py::module_& m) {
       .def_readonly("pitch_deg", &api::GeoPose::pitch_deg, "Above the horizon")
       .def_readonly("roll_deg", &api::GeoPose::roll_deg, "About the optical axis");
 
+  py::class_<api::CovarianceScales>(
+      m, "CovarianceScales",
+      "What the index's calibration multiplied a pose covariance's blocks by.")
+      .def_readonly("rotation", &api::CovarianceScales::rotation, "The rotation block's factor")
+      .def_readonly("position", &api::CovarianceScales::position, "The centre block's factor");
+
   py::class_<api::PoseCovariance>(m, "PoseCovariance",
                                   "How well the refined pose is known (docs/algorithm.md).")
       .def_property_readonly(
@@ -109,6 +115,9 @@ void BindParts(py::module_& m) {
       .def_property_readonly(
           "focal_std_px", [](const api::PoseCovariance& c) { return OrNone(c.focal_std_px); },
           "Standard deviation of an estimated focal length, or None")
+      .def_property_readonly(
+          "calibration", [](const api::PoseCovariance& c) { return OrNone(c.calibration); },
+          "CovarianceScales the index's calibration widened pose by, or None")
       .def_property_readonly(
           "enu_position",
           [](const api::PoseCovariance& c) -> py::object {

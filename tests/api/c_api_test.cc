@@ -351,6 +351,9 @@ TEST_F(CApiGeoTest, CovarianceIsNotAvailableWithoutAPose) {
   EXPECT_STREQ(cwloc_last_error(), "covariance: the query was not localized");
   EXPECT_EQ(cwloc_result_enu_covariance(result, nullptr, &radius), CWLOC_ERROR_NOT_AVAILABLE);
   EXPECT_STREQ(cwloc_last_error(), "ENU covariance: the query was not localized");
+  EXPECT_EQ(cwloc_result_covariance_calibration(result, nullptr, nullptr),
+            CWLOC_ERROR_NOT_AVAILABLE);
+  EXPECT_STREQ(cwloc_last_error(), "covariance calibration: the query was not localized");
   EXPECT_EQ(cwloc_result_covariance(nullptr, pose, &radius), CWLOC_ERROR_INVALID_ARGUMENT);
   EXPECT_STREQ(cwloc_result_json(nullptr), "");
   EXPECT_NE(std::string(cwloc_result_json(result)).find("\"success\":false"), std::string::npos);
@@ -389,6 +392,13 @@ TEST_F(CApiGeoTest, MissingValuesAreNotAvailableSayingWhy) {
   EXPECT_STREQ(cwloc_last_error(), "geo pose: the index is not georeferenced");
   EXPECT_EQ(cwloc_result_gravity_error(result, &error_deg), CWLOC_ERROR_NOT_AVAILABLE);
   EXPECT_EQ(cwloc_result_position_prior(result, &used, &clusters), CWLOC_ERROR_NOT_AVAILABLE);
+  // A 1.0 index has no calibration: the covariance is the keypoints' alone.
+  double rotation_scale = 0, position_scale = 0;
+  EXPECT_EQ(cwloc_result_covariance(result, nullptr, nullptr), CWLOC_OK);
+  EXPECT_EQ(cwloc_result_covariance_calibration(result, &rotation_scale, &position_scale),
+            CWLOC_ERROR_NOT_AVAILABLE);
+  EXPECT_STREQ(cwloc_last_error(),
+               "covariance calibration: the index has none for the query's calibration mode");
   cwloc_result_destroy(result);
 
   // ... and priors there are the caller's mistake, with the pipeline's message.

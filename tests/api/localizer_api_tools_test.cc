@@ -351,6 +351,15 @@ TEST_F(LocalizerApiGeoToolsTest, GeoPosesAndPriorsAreCwlocLocalizesBitForBit) {
     EXPECT_EQ(c_enu, *covariance.enu_position);
     EXPECT_EQ(c_radius, covariance.position_radius95);
     EXPECT_EQ(c_radius_m, *covariance.position_radius95_m);
+    // The index has cwloc-index build's default calibration.
+    ASSERT_TRUE(covariance.calibration);
+    double c_rotation_scale = 0, c_position_scale = 0;
+    ASSERT_EQ(cwloc_result_covariance_calibration(c_result, &c_rotation_scale, &c_position_scale),
+              CWLOC_OK);
+    EXPECT_EQ(c_rotation_scale, covariance.calibration->rotation);
+    EXPECT_EQ(c_position_scale, covariance.calibration->position);
+    EXPECT_GE(c_position_scale, 1.0);
+    EXPECT_EQ(json["covariance"]["calibration"]["position_scale"], c_position_scale);
     // The record is cwloc-localize's but for the query's name, the times and the priors' source.
     nlohmann::json c_json = nlohmann::json::parse(cwloc_result_json(c_result));
     EXPECT_EQ(c_json["name"], "query");

@@ -58,7 +58,7 @@ TEST_F(IndexCliTest, BuildInfoAndVerifySucceed) {
   EXPECT_EQ(Run("info " + index_path_.string(), &output), 0) << output;
   EXPECT_THAT(output, HasSubstr("10 images, 400 points"));
   EXPECT_EQ(Run("verify " + index_path_.string(), &output), 0) << output;
-  EXPECT_THAT(output, HasSubstr(": OK: 14 section checksums and every stored index verified"));
+  EXPECT_THAT(output, HasSubstr(": OK: 15 section checksums and every stored index verified"));
 }
 
 TEST_F(IndexCliTest, InfoJsonValidatesAgainstItsSchema) {
@@ -76,15 +76,15 @@ TEST_F(IndexCliTest, CompactBuildSaysHowItStoresDescriptorsInInfoAndItsSchema) {
   ASSERT_NO_FATAL_FAILURE(Build(" --compact"));
   std::string output;
   EXPECT_EQ(Run("info " + index_path_.string(), &output), 0) << output;
-  EXPECT_THAT(output, HasSubstr(": cwloc index format 1.2, "));
+  EXPECT_THAT(output, HasSubstr(": cwloc index format 1.3, "));
   EXPECT_THAT(output, testing::ContainsRegex(
                           "descriptors: one 32-byte product-quantization code per 3D point "
                           "\\([0-9.]+ views per point\\)"));
   EXPECT_EQ(Run("verify " + index_path_.string(), &output), 0) << output;
-  EXPECT_THAT(output, HasSubstr(": OK: 16 section checksums and every stored index verified"));
+  EXPECT_THAT(output, HasSubstr(": OK: 17 section checksums and every stored index verified"));
   ASSERT_EQ(Run("info --json " + index_path_.string(), &output), 0) << output;
   const auto info = nlohmann::json::parse(output);
-  EXPECT_EQ(info["format_version"], "1.2");
+  EXPECT_EQ(info["format_version"], "1.3");  // PCAL
   EXPECT_EQ(info["manifest"]["build_parameters"]["descriptors"]["code_bytes"], 32);
   EXPECT_DOUBLE_EQ(info["bytes_per_view"].get<double>(),
                    double(info["file_bytes"].get<uint64_t>()) /
@@ -130,7 +130,7 @@ TEST_F(IndexCliTest, VerifyReportsAFlippedByteInEverySection) {
     const IndexFile file = IndexFile::Open(index_path_);
     entries.assign(file.sections().begin(), file.sections().end());
   }
-  ASSERT_EQ(entries.size(), 14u);
+  ASSERT_EQ(entries.size(), 15u);
   // Named strings: "literal" + a temporary std::string trips GCC 12's -Wrestrict.
   const std::string corrupt = (dir_ / "corrupt.cwl").string();
   for (const SectionEntry& entry : entries) {
@@ -169,7 +169,7 @@ TEST_F(IndexCliTest, DamagedFilesGiveTheirOwnErrors) {
   WriteCorrupt(newer);
   EXPECT_EQ(Run("info " + corrupt, &output), 2);
   EXPECT_THAT(output,
-              HasSubstr("index format 3.1 is not readable by this cwloc, which reads format 1.x"));
+              HasSubstr("index format 3.3 is not readable by this cwloc, which reads format 1.x"));
 
   EXPECT_EQ(Run("info " + (dir_ / "missing.cwl").string(), &output), 2);
   EXPECT_THAT(output, HasSubstr("missing.cwl: cannot open: No such file or directory"));

@@ -88,6 +88,7 @@ TEST(MatchingSceneTest, ItsIndexIsTheIndexOfItsModel) {
   options.database_path = dir / "database.db";
   options.output_path = dir / "built.cwl";
   options.threads = 2;
+  options.calibration_samples = 0;  // the scene's index has no PCAL
   BuildIndex(options);
 
   const IndexFile built = IndexFile::Open(dir / "built.cwl");

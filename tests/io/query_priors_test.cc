@@ -84,7 +84,7 @@ TEST_F(PriorsFileTest, ReadsPositionsAndGravityPerQuery) {
   EXPECT_DOUBLE_EQ(q1.position->latitude_deg, 48.1);
   EXPECT_DOUBLE_EQ(*q1.position->height_m, 520.25);
   EXPECT_DOUBLE_EQ(q1.position->radius_m, 50);
-  EXPECT_EQ(q1.position->source, PriorSource::kPriorsFile);
+  EXPECT_EQ(q1.position->source, PriorSource::kFile);
   EXPECT_EQ(*q1.gravity, (std::array<double, 3>{0, 1, 0}));
   const QueryPriors& q2 = priors.at("q2.jpg");
   EXPECT_FALSE(q2.position->height_m.has_value());

@@ -34,10 +34,21 @@ TEST(EndToEndTest, EveryQueryOfTheDemoCityIsLocalizedNearItsGroundTruth) {
       << output;
   ASSERT_EQ(test::RunCommand(test::ToolPath("cwloc-index").string() + " build --model " +
                                  (city / "mapping_model" / "bin").string() + " --database " +
-                                 (city / "database.db").string() + " -o " + index.string(),
+                                 (city / "database.db").string() + " -o " + index.string() +
+                                 " --threads 2",
                              &output),
             0)
       << output;
+  // The covariance calibration localizes the folds' images on threads; the file is the same.
+  const auto one_thread = dir / "one_thread.cwl";
+  ASSERT_EQ(test::RunCommand(test::ToolPath("cwloc-index").string() + " build --model " +
+                                 (city / "mapping_model" / "bin").string() + " --database " +
+                                 (city / "database.db").string() + " -o " + one_thread.string() +
+                                 " --threads 1",
+                             &output),
+            0)
+      << output;
+  EXPECT_EQ(test::ReadBytes(index), test::ReadBytes(one_thread));
   // Exit 0 means every query was localized (1 would be "some query not localized").
   EXPECT_EQ(
       test::RunCommand(test::ToolPath("cwloc-localize").string() + " --index " + index.string() +
@@ -61,6 +72,8 @@ TEST(EndToEndTest, EveryQueryOfTheDemoCityIsLocalizedNearItsGroundTruth) {
     ASSERT_TRUE(truth.contains(name));
     EXPECT_TRUE(seen.insert(name).second) << "reported twice";
     ASSERT_TRUE(result.value("success", false)) << result.dump();
+    // Calibrated by the build in every mode (30 samples of 134 images; 5 must localize).
+    EXPECT_GE(result.at("covariance").at("calibration").at("position_scale").get<double>(), 1.0);
     const test::PoseError error =
         test::ErrorOf(test::PoseOfResult(result), truth.at(name).pose, metres_per_unit);
     EXPECT_LT(error.position_m, kMaxPositionErrorM);

@@ -227,6 +227,13 @@ CWLOC_C_API cwloc_status cwloc_result_gravity_error(const cwloc_result* result, 
  * may be NULL. */
 CWLOC_C_API cwloc_status cwloc_result_covariance(const cwloc_result* result, double pose[36],
                                                  double* position_radius95);
+/* What the index's calibration (cwloc-index build --calibration-samples) multiplied the
+ * covariance by: its rotation block by rotation_scale, its centre block by position_scale (the
+ * cross terms by the root of both); CWLOC_ERROR_NOT_AVAILABLE when the query was not localized
+ * or the index has no calibration for its calibration mode. Either output may be NULL. */
+CWLOC_C_API cwloc_status cwloc_result_covariance_calibration(const cwloc_result* result,
+                                                             double* rotation_scale,
+                                                             double* position_scale);
 /* A georeferenced index: the centre's 3 x 3 covariance in square metres in the local
  * east-north-up frame at the camera, row-major, and its 95 % radius in metres;
  * CWLOC_ERROR_NOT_AVAILABLE otherwise. Either output may be NULL. */

@@ -105,6 +105,7 @@ struct CWLOC_API Options {
 
 // A model image and its votes, a stage's seconds, a camera on the globe: the localizer's own
 // plain types (cwloc/result_types.h).
+using cwloc::CovarianceScales;
 using cwloc::GeoPose;
 using cwloc::RankedImage;
 using cwloc::StageTimes;
@@ -131,6 +132,9 @@ struct PoseCovariance {
   std::array<double, 36> pose{};
   double position_radius95 = 0;        // model units: C's 95 % ellipsoid lies within it
   std::optional<double> focal_std_px;  // when the focal length was estimated
+  // What the index's calibration widened `pose` by; empty when the index has none for the
+  // query's calibration mode (the covariance then knows the keypoints' noise only).
+  std::optional<CovarianceScales> calibration;
   // A georeferenced index: C's 3 x 3 covariance in square metres, row-major, in the local
   // east-north-up frame at the camera, and its 95 % radius in metres.
   std::optional<std::array<double, 9>> enu_position;
