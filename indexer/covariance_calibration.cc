@@ -36,7 +36,8 @@ struct SampleError {
 std::vector<uint32_t> SampledImages(size_t num_images, uint32_t samples) {
   const size_t n = std::min<size_t>(num_images, samples);
   std::vector<uint32_t> rows(n);
-  for (size_t k = 0; k < n; ++k) rows[k] = static_cast<uint32_t>((2 * k + 1) * num_images / (2 * n));
+  for (size_t k = 0; k < n; ++k)
+    rows[k] = static_cast<uint32_t>((2 * k + 1) * num_images / (2 * n));
   return rows;
 }
 
@@ -65,8 +66,8 @@ QueryCamera SampleCamera(const IndexCamera& camera, Calibration mode) {
   const auto model = static_cast<CameraModelId>(camera.model_id);
   switch (mode) {
     case Calibration::kKnown:
-      return {model, camera.width, camera.height, params, Calibration::kKnown,
-              IntrinsicsSource::kDatabase};
+      return {model,  camera.width,        camera.height,
+              params, Calibration::kKnown, IntrinsicsSource::kDatabase};
     case Calibration::kFocalPrior:
       return FocalPriorCamera(MeanFocalLength(model, params), camera.width, camera.height,
                               IntrinsicsSource::kDatabase);
@@ -135,10 +136,11 @@ CovarianceCalibration CalibrateCovariance(const ModelViews& views,
                                           const std::string& clustering_method,
                                           const colmap::DatabaseReader& database,
                                           const IndexBuildOptions& options) {
-  const std::vector<uint32_t> samples = SampledImages(views.images.size(), options.calibration_samples);
-  const size_t fold_size = std::max<size_t>(
-      {1, static_cast<size_t>(kCalibrationFoldShare * double(views.images.size())),
-       (samples.size() + kCalibrationMaxFolds - 1) / kCalibrationMaxFolds});
+  const std::vector<uint32_t> samples =
+      SampledImages(views.images.size(), options.calibration_samples);
+  const size_t fold_size =
+      std::max<size_t>({1, static_cast<size_t>(kCalibrationFoldShare * double(views.images.size())),
+                        (samples.size() + kCalibrationMaxFolds - 1) / kCalibrationMaxFolds});
   const size_t num_folds = (samples.size() + fold_size - 1) / fold_size;
   const int threads = ResolveThreads(options.threads);
   const bool coded = options.code_bytes != 0;
@@ -171,8 +173,8 @@ CovarianceCalibration CalibrateCovariance(const ModelViews& views,
         clustering.cluster_of_image.push_back(image.cluster);
         clustering.num_clusters = std::max(clustering.num_clusters, image.cluster + 1);
       }
-      const CovisibilityGraph graph = BuildCovisibilityGraph(
-          rest.images, rest.points, rest.tracks, rest.view_points, threads);
+      const CovisibilityGraph graph =
+          BuildCovisibilityGraph(rest.images, rest.points, rest.tracks, rest.view_points, threads);
       IndexBuildReport ignored;
       WriteIndexOfViews(std::move(rest), clustering, graph, fold_options, nullptr, nullptr, {},
                         fold_path, &ignored);

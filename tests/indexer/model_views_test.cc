@@ -1,11 +1,12 @@
 // ModelViews: what the index stores about a model, and the model without some of its images.
+#include "indexer/model_views.h"
+
 #include <gtest/gtest.h>
 
 #include <fstream>
 #include <set>
 
 #include "colmap/reconstruction_io.h"
-#include "indexer/model_views.h"
 #include "tests/test_util.h"
 
 namespace cwloc {
