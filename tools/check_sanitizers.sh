@@ -37,6 +37,7 @@ case "$mode" in
     asan_skipped+='|^SharedPhotoTest\.HerzJesu(FastModeSkipsTheDoubledOctave|FocalOptionIsAPrior|FocalUnknownWithinFiveCentimetres)$'  # SceauxCastleFromTheExifFocal
     asan_skipped+='|^LocalizeCliHerzJesu\.BuiltinRefinerGivesCeresPoses$'  # RefinerAgreementTest
     asan_skipped+='|^NeighborDistances\.LargeClustersAreNearlyExactAndNeverTooSmall$'  # every index build
+    asan_skipped+='|^RealCaptures/CovarianceCalibrationTest\.'  # EndToEndTest (calibrated builds)
     # Our SIFT against COLMAP's features at 1600 px (23 s sanitized): SiftCwlocTest and
     # SiftImplementationTest run the same extraction sanitized on smaller images. (A
     # parameterised test's ctest name goes on with "  # GetParam() = ...": no $ after it.)

@@ -23,7 +23,7 @@ namespace {
 class CovarianceCalibrationTest : public testing::TestWithParam<std::string> {};
 
 TEST_P(CovarianceCalibrationTest, HeldOutQueriesFallInsideTheirCalibrated95PercentRegion) {
-  const auto shared = test::BuildSharedDataIndex(GetParam());
+  const auto shared = test::BuildSharedDataIndex(GetParam(), 0, /*calibrated=*/true);
   if (!shared) GTEST_SKIP() << "shared data '" << GetParam() << "' not found; skipping";
   const Index index = Index::Open(shared->index);
   const IndexCovarianceCalibration* calibration = index.covariance_calibration();

@@ -67,7 +67,7 @@ class GeoLocalizationTest : public testing::Test {
                                      (city / "mapping_model" / "bin").string() + " --database " +
                                      (city / "database.db").string() + " --georef " +
                                      (city / "georef.txt").string() + " -o " +
-                                     (out / "city.cwl").string(),
+                                     (out / "city.cwl").string() + " --calibration-samples 0",
                                  &output),
                 0)
           << output;
@@ -195,7 +195,8 @@ TEST_F(GeoLocalizationTest, PriorsOnAnIndexWithoutGeoreferenceAreABadQuery) {
   std::string output;
   ASSERT_EQ(test::RunCommand(test::ToolPath("cwloc-index").string() + " build --model " +
                                  (City() / "mapping_model" / "bin").string() + " --database " +
-                                 (City() / "database.db").string() + " -o " + plain.string(),
+                                 (City() / "database.db").string() + " -o " + plain.string() +
+                                 " --calibration-samples 0",
                              &output),
             0);
   const auto results = *dir_ / "plain.jsonl";

@@ -33,8 +33,11 @@ class TileTest : public testing::TestWithParam<bool> {
       for (const bool compact : {false, true}) {
         ASSERT_EQ(Index("build --model " + (city / "mapping_model" / "bin").string() +
                             " --database " + (city / "database.db").string() + " --georef " +
-                            (city / "georef.txt").string() + (compact ? " --compact" : "") +
-                            " -o " + (out / (compact ? "compact.cwl" : "full.cwl")).string(),
+                            (city / "georef.txt").string() +
+                            // The full parent's PCAL must reach its tiles; the compact
+                            // calibration would train codes per fold.
+                            (compact ? " --compact --calibration-samples 0" : "") + " -o " +
+                            (out / (compact ? "compact.cwl" : "full.cwl")).string(),
                         &output),
                   0)
             << output;
@@ -100,6 +103,10 @@ TEST_P(TileTest, ATileOfEveryClusterHoldsTheParentsSectionsBitForBit) {
   parent.erase(parent.begin());
   copy.erase(copy.begin());
   EXPECT_EQ(parent, copy);
+  // The full parent is calibrated: its PCAL is among the copied sections.
+  EXPECT_EQ(std::count_if(copy.begin(), copy.end(),
+                          [](const std::string& section) { return section.starts_with("PCAL "); }),
+            compact ? 0 : 1);
 }
 
 TEST_P(TileTest, ATileLocalizesItsQueriesAsTheWholeIndexWithTheSamePrior) {
@@ -201,7 +208,8 @@ class ClusteredTileTest : public testing::Test {
       ASSERT_EQ(test::RunCommand(test::ToolPath("cwloc-index").string() + " build --model " +
                                      (out / "city" / "mapping_model" / "bin").string() +
                                      " --database " + (out / "city" / "database.db").string() +
-                                     " --clusters 12 -o " + (out / "clustered.cwl").string(),
+                                     " --clusters 12 --calibration-samples 0 -o " +
+                                     (out / "clustered.cwl").string(),
                                  &output),
                 0)
           << output;
