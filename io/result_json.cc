@@ -1,5 +1,6 @@
 #include "io/result_json.h"
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <type_traits>
@@ -54,6 +55,42 @@ nlohmann::ordered_json CovarianceToJson(const PoseCovariance& covariance,
   return out;
 }
 
+// Which distortion model a localized query was fitted with, and why.
+nlohmann::ordered_json DistortionToJson(const LocalizationResult& result) {
+  nlohmann::ordered_json out;
+  out["model"] = std::string(CameraModelName(result.camera.model_id));
+  out["fit"] = std::string(kDistortionFitNames[static_cast<size_t>(result.distortion_fit)]);
+  switch (result.distortion_fit) {
+    case DistortionFit::kGiven:
+      out["why"] = "the camera was known: its own model and parameters, held fixed";
+      break;
+    case DistortionFit::kHeldAtZero:
+      out["k"] = 0.0;
+      out["why"] =
+          "the focal length was estimated without the final refinement (--no-refine, a latency "
+          "budget, or a refined camera that was not sane), so k stayed 0";
+      break;
+    case DistortionFit::kEstimated: {
+      const double k = result.camera.params.back();
+      out["k"] = k;
+      std::string why =
+          "the camera was not known: one radial term k was refined with the focal length, as "
+          "COLMAP's registrator refines a camera that no registered image has refined";
+      if (result.covariance && result.covariance->distortion_std) {
+        const double k_std = *result.covariance->distortion_std;
+        out["k_std"] = k_std;
+        out["k_significant"] = std::abs(k) >= 2.0 * k_std;
+        why += std::abs(k) >= 2.0 * k_std
+                   ? "; the data constrain it (|k| is at least 2 standard deviations)"
+                   : "; the data hardly constrain it (|k| is under 2 standard deviations)";
+      }
+      out["why"] = why;
+      break;
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
 nlohmann::ordered_json ResultToJson(const LocalizationResult& result, const QueryOptions& options) {
@@ -72,6 +109,7 @@ nlohmann::ordered_json ResultToJson(const LocalizationResult& result, const Quer
                    {"focal_estimated", result.focal_estimated},
                    {"calibration", std::string(CalibrationName(result.camera.calibration))},
                    {"intrinsics_source", std::string(IntrinsicsSourceName(result.camera.source))}};
+  if (result.success) out["camera"]["distortion"] = DistortionToJson(result);
   if (const auto& coupling = result.focal_depth) {
     out["focal_depth"] = {
         {"correlation", coupling->correlation},

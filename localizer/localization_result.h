@@ -29,6 +29,15 @@ struct PriorUse {
   std::optional<double> gravity_error_deg;
 };
 
+// How a localized query's lens distortion was fitted (the JSON's camera.distortion says why).
+enum class DistortionFit {
+  kGiven,       // a known camera: its own model and parameters, held fixed
+  kEstimated,   // SIMPLE_RADIAL's k refined with the focal length
+  kHeldAtZero,  // focal estimated, k left at 0: the refinement did not run or kept no camera
+};
+inline constexpr std::array<std::string_view, 3> kDistortionFitNames = {"given", "estimated",
+                                                                        "held-at-zero"};
+
 struct LocalizationResult {
   std::string name;
   bool success = false;
@@ -39,6 +48,7 @@ struct LocalizationResult {
   std::array<double, 3> center{0, 0, 0};
   QueryCamera camera;  // as used; the estimated focal when it was unknown
   bool focal_estimated = false;
+  DistortionFit distortion_fit = DistortionFit::kGiven;  // on success
   // An estimated focal length: how well it is told apart from the depth (refine_pose.h).
   std::optional<FocalDepthUncertainty> focal_depth;
   // The result's numbers: num_inliers, the match counts, ... (result_fields.inc).

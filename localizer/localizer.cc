@@ -377,6 +377,8 @@ void ReportPose(const Index& index, const std::optional<IndexGeo>& geo, const Qu
   }
   if (!query.camera.FocalKnown()) {
     result->focal_estimated = true;
+    // The pose stage refines k with f whenever it refines (absolute_pose.h).
+    result->distortion_fit = pose.refined ? DistortionFit::kEstimated : DistortionFit::kHeldAtZero;
     result->camera.model_id = CameraModelId::kSimpleRadial;
     result->camera.params = EstimatedCameraParams(query.camera, pose);
     result->focal_depth = pose.focal_depth;

@@ -202,6 +202,10 @@ std::optional<PoseCovariance> PoseCovarianceAt(std::span<const Eigen::Vector2d> 
   out.pose = 0.5 * (out.pose + out.pose.transpose()).eval();
   if (!out.pose.allFinite() || !(out.pose.diagonal().array() > 0.0).all()) return std::nullopt;
   if (problem.refine_focal_length) out.focal_std_px = std::sqrt((*covariance)(6, 6));
+  if (problem.radial && problem.refine_radial_distortion) {
+    const Eigen::Index k = 6 + Eigen::Index{problem.refine_focal_length};
+    out.distortion_std = std::sqrt((*covariance)(k, k));
+  }
   return out;
 }
 

@@ -134,7 +134,8 @@ inline bool WeaklyConstrained(const FocalDepthUncertainty& uncertainty, double f
 // units.
 struct PoseCovariance {
   Eigen::Matrix<double, 6, 6> pose = Eigen::Matrix<double, 6, 6>::Zero();
-  std::optional<double> focal_std_px;  // when the focal length was refined
+  std::optional<double> focal_std_px;    // when the focal length was refined
+  std::optional<double> distortion_std;  // of SIMPLE_RADIAL's k, when it was refined
 
   Eigen::Matrix3d Position() const { return pose.bottomRightCorner<3, 3>(); }
 };

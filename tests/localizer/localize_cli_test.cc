@@ -309,12 +309,14 @@ TEST_F(LocalizeCliTest, AbsurdParametersAreRejected) {
   EXPECT_THAT(output, HasSubstr("no queries"));
 }
 
-// cwloc-index on herz_jesu_p25's mapping model.
+// cwloc-index on herz_jesu_p25's mapping model; uncalibrated, since these tests are about the
+// CLI (covariance_calibration_test.cc tests the calibration on the shared index).
 void BuildHerzJesuIndex(const std::filesystem::path& data, const std::filesystem::path& index) {
   std::string output;
   ASSERT_EQ(test::RunCommand(test::ToolPath("cwloc-index").string() + " build --model " +
                                  (data / "mapping_model" / "bin").string() + " --database " +
-                                 (data / "database.db").string() + " -o " + index.string(),
+                                 (data / "database.db").string() + " -o " + index.string() +
+                                 " --calibration-samples 0",
                              &output),
             0)
       << output;
@@ -365,6 +367,17 @@ TEST(LocalizeCliHerzJesu, DatabaseCameraWithoutPriorIsAnUnknownFocal) {
     EXPECT_EQ(camera.at("model"), "SIMPLE_RADIAL");
     EXPECT_TRUE(camera.at("focal_estimated").get<bool>());
     EXPECT_NEAR(camera.at("params").at(0).get<double>(), 1375.77, 0.01 * 1375.77);
+    // Which distortion model, and why: k refined with f, with its standard deviation.
+    const auto& distortion = camera.at("distortion");
+    EXPECT_EQ(distortion.at("model"), "SIMPLE_RADIAL");
+    EXPECT_EQ(distortion.at("fit"), "estimated");
+    EXPECT_EQ(distortion.at("k"), camera.at("params").at(3));
+    EXPECT_GT(distortion.at("k_std").get<double>(), 0.0);
+    EXPECT_EQ(
+        distortion.at("k_significant").get<bool>(),
+        std::abs(distortion.at("k").get<double>()) >= 2 * distortion.at("k_std").get<double>());
+    EXPECT_THAT(distortion.at("why").get<std::string>(),
+                HasSubstr("the camera was not known: one radial term k was refined"));
     // Full frames: the estimated focal length is known to well under a pixel.
     const auto& focal_depth = result.at("focal_depth");
     EXPECT_LT(focal_depth.at("focal_std_px").get<double>(), 1.0);
@@ -450,6 +463,14 @@ TEST(LocalizeCliHerzJesu, LocalizesEveryQueryWithValidJsonAndPoses) {
   EXPECT_THAT(output, HasSubstr("localized 5 of 5 queries"));
   std::string validation;
   EXPECT_EQ(ValidateAgainstSchema(dir / "out.jsonl", &validation), 0) << validation;
+  for (const auto& result : test::ReadJsonLines(dir / "out.jsonl")) {
+    EXPECT_EQ(result.at("camera").at("distortion"),
+              nlohmann::json({{"model", "SIMPLE_RADIAL"},
+                              {"fit", "given"},
+                              {"why",
+                               "the camera was known: its own model and parameters, "
+                               "held fixed"}}));
+  }
   std::ifstream poses(dir / "poses.txt");
   int lines = 0;
   for (std::string line; std::getline(poses, line); ++lines) {
