@@ -325,10 +325,9 @@ void ReportMatching(const Index& index, const Query& query, const MatcherOutput&
   result->times.back_matching = matched.seconds_back_matching;
 }
 
-// The pose stage's answer, into the result: the pose, its inliers, the camera as estimated, the
-// covariance and, on a georeferenced index, the pose on the globe; or why there is none.
-// Widens the covariance by the index's calibration for the query's calibration mode (PCAL);
-// empty when the index has none for it.
+// Widens the covariance by the index's calibration for the query's calibration mode (PCAL):
+// the rotation block by its rotation scale, the centre block by its position scale, the cross
+// terms by the root of both. Empty when the index has none for the mode.
 std::optional<CovarianceScales> ApplyCovarianceCalibration(
     const IndexCovarianceCalibration* calibration, Calibration mode, PoseCovariance* covariance) {
   const auto m = static_cast<size_t>(mode);
@@ -343,6 +342,8 @@ std::optional<CovarianceScales> ApplyCovarianceCalibration(
   return scales;
 }
 
+// The pose stage's answer, into the result: the pose, its inliers, the camera as estimated, the
+// covariance and, on a georeferenced index, the pose on the globe; or why there is none.
 void ReportPose(const Index& index, const std::optional<IndexGeo>& geo, const Query& query,
                 const MatcherOutput& matched, const QueryPose& fit, LocalizationResult* result) {
   const AbsolutePoseResult& pose = fit.pose;
