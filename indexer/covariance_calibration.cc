@@ -17,6 +17,7 @@
 #include "base/progress.h"
 #include "camera/camera_models.h"
 #include "format/index.h"
+#include "geo/index_georeference.h"
 #include "localizer/localizer.h"
 
 namespace cwloc {
@@ -96,14 +97,12 @@ std::optional<SampleError> NormalisedError(const LocalizationResult& result,
     return Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized().toRotationMatrix();
   };
   const Eigen::Matrix3d true_rotation = quaternion(truth.cam_from_world_rotation);
-  const Eigen::Vector3d true_center =
-      -true_rotation.transpose() * Eigen::Vector3d(truth.cam_from_world_translation);
   const Eigen::Matrix3d rotation = quaternion(result.rotation.data());
   // world_from_cam_estimate = exp([theta]x) world_from_cam_true (refine_pose.h).
   const Eigen::AngleAxisd turn(rotation.transpose() * true_rotation);
   const Eigen::Vector3d theta = turn.angle() * turn.axis();
   if (turn.angle() > kCalibrationWrongPoseDeg * M_PI / 180.0) return SampleError{0, 0, true};
-  const Eigen::Vector3d offset = Eigen::Vector3d(result.center.data()) - true_center;
+  const Eigen::Vector3d offset = Eigen::Vector3d(result.center.data()) - CameraCenterOf(truth);
   const auto& pose = result.covariance->pose;
   const Eigen::LDLT<Eigen::Matrix3d> rotation_block(pose.topLeftCorner<3, 3>());
   const Eigen::LDLT<Eigen::Matrix3d> position_block(pose.bottomRightCorner<3, 3>());

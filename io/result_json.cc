@@ -78,11 +78,11 @@ nlohmann::ordered_json DistortionToJson(const LocalizationResult& result) {
           "COLMAP's registrator refines a camera that no registered image has refined";
       if (result.covariance && result.covariance->distortion_std) {
         const double k_std = *result.covariance->distortion_std;
+        const bool significant = std::abs(k) >= 2.0 * k_std;
         out["k_std"] = k_std;
-        out["k_significant"] = std::abs(k) >= 2.0 * k_std;
-        why += std::abs(k) >= 2.0 * k_std
-                   ? "; the data constrain it (|k| is at least 2 standard deviations)"
-                   : "; the data hardly constrain it (|k| is under 2 standard deviations)";
+        out["k_significant"] = significant;
+        why += significant ? "; the data constrain it (|k| is at least 2 standard deviations)"
+                           : "; the data hardly constrain it (|k| is under 2 standard deviations)";
       }
       out["why"] = why;
       break;
