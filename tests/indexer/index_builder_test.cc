@@ -3,6 +3,7 @@
 #include <gmock/gmock.h>
 
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <set>
@@ -230,6 +231,38 @@ TEST_F(IndexBuilderTest, CovisibilityCountsSharedPointsSymmetrically) {
       stored[{i, edge.image_index}] = edge.shared_points;
   }
   EXPECT_EQ(stored, expected);
+}
+
+// PCAL's values are checked at open (the localizer scales every covariance by them), with a
+// message naming the file and the section; checksums are verify's.
+TEST_F(IndexBuilderTest, ACorruptCovarianceCalibrationIsRefusedAtOpen) {
+  BuildIndex(Options());
+  uint64_t offset = 0;
+  {
+    const Index index = Index::Open(index_path_);
+    ASSERT_NE(index.covariance_calibration(), nullptr);
+    EXPECT_EQ(index.covariance_calibration()->sampled, 10u);  // every fixture image
+    offset = index.file().FindSection(section::kCovarianceCalibration)->offset;
+  }
+  const auto open_error = [&](size_t field, const auto& value) {
+    std::vector<uint8_t> bytes = test::ReadBytes(index_path_);
+    std::memcpy(bytes.data() + offset + field, &value, sizeof(value));
+    const auto corrupt = dir_ / "corrupt.cwl";
+    test::WriteBytes(corrupt, bytes);
+    try {
+      Index::Open(corrupt);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("opened");
+  };
+  const std::string name = (dir_ / "corrupt.cwl").string();
+  EXPECT_EQ(open_error(offsetof(IndexCovarianceCalibration, position_scale), -1.0f),
+            name + ": section 'PCAL': scale -1.000000 is not a finite number >= 0");
+  EXPECT_EQ(open_error(offsetof(IndexCovarianceCalibration, rotation_scale) + 8, NAN),
+            name + ": section 'PCAL': scale nan is not a finite number >= 0");
+  EXPECT_EQ(open_error(offsetof(IndexCovarianceCalibration, localized), uint32_t{11}),
+            name + ": section 'PCAL': 11 samples localized of 10");
 }
 
 TEST_F(IndexBuilderTest, OutputIsByteIdenticalForTheSameInputAndAnyThreadCount) {
