@@ -8,6 +8,8 @@ packages=(
   libeigen3-dev libflann-dev libceres-dev libgeographiclib-dev
   libsqlite3-dev sqlite3 nlohmann-json3-dev libcli11-dev
   libgtest-dev libgmock-dev libbenchmark-dev libvlfeat-dev libstb-dev
+  # OpenGV: the generalized pose solvers' reference in tests only.
+  libopengv-dev
   libjpeg62-turbo-dev libpng-dev libexif-dev
   # Video files (cwloc-localize --video; never in the device build), and ffmpeg to make the
   # tests' videos.

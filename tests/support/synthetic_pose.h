@@ -99,6 +99,13 @@ CameraPose RandomPose(Rng& rng) {
   return CameraPose(q, -(q * center));
 }
 
+// A pose's distance from the truth: the rotation's angle (radians) plus the centre's distance
+// relative to the truth's distance from the origin (and `scale`, for centres near it).
+inline double PoseError(const CameraPose& estimate, const CameraPose& truth, double scale = 1.0) {
+  return estimate.rotation.angularDistance(truth.rotation) +
+         (estimate.Center() - truth.Center()).norm() / (scale + truth.Center().norm());
+}
+
 // Angle between two rotations, degrees.
 inline double RotationErrorDeg(const CameraPose& a, const CameraPose& b) {
   return a.rotation.angularDistance(b.rotation) * 180.0 / std::numbers::pi;

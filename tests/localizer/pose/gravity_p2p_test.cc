@@ -92,15 +92,10 @@ int Solve(const P2PProblem& p, std::vector<CameraPose>* poses) {
 
 // Rotation error (rad) plus centre error relative to the distance from the origin, in a scene
 // whose lengths are `scale` times those of RandomProblem's.
-double PoseError(const CameraPose& estimate, const CameraPose& truth, double scale = 1.0) {
-  return estimate.rotation.angularDistance(truth.rotation) +
-         (estimate.Center() - truth.Center()).norm() / (scale + truth.Center().norm());
-}
-
 double BestError(const std::vector<CameraPose>& poses, const CameraPose& truth,
                  double scale = 1.0) {
   double best = std::numeric_limits<double>::infinity();
-  for (const CameraPose& pose : poses) best = std::min(best, PoseError(pose, truth, scale));
+  for (const CameraPose& pose : poses) best = std::min(best, test::PoseError(pose, truth, scale));
   return best;
 }
 

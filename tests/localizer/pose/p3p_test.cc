@@ -31,11 +31,6 @@ P3PProblem RandomP3PProblem(std::mt19937_64& rng, double min_depth = 1.0, double
   return p;
 }
 
-double PoseError(const CameraPose& estimate, const CameraPose& truth) {
-  return estimate.rotation.angularDistance(truth.rotation) +
-         (estimate.Center() - truth.Center()).norm() / (1.0 + truth.Center().norm());
-}
-
 void ExpectValidSolutions(const std::vector<CameraPose>& poses, const P3PProblem& problem) {
   EXPECT_LE(poses.size(), 4u);
   for (const CameraPose& pose : poses) {
@@ -61,7 +56,7 @@ TEST(P3P, RecoversRandomPosesToMachinePrecision) {
     ASSERT_GE(n, 1) << "trial " << trial;
     ExpectValidSolutions(poses, problem);
     double best = std::numeric_limits<double>::infinity();
-    for (const CameraPose& pose : poses) best = std::min(best, PoseError(pose, problem.pose));
+    for (const CameraPose& pose : poses) best = std::min(best, test::PoseError(pose, problem.pose));
     worst = std::max(worst, best);
     accurate += best < 1e-8;
     // Every solution explains the three rays.
