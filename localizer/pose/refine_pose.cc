@@ -142,16 +142,23 @@ std::optional<Eigen::MatrixXd> ParameterCovarianceAt(const RefinementProblem& pr
                                                      bool per_point_noise) {
   Linearization at;
   if (!LinearizeWithBuiltin(problem, x, &at)) return std::nullopt;
-  const Eigen::Index n = at.design.rows();
-  const Eigen::Index residuals = 2 * Eigen::Index(problem.indices.size());
-  const double points = double(problem.indices.size());
-  if (residuals <= n) return std::nullopt;
+  if (2 * Eigen::Index(problem.indices.size()) <= at.design.rows()) return std::nullopt;
   if (per_point_noise) {
     const Eigen::FullPivLU<Eigen::MatrixXd> lu(at.hessian);
     if (!lu.isInvertible()) return std::nullopt;
     const Eigen::MatrixXd inverse = lu.inverse();
     return inverse * at.scores * inverse;
   }
+  return HuberCovariance(at, problem.indices.size());
+}
+
+}  // namespace
+
+std::optional<Eigen::MatrixXd> HuberCovariance(const Linearization& at, size_t num_points) {
+  const Eigen::Index n = at.design.rows();
+  const Eigen::Index residuals = 2 * Eigen::Index(num_points);
+  const double points = double(num_points);
+  if (residuals <= n) return std::nullopt;
   const double kappa = at.curvature / points;
   if (!(kappa > 0.0)) return std::nullopt;
   const double tau2 = at.squared_scores / double(residuals - n);
@@ -164,8 +171,6 @@ std::optional<Eigen::MatrixXd> ParameterCovarianceAt(const RefinementProblem& pr
   if (!covariance.allFinite()) return std::nullopt;
   return covariance;
 }
-
-}  // namespace
 
 double Radius95(const Eigen::Matrix3d& covariance) {
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(covariance, Eigen::EigenvaluesOnly);

@@ -63,4 +63,10 @@ struct Linearization {
 bool LinearizeWithBuiltin(const RefinementProblem& problem, const RefinementParameters& parameters,
                           Linearization* out);
 
+// Huber's covariance of an M-estimator's parameters with one pixel noise variance estimated
+// from the residuals (refine_pose.cc says how), from the design, prior and sums of `at` over
+// num_points points of two residuals each; the rig's refinement (rig_pose.h) uses it too.
+// Empty when there are no more residuals than parameters or the information is singular.
+std::optional<Eigen::MatrixXd> HuberCovariance(const Linearization& at, size_t num_points);
+
 }  // namespace cwloc

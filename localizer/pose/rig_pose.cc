@@ -1,0 +1,500 @@
+#include "localizer/pose/rig_pose.h"
+
+#include <Eigen/Cholesky>
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "localizer/pose/generalized_pose.h"
+#include "localizer/pose/p3p.h"
+#include "localizer/pose/refine_pose_solver.h"
+
+namespace cwloc {
+
+CameraPose RigPose::CameraFromWorld(const CameraPose& cam_from_rig) const {
+  return CameraPose(
+      cam_from_rig.rotation * rig_from_world.rotation,
+      cam_from_rig.rotation * rig_from_world.translation + scale * cam_from_rig.translation);
+}
+
+namespace {
+
+// Each camera's cam_from_world under a rig pose, as a matrix and a translation.
+struct CameraMaps {
+  std::vector<Eigen::Matrix3d> rotation;
+  std::vector<Eigen::Vector3d> translation;
+
+  CameraMaps(std::span<const RigCamera> rig, const RigPose& pose) {
+    for (const RigCamera& camera : rig) {
+      const CameraPose cam = pose.CameraFromWorld(camera.cam_from_rig);
+      rotation.push_back(cam.RotationMatrix());
+      translation.push_back(cam.translation);
+    }
+  }
+};
+
+// The squared reprojection error of observation o in pixels; infinity behind its camera.
+double SquaredError(const CameraMaps& maps, std::span<const RadialCamera> cameras,
+                    const RigObservation& o) {
+  const Eigen::Vector3d z = maps.rotation[o.camera] * o.point3D + maps.translation[o.camera];
+  if (!(z.z() > 0.0)) return std::numeric_limits<double>::infinity();
+  return (cameras[o.camera].Project(z) - o.pixel).squaredNorm();
+}
+
+// The refinement's state: world_from_rig's rotation and the rig origin C in the world (the
+// covariance's parameters, PoseCovariance), the scale, the cameras' intrinsics.
+struct RigState {
+  Eigen::Matrix3d world_from_rig = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d center = Eigen::Vector3d::Zero();
+  double scale = 1.0;
+  std::vector<RadialCamera> cameras;
+
+  static RigState Of(const RigPose& pose, std::span<const RadialCamera> cameras) {
+    RigState state;
+    state.world_from_rig = pose.rig_from_world.RotationMatrix().transpose();
+    state.center = pose.rig_from_world.Center();
+    state.scale = pose.scale;
+    state.cameras.assign(cameras.begin(), cameras.end());
+    return state;
+  }
+
+  RigPose Pose() const {
+    const Eigen::Matrix3d r = world_from_rig.transpose();
+    return {CameraPose(Eigen::Quaterniond(r).normalized(), -r * center), scale};
+  }
+};
+
+// The normal equations (J^T W J, J^T W r) of the loss-weighted residuals, their cost, and what
+// HuberCovariance needs.
+struct RigNormal {
+  double cost = 0.0;
+  Eigen::MatrixXd h;
+  Eigen::VectorXd g;
+  Linearization covariance_terms;
+};
+
+class RigProblem {
+ public:
+  RigProblem(std::span<const RigCamera> rig, std::span<const RigObservation> observations,
+             std::span<const uint32_t> indices, const RigRefinementOptions& options)
+      : rig_(rig), observations_(observations), indices_(indices), options_(options) {
+    num_params_ = 6 + int{options.refine_scale};
+    intrinsics_column_.assign(rig.size(), -1);
+    for (size_t c = 0; c < rig.size(); ++c) {
+      if (options.refine_intrinsics && rig[c].refine_intrinsics) {
+        intrinsics_column_[c] = num_params_;
+        num_params_ += 2;
+      }
+    }
+  }
+
+  int num_params() const { return num_params_; }
+
+  // False when a point is behind its camera or a value is not finite.
+  bool Evaluate(const RigState& x, bool linearize, RigNormal* out) const {
+    const int n = num_params_;
+    out->cost = 0.0;
+    if (linearize) {
+      out->h = Eigen::MatrixXd::Zero(n, n);
+      out->g = Eigen::VectorXd::Zero(n);
+      out->covariance_terms = Linearization();
+      out->covariance_terms.design = Eigen::MatrixXd::Zero(n, n);
+      out->covariance_terms.prior = Eigen::MatrixXd::Zero(n, n);
+    }
+    const double a2 = options_.loss_scale_px * options_.loss_scale_px;
+    const bool robust = a2 > 0.0;
+    const Eigen::Matrix3d rig_from_world = x.world_from_rig.transpose();
+    Eigen::Matrix<double, 2, Eigen::Dynamic> jac(2, n);
+    for (const uint32_t i : indices_) {
+      const RigObservation& o = observations_[i];
+      const RigCamera& rc = rig_[o.camera];
+      const RadialCamera& camera = x.cameras[o.camera];
+      const Eigen::Matrix3d rc_rot = rc.cam_from_rig.RotationMatrix();
+      const Eigen::Vector3d offset = o.point3D - x.center;
+      const Eigen::Vector3d q =
+          rc_rot * (rig_from_world * offset) + x.scale * rc.cam_from_rig.translation;
+      if (!(q.z() > 0.0)) return false;
+      const Eigen::Vector2d u = q.hnormalized();
+      const double uu = u.squaredNorm();
+      const double d = 1.0 + camera.k * uu;
+      const Eigen::Vector2d r = camera.focal_length_px * d * u - o.pixel;
+      const double s = r.squaredNorm();
+      if (!std::isfinite(s)) return false;
+      double rho1 = 1.0, rho2 = 0.0;
+      if (robust) {
+        const double sum = 1.0 + s / a2;
+        out->cost += 0.5 * a2 * std::log(sum);
+        rho1 = 1.0 / sum;
+        rho2 = -rho1 * rho1 / a2;
+      } else {
+        out->cost += 0.5 * s;
+      }
+      if (!linearize) continue;
+      // d(pixel)/du, du/dq, then dq/d(theta, C, s).
+      const Eigen::Matrix2d dpix_du = camera.focal_length_px * (d * Eigen::Matrix2d::Identity() +
+                                                                2.0 * camera.k * u * u.transpose());
+      Eigen::Matrix<double, 2, 3> du_dq;
+      du_dq << 1.0, 0.0, -u.x(), 0.0, 1.0, -u.y();
+      du_dq /= q.z();
+      const Eigen::Matrix<double, 2, 3> dpix_dq = dpix_du * du_dq;
+      const Eigen::Matrix3d to_cam = rc_rot * rig_from_world;
+      Eigen::Matrix3d offset_cross;
+      offset_cross << 0.0, -offset.z(), offset.y(), offset.z(), 0.0, -offset.x(), -offset.y(),
+          offset.x(), 0.0;
+      jac.setZero();
+      jac.leftCols<3>() = dpix_dq * to_cam * offset_cross;
+      jac.middleCols<3>(3) = -dpix_dq * to_cam;
+      if (options_.refine_scale) jac.col(6) = dpix_dq * rc.cam_from_rig.translation;
+      if (const int col = intrinsics_column_[o.camera]; col >= 0) {
+        jac.col(col) = d * u;
+        jac.col(col + 1) = camera.focal_length_px * uu * u;
+      }
+      const Eigen::VectorXd jr = jac.transpose() * r;
+      const Eigen::MatrixXd jj = jac.transpose() * jac;
+      out->h += rho1 * jj;
+      out->g += rho1 * jr;
+      Linearization& terms = out->covariance_terms;
+      terms.design += jj;
+      const double curvature = rho1 + rho2 * s;
+      terms.squared_scores += rho1 * rho1 * s;
+      terms.curvature += curvature;
+      terms.squared_curvature += curvature * curvature;
+    }
+    return std::isfinite(out->cost) && (!linearize || (out->h.allFinite() && out->g.allFinite()));
+  }
+
+  RigState Plus(const RigState& x, const Eigen::VectorXd& step) const {
+    RigState y = x;
+    const Eigen::Vector3d w = step.head<3>();
+    if (w.norm() > 0.0)
+      y.world_from_rig = Eigen::AngleAxisd(w.norm(), w.normalized()) * x.world_from_rig;
+    y.center += step.segment<3>(3);
+    if (options_.refine_scale) y.scale += step(6);
+    for (size_t c = 0; c < rig_.size(); ++c) {
+      if (const int col = intrinsics_column_[c]; col >= 0) {
+        y.cameras[c].focal_length_px += step(col);
+        y.cameras[c].k += step(col + 1);
+      }
+    }
+    return y;
+  }
+
+  bool Sane(const RigState& x) const {
+    if (!(x.scale > 0.0) || !x.center.allFinite() || !x.world_from_rig.allFinite()) return false;
+    for (const RadialCamera& camera : x.cameras)
+      if (!(camera.focal_length_px > 0.0) || !std::isfinite(camera.k)) return false;
+    return true;
+  }
+
+ private:
+  std::span<const RigCamera> rig_;
+  std::span<const RigObservation> observations_;
+  std::span<const uint32_t> indices_;
+  RigRefinementOptions options_;
+  int num_params_ = 6;
+  std::vector<int> intrinsics_column_;  // a camera's f column (k follows), or -1
+};
+
+// Levenberg-Marquardt with Marquardt's damping; false when no finite start or solution.
+bool Minimize(const RigProblem& problem, int max_iterations, RigState* x) {
+  RigNormal at;
+  if (!problem.Evaluate(*x, true, &at)) return false;
+  double lambda = 1e-4;
+  for (int iteration = 0; iteration < max_iterations; ++iteration) {
+    Eigen::MatrixXd damped = at.h;
+    damped.diagonal() += lambda * at.h.diagonal().cwiseMax(1e-9);
+    const Eigen::VectorXd step = -damped.ldlt().solve(at.g);
+    if (!step.allFinite()) return false;
+    const RigState candidate = problem.Plus(*x, step);
+    RigNormal next;
+    if (problem.Sane(candidate) && problem.Evaluate(candidate, false, &next) &&
+        next.cost < at.cost) {
+      const double decrease = at.cost - next.cost;
+      *x = candidate;
+      if (!problem.Evaluate(*x, true, &at)) return false;
+      lambda = std::max(lambda / 10.0, 1e-12);
+      if (decrease <= 1e-10 * at.cost || step.norm() <= 1e-12) break;
+    } else {
+      lambda *= 10.0;
+      if (lambda > 1e12) break;
+    }
+  }
+  return problem.Sane(*x);
+}
+
+// RANSAC's view of the observations: unit bearings in their cameras (ignoring k, which only
+// the refinement estimates), each camera's observations, and the threshold.
+class RigData {
+ public:
+  RigData(std::span<const RigCamera> rig, std::span<const RigObservation> observations,
+          double max_error_px, int lo_iterations)
+      : rig_(rig),
+        observations_(observations),
+        max_sq_(max_error_px * max_error_px),
+        lo_iterations_(lo_iterations),
+        by_camera_(rig.size()) {
+    for (const RigCamera& camera : rig) cameras_.push_back(camera.camera);
+    for (uint32_t i = 0; i < observations.size(); ++i) {
+      const RigObservation& o = observations[i];
+      bearings_.push_back(
+          (o.pixel / rig[o.camera].camera.focal_length_px).homogeneous().normalized());
+      by_camera_[o.camera].push_back(i);
+    }
+  }
+
+  size_t NumData() const { return observations_.size(); }
+
+  double Score(const RigPose& model, uint32_t* num_inliers, double bound) const {
+    const CameraMaps maps(rig_, model);
+    double score = 0.0;
+    uint32_t inliers = 0;
+    for (const RigObservation& o : observations_) {
+      const double e = SquaredError(maps, cameras_, o);
+      if (e < max_sq_) {
+        score += e;
+        ++inliers;
+      } else {
+        score += max_sq_;
+      }
+      if (score >= bound) break;
+    }
+    *num_inliers = inliers;
+    return score;
+  }
+
+  void Inliers(const RigPose& model, std::vector<uint32_t>* inliers) const {
+    inliers->clear();
+    const CameraMaps maps(rig_, model);
+    for (uint32_t i = 0; i < observations_.size(); ++i)
+      if (SquaredError(maps, cameras_, observations_[i]) < max_sq_) inliers->push_back(i);
+  }
+
+  // Least squares on at most 256 of the model's inliers, spread evenly (as the single camera's
+  // local optimisation, local_optimization.h), pose and scale only.
+  void Refine(RigPose* model, bool refine_scale) const {
+    std::vector<uint32_t> inliers;
+    Inliers(*model, &inliers);
+    if (inliers.size() < 4) return;
+    const size_t stride = (inliers.size() + 255) / 256;
+    std::vector<uint32_t> thinned;
+    for (size_t i = 0; i < inliers.size(); i += stride) thinned.push_back(inliers[i]);
+    RigRefinementOptions options;
+    options.max_iterations = lo_iterations_;
+    options.refine_scale = refine_scale;
+    options.refine_intrinsics = false;
+    std::vector<RadialCamera> cameras = cameras_;
+    RefineRigPose(rig_, observations_, thinned, options, model, &cameras);
+  }
+
+  RigRay Ray(uint32_t i) const {
+    const CameraPose& cam = rig_[observations_[i].camera].cam_from_rig;
+    return {cam.Center(), cam.rotation.conjugate() * bearings_[i]};
+  }
+
+  std::span<const RigCamera> rig_;
+  std::span<const RigObservation> observations_;
+  std::vector<RadialCamera> cameras_;
+  std::vector<Eigen::Vector3d> bearings_;
+  double max_sq_;
+  int lo_iterations_;
+  std::vector<std::vector<uint32_t>> by_camera_;
+};
+
+// Known scale: GeneralizedP3P on three correspondences of any cameras.
+class RigPoseEstimator : public RigData {
+ public:
+  using Model = RigPose;
+  static constexpr size_t kSampleSize = 3;
+  using RigData::RigData;
+
+  void GenerateModels(std::span<const uint32_t> sample, std::vector<Model>* models) const {
+    GeneralizedP3P({Ray(sample[0]), Ray(sample[1]), Ray(sample[2])},
+                   {observations_[sample[0]].point3D, observations_[sample[1]].point3D,
+                    observations_[sample[2]].point3D},
+                   &poses_);
+    for (const CameraPose& pose : poses_) models->push_back({pose, 1.0});
+  }
+  void Refine(Model* model) const { RigData::Refine(model, false); }
+
+ private:
+  mutable std::vector<CameraPose> poses_;
+};
+
+// Unknown scale: GeneralizedP3PScale. The uniform sample of four is mapped to its shape: the
+// first correspondence's camera takes two more of its own (the second and third drawn indices
+// taken modulo that camera's count), and the fourth, if in the same camera, is moved to the
+// next correspondence of another camera.
+class RigPoseScaleEstimator : public RigData {
+ public:
+  using Model = RigPose;
+  static constexpr size_t kSampleSize = 4;
+
+  RigPoseScaleEstimator(std::span<const RigCamera> rig,
+                        std::span<const RigObservation> observations, double max_error_px,
+                        int lo_iterations)
+      : RigData(rig, observations, max_error_px, lo_iterations) {
+    // The fourth ray's tolerance: the threshold in the narrowest camera's normalised units.
+    for (const RigCamera& camera : rig)
+      fourth_error_ = std::max(fourth_error_, std::sqrt(max_sq_) / camera.camera.focal_length_px);
+  }
+
+  void GenerateModels(std::span<const uint32_t> sample, std::vector<Model>* models) const {
+    const uint32_t a = observations_[sample[0]].camera;
+    const std::vector<uint32_t>& own = by_camera_[a];
+    if (own.size() < 3) return;
+    const std::array<uint32_t, 3> first = {sample[0], own[sample[1] % own.size()],
+                                           own[sample[2] % own.size()]};
+    if (first[0] == first[1] || first[0] == first[2] || first[1] == first[2]) return;
+    uint32_t fourth = sample[3];
+    for (size_t step = 0; observations_[fourth].camera == a; ++step) {
+      if (step == observations_.size()) return;  // one camera only: no scale
+      fourth = static_cast<uint32_t>((fourth + 1) % observations_.size());
+    }
+    const uint32_t b = observations_[fourth].camera;
+    GeneralizedP3PScale(
+        {bearings_[first[0]], bearings_[first[1]], bearings_[first[2]], bearings_[fourth]},
+        {observations_[first[0]].point3D, observations_[first[1]].point3D,
+         observations_[first[2]].point3D, observations_[fourth].point3D},
+        rig_[a].cam_from_rig, rig_[b].cam_from_rig, fourth_error_, &poses_, &scales_);
+    for (size_t s = 0; s < poses_.size(); ++s) models->push_back({poses_[s], scales_[s]});
+  }
+  void Refine(Model* model) const { RigData::Refine(model, true); }
+
+ private:
+  double fourth_error_ = 0.0;
+  mutable std::vector<CameraPose> poses_;
+  mutable std::vector<double> scales_;
+};
+
+// Refinement of a focal-prior camera's intrinsics needs this many of its inliers.
+constexpr uint32_t kMinInliersForIntrinsics = 12;
+
+}  // namespace
+
+bool RefineRigPose(std::span<const RigCamera> rig, std::span<const RigObservation> observations,
+                   std::span<const uint32_t> indices, const RigRefinementOptions& options,
+                   RigPose* pose, std::vector<RadialCamera>* cameras) {
+  const RigProblem problem(rig, observations, indices, options);
+  if (indices.size() * 2 <= size_t(problem.num_params())) return false;
+  RigState x = RigState::Of(*pose, *cameras);
+  if (!Minimize(problem, options.max_iterations, &x)) return false;
+  *pose = x.Pose();
+  *cameras = x.cameras;
+  return true;
+}
+
+RigPoseResult EstimateRigPose(std::span<const RigCamera> cameras,
+                              std::span<const RigObservation> observations, bool unknown_scale,
+                              const AbsolutePoseOptions& options, const PoseContext& context) {
+  RigPoseResult result;
+  for (const RigCamera& camera : cameras) result.cameras.push_back(camera.camera);
+  result.inliers_per_camera.assign(cameras.size(), 0);
+  const size_t sample_size = unknown_scale ? 4 : 3;
+  if (observations.size() <
+      std::max<size_t>(sample_size, size_t(std::max(options.min_inliers, 0)))) {
+    result.failure_reason =
+        "too few correspondences over all images: " + std::to_string(observations.size()) + " < " +
+        std::to_string(std::max<size_t>(sample_size, options.min_inliers));
+    return result;
+  }
+  std::vector<uint32_t> inliers;
+  const auto run = [&](const auto& estimator) {
+    result.stats = Ransac(estimator, options.ransac, context.ransac, &result.pose);
+    if (std::isfinite(result.stats.score)) estimator.Inliers(result.pose, &inliers);
+  };
+  if (unknown_scale) {
+    run(RigPoseScaleEstimator(cameras, observations, options.max_error_px, options.lo_iterations));
+  } else {
+    run(RigPoseEstimator(cameras, observations, options.max_error_px, options.lo_iterations));
+  }
+  if (!std::isfinite(result.stats.score)) {
+    result.failure_reason =
+        unknown_scale ? "no pose hypothesis: an unknown scale needs three correspondences in "
+                        "one image and one in another"
+                      : "no pose hypothesis: every minimal sample was degenerate";
+    return result;
+  }
+
+  // The final refinement on RANSAC's inliers, in rounds as a single uncalibrated camera's
+  // (absolute_pose.h): each round re-scores every correspondence with the refined pose and
+  // cameras and refines again on the new inliers, until they stop changing; a round is kept
+  // unless it loses more than 2 % of RANSAC's inliers.
+  const size_t ransac_inliers = inliers.size();
+  for (int round = 0; options.refine && round < std::max(1, options.camera_refinement_rounds);
+       ++round) {
+    std::vector<uint32_t> per_camera(cameras.size(), 0);
+    for (const uint32_t i : inliers) ++per_camera[observations[i].camera];
+    std::vector<RigCamera> rig(cameras.begin(), cameras.end());
+    for (size_t c = 0; c < rig.size(); ++c)
+      rig[c].refine_intrinsics &= per_camera[c] >= kMinInliersForIntrinsics;
+    RigRefinementOptions refinement;
+    refinement.loss_scale_px = options.loss_scale_px;
+    refinement.refine_scale = unknown_scale;
+    RigPose pose = result.pose;
+    std::vector<RadialCamera> refined_cameras = result.cameras;
+    if (!RefineRigPose(rig, observations, inliers, refinement, &pose, &refined_cameras)) break;
+    RigData refined_scorer(rig, observations, options.max_error_px, options.lo_iterations);
+    refined_scorer.cameras_ = refined_cameras;
+    std::vector<uint32_t> refined_inliers;
+    refined_scorer.Inliers(pose, &refined_inliers);
+    if (refined_inliers.size() * 50 < ransac_inliers * 49) break;
+    result.pose = pose;
+    result.cameras = refined_cameras;
+    result.refined = true;
+    const bool changed = refined_inliers != inliers;
+    inliers = std::move(refined_inliers);
+    if (!changed) break;
+  }
+
+  result.inliers.assign(observations.size(), 0);
+  double error_sum = 0.0;
+  const CameraMaps maps(cameras, result.pose);
+  for (const uint32_t i : inliers) {
+    result.inliers[i] = 1;
+    ++result.inliers_per_camera[observations[i].camera];
+    error_sum += std::sqrt(SquaredError(maps, result.cameras, observations[i]));
+  }
+  result.num_inliers = static_cast<int>(inliers.size());
+  result.mean_reprojection_error_px = inliers.empty() ? 0.0 : error_sum / double(inliers.size());
+  const int with_inliers = static_cast<int>(std::count_if(result.inliers_per_camera.begin(),
+                                                          result.inliers_per_camera.end(),
+                                                          [](uint32_t n) { return n > 0; }));
+  if (result.num_inliers < options.min_inliers) {
+    result.failure_reason = "best rig pose has " + std::to_string(result.num_inliers) +
+                            " inliers over all images < " + std::to_string(options.min_inliers);
+    return result;
+  }
+  if (unknown_scale && with_inliers < 2) {
+    result.failure_reason =
+        "an unknown scale needs inliers in two images, the pose has them in one";
+    return result;
+  }
+  result.success = true;
+
+  // The covariance at the reported pose, with the final refinement's loss and parameters.
+  std::vector<RigCamera> rig(cameras.begin(), cameras.end());
+  for (size_t c = 0; c < rig.size(); ++c)
+    rig[c].refine_intrinsics &= result.inliers_per_camera[c] >= kMinInliersForIntrinsics;
+  RigRefinementOptions refinement;
+  refinement.loss_scale_px = options.loss_scale_px;
+  refinement.refine_scale = unknown_scale;
+  const RigProblem problem(rig, observations, inliers, refinement);
+  RigNormal at;
+  if (problem.Evaluate(RigState::Of(result.pose, result.cameras), true, &at)) {
+    if (const std::optional<Eigen::MatrixXd> covariance =
+            HuberCovariance(at.covariance_terms, inliers.size())) {
+      PoseCovariance pose_covariance;
+      pose_covariance.pose = covariance->topLeftCorner<6, 6>();
+      pose_covariance.pose = 0.5 * (pose_covariance.pose + pose_covariance.pose.transpose()).eval();
+      if (pose_covariance.pose.allFinite() &&
+          (pose_covariance.pose.diagonal().array() > 0.0).all()) {
+        result.covariance = pose_covariance;
+        if (unknown_scale) result.scale_std = std::sqrt((*covariance)(6, 6));
+      }
+    }
+  }
+  return result;
+}
+
+}  // namespace cwloc
