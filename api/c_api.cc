@@ -32,6 +32,10 @@ struct cwloc_result {
   bool georeferenced = false;  // the index's: why a result has no geo pose
 };
 
+struct cwloc_rig_result {
+  cwloc::api::RigResult result;
+};
+
 namespace {
 
 thread_local std::string last_error;
@@ -516,3 +520,86 @@ const char* cwloc_result_json(const cwloc_result* result) {
 }
 
 }  // extern "C"
+
+cwloc_status cwloc_localize_rig(const cwloc_localizer* localizer, const cwloc_rig_image* images,
+                                size_t num_images, int unknown_scale, const char* name,
+                                const cwloc_options* options, cwloc_rig_result** out) {
+  if (out == nullptr) return Fail(CWLOC_ERROR_INVALID_ARGUMENT, "out is NULL");
+  *out = nullptr;
+  if (localizer == nullptr) return Fail(CWLOC_ERROR_INVALID_ARGUMENT, "localizer is NULL");
+  if (images == nullptr && num_images > 0)
+    return Fail(CWLOC_ERROR_INVALID_ARGUMENT, "images is NULL");
+  return Guarded([&] {
+    std::vector<cwloc::api::RigImage> rig;
+    for (size_t i = 0; i < num_images; ++i) {
+      const cwloc_rig_image& image = images[i];
+      cwloc::api::RigImage& in = rig.emplace_back();
+      in.name = image.name != nullptr ? image.name : "image " + std::to_string(i + 1);
+      if (image.photo_path != nullptr) {
+        in.photo_path = image.photo_path;
+      } else {
+        in.features = FeaturesOf(image.keypoints, image.descriptors, image.num_features);
+      }
+      in.camera = ToCamera(image.camera);
+      std::copy_n(image.cam_from_rig_rotation_wxyz, 4, in.cam_from_rig_rotation.begin());
+      std::copy_n(image.cam_from_rig_translation, 3, in.cam_from_rig_translation.begin());
+    }
+    *out = new cwloc_rig_result{localizer->localizer.LocalizeRig(
+        rig, unknown_scale != 0, OptionsOrDefault(options), name != nullptr ? name : "frame")};
+  });
+}
+
+void cwloc_rig_result_destroy(cwloc_rig_result* result) { delete result; }
+
+int cwloc_rig_result_success(const cwloc_rig_result* result) { return result->result.success; }
+
+const char* cwloc_rig_result_failure_reason(const cwloc_rig_result* result) {
+  return result->result.failure_reason.c_str();
+}
+
+void cwloc_rig_result_pose(const cwloc_rig_result* result, double rotation_wxyz[4],
+                           double translation[3], double center[3], double* scale) {
+  const cwloc::api::RigResult& r = result->result;
+  if (rotation_wxyz != nullptr) std::copy_n(r.rotation.begin(), 4, rotation_wxyz);
+  if (translation != nullptr) std::copy_n(r.translation.begin(), 3, translation);
+  if (center != nullptr) std::copy_n(r.center.begin(), 3, center);
+  if (scale != nullptr) *scale = r.scale;
+}
+
+uint32_t cwloc_rig_result_num_inliers(const cwloc_rig_result* result) {
+  return result->result.num_inliers;
+}
+
+uint32_t cwloc_rig_result_num_images(const cwloc_rig_result* result) {
+  return static_cast<uint32_t>(result->result.images.size());
+}
+
+cwloc_status cwloc_rig_result_image_pose(const cwloc_rig_result* result, uint32_t i,
+                                         double rotation_wxyz[4], double translation[3],
+                                         uint32_t* num_inliers) {
+  const cwloc::api::RigResult& r = result->result;
+  if (i >= r.images.size()) {
+    return Fail(CWLOC_ERROR_INVALID_ARGUMENT, "image " + std::to_string(i) + ": out of range");
+  }
+  const cwloc::api::RigImageResult& image = r.images[i];
+  if (!image.posed) return Fail(CWLOC_ERROR_NOT_AVAILABLE, "the rig was not localized");
+  if (rotation_wxyz != nullptr) std::copy_n(image.rotation.begin(), 4, rotation_wxyz);
+  if (translation != nullptr) std::copy_n(image.translation.begin(), 3, translation);
+  if (num_inliers != nullptr) *num_inliers = image.num_inliers;
+  last_error.clear();
+  return CWLOC_OK;
+}
+
+cwloc_status cwloc_rig_result_covariance(const cwloc_rig_result* result, double pose[36],
+                                         double* position_radius95) {
+  const auto& covariance = result->result.covariance;
+  if (!covariance) return Fail(CWLOC_ERROR_NOT_AVAILABLE, "the rig was not localized");
+  if (pose != nullptr) std::copy_n(covariance->pose.begin(), 36, pose);
+  if (position_radius95 != nullptr) *position_radius95 = covariance->position_radius95;
+  last_error.clear();
+  return CWLOC_OK;
+}
+
+const char* cwloc_rig_result_json(const cwloc_rig_result* result) {
+  return result->result.json.c_str();
+}

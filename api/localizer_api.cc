@@ -17,6 +17,7 @@
 #include "io/query_assembly.h"
 #include "io/result_json.h"
 #include "localizer/localizer.h"
+#include "localizer/rig_localizer.h"
 #include "localizer/tracker.h"
 
 namespace cwloc::api {
@@ -130,6 +131,50 @@ PriorInputs ToPriorInputs(const Options& options) {
   return priors;
 }
 
+PoseCovariance ToPoseCovariance(const cwloc::PoseCovariance& c,
+                                const std::optional<CovarianceScales>& calibration) {
+  PoseCovariance covariance;
+  Eigen::Map<Eigen::Matrix<double, 6, 6, Eigen::RowMajor>>(covariance.pose.data()) = c.pose;
+  covariance.position_radius95 = Radius95(c.Position());
+  covariance.focal_std_px = c.focal_std_px;
+  covariance.calibration = calibration;
+  return covariance;
+}
+
+// A pose's (w, x, y, z), t and centre.
+void SplitPose(const CameraPose& pose, std::array<double, 4>* rotation,
+               std::array<double, 3>* translation, std::array<double, 3>* center) {
+  const Eigen::Quaterniond& q = pose.rotation;
+  *rotation = {q.w(), q.x(), q.y(), q.z()};
+  *translation = {pose.translation.x(), pose.translation.y(), pose.translation.z()};
+  const Eigen::Vector3d c = pose.Center();
+  *center = {c.x(), c.y(), c.z()};
+}
+
+RigResult ToRigResult(const RigLocalizationResult& r, const QueryOptions& options) {
+  RigResult result;
+  result.json = RigResultToJson(r, options).dump();
+  result.success = r.success;
+  result.failure_reason = r.failure_reason;
+  if (r.success) SplitPose(r.rig_from_world, &result.rotation, &result.translation, &result.center);
+  result.scale = r.scale;
+  result.scale_std = r.scale_std;
+  result.num_inliers = r.num_inliers;
+  result.correspondences = r.correspondences;
+  if (r.covariance) result.covariance = ToPoseCovariance(*r.covariance, r.covariance_calibration);
+  result.geo = r.geo;
+  for (const cwloc::RigImageResult& image : r.images) {
+    RigImageResult& out = result.images.emplace_back();
+    out.name = image.alone.name;
+    out.posed = image.cam_from_world.has_value();
+    if (out.posed) SplitPose(*image.cam_from_world, &out.rotation, &out.translation, &out.center);
+    out.num_inliers = image.num_inliers;
+    out.localized_alone = image.alone.success;
+    out.camera = ToCamera(image.camera);
+  }
+  return result;
+}
+
 Result ToResult(const LocalizationResult& r, const Query& query, const Index& index,
                 const QueryOptions& options) {
   Result result;
@@ -160,11 +205,8 @@ Result ToResult(const LocalizationResult& r, const Query& query, const Index& in
         PositionPrior{p->latitude_deg, p->longitude_deg, p->height_m, p->radius_m};
   result.clusters_in_radius = r.priors.clusters_in_radius;
   if (const auto& c = r.covariance) {
-    PoseCovariance& covariance = result.covariance.emplace();
-    Eigen::Map<Eigen::Matrix<double, 6, 6, Eigen::RowMajor>>(covariance.pose.data()) = c->pose;
-    covariance.position_radius95 = Radius95(c->Position());
-    covariance.focal_std_px = c->focal_std_px;
-    covariance.calibration = r.covariance_calibration;
+    PoseCovariance& covariance =
+        result.covariance.emplace(ToPoseCovariance(*c, r.covariance_calibration));
     if (const auto& enu = r.enu_position_covariance) {
       Eigen::Map<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(
           covariance.enu_position.emplace().data()) = *enu;
@@ -392,6 +434,47 @@ Result Localizer::LocalizeGreyImage(const uint8_t* pixels, uint32_t width, uint3
                                     size_t stride, const Camera& camera,
                                     const Options& options) const {
   return impl_->FromGreyImage(pixels, width, height, stride, camera, options, nullptr);
+}
+
+RigResult Localizer::LocalizeRig(const std::vector<RigImage>& images, bool unknown_scale,
+                                 const Options& options, const std::string& name) const {
+  return Translated([&] {
+    RigQuery query;
+    query.name = name;
+    query.unknown_scale = unknown_scale;
+    const QueryOptions query_options = ToQueryOptions(options);
+    for (const RigImage& image : images) {
+      const std::string what = "rig image '" + image.name + "'";
+      std::variant<CameraPose, std::string> pose =
+          PoseFromParts(image.cam_from_rig_rotation, image.cam_from_rig_translation);
+      if (const auto* problem = std::get_if<std::string>(&pose))
+        throw InvalidArgument(what + ": cam_from_rig: " + *problem);
+      const CallOptions call(options, image.camera);
+      Query query_image;
+      QuerySource source;
+      if (image.photo_path.empty()) {
+        if (!image.camera) throw InvalidArgument(what + ": features need a camera");
+        query_image.keypoints = image.features.keypoints;
+        query_image.descriptors = image.features.descriptors;
+        source = {image.name, QuerySource::Kind::kFeatures};
+      } else {
+        source = {image.name, QuerySource::Kind::kPhoto, image.photo_path};
+        query_image = call.assembler.Read(source);
+      }
+      query_image.name = image.name;
+      if (query_image.source.empty()) query_image.source = what;
+      call.Complete(source, &query_image);
+      query.images.push_back({std::move(query_image), std::get<CameraPose>(pose)});
+    }
+    if (images.empty()) throw InvalidArgument("rig frame '" + name + "': no images");
+    RigLocalizationResult result;
+    ValidateOrThrowInvalidArgument([&] {
+      for (const cwloc::RigImage& image : query.images)
+        impl_->localizer.ValidatePriors(image.query);
+    });
+    result = cwloc::LocalizeRig(impl_->localizer, query, query_options.localizer);
+    return ToRigResult(result, query_options);
+  });
 }
 
 struct Tracker::Impl {

@@ -23,10 +23,13 @@
 #include <unordered_set>
 #include <variant>
 
-#include "base/checkpointed_file.h"
 #include "base/error.h"
+#include "base/option_value.h"
 #include "base/progress.h"
 #include "cwloc/version.h"
+#include "exe/localize/localize_cli.h"
+#include "exe/localize/localize_rigs.h"
+#include "exe/localize/result_sink.h"
 #include "exe/tool_main.h"
 #include "format/index.h"
 #include "io/camera_spec.h"
@@ -36,7 +39,7 @@
 #include "io/query_assembly.h"
 #include "io/query_list.h"
 #include "io/query_priors.h"
-#include "io/result_json.h"
+#include "io/rig_input.h"
 #include "io/trajectory_file.h"
 #include "localizer/localizer.h"
 #include "localizer/tracker.h"
@@ -50,36 +53,6 @@
 
 namespace cwloc {
 namespace {
-
-struct CliOptions {
-  std::string index_path;
-  std::string database_path;
-  std::vector<std::string> query_names;
-  std::string query_list;
-  std::vector<std::string> feature_files;
-  std::vector<std::string> images;
-  std::string image_list;
-  std::string image_dir;
-  std::string camera_spec;
-  std::string image_size;
-  double focal = 0.0;
-  bool unknown_focal = false;
-  std::string prior_position;  // --prior-position, for every query
-  std::string prior_gravity;   // --prior-gravity, for every query
-  std::string priors_path;     // --priors: per query
-  QueryOptions options;        // the option table's
-  std::string output_path;
-  std::string poses_path;
-  std::string trajectory_path;  // --sequence's poses
-  std::string trajectory_format = "tum";
-  int threads = 1;
-  bool sequence = false;    // the queries are frames of one camera, in order
-  std::string video_path;   // --video: a sequence of a video file's frames
-  std::string motion_path;  // --motion: the frames' motion from VIO
-  uint32_t video_step = 1;
-  bool verify = false;
-  bool quiet = false;
-};
 
 std::vector<QuerySource> CollectQueries(const CliOptions& cli) {
   using Kind = QuerySource::Kind;
@@ -137,6 +110,27 @@ class QueryLoader {
     return query;
   }
 
+  // A rig frame's image: as Load, with the rig config's camera model and parameters, which the
+  // photo's size completes, when its list line has no camera.
+  Query LoadRigImage(const RigFrameImage& image) const {
+    QuerySource source = image.source;
+    if (source.kind == QuerySource::Kind::kDatabase) return Load(source);
+    Query query = assembler_.Read(source);
+    if (source.camera_spec.empty() && !image.model_name.empty()) {
+      if (query.camera.width == 0) {
+        throw InputError(source.Label() +
+                         ": the rig config's camera needs the image size: give 'MODEL W H "
+                         "PARAMS' after the image's name in the list");
+      }
+      std::string spec = image.model_name + " " + std::to_string(query.camera.width) + " " +
+                         std::to_string(query.camera.height);
+      for (const double p : image.params) spec += " " + NumberText(p);
+      source.camera_spec = spec;
+    }
+    assembler_.Complete(source, &query);
+    return query;
+  }
+
   // A video frame: the camera from --camera or --focal, else only its size; then its SIFT.
   Query LoadFrame(const std::string& name, GreyImage image) const {
     Query query;
@@ -189,139 +183,6 @@ class QueryLoader {
 #endif
 };
 
-// " f 1380.2 +- 9.7 px," for an estimated focal length, and what a weak constraint leaves.
-std::string EstimatedFocalText(const LocalizationResult& result) {
-  if (!result.focal_depth || result.camera.params.empty()) return "";
-  const FocalDepthUncertainty& uncertainty = *result.focal_depth;
-  const double focal = result.camera.params[0];
-  char text[160];
-  if (WeaklyConstrained(uncertainty, focal)) {
-    std::snprintf(text, sizeof(text), " f %.1f +- %.1f px, weakly constrained (depth +- %.3g),",
-                  focal, uncertainty.focal_std_px, uncertainty.depth_std);
-  } else {
-    std::snprintf(text, sizeof(text), " f %.1f +- %.1f px,", focal, uncertainty.focal_std_px);
-  }
-  return text;
-}
-
-// " position +- 0.8 m (95 %)," in metres for a georeferenced index, else in model units.
-std::string PositionRadiusText(const LocalizationResult& result) {
-  if (!result.covariance) return "";
-  char text[96];
-  if (result.enu_position_covariance) {
-    std::snprintf(text, sizeof(text), " position +- %.3g m (95 %%),",
-                  Radius95(*result.enu_position_covariance));
-  } else {
-    std::snprintf(text, sizeof(text), " position +- %.3g model units (95 %%),",
-                  Radius95(result.covariance->Position()));
-  }
-  return text;
-}
-
-// Writes each finished query's record: JSON lines to --output (stdout by default), a pose line
-// to --poses, a readable line to stdout when the JSON goes to a file. Files get whole records
-// only and keep their previous content until the first checkpoint (CheckpointedFile). The first
-// error writing them stops the run: failed() tells the workers, Close() throws it.
-class ResultSink {
- public:
-  explicit ResultSink(const CliOptions& cli) : cli_(cli) {
-    if (!cli.output_path.empty() && cli.output_path != "-")
-      json_file_ = std::make_unique<CheckpointedFile>(cli.output_path);
-    if (!cli.poses_path.empty()) poses_file_ = std::make_unique<CheckpointedFile>(cli.poses_path);
-    if (!cli.trajectory_path.empty()) {
-      trajectory_file_ = std::make_unique<CheckpointedFile>(cli.trajectory_path);
-      trajectory_format_ = TrajectoryFormatNamed(cli.trajectory_format);
-      const std::string header = TrajectoryHeader(trajectory_format_);
-      if (!header.empty()) Guard([&] { trajectory_file_->Append(header); });
-    }
-  }
-
-  // `stamp`: a sequence frame's, for --trajectory.
-  void Write(const LocalizationResult& result, const QueryOptions& options, FrameStamp stamp) {
-    std::lock_guard lock(mutex_);
-    if (closed_) return;  // a query abandoned by a stopped batch
-    EmitJsonLine(ResultToJson(result, options).dump());
-    // With the JSON in a file, stdout gets a readable line per query.
-    if (json_file_ && !cli_.quiet) {
-      // A frame of a sequence says how it got its pose.
-      const char* how =
-          result.tracking ? kTrackingModeNames[size_t(result.tracking->mode)].data() : "localized";
-      if (result.success) {
-        std::printf("%s: %s, %u inliers / %u correspondences,%s%s %.1f ms\n", result.name.c_str(),
-                    how, result.num_inliers, result.correspondences,
-                    PositionRadiusText(result).c_str(), EstimatedFocalText(result).c_str(),
-                    result.times.total * 1e3);
-      } else {
-        std::printf("%s: not localized: %s\n", result.name.c_str(), result.failure_reason.c_str());
-      }
-      std::fflush(stdout);
-    }
-    if (poses_file_ && result.success) Append(*poses_file_, PoseLine(result));
-    if (trajectory_file_ && result.success)
-      Append(*trajectory_file_, TrajectoryLine(result, stamp, trajectory_format_));
-  }
-
-  void WriteError(const std::string& name, const std::string& error) {
-    std::lock_guard lock(mutex_);
-    if (closed_) return;
-    EmitJsonLine(ErrorToJson(name, error).dump());
-    std::fprintf(stderr, "cwloc-localize: error: %s\n", error.c_str());
-  }
-
-  bool failed() const { return failed_; }
-
-  // Puts every record in place; throws the first write error.
-  void Close() {
-    std::lock_guard lock(mutex_);
-    closed_ = true;
-    for (CheckpointedFile* file : {json_file_.get(), poses_file_.get(), trajectory_file_.get()}) {
-      if (file && !failed_) Guard([&] { file->Close(); });
-    }
-    if (failed_) throw InputError(error_);
-  }
-
- private:
-  // One record per line to --output, or stdout without it; the caller holds mutex_.
-  void EmitJsonLine(const std::string& json) {
-    if (json_file_) {
-      Append(*json_file_, json);
-      return;
-    }
-    // A record and its newline in one write, flushed at once: a reader of the pipe sees each
-    // query as it finishes.
-    const std::string line = json + '\n';
-    std::cout.write(line.data(), static_cast<std::streamsize>(line.size()));
-    std::cout.flush();
-  }
-
-  void Append(CheckpointedFile& file, std::string line) {
-    line += '\n';
-    Guard([&] { file.Append(line); });
-  }
-
-  // Runs a file operation unless one failed already, keeping the first error.
-  template <typename Operation>
-  void Guard(Operation operation) {
-    if (failed_) return;
-    try {
-      operation();
-    } catch (const InputError& e) {
-      error_ = e.what();
-      failed_ = true;
-    }
-  }
-
-  const CliOptions& cli_;
-  std::unique_ptr<CheckpointedFile> json_file_;
-  std::unique_ptr<CheckpointedFile> poses_file_;
-  std::unique_ptr<CheckpointedFile> trajectory_file_;
-  TrajectoryFormat trajectory_format_ = TrajectoryFormat::kTum;
-  std::mutex mutex_;
-  std::atomic<bool> failed_{false};
-  bool closed_ = false;
-  std::string error_;
-};
-
 // The signal that asked the batch to stop (SIGINT or SIGTERM), else 0; lock-free, so a signal
 // handler may set it.
 std::atomic<int> stop_signal{0};
@@ -340,6 +201,42 @@ void StopOnInterrupt() {
   sigemptyset(&action.sa_mask);
   action.sa_flags = SA_RESETHAND;
   for (const int signal_number : {SIGINT, SIGTERM}) sigaction(signal_number, &action, nullptr);
+}
+
+// --rig or --frames: every frame localized as one rig.
+int RunRigs(const CliOptions& cli, const Index& index) {
+  const std::vector<RigFrameInput> frames = CollectRigFrames(cli);
+  QueryOptions query_options = cli.options;
+  const int threads = std::max(1, std::min<int>(cli.threads, static_cast<int>(frames.size())));
+  query_options.photo.sift.num_threads = std::max(1, cli.threads / threads);
+  const QueryLoader loader(cli, query_options);
+  ResultSink sink(cli);
+  const Localizer localizer(index);
+  RigRunCounts counts = RunRigFrames(
+      cli, frames, localizer,
+      [&](const RigFrameImage& image) { return loader.LoadRigImage(image); }, sink, stop_signal);
+  sink.Close();
+  if (const int signal_number = stop_signal) {
+    std::fprintf(stderr, "cwloc-localize: interrupted by %s\n",
+                 signal_number == SIGINT ? "SIGINT" : "SIGTERM");
+    return 128 + signal_number;
+  }
+  std::sort(counts.seconds.begin(), counts.seconds.end());
+  if (!cli.quiet) {
+    std::fprintf(stderr, "cwloc-localize: localized %d of %zu rig frames", counts.localized,
+                 frames.size());
+    if (counts.errors > 0) std::fprintf(stderr, " (%d bad input)", counts.errors);
+    if (counts.internal_errors > 0)
+      std::fprintf(stderr, " (%d out of memory or internal error)", counts.internal_errors);
+    if (!counts.seconds.empty()) {
+      std::fprintf(stderr, ", median %.1f ms per frame",
+                   counts.seconds[counts.seconds.size() / 2] * 1e3);
+    }
+    std::fprintf(stderr, "\n");
+  }
+  if (counts.internal_errors > 0) return kExitInternalError;
+  if (counts.errors > 0) return kExitBadInput;
+  return counts.failed > 0 ? kExitNotLocalized : kExitOk;
 }
 
 int Run(const CliOptions& cli) {
@@ -363,6 +260,7 @@ int Run(const CliOptions& cli) {
     index.file().VerifyChecksums();
     index.Validate();
   }
+  if (!cli.rig_config_path.empty() || !cli.frames_path.empty()) return RunRigs(cli, index);
   const std::vector<QuerySource> sources = CollectQueries(cli);
   std::unordered_map<std::string, MotionLine> motions;
   if (!cli.motion_path.empty()) {
@@ -726,6 +624,23 @@ int main(int argc, char** argv) {
                "The queries are frames of one moving camera, in the order given: each is "
                "tracked from the frames before it, or localized from scratch when that fails "
                "(docs/algorithm.md, \"Sequences\"); one frame at a time")
+      ->group(kQueries);
+  app.add_option("--rig", cli.rig_config_path,
+                 "COLMAP 3.12's rig_config.json: the --image-list images are cameras of rigs "
+                 "(by image_prefix), and images whose names agree after the prefix one frame, "
+                 "localized as one generalized camera (docs/cli.md, \"Rigs and multi-frame "
+                 "queries\"); translations in model units")
+      ->group(kQueries);
+  app.add_option("--frames", cli.frames_path,
+                 "Multi-image frames, one line per image: 'FRAME_ID IMAGE QW QX QY QZ TX TY TZ "
+                 "[MODEL W H PARAMS]', the image's cam_from_rig (its camera from the frame's "
+                 "reference), a frame's lines consecutive, its first image the reference; IMAGE "
+                 "a photo, or a feature file (.txt), relative to --image-dir or the file's folder")
+      ->group(kQueries);
+  app.add_option("--frames-scale", cli.frames_scale,
+                 "known: cam_from_rig translations are in model units; unknown: up to one scale "
+                 "per frame (VIO without a metric map), which the pose estimates")
+      ->capture_default_str()
       ->group(kQueries);
   app.add_flag("--verify", cli.verify,
                "Verify the index's checksums and stored indices before localizing");

@@ -91,6 +91,31 @@ nlohmann::ordered_json DistortionToJson(const LocalizationResult& result) {
   return out;
 }
 
+nlohmann::ordered_json PoseToJson(const CameraPose& pose) {
+  const Eigen::Quaterniond& q = pose.rotation;
+  const Eigen::Vector3d& t = pose.translation;
+  const Eigen::Vector3d c = pose.Center();
+  return {{"qvec", {q.w(), q.x(), q.y(), q.z()}},
+          {"tvec", {t.x(), t.y(), t.z()}},
+          {"center", {c.x(), c.y(), c.z()}}};
+}
+
+nlohmann::ordered_json CameraToJson(const QueryCamera& camera) {
+  return {{"model", std::string(CameraModelName(camera.model_id))},
+          {"width", camera.width},
+          {"height", camera.height},
+          {"params", camera.params},
+          {"calibration", std::string(CalibrationName(camera.calibration))},
+          {"intrinsics_source", std::string(IntrinsicsSourceName(camera.source))}};
+}
+
+nlohmann::ordered_json GeoToJson(const GeoPose& g) {
+  return {{"latitude_deg", g.latitude_deg}, {"longitude_deg", g.longitude_deg},
+          {"height_m", g.height_m},         {"enu", g.enu},
+          {"heading_deg", g.heading_deg},   {"pitch_deg", g.pitch_deg},
+          {"roll_deg", g.roll_deg}};
+}
+
 }  // namespace
 
 nlohmann::ordered_json ResultToJson(const LocalizationResult& result, const QueryOptions& options) {
@@ -121,13 +146,7 @@ nlohmann::ordered_json ResultToJson(const LocalizationResult& result, const Quer
     out["covariance"] = CovarianceToJson(*covariance, result.covariance_calibration,
                                          result.enu_position_covariance);
   }
-  if (result.geo) {
-    const GeoPose& g = *result.geo;
-    out["geo"] = {{"latitude_deg", g.latitude_deg}, {"longitude_deg", g.longitude_deg},
-                  {"height_m", g.height_m},         {"enu", g.enu},
-                  {"heading_deg", g.heading_deg},   {"pitch_deg", g.pitch_deg},
-                  {"roll_deg", g.roll_deg}};
-  }
+  if (result.geo) out["geo"] = GeoToJson(*result.geo);
   if (result.priors.position || result.priors.gravity) {
     nlohmann::ordered_json priors = nlohmann::ordered_json::object();
     if (const auto& p = result.priors.position) {
@@ -191,13 +210,78 @@ nlohmann::ordered_json ErrorToJson(const std::string& name, const std::string& e
   return {{"name", name}, {"success", false}, {"error", error}};
 }
 
-std::string PoseLine(const LocalizationResult& result) {
+std::string PoseLine(const std::string& name, const CameraPose& cam_from_world) {
+  const Eigen::Quaterniond& q = cam_from_world.rotation;
+  const Eigen::Vector3d& t = cam_from_world.translation;
   char buffer[512];
   std::snprintf(buffer, sizeof(buffer), "%s %.17g %.17g %.17g %.17g %.17g %.17g %.17g",
-                result.name.c_str(), result.rotation[0], result.rotation[1], result.rotation[2],
-                result.rotation[3], result.translation[0], result.translation[1],
-                result.translation[2]);
+                name.c_str(), q.w(), q.x(), q.y(), q.z(), t.x(), t.y(), t.z());
   return buffer;
+}
+
+std::string PoseLine(const LocalizationResult& result) {
+  const auto& q = result.rotation;
+  const auto& t = result.translation;
+  return PoseLine(result.name, CameraPose(Eigen::Quaterniond(q[0], q[1], q[2], q[3]),
+                                          Eigen::Vector3d(t[0], t[1], t[2])));
+}
+
+nlohmann::ordered_json RigResultToJson(const RigLocalizationResult& result,
+                                       const QueryOptions& options) {
+  nlohmann::ordered_json out;
+  out["name"] = result.name;
+  out["success"] = result.success;
+  if (!result.success) out["failure_reason"] = result.failure_reason;
+  const RigImageResult& reference = result.images.front();
+  if (result.success) out["pose"] = PoseToJson(*reference.cam_from_world);
+  nlohmann::ordered_json& rig = out["rig"];
+  rig["reference_image"] = reference.alone.name;
+  if (result.success) rig["rig_from_world"] = PoseToJson(result.rig_from_world);
+  rig["unknown_scale"] = result.unknown_scale;
+  rig["scale"] = result.scale;
+  if (result.scale_std) rig["scale_std"] = *result.scale_std;
+  rig["num_inliers"] = result.num_inliers;
+  rig["correspondences"] = result.correspondences;
+  rig["ransac_iterations"] = result.ransac_iterations;
+  rig["refined"] = result.refined;
+  if (result.success) rig["mean_reprojection_error_px"] = result.mean_reprojection_error_px;
+  rig["images_localized_alone"] = result.images_localized_alone;
+  if (result.covariance)
+    out["covariance"] = CovarianceToJson(*result.covariance, result.covariance_calibration, {});
+  if (result.geo) out["geo"] = GeoToJson(*result.geo);
+  nlohmann::ordered_json& images = out["images"];
+  images = nlohmann::ordered_json::array();
+  for (const RigImageResult& image : result.images) {
+    const LocalizationResult& alone = image.alone;
+    nlohmann::ordered_json record;
+    record["name"] = alone.name;
+    const Eigen::Quaterniond& q = image.cam_from_rig.rotation;
+    const Eigen::Vector3d& t = image.cam_from_rig.translation;
+    record["cam_from_rig"] = {{"qvec", {q.w(), q.x(), q.y(), q.z()}},
+                              {"tvec", {t.x(), t.y(), t.z()}}};
+    if (image.cam_from_world) record["pose"] = PoseToJson(*image.cam_from_world);
+    record["camera"] = CameraToJson(image.camera);
+    record["num_inliers"] = image.num_inliers;
+    record["matches"] = {{"features", alone.num_features},
+                         {"forward", alone.forward_matches},
+                         {"back", alone.back_matches},
+                         {"correspondences", alone.correspondences}};
+    nlohmann::ordered_json& own = record["alone"];
+    own["success"] = alone.success;
+    own["num_inliers"] = alone.num_inliers;
+    if (alone.success) {
+      own["pose"] = {
+          {"qvec", alone.rotation}, {"tvec", alone.translation}, {"center", alone.center}};
+    } else {
+      own["failure_reason"] = alone.failure_reason;
+    }
+    images.push_back(std::move(record));
+  }
+  out["times_ms"] = {{"images", result.seconds_images * 1e3},
+                     {"rig_pose", result.seconds_rig_pose * 1e3},
+                     {"total", result.seconds_total * 1e3}};
+  out["parameters"] = OptionsToJson(options);
+  return out;
 }
 
 }  // namespace cwloc

@@ -325,23 +325,6 @@ void ReportMatching(const Index& index, const Query& query, const MatcherOutput&
   result->times.back_matching = matched.seconds_back_matching;
 }
 
-// Widens the covariance by the index's calibration for the query's calibration mode (PCAL):
-// the rotation block by its rotation scale, the centre block by its position scale, the cross
-// terms by the root of both. Empty when the index has none for the mode.
-std::optional<CovarianceScales> ApplyCovarianceCalibration(
-    const IndexCovarianceCalibration* calibration, Calibration mode, PoseCovariance* covariance) {
-  const auto m = static_cast<size_t>(mode);
-  if (calibration == nullptr || calibration->position_scale[m] <= 0 ||
-      calibration->rotation_scale[m] <= 0)
-    return std::nullopt;
-  const CovarianceScales scales{calibration->rotation_scale[m], calibration->position_scale[m]};
-  Eigen::Matrix<double, 6, 1> root;
-  root << Eigen::Vector3d::Constant(std::sqrt(scales.rotation)),
-      Eigen::Vector3d::Constant(std::sqrt(scales.position));
-  covariance->pose = root.asDiagonal() * covariance->pose * root.asDiagonal();
-  return scales;
-}
-
 // The pose stage's answer, into the result: the pose, its inliers, the camera as estimated, the
 // covariance and, on a georeferenced index, the pose on the globe; or why there is none.
 void ReportPose(const Index& index, const std::optional<IndexGeo>& geo, const Query& query,
@@ -413,6 +396,20 @@ void ValidateQuery(const Query& query) {
 }
 
 }  // namespace
+
+std::optional<CovarianceScales> ApplyCovarianceCalibration(
+    const IndexCovarianceCalibration* calibration, Calibration mode, PoseCovariance* covariance) {
+  const auto m = static_cast<size_t>(mode);
+  if (calibration == nullptr || calibration->position_scale[m] <= 0 ||
+      calibration->rotation_scale[m] <= 0)
+    return std::nullopt;
+  const CovarianceScales scales{calibration->rotation_scale[m], calibration->position_scale[m]};
+  Eigen::Matrix<double, 6, 1> root;
+  root << Eigen::Vector3d::Constant(std::sqrt(scales.rotation)),
+      Eigen::Vector3d::Constant(std::sqrt(scales.position));
+  covariance->pose = root.asDiagonal() * covariance->pose * root.asDiagonal();
+  return scales;
+}
 
 Localizer::Localizer(const Index& index)
     : index_(index), clusters_(index), geo_(IndexGeo::Of(index)) {}

@@ -60,4 +60,10 @@ class Localizer {
   std::optional<IndexGeo> geo_;
 };
 
+// Widens a covariance by the index's calibration for a calibration mode (PCAL): the rotation
+// block by its rotation scale, the centre block by its position scale, the cross terms by the
+// root of both. Empty when the index has none for the mode.
+std::optional<CovarianceScales> ApplyCovarianceCalibration(
+    const IndexCovarianceCalibration* calibration, Calibration mode, PoseCovariance* covariance);
+
 }  // namespace cwloc

@@ -86,16 +86,12 @@ std::variant<FrameMotion, std::string> MetricMotion(const std::array<double, 4>&
                                                     const std::array<double, 3>& translation,
                                                     double sigma_rotation_deg,
                                                     double sigma_position) {
-  const auto& q = rotation_wxyz;
-  const Eigen::Quaterniond rotation(q[0], q[1], q[2], q[3]);
-  if (!(std::abs(rotation.norm() - 1.0) <= 1e-3))
-    return "the quaternion (w, x, y, z) has length " + NumberText(rotation.norm()) + ", not 1";
-  const auto& t = translation;
-  if (!std::isfinite(t[0] + t[1] + t[2])) return std::string("the translation is not finite");
+  std::variant<CameraPose, std::string> pose = PoseFromParts(rotation_wxyz, translation);
+  if (const auto* problem = std::get_if<std::string>(&pose)) return *problem;
   if (!(sigma_rotation_deg >= 0.0) || !(sigma_position >= 0.0) ||
       !std::isfinite(sigma_rotation_deg + sigma_position))
     return std::string("the sigmas are finite and at least 0 (0: not known)");
-  FrameMotion motion{CameraPose(rotation.normalized(), Eigen::Vector3d(t[0], t[1], t[2])), true};
+  FrameMotion motion{std::get<CameraPose>(pose), true};
   motion.sigma_rotation_deg = sigma_rotation_deg;
   motion.sigma_position = sigma_position;
   return motion;

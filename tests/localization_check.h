@@ -3,6 +3,7 @@
 // cwloc-synth's queries_gt.txt format, the scale file, and the pose errors between them. Kept
 // apart from tools/eval on purpose: the tests check the pipeline, not cwloc-eval.
 #include <Eigen/Geometry>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -57,6 +58,19 @@ inline double ReadMetresPerUnit(const std::filesystem::path& path) {
     if (fields >> key && key == "scale" && fields >> scale) return scale;
   }
   throw std::runtime_error(path.string() + ": no 'scale S' line");
+}
+
+// cam_from_rig (COLMAP's name: X_cam = R X_rig + t) of a camera on a rig whose reference
+// camera is `reference`, its translation times `scale`, as a --frames line's "QW QX QY QZ TX
+// TY TZ".
+inline std::string CamFromRigText(const CameraPose& camera, const CameraPose& reference,
+                                  double scale = 1.0) {
+  const Eigen::Quaterniond q = (camera.rotation * reference.rotation.conjugate()).normalized();
+  const Eigen::Vector3d t = scale * (camera.translation - q * reference.translation);
+  char text[256];
+  std::snprintf(text, sizeof(text), "%.17g %.17g %.17g %.17g %.17g %.17g %.17g", q.w(), q.x(),
+                q.y(), q.z(), t.x(), t.y(), t.z());
+  return text;
 }
 
 inline std::vector<nlohmann::json> ReadJsonLines(const std::filesystem::path& path) {

@@ -2,6 +2,9 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <array>
+#include <string>
+#include <variant>
 
 namespace cwloc {
 
@@ -29,5 +32,11 @@ struct CameraPose {
     return rotation * point_world + translation;
   }
 };
+
+// A pose from a file's or the API's numbers (a rig's cam_from_rig, a VIO motion): a quaternion
+// (w, x, y, z) of unit length within 1e-3, then normalised, and a finite translation; else why
+// not, for the caller to say where the numbers came from.
+std::variant<CameraPose, std::string> PoseFromParts(const std::array<double, 4>& rotation_wxyz,
+                                                    const std::array<double, 3>& translation);
 
 }  // namespace cwloc

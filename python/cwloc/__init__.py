@@ -25,6 +25,8 @@ from ._cwloc import (
     PositionPrior,
     RankedImage,
     Result,
+    RigImageResult,
+    RigResult,
     StageTimes,
     Tracker,
     Tracking,
@@ -38,7 +40,8 @@ __version__ = version()
 __all__ = [
     "BadInputError", "Camera", "Error", "ErrorCode", "GeoPose", "IndexInfo", "Inliers",
     "InternalError", "InvalidArgumentError", "Localizer", "Options", "OutOfMemoryError",
-    "PoseCovariance", "PositionPrior", "RankedImage", "Result", "StageTimes", "Tracker",
+    "PoseCovariance", "PositionPrior", "RankedImage", "Result", "RigImageResult", "RigResult",
+    "StageTimes", "Tracker",
     "Tracking", "default_options", "read_feature_file", "version", "__version__",
 ]
 

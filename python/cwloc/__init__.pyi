@@ -157,7 +157,36 @@ class Result:
     json: str
     def to_dict(self) -> dict[str, Any]: ...
 
+class RigImageResult:
+    name: str
+    posed: bool
+    rotation: npt.NDArray[np.float64]  # cam_from_world = cam_from_rig * rig_from_world
+    translation: npt.NDArray[np.float64]
+    center: npt.NDArray[np.float64]
+    num_inliers: int
+    localized_alone: bool
+    camera: Camera
+
+class RigResult:
+    success: bool
+    failure_reason: str
+    rotation: npt.NDArray[np.float64]  # rig_from_world: X_rig = R X_world + t
+    translation: npt.NDArray[np.float64]
+    center: npt.NDArray[np.float64]
+    scale: float
+    scale_std: Optional[float]
+    num_inliers: int
+    correspondences: int
+    covariance: Optional[PoseCovariance]
+    geo: Optional[GeoPose]
+    images: list[RigImageResult]
+    json: str
+    def to_dict(self) -> dict[str, Any]: ...
+
 _Bytes = Union[bytes, bytearray, memoryview]
+# A rig image: name, photo (a path) or keypoints and descriptors, camera, and cam_from_rig
+# ((w, x, y, z), (tx, ty, tz)).
+_RigImage = dict[str, Any]
 
 class Localizer:
     def __init__(self, path: _Path, verify: bool = False) -> None: ...
@@ -169,6 +198,8 @@ class Localizer:
     def localize_features(self, keypoints: npt.ArrayLike, descriptors: npt.ArrayLike,
                           camera: _CameraLike, **options: Any) -> Result: ...
     def localize_grey(self, image: npt.ArrayLike, camera: _CameraLike, **options: Any) -> Result: ...
+    def localize_rig(self, images: list[_RigImage], unknown_scale: bool = False,
+                     name: str = "frame", **options: Any) -> RigResult: ...
 
 _Motion = Union[tuple[tuple[float, float, float, float], tuple[float, float, float]],
                 tuple[tuple[float, float, float, float], tuple[float, float, float],

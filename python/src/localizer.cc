@@ -119,6 +119,17 @@ void BindLocalizer(py::module_& m) {
            (std::string("Localizes an 8-bit grey image: uint8 (height, width), rows of any "
                         "stride (a camera's Y plane); camera of its size.") +
             kOptionsDoc)
+               .c_str())
+      .def("localize_rig", &LocalizeRig, py::arg("images"), py::arg("unknown_scale") = false,
+           py::arg("name") = "frame",
+           (std::string("Localizes several images as one generalized camera (cwloc-localize "
+                        "--frames) and returns a RigResult: images is a list of dicts with "
+                        "'name', 'photo' (a path) or 'keypoints' and 'descriptors', 'camera' "
+                        "(known or a focal prior; a photo without one uses its EXIF focal "
+                        "length) and 'cam_from_rig' = ((w, x, y, z), (tx, ty, tz)), X_cam = R "
+                        "X_rig + t; the first image is the reference camera. unknown_scale: the "
+                        "translations are known up to one scale, which is estimated.") +
+            kOptionsDoc)
                .c_str());
   m.def("read_feature_file", &ReadFeatureFile, py::arg("path"),
         "(keypoints float32 (N, 2), descriptors uint8 (N, 128)) of COLMAP's text feature file "

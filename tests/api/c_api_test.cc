@@ -5,11 +5,13 @@
 
 #include <cmath>
 #include <fstream>
+#include <sstream>
 #include <thread>
 
 #include "cwloc/cwloc.h"
 #include "cwloc/cwloc.hpp"
 #include "tests/api/api_test_util.h"
+#include "tests/localization_check.h"
 #include "tests/test_util.h"
 
 namespace cwloc {
@@ -97,6 +99,70 @@ TEST_F(CApiTest, LocalizesLikeTheCppApi) {
   EXPECT_EQ(cwloc_result_ranked_image(result, 1000, nullptr, nullptr, nullptr),
             CWLOC_ERROR_INVALID_ARGUMENT);
   cwloc_result_destroy(result);
+}
+
+// Two golden queries as a rig frame (cam_from_rig from their true poses).
+TEST_F(CApiTest, LocalizesRigsLikeTheCppApi) {
+  const auto truth = test::ReadGroundTruth(QueryDir() / "queries_gt.txt");
+  const std::vector<std::string> names = {"query_00001.jpg", "query_00003.jpg"};
+  std::vector<api::Features> features;
+  std::vector<cwloc_camera> cameras(names.size(), KnownCamera());
+  std::vector<cwloc_rig_image> images(names.size());
+  std::vector<api::RigImage> cpp_images(names.size());
+  for (size_t i = 0; i < names.size(); ++i) {
+    features.push_back(ReadQueryFeatures(QueryDir(), names[i]));
+    std::istringstream pose(test::CamFromRigText(truth.at(names[i]).pose, truth.at(names[0]).pose));
+    cwloc_rig_image& image = images[i];
+    image.name = names[i].c_str();
+    image.keypoints = features[i].keypoints.data();
+    image.descriptors = features[i].descriptors.data();
+    image.num_features = static_cast<uint32_t>(features[i].keypoints.size() / 2);
+    image.camera = &cameras[i];
+    for (double& v : image.cam_from_rig_rotation_wxyz) pose >> v;
+    for (double& v : image.cam_from_rig_translation) pose >> v;
+    cpp_images[i] = {names[i], features[i],
+                     "",       api::Camera{"SIMPLE_RADIAL", 1024, 768, {900, 512, 384, -0.01}},
+                     {},       {}};
+    std::copy_n(image.cam_from_rig_rotation_wxyz, 4, cpp_images[i].cam_from_rig_rotation.begin());
+    std::copy_n(image.cam_from_rig_translation, 3, cpp_images[i].cam_from_rig_translation.begin());
+  }
+  cwloc_rig_result* result = nullptr;
+  ASSERT_EQ(cwloc_localize_rig(localizer_, images.data(), images.size(), 0, "f", nullptr, &result),
+            CWLOC_OK)
+      << cwloc_last_error();
+  ASSERT_EQ(cwloc_rig_result_success(result), 1) << cwloc_rig_result_failure_reason(result);
+  const api::RigResult want =
+      api::Localizer::Open(kIndex).LocalizeRig(cpp_images, false, api::Options(), "f");
+  double rotation[4], translation[3], center[3], scale = 0;
+  cwloc_rig_result_pose(result, rotation, translation, center, &scale);
+  for (int i = 0; i < 4; ++i) EXPECT_EQ(rotation[i], want.rotation[i]);
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(translation[i], want.translation[i]);
+  EXPECT_EQ(scale, 1.0);
+  EXPECT_EQ(cwloc_rig_result_num_inliers(result), want.num_inliers);
+  ASSERT_EQ(cwloc_rig_result_num_images(result), 2u);
+  for (uint32_t i = 0; i < 2; ++i) {
+    uint32_t inliers = 0;
+    ASSERT_EQ(cwloc_rig_result_image_pose(result, i, rotation, translation, &inliers), CWLOC_OK);
+    for (int k = 0; k < 4; ++k) EXPECT_EQ(rotation[k], want.images[i].rotation[k]);
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(translation[k], want.images[i].translation[k]);
+    EXPECT_EQ(inliers, want.images[i].num_inliers);
+  }
+  EXPECT_EQ(cwloc_rig_result_image_pose(result, 2, nullptr, nullptr, nullptr),
+            CWLOC_ERROR_INVALID_ARGUMENT);
+  EXPECT_STREQ(cwloc_last_error(), "image 2: out of range");
+  double covariance[36], radius = 0;
+  ASSERT_EQ(cwloc_rig_result_covariance(result, covariance, &radius), CWLOC_OK);
+  EXPECT_EQ(radius, want.covariance->position_radius95);
+  EXPECT_THAT(cwloc_rig_result_json(result), HasSubstr("\"rig\""));
+  cwloc_rig_result_destroy(result);
+
+  // A quaternion that is not of unit length is the caller's argument.
+  images[1].cam_from_rig_rotation_wxyz[0] = 2.0;
+  EXPECT_EQ(cwloc_localize_rig(localizer_, images.data(), images.size(), 0, "f", nullptr, &result),
+            CWLOC_ERROR_INVALID_ARGUMENT);
+  EXPECT_THAT(cwloc_last_error(), HasSubstr("rig image 'query_00003.jpg': cam_from_rig: the "
+                                            "quaternion (w, x, y, z) has length"));
+  EXPECT_EQ(result, nullptr);
 }
 
 TEST_F(CApiTest, UnknownFocalNeedsOnlyTheImageSize) {

@@ -154,6 +154,31 @@ std::optional<SequenceReport> EvaluateSequence(const RunResults& run,
   return sequence;
 }
 
+// The rig frames by their reference cameras; nothing when no result is a rig's.
+std::optional<RigReport> EvaluateRig(const RunResults& run,
+                                     const std::vector<QueryOutcome>& outcomes) {
+  std::unordered_map<std::string, const QueryOutcome*> by_name;
+  for (const QueryOutcome& outcome : outcomes) by_name.emplace(outcome.name, &outcome);
+  RigReport rig;
+  std::vector<double> position, rotation;
+  bool any = false;
+  for (const QueryResult& result : run.queries) {
+    any |= !result.rig_frame.empty();
+    if (!result.rig_reference) continue;
+    const auto outcome = by_name.find(result.name);
+    if (outcome == by_name.end()) continue;  // a reference camera without ground truth
+    ++rig.frames;
+    if (outcome->second->status != QueryStatus::kLocalized) continue;
+    ++rig.localized;
+    position.push_back(outcome->second->position_error);
+    rotation.push_back(outcome->second->rotation_error_deg);
+  }
+  if (!any) return std::nullopt;
+  rig.position_error = ComputeQuartiles(std::move(position));
+  rig.rotation_error_deg = ComputeQuartiles(std::move(rotation));
+  return rig;
+}
+
 }  // namespace
 
 RunReport EvaluateRun(const std::vector<NamedPose>& ground_truth, const RunResults& run,
@@ -241,6 +266,7 @@ RunReport EvaluateRun(const std::vector<NamedPose>& ground_truth, const RunResul
       stage_values[s].push_back((*result.times_ms)[s]);
   }
   report.sequence = EvaluateSequence(run, report.per_query);
+  report.rig = EvaluateRig(run, report.per_query);
   report.position_error = ComputeQuartiles(std::move(position_errors));
   report.rotation_error_deg = ComputeQuartiles(std::move(rotation_errors));
   report.ground_error = ComputeQuartiles(std::move(ground_errors));
@@ -331,6 +357,12 @@ nlohmann::ordered_json ReportToJson(const EvalReport& report) {
         {"with_covariance", run.with_covariance},
         {"inside", run.inside95},
         {"share", run.with_covariance ? double(run.inside95) / run.with_covariance : 0.0}};
+    if (const auto& rig = run.rig) {
+      r["rig"] = {{"frames", rig->frames},
+                  {"localized", rig->localized},
+                  {"position_error", QuartilesJson(rig->position_error)},
+                  {"rotation_error_deg", QuartilesJson(rig->rotation_error_deg)}};
+    }
     if (const auto& sequence = run.sequence) {
       r["sequence"] = {{"frames", sequence->frames},
                        {"tracked", sequence->tracked},
@@ -451,6 +483,18 @@ std::string FormatTable(const EvalReport& report) {
         << s.longest_without_pose << " in a row without; median position error tracked "
         << median(s.tracked_error) << ", relocalized " << median(s.relocalized_error) << " ("
         << report.Unit() << ")\n";
+  }
+
+  // Rig frames by their reference cameras (docs/algorithm.md, "Rigs and multi-frame queries").
+  for (const RunReport& run : report.runs) {
+    if (!run.rig) continue;
+    const RigReport& r = *run.rig;
+    out << "  " << run.label << ": " << r.frames << " rig frames, " << r.localized
+        << " localized; the reference camera's median position error "
+        << (r.position_error ? Number(r.position_error->median) : std::string("-")) << " "
+        << report.Unit() << ", rotation "
+        << (r.rotation_error_deg ? Number(r.rotation_error_deg->median) : std::string("-"))
+        << " deg (the table counts every image)\n";
   }
 
   // How often the truth lies where the covariance says it should (docs/algorithm.md).

@@ -87,6 +87,14 @@ struct SequenceReport {
   double with_pose_share = 0;    // (tracked + relocalized) / frames
 };
 
+// Rig frames (cwloc-localize --rig, --frames): each frame's error is its reference camera's.
+struct RigReport {
+  int frames = 0;     // rig records, by their reference images in the ground truth
+  int localized = 0;  // of those, with a pose
+  std::optional<Quartiles> position_error;  // of the reference cameras
+  std::optional<Quartiles> rotation_error_deg;
+};
+
 struct RunReport {
   std::string label;
   std::filesystem::path path;
@@ -114,6 +122,8 @@ struct RunReport {
   int with_covariance = 0;
   int inside95 = 0;
   std::optional<SequenceReport> sequence;  // when the results are a sequence's frames
+  // When the results are rig frames; the counts and errors above are then every image's.
+  std::optional<RigReport> rig;
 };
 
 struct EvalReport {

@@ -36,7 +36,47 @@ std::array<double, N> NumberArray(const json& object, const char* key, const std
   return values;
 }
 
-QueryResult ParseJsonLine(const std::string& line, const std::string& where) {
+// "pose": {"qvec": [4], "tvec": [3]} of `object`, which `field` names in messages.
+Pose ReadPose(const json& object, const std::string& where, const std::string& field) {
+  const auto pose = object.find("pose");
+  if (pose == object.end() || !pose->is_object())
+    throw InputError(where + "\"success\" is true but there is no \"" + field + "\" object");
+  const std::string qvec = field + ".qvec", tvec = field + ".tvec";
+  const auto q = NumberArray<4>(*pose, "qvec", where, qvec.c_str());
+  const auto t = NumberArray<3>(*pose, "tvec", where, tvec.c_str());
+  const Eigen::Quaterniond rotation(q[0], q[1], q[2], q[3]);
+  if (rotation.norm() < 1e-12) throw InputError(where + "\"" + qvec + "\" is zero");
+  return Pose{rotation.normalized(), Eigen::Vector3d(t[0], t[1], t[2])};
+}
+
+// A rig frame's record: one result per image, the first its reference camera.
+std::vector<QueryResult> ParseRigRecord(const json& record, const std::string& frame,
+                                        const std::string& where) {
+  const auto images = record.find("images");
+  if (images == record.end() || !images->is_array() || images->empty())
+    throw InputError(where + "a rig frame's \"images\" must be a non-empty array");
+  std::vector<QueryResult> results;
+  for (size_t i = 0; i < images->size(); ++i) {
+    const json& image = (*images)[i];
+    const std::string field = "images[" + std::to_string(i) + "]";
+    const auto name = image.is_object() ? image.find("name") : image.end();
+    if (name == image.end() || !name->is_string() || name->get<std::string>().empty())
+      throw InputError(where + "\"" + field + ".name\" must be a non-empty string");
+    QueryResult result;
+    result.name = name->get<std::string>();
+    result.rig_frame = frame;
+    result.rig_reference = i == 0;
+    if (image.contains("pose")) {
+      result.pose = ReadPose(image, where, field + ".pose");
+      result.status = ResultStatus::kLocalized;
+    }
+    results.push_back(std::move(result));
+  }
+  return results;
+}
+
+QueryResult ParseJsonLine(const std::string& line, const std::string& where,
+                          std::vector<QueryResult>* rig_images) {
   const json record = json::parse(line, nullptr, /*allow_exceptions=*/false);
   if (record.is_discarded()) throw InputError(where + "not valid JSON");
   if (!record.is_object())
@@ -51,16 +91,12 @@ QueryResult ParseJsonLine(const std::string& line, const std::string& where) {
   if (success == record.end() || !success->is_boolean())
     throw InputError(where + "expected a boolean \"success\"");
 
+  if (record.contains("rig")) {
+    *rig_images = ParseRigRecord(record, result.name, where);
+    return result;
+  }
   if (success->get<bool>()) {
-    const auto pose = record.find("pose");
-    if (pose == record.end() || !pose->is_object()) {
-      throw InputError(where + "\"success\" is true but there is no \"pose\" object");
-    }
-    const auto q = NumberArray<4>(*pose, "qvec", where, "pose.qvec");
-    const auto t = NumberArray<3>(*pose, "tvec", where, "pose.tvec");
-    const Eigen::Quaterniond qvec(q[0], q[1], q[2], q[3]);
-    if (qvec.norm() < 1e-12) throw InputError(where + "\"pose.qvec\" is zero");
-    result.pose = Pose{qvec.normalized(), Eigen::Vector3d(t[0], t[1], t[2])};
+    result.pose = ReadPose(record, where, "pose");
     result.status = ResultStatus::kLocalized;
   } else {
     result.status = record.contains("error") ? ResultStatus::kError : ResultStatus::kNotLocalized;
@@ -154,9 +190,13 @@ RunResults ReadResults(const std::filesystem::path& path) {
   if (run.format == ResultFormat::kJsonLines) {
     for (size_t i = 0; i < lines.size(); ++i) {
       if (LeftTrimmed(lines[i]).empty()) continue;
-      QueryResult result = ParseJsonLine(lines[i], Where(path, int(i) + 1));
-      result.line = int(i) + 1;
-      run.queries.push_back(std::move(result));
+      std::vector<QueryResult> rig_images;
+      QueryResult result = ParseJsonLine(lines[i], Where(path, int(i) + 1), &rig_images);
+      if (rig_images.empty()) rig_images.push_back(std::move(result));
+      for (QueryResult& image : rig_images) {
+        image.line = int(i) + 1;
+        run.queries.push_back(std::move(image));
+      }
     }
   } else {
     for (NamedPose& entry : ReadPosesFile(path)) {

@@ -32,6 +32,10 @@ struct QueryResult {
   std::optional<Eigen::Matrix3d> position_covariance;
   std::vector<uint32_t> ranked_image_ids;  // "ranked_images", best first (JSON lines only)
   std::string tracking_mode;               // a sequence frame's "tracking.mode"; empty otherwise
+  // An image of a rig frame's record (cwloc-localize --rig, --frames): the frame's name, and
+  // whether the image is its reference camera, whose error is the frame's.
+  std::string rig_frame;
+  bool rig_reference = false;
   int line = 0;
 };
 
@@ -45,7 +49,8 @@ struct RunResults {
 };
 
 // Reads cwloc-localize JSON lines or a poses file, telling them apart by content: the first
-// line that is not blank or a '#' comment starts with '{' for JSON lines. Throws InputError
+// line that is not blank or a '#' comment starts with '{' for JSON lines. A rig frame's record
+// gives one result per image, named by the image, with the pose the rig gave it. Throws InputError
 // naming the file and line for malformed input and for a query name given twice.
 RunResults ReadResults(const std::filesystem::path& path);
 

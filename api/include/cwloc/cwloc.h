@@ -104,10 +104,27 @@ typedef struct cwloc_motion {
   double sigma_position;
 } cwloc_motion;
 
+/* One image of a multi-image query (a rig's frame, a VIO window; the C++ RigImage): its features
+ * (keypoints, descriptors, num_features) or, when photo_path is not NULL, a JPEG or PNG file;
+ * its camera (needed with features; a photo without one takes its EXIF focal length as a
+ * prior); and COLMAP's cam_from_rig (X_cam = R(rotation) X_rig + translation). The first image
+ * is the reference camera. */
+typedef struct cwloc_rig_image {
+  const char* name;
+  const float* keypoints;
+  const uint8_t* descriptors;
+  uint32_t num_features;
+  const char* photo_path;
+  const cwloc_camera* camera;
+  double cam_from_rig_rotation_wxyz[4];
+  double cam_from_rig_translation[3];
+} cwloc_rig_image;
+
 typedef struct cwloc_localizer cwloc_localizer;
 typedef struct cwloc_options cwloc_options;
 typedef struct cwloc_result cwloc_result;
 typedef struct cwloc_tracker cwloc_tracker;
+typedef struct cwloc_rig_result cwloc_rig_result;
 
 CWLOC_C_API const char* cwloc_version(void);
 CWLOC_C_API const char* cwloc_last_error(void);
@@ -159,6 +176,33 @@ CWLOC_C_API cwloc_status cwloc_localize_encoded_photo(const cwloc_localizer* loc
 CWLOC_C_API cwloc_status cwloc_localize_grey_image(
     const cwloc_localizer* localizer, const uint8_t* pixels, uint32_t width, uint32_t height,
     size_t stride, const cwloc_camera* camera, const cwloc_options* options, cwloc_result** out);
+
+/* Several images localized as one generalized camera (cwloc-localize --frames); unknown_scale
+ * 1: the cam_from_rig translations are known up to one scale, which is estimated. name: the
+ * frame's, may be NULL ("frame"). */
+CWLOC_C_API cwloc_status cwloc_localize_rig(const cwloc_localizer* localizer,
+                                            const cwloc_rig_image* images, size_t num_images,
+                                            int unknown_scale, const char* name,
+                                            const cwloc_options* options, cwloc_rig_result** out);
+CWLOC_C_API void cwloc_rig_result_destroy(cwloc_rig_result* result);
+CWLOC_C_API int cwloc_rig_result_success(const cwloc_rig_result* result);
+CWLOC_C_API const char* cwloc_rig_result_failure_reason(const cwloc_rig_result* result);
+/* rig_from_world (X_rig = R X_world + t), the rig's origin, and the scale (1 unless unknown). */
+CWLOC_C_API void cwloc_rig_result_pose(const cwloc_rig_result* result, double rotation_wxyz[4],
+                                       double translation[3], double center[3], double* scale);
+CWLOC_C_API uint32_t cwloc_rig_result_num_inliers(const cwloc_rig_result* result);
+CWLOC_C_API uint32_t cwloc_rig_result_num_images(const cwloc_rig_result* result);
+/* Image i's cam_from_world (cam_from_rig * rig_from_world) and the rig's inliers in it;
+ * CWLOC_ERROR_NOT_AVAILABLE when the rig was not localized. Any output may be NULL. */
+CWLOC_C_API cwloc_status cwloc_rig_result_image_pose(const cwloc_rig_result* result, uint32_t i,
+                                                     double rotation_wxyz[4], double translation[3],
+                                                     uint32_t* num_inliers);
+/* The rig pose's 6 x 6 covariance over (theta, C), row-major, and its 95 % position radius;
+ * CWLOC_ERROR_NOT_AVAILABLE when the rig was not localized. Either output may be NULL. */
+CWLOC_C_API cwloc_status cwloc_rig_result_covariance(const cwloc_rig_result* result,
+                                                     double pose[36], double* position_radius95);
+/* The frame's JSON record as cwloc-localize writes it. */
+CWLOC_C_API const char* cwloc_rig_result_json(const cwloc_rig_result* result);
 
 /* A tracker: the frames of one moving camera, in order (cwloc-localize --sequence), with the
  * options given here (NULL: the defaults). Each frame is tracked from the frames before it,

@@ -172,6 +172,51 @@ struct Result {
   std::string json;
 };
 
+// One image of a multi-image query (docs/api.md, "Rigs and multi-frame queries"): a rig's
+// frame, or a window of video frames whose relative poses VIO knows. Its SIFT features with a
+// camera, or a photo file (its EXIF focal length a prior without a camera); and where its camera
+// sits, COLMAP's cam_from_rig: X_cam = R(rotation) X_rig + translation, rotation (w, x, y, z) of
+// unit length. The first image is the reference camera; the camera must be known or a focal
+// prior.
+struct RigImage {
+  std::string name;        // in the result and in error messages
+  Features features;       // used when photo_path is empty
+  std::string photo_path;  // a JPEG or PNG file instead
+  std::optional<Camera> camera;
+  std::array<double, 4> cam_from_rig_rotation{1, 0, 0, 0};
+  std::array<double, 3> cam_from_rig_translation{};
+};
+
+struct RigImageResult {
+  std::string name;
+  bool posed = false;  // the rig was localized: cam_from_world = cam_from_rig * rig_from_world
+  std::array<double, 4> rotation{1, 0, 0, 0};  // cam_from_world
+  std::array<double, 3> translation{};
+  std::array<double, 3> center{};
+  uint32_t num_inliers = 0;      // the rig's inliers in this image
+  bool localized_alone = false;  // its own pipeline localized it
+  Camera camera;                 // as used: a focal prior refined with the rig pose
+};
+
+struct RigResult {
+  bool success = false;
+  std::string failure_reason;
+  // rig_from_world: X_rig = R(rotation) X_world + translation; center is the rig's origin.
+  std::array<double, 4> rotation{1, 0, 0, 0};
+  std::array<double, 3> translation{};
+  std::array<double, 3> center{};
+  double scale = 1;  // model units per cam_from_rig translation unit (estimated if unknown)
+  std::optional<double> scale_std;
+  uint32_t num_inliers = 0;      // over all images
+  uint32_t correspondences = 0;  // pooled 2D-3D pairs
+  // The rig pose's covariance over (theta, C) as PoseCovariance defines it for a camera.
+  std::optional<PoseCovariance> covariance;
+  std::optional<GeoPose> geo;  // the reference camera's, with a georeferenced index
+  std::vector<RigImageResult> images;
+  // The JSON record cwloc-localize --frames writes for this frame.
+  std::string json;
+};
+
 struct IndexInfo {
   std::string path;
   std::string format_version;  // "MAJOR.MINOR"
@@ -218,6 +263,13 @@ class CWLOC_API Localizer {
   // An 8-bit grey image, row-major, `stride` bytes from one row to the next (a camera frame).
   Result LocalizeGreyImage(const uint8_t* pixels, uint32_t width, uint32_t height, size_t stride,
                            const Camera& camera, const Options& options = Options()) const;
+
+  // Several images localized as one generalized camera (cwloc-localize --frames): each image's
+  // own pipeline finds its correspondences, one robust pose fits them all. unknown_scale: the
+  // cam_from_rig translations are known up to one scale, which is estimated.
+  RigResult LocalizeRig(const std::vector<RigImage>& images, bool unknown_scale = false,
+                        const Options& options = Options(),
+                        const std::string& name = "frame") const;
 
  private:
   friend class Tracker;
