@@ -29,6 +29,7 @@ enum SceneStream : uint64_t {
   kInstanceStream,
   kClutterPatchStream,
   kViewNoiseStream,
+  kRigObserveStream,
 };
 
 constexpr double kMinKeypointScale = 1.3;  // pixels; smaller blobs are not detected
@@ -63,6 +64,26 @@ struct CityScene::Observation {
   float x, y, scale, orientation;
   float score;  // detector response: larger and more frontal features win the budget
 };
+
+CameraPose RigCameraInRig(int camera, int cameras) {
+  // R turns about y so that the camera's view direction in the rig frame, R^T e_z =
+  // (sin yaw, 0, cos yaw), goes right (+x) for a positive yaw.
+  const double yaw = 2 * std::numbers::pi * double(camera) / double(cameras);
+  const double c = std::cos(yaw), s = std::sin(yaw);
+  CameraPose pose;
+  pose.cam_from_world_rotation << c, 0, -s, 0, 1, 0, s, 0, c;
+  pose.centre = kRigRadius * Eigen::Vector3d(s, 0, c - 1);
+  return pose;
+}
+
+CameraPose RigCameraPose(const CameraPose& rig, int camera, int cameras) {
+  if (camera == 0) return rig;  // bit for bit: a one-camera rig changes nothing
+  const CameraPose in_rig = RigCameraInRig(camera, cameras);
+  CameraPose pose = rig;
+  pose.cam_from_world_rotation = in_rig.cam_from_world_rotation * rig.cam_from_world_rotation;
+  pose.centre = rig.centre + rig.cam_from_world_rotation.transpose() * in_rig.centre;
+  return pose;
+}
 
 double DefaultPointDensity(const SceneOptions& options) {
   // About 140 m^2 of facade lies in a typical view within the detectable range; more points
@@ -155,33 +176,46 @@ CityScene CityScene::Generate(const SceneOptions& options, const Progress& progr
     if (view_count[p] >= 2) scene.point3D_ids_[p] = next_id++;
   }
 
-  // Queries: redraw a pose until it sees enough model points (keep the best draw otherwise), or
-  // the walk's frames as they come.
-  const size_t num_queries = size_t(std::max(0, options.queries));
+  // Queries: redraw a pose until its frame sees enough model points (keep the best draw
+  // otherwise), or the walk's frames as they come. With a rig the cameras count together, so
+  // that some of them may see nothing (the sky, down a street), as a real rig's do.
+  const size_t num_frames = size_t(std::max(0, options.queries));
+  const size_t rig = size_t(std::max(1, options.rig_cameras));
+  const size_t num_queries = num_frames * rig;
   std::vector<CameraPose> query_poses(num_queries);
   std::vector<std::vector<Observation>> query_observations(num_queries);
   report("queries", 0);
-  if (options.path_step > 0)
-    query_poses = scene.layout_.WalkCameras(options.seed, num_queries, options.path_step);
-  ParallelFor(num_queries, options.threads, [&](size_t q) {
-    if (options.path_step > 0) {
-      query_observations[q] =
-          scene.Observe(query_poses[q], Rng::Seed(options.seed, kQueryObserveStream, q, 0), budget);
-      return;
-    }
+  const bool walk = options.path_step > 0;
+  std::vector<CameraPose> walk_poses;
+  if (walk) walk_poses = scene.layout_.WalkCameras(options.seed, num_frames, options.path_step);
+  ParallelFor(num_frames, options.threads, [&](size_t q) {
+    std::vector<CameraPose> frame_poses(rig);
+    std::vector<std::vector<Observation>> frame_obs(rig);
     size_t best = 0;
     for (int draw = 0; draw < kMaxQueryDraws; ++draw) {
-      const CameraPose pose =
-          scene.layout_.DrawQueryCamera(options.seed, q * kMaxQueryDraws + draw);
-      auto obs = scene.Observe(pose, Rng::Seed(options.seed, kQueryObserveStream, q, draw), budget);
+      const CameraPose rig_pose =
+          walk ? walk_poses[q]
+               : scene.layout_.DrawQueryCamera(options.seed, q * kMaxQueryDraws + draw);
       size_t in_model = 0;
-      for (const Observation& o : obs) in_model += scene.point3D_ids_[o.point] != kInvalidPoint3DId;
+      for (size_t c = 0; c < rig; ++c) {
+        // Camera 0 keeps the single camera's stream: without a rig nothing changes.
+        const uint64_t observe_seed =
+            c == 0 ? Rng::Seed(options.seed, kQueryObserveStream, q, uint64_t(draw))
+                   : Rng::Seed(options.seed, kRigObserveStream, q * kMaxRigCameras + c,
+                               uint64_t(draw));
+        frame_poses[c] = RigCameraPose(rig_pose, int(c), int(rig));
+        frame_obs[c] = scene.Observe(frame_poses[c], observe_seed, budget);
+        for (const Observation& o : frame_obs[c])
+          in_model += scene.point3D_ids_[o.point] != kInvalidPoint3DId;
+      }
       if (draw == 0 || in_model > best) {
         best = in_model;
-        query_poses[q] = pose;
-        query_observations[q] = std::move(obs);
+        for (size_t c = 0; c < rig; ++c) {
+          query_poses[q * rig + c] = frame_poses[c];
+          query_observations[q * rig + c] = std::move(frame_obs[c]);
+        }
       }
-      if (in_model >= size_t(options.min_query_points)) break;
+      if (walk || in_model >= size_t(options.min_query_points)) break;
     }
   });
 
@@ -192,11 +226,15 @@ CityScene CityScene::Generate(const SceneOptions& options, const Progress& progr
     SceneImage& image = scene.images_[i];
     image.image_id = image_t(i + 1);
     image.query = i >= num_mapping;
-    char name[32];
-    if (image.query) {
+    char name[64];
+    if (!image.query) {
+      std::snprintf(name, sizeof(name), "map_%06zu.jpg", i + 1);
+    } else if (rig == 1) {
       std::snprintf(name, sizeof(name), "query_%05zu.jpg", i - num_mapping + 1);
     } else {
-      std::snprintf(name, sizeof(name), "map_%06zu.jpg", i + 1);
+      // COLMAP's rig layout: a folder per camera, the images of one frame share the file name.
+      const size_t k = i - num_mapping;
+      std::snprintf(name, sizeof(name), "cam%zu/query_%05zu.jpg", k % rig, k / rig + 1);
     }
     image.name = name;
     image.pose = image.query ? query_poses[i - num_mapping] : poses[i];

@@ -21,6 +21,9 @@
 
 namespace cwloc::synth {
 
+inline constexpr int kMaxRigCameras = 6;
+inline constexpr double kRigRadius = 0.3;  // metres: the circle the rig's cameras sit on
+
 struct SceneOptions {
   uint64_t seed = 1;
   LayoutOptions layout;
@@ -42,11 +45,23 @@ struct SceneOptions {
   // this many metres apart, in order (CityLayout::WalkCameras), each as it comes: a frame that
   // sees few model points is part of the walk.
   double path_step = 0;
+  // 1: a query is one camera. 2..kMaxRigCameras: a query frame is a rig of this many cameras
+  // (RigCameraPose), each an ordinary query image, so that rig localization can be tested.
+  int rig_cameras = 1;
   colmap::Camera camera;  // shared by every image; camera_id 1
   PatchModel patch;
   ViewNoiseModel view_noise;
   int threads = 0;  // 0: all cores
 };
+
+// Camera `camera` of a rig of `cameras` in the rig frame (cam_from_rig, metres). Camera 0 is
+// the reference sensor (the identity); camera c is camera 0 turned right by c * 360 / cameras
+// degrees about its y (down) axis. All sit on a circle of kRigRadius looking outwards, camera 0
+// at the rig origin, so that together they see all around as a street-level 360 rig does.
+CameraPose RigCameraInRig(int camera, int cameras);
+
+// That camera in the world when the rig frame (camera 0) is at `rig`.
+CameraPose RigCameraPose(const CameraPose& rig, int camera, int cameras);
 
 // Facade points per m^2 that fill an image's feature budget at typical distances.
 double DefaultPointDensity(const SceneOptions& options);
@@ -83,7 +98,7 @@ struct SceneImage {
 
 struct SceneCounts {
   size_t mapping_images = 0;
-  size_t queries = 0;
+  size_t queries = 0;  // query images: frames x rig cameras
   size_t facades = 0;
   size_t scene_points = 0;  // all facade points, seen or not
   size_t model_points = 0;  // seen by >= 2 mapping images
@@ -110,7 +125,8 @@ class CityScene {
   const SceneOptions& options() const { return options_; }
   const CityLayout& layout() const { return layout_; }
   const std::vector<ScenePoint>& points() const { return points_; }
-  // Mapping images first (image ids 1..M), then queries (M+1..M+Q).
+  // Mapping images first (image ids 1..M), then queries (M+1..M+Q), a rig frame's cameras
+  // in order before the next frame's.
   const std::vector<SceneImage>& images() const { return images_; }
   size_t num_mapping_images() const { return num_mapping_images_; }
   // Model point3D id of a scene point, or kInvalidPoint3DId when fewer than 2 mapping images

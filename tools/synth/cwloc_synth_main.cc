@@ -103,6 +103,7 @@ nlohmann::ordered_json Summary(const std::filesystem::path& output, const SynthK
                    {"blocks_y", o.layout.blocks_y},
                    {"queries", o.queries},
                    {"path_step", o.path_step > 0 ? nlohmann::ordered_json(o.path_step) : nullptr},
+                   {"rig_cameras", o.rig_cameras},
                    {"features_per_image", o.features_per_image},
                    {"clutter_fraction", o.clutter_fraction},
                    {"repetition", o.repetition},
@@ -172,8 +173,13 @@ void PrintSummary(const nlohmann::ordered_json& s) {
               static_cast<unsigned long long>(s["seed"].get<uint64_t>()));
   std::printf("  city:     %d x %d blocks, %zu facades\n", k["blocks_x"].get<int>(),
               k["blocks_y"].get<int>(), c["facades"].get<size_t>());
-  std::printf("  images:   %zu mapping, %zu queries\n", c["mapping_images"].get<size_t>(),
+  std::printf("  images:   %zu mapping, %zu queries", c["mapping_images"].get<size_t>(),
               c["queries"].get<size_t>());
+  if (k["rig_cameras"].get<int>() > 1) {
+    std::printf(" (%d frames of a %d-camera rig)", k["queries"].get<int>(),
+                k["rig_cameras"].get<int>());
+  }
+  std::printf("\n");
   std::printf("  model:    %zu 3D points, %zu views (mean track %.2f)\n",
               c["points3D"].get<size_t>(), c["views"].get<size_t>(),
               c["mean_track_length"].get<double>());
@@ -244,6 +250,9 @@ int main(int argc, char** argv) {
   app.add_option("--path-step", knobs.path_step,
                  "The queries are the frames of one walk down a street, this many metres apart, "
                  "in order (for cwloc-localize --sequence); unset: independent cameras");
+  app.add_option("--rig-cameras", knobs.rig_cameras,
+                 "Cameras per query frame, in [1, 6]: 2 or more make every query a frame of a "
+                 "rig turning all around (cam0/, cam1/, ...; rig_config.json) [1]");
   app.add_option("--keypoint-noise", knobs.keypoint_noise,
                  "Keypoint noise, pixels (sigma per axis) [0.7]");
   app.add_option(

@@ -6,6 +6,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <condition_variable>
 #include <cstdio>
@@ -70,6 +71,47 @@ bool IsNonEmptyDirectory(const fs::path& path) {
   return fs::is_directory(path, ec) && !fs::is_empty(path, ec);
 }
 
+// README.txt's section on the query rig; empty without one.
+std::string RigReadmeText(const SceneOptions& o) {
+  if (o.rig_cameras < 2) return "";
+  const std::string n = std::to_string(o.rig_cameras);
+  std::string t = "\nQUERY RIG (--rig-cameras " + n + ")\n";
+  t += "  Every query is one frame of a rig of " + n +
+       " cameras (all with the shared camera's intrinsics), for rig localization:\n";
+  t += "  camC/query_NNNNN.jpg is camera C of frame NNNNN, and the query files list a frame's "
+       "cameras together.\n";
+  t += "  cam0 is the reference sensor (the rig frame); camera c is cam0 turned right by c x " +
+       Format("%.6g", 360.0 / o.rig_cameras) + " deg about its\n";
+  t += "  down (y) axis, all on a " + Format("%.3g", kRigRadius) +
+       " m circle looking outwards. A frame was accepted when its cameras together see\n";
+  t += "  enough model points, so single cameras may see none. rig_config.json: each camera's "
+       "cam_from_rig in the\n";
+  t += "  model frame, in the format of COLMAP 3.12's rig_configurator.\n";
+  return t;
+}
+
+// COLMAP 3.12's rig_config.json, cam_from_rig in the model frame: the model frame is a
+// similarity of the world, and camera frames in it are scaled alike (ModelFrame::CamFromModel),
+// so rotations stay and translations scale.
+std::string RigConfigText(const SceneOptions& o, const ModelFrame& frame) {
+  auto number = [](double value) { return Format("%.17g", value + 0.0); };  // no "-0"
+  std::string t = "[\n  {\n    \"cameras\": [\n";
+  t += "      {\n        \"image_prefix\": \"cam0/\",\n        \"ref_sensor\": true\n      }";
+  for (int c = 1; c < o.rig_cameras; ++c) {
+    const CameraPose in_rig = RigCameraInRig(c, o.rig_cameras);
+    Eigen::Quaterniond q(in_rig.cam_from_world_rotation);
+    if (q.w() < 0) q.coeffs() *= -1;
+    const Eigen::Vector3d x = -frame.scale * (in_rig.cam_from_world_rotation * in_rig.centre);
+    t += ",\n      {\n        \"image_prefix\": \"cam" + std::to_string(c) + "/\",\n";
+    t += "        \"cam_from_rig_rotation\": [" + number(q.w()) + ", " + number(q.x()) + ", " +
+         number(q.y()) + ", " + number(q.z()) + "],\n";
+    t += "        \"cam_from_rig_translation\": [" + number(x.x()) + ", " + number(x.y()) + ", " +
+         number(x.z()) + "]\n      }";
+  }
+  t += "\n    ]\n  }\n]\n";
+  return t;
+}
+
 std::string ReadmeText(const CityScene& scene, const WriteOptions& options) {
   const SceneOptions& o = scene.options();
   const SceneCounts& c = scene.counts();
@@ -109,7 +151,12 @@ std::string ReadmeText(const CityScene& scene, const WriteOptions& options) {
   t += "  seen through each view's affine distortion; see docs/synth.md in the cwloc sources.\n\n";
   t += "COUNTS\n";
   t += "  mapping images:      " + std::to_string(c.mapping_images) + "\n";
-  t += "  queries:             " + std::to_string(c.queries) + "\n";
+  t += "  queries:             " + std::to_string(c.queries);
+  if (o.rig_cameras > 1) {
+    t += " (" + std::to_string(o.queries) + " frames of a " + std::to_string(o.rig_cameras) +
+         "-camera rig)";
+  }
+  t += "\n";
   t += "  model 3D points:     " + std::to_string(c.model_points) + " (of " +
        std::to_string(c.scene_points) + " facade points)\n";
   t += "  model views:         " + std::to_string(c.views) + "\n";
@@ -134,10 +181,13 @@ std::string ReadmeText(const CityScene& scene, const WriteOptions& options) {
        "recognition GT)\n";
   t +=
       "  queries_gt_matches.txt      NAME then POINT2D_IDX:POINT3D_ID pairs (true 2D-3D matches)\n";
+  if (o.rig_cameras > 1) {
+    t += "  rig_config.json             COLMAP 3.12 rig config of the query rig (see QUERY RIG)\n";
+  }
   if (!options.geo.origin) {
     t += "  scale_to_metres.txt         identity similarity: the city is built in metres\n";
     t += "  stats.json                  counts, timings, peak memory\n";
-    return t;
+    return t + RigReadmeText(o);
   }
   const GeoOptions& geo = options.geo;
   t += "  scale_to_metres.txt         similarity model -> ENU metres at the city centre (--geo)\n";
@@ -164,7 +214,7 @@ std::string ReadmeText(const CityScene& scene, const WriteOptions& options) {
   t += "  query priors " + Format("%.3g", geo.prior_position_error) +
        " m off horizontally (radius " + Format("%.3g", geo.prior_radius) + " m), gravity " +
        Format("%.3g", geo.prior_gravity_error_deg) + " deg off.\n";
-  return t;
+  return t + RigReadmeText(o);
 }
 
 // Renders descriptors on worker threads while the calling thread writes the database in
@@ -461,6 +511,8 @@ WriteTimings SceneWriter::Write(const CityScene& scene, const WriteOptions& opti
   timings.database_seconds = stage.Seconds();
   stage.Restart();
   WriteQueryFiles(scene, frame, temp_dir_);
+  if (scene.options().rig_cameras > 1)
+    WriteTextFile(temp_dir_ / "rig_config.json", RigConfigText(scene.options(), frame));
   if (options.geo.origin) {
     const GeoFiles geo = MakeGeoFiles(scene, options.geo, frame);
     WriteTextFile(temp_dir_ / "georef.txt", geo.georef);

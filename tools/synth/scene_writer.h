@@ -2,8 +2,9 @@
 
 // Writes a generated city in the layout of the shared real-data sets (see docs/synth.md):
 // mapping_model/bin (and txt), database.db with every image's features, the query lists and
-// ground truth, scale_to_metres.txt, README.txt and stats.json; with --geo also the files of
-// city_geo.h, and the model and ground truth in the model frame. Everything is written into a
+// ground truth, scale_to_metres.txt, README.txt and stats.json; with a query rig its
+// rig_config.json; with --geo also the files of city_geo.h, and the model and ground truth in
+// the model frame. Everything is written into a
 // temporary sibling directory that Commit() renames into place, so a failure or an interrupt
 // never leaves a half-written output.
 

@@ -133,6 +133,11 @@ SceneOptions MakeSceneOptions(const SynthKnobs& knobs) {
     Require(o.path_step >= 0.01 && o.path_step <= 20,
             "--path-step must be in [0.01, 20] metres (got " + Str(o.path_step) + ")");
   }
+  const int64_t rig_cameras = Pick(knobs.rig_cameras, {}, int64_t{1});
+  Require(
+      rig_cameras >= 1 && rig_cameras <= kMaxRigCameras,
+      "--rig-cameras must be in [1, " + Str(kMaxRigCameras) + "] (got " + Str(rig_cameras) + ")");
+  o.rig_cameras = int(rig_cameras);
   const int64_t features = Pick(knobs.features_per_image, preset.features_per_image, int64_t{1500});
   Require(features >= 20 && features <= 100000,
           "--features-per-image must be in [20, 100000] (got " + Str(features) + ")");

@@ -31,7 +31,8 @@ struct SynthKnobs {
   std::optional<double> camera_spacing;
   std::optional<double> keypoint_noise;
   std::optional<double> point_noise;
-  std::optional<double> path_step;  // metres between the frames of a walk; unset: no walk
+  std::optional<double> path_step;     // metres between the frames of a walk; unset: no walk
+  std::optional<int64_t> rig_cameras;  // cameras per query frame (a rig when 2 or more)
   int64_t threads = 0;
   // On the globe (city_geo.h); the others need --geo.
   std::optional<std::string> geo;  // "LAT LON HEIGHT": WGS84 degrees, ellipsoidal metres

@@ -465,6 +465,104 @@ TEST(SceneWriterTest, OutputReadsBackWithTheColmapReaders) {
   EXPECT_LT(Quantile(errors, 0.99), 3.0);
 }
 
+// queries_gt.txt's poses in file order.
+std::vector<std::pair<std::string, colmap::Rigid3d>> ReadQueryPoses(const fs::path& path) {
+  std::vector<std::pair<std::string, colmap::Rigid3d>> poses;
+  std::ifstream gt(path);
+  for (std::string line; std::getline(gt, line);) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream in(line);
+    auto& [name, pose] = poses.emplace_back();
+    in >> name;
+    for (double& v : pose.rotation) in >> v;
+    for (double& v : pose.translation) in >> v;
+  }
+  return poses;
+}
+
+// Up to the quaternion's sign; translations relative to their size.
+double PoseDifference(const colmap::Rigid3d& a, const colmap::Rigid3d& b) {
+  double same = 0, flipped = 0, t = 0, scale = 1;
+  for (int i = 0; i < 4; ++i) {
+    same = std::max(same, std::abs(a.rotation[i] - b.rotation[i]));
+    flipped = std::max(flipped, std::abs(a.rotation[i] + b.rotation[i]));
+  }
+  for (int i = 0; i < 3; ++i) {
+    t = std::max(t, std::abs(a.translation[i] - b.translation[i]));
+    scale = std::max(scale, std::abs(a.translation[i]));
+  }
+  return std::max(std::min(same, flipped), t / scale);
+}
+
+// --rig-cameras: every query frame is a rig whose cameras' written poses are camera 0's moved
+// by the cam_from_rig of rig_config.json, in the world frame and in --geo's scaled model frame.
+TEST(SceneWriterTest, ARigWritesItsFramesAndAConfigThatHoldsForEveryFrame) {
+  test::TempDir dir;
+  for (const bool geo : {false, true}) {
+    SynthKnobs knobs = SmallKnobs();
+    knobs.features_per_image = 100;
+    knobs.queries = 4;
+    knobs.rig_cameras = 3;
+    if (geo) knobs.geo = "48.8 2.3 40";
+    const CityScene scene = CityScene::Generate(MakeSceneOptions(knobs));
+    ASSERT_EQ(scene.counts().queries, 12u);
+    const fs::path out = dir / (geo ? "geo" : "world");
+    {
+      SceneWriter writer(out, false);
+      writer.Write(
+          scene,
+          {.text = false, .threads = 2, .command_line = "test", .geo = MakeGeoOptions(knobs)});
+      writer.Commit("{}\n");
+    }
+    const auto config = nlohmann::json::parse(ReadBytes(out / "rig_config.json"));
+    ASSERT_EQ(config.size(), 1u);
+    const auto& cameras = config[0]["cameras"];
+    ASSERT_EQ(cameras.size(), 3u);
+    std::vector<colmap::Rigid3d> cam_from_rig(3);
+    int references = 0;
+    for (int c = 0; c < 3; ++c) {
+      EXPECT_EQ(cameras[c]["image_prefix"], "cam" + std::to_string(c) + "/");
+      references += cameras[c].value("ref_sensor", false);
+      if (c == 0) continue;
+      for (int i = 0; i < 4; ++i)
+        cam_from_rig[c].rotation[i] = cameras[c]["cam_from_rig_rotation"][i];
+      for (int i = 0; i < 3; ++i)
+        cam_from_rig[c].translation[i] = cameras[c]["cam_from_rig_translation"][i];
+    }
+    EXPECT_EQ(references, 1);
+    EXPECT_FALSE(cameras[0].contains("cam_from_rig_rotation"));
+    if (!geo) {
+      // Camera 1 is turned right by 120 degrees and sits on the 0.3 m circle.
+      const Eigen::Quaterniond q(cam_from_rig[1].rotation[0], cam_from_rig[1].rotation[1],
+                                 cam_from_rig[1].rotation[2], cam_from_rig[1].rotation[3]);
+      const Eigen::Vector3d view = q.conjugate() * Eigen::Vector3d::UnitZ();
+      EXPECT_LT((view - Eigen::Vector3d(std::sqrt(0.75), 0, -0.5)).norm(), 1e-12);
+      const auto& t = cam_from_rig[1].translation;
+      const Eigen::Vector3d centre = -(q.conjugate() * Eigen::Vector3d(t[0], t[1], t[2]));
+      EXPECT_LT((centre - 0.3 * Eigen::Vector3d(std::sqrt(0.75), 0, -1.5)).norm(), 1e-12);
+    }
+    const auto poses = ReadQueryPoses(out / "queries_gt.txt");
+    ASSERT_EQ(poses.size(), 12u);
+    std::vector<std::string> list;
+    std::ifstream list_file(out / "query_list.txt");
+    for (std::string name; std::getline(list_file, name);) list.push_back(name);
+    ASSERT_EQ(list.size(), 12u);
+    for (size_t i = 0; i < poses.size(); ++i) {
+      const size_t frame = i / 3 + 1, c = i % 3;
+      char name[64];
+      std::snprintf(name, sizeof(name), "cam%zu/query_%05zu.jpg", c, frame);
+      EXPECT_EQ(poses[i].first, name);
+      EXPECT_EQ(list[i], name);
+      if (c == 0) continue;
+      const colmap::Rigid3d expected = cam_from_rig[c] * poses[i - c].second;
+      EXPECT_LT(PoseDifference(poses[i].second, expected), 1e-9) << name << (geo ? " (geo)" : "");
+    }
+    colmap::DatabaseReader db(out / "database.db");
+    EXPECT_EQ(db.ReadAllImages().size(), scene.counts().mapping_images + 12);
+    EXPECT_TRUE(db.FindImage("cam2/query_00004.jpg").has_value());
+  }
+}
+
 TEST(SceneWriterTest, NeverLeavesAHalfWrittenOutput) {
   test::TempDir dir;
   {
@@ -531,6 +629,10 @@ TEST(SynthOptionsTest, BadKnobsGiveExactMessages) {
             "--width and --height must be in [64, 100000] pixels (got 10x768)");
   EXPECT_EQ(with([](SynthKnobs& k) { k.preset = "huge"; }), "--preset must be 'demo' (got 'huge')");
   EXPECT_EQ(with([](SynthKnobs& k) { k.threads = -2; }), "--threads must not be negative (got -2)");
+  EXPECT_EQ(with([](SynthKnobs& k) { k.rig_cameras = 7; }),
+            "--rig-cameras must be in [1, 6] (got 7)");
+  EXPECT_EQ(with([](SynthKnobs& k) { k.rig_cameras = 0; }),
+            "--rig-cameras must be in [1, 6] (got 0)");
   SynthKnobs defaults;
   const int64_t minimum = MinimumViews(MakeSceneOptions(defaults));
   EXPECT_EQ(with([](SynthKnobs& k) { k.views = 1000; }),
@@ -570,6 +672,9 @@ TEST_F(SynthCliTest, BadKnobExitsTwoWithTheMessage) {
   EXPECT_EQ(Run("-o " + (dir_ / "c").string() + " --clutter-fraction 1", &output), 2);
   EXPECT_EQ(output, "cwloc-synth: error: --clutter-fraction must be in [0, 1) (got 1)\n");
   EXPECT_FALSE(fs::exists(dir_ / "c"));
+  EXPECT_EQ(Run("-o " + (dir_ / "c").string() + " --rig-cameras 7", &output), 2);
+  EXPECT_EQ(output, "cwloc-synth: error: --rig-cameras must be in [1, 6] (got 7)\n");
+  EXPECT_FALSE(fs::exists(dir_ / "c"));
 }
 
 TEST_F(SynthCliTest, JsonSummaryAndStatsValidateAgainstTheSchema) {
@@ -582,6 +687,7 @@ TEST_F(SynthCliTest, JsonSummaryAndStatsValidateAgainstTheSchema) {
       << output;
   const auto summary = nlohmann::json::parse(output);
   EXPECT_EQ(summary["counts"]["queries"], 3);
+  EXPECT_EQ(summary["knobs"]["rig_cameras"], 1);
   EXPECT_EQ(summary["output"], fs::canonical(out).string());
   std::ofstream(dir_ / "summary.json") << output;
   for (const fs::path& json : {dir_ / "summary.json", out / "stats.json"}) {
@@ -594,6 +700,27 @@ TEST_F(SynthCliTest, JsonSummaryAndStatsValidateAgainstTheSchema) {
                            "queries_gt_points.txt", "scale_to_metres.txt", "stats.json"}) {
     EXPECT_TRUE(fs::exists(out / file)) << file;
   }
+}
+
+TEST_F(SynthCliTest, RigRunSaysSoInTheSummaryAndTheReadme) {
+  std::string output;
+  const fs::path out = dir_ / "c";
+  ASSERT_EQ(Run("-o " + out.string() +
+                    " --blocks 1 --features-per-image 100 --queries 2 --camera-spacing 8"
+                    " --rig-cameras 2 --path-step 1 --json",
+                &output),
+            0)
+      << output;
+  const auto summary = nlohmann::json::parse(output);
+  EXPECT_EQ(summary["knobs"]["rig_cameras"], 2);
+  EXPECT_EQ(summary["counts"]["queries"], 4);
+  std::string validation;
+  EXPECT_EQ(test::ValidateJson("synth-summary.schema.json", out / "stats.json", false, &validation),
+            0)
+      << validation;
+  EXPECT_THAT(ReadBytes(out / "README.txt"), HasSubstr("rig_config.json"));
+  EXPECT_THAT(ReadBytes(out / "query_list.txt"),
+              testing::StartsWith("cam0/query_00001.jpg\ncam1/query_00001.jpg\n"));
 }
 
 }  // namespace
