@@ -165,11 +165,10 @@ RigResult ToRigResult(const RigLocalizationResult& r, const QueryOptions& option
   result.geo = r.geo;
   for (const cwloc::RigImageResult& image : r.images) {
     RigImageResult& out = result.images.emplace_back();
-    out.name = image.alone.name;
+    out.name = image.matched.name;
     out.posed = image.cam_from_world.has_value();
     if (out.posed) SplitPose(*image.cam_from_world, &out.rotation, &out.translation, &out.center);
     out.num_inliers = image.num_inliers;
-    out.localized_alone = image.alone.success;
     out.camera = ToCamera(image.camera);
   }
   return result;

@@ -235,7 +235,7 @@ nlohmann::ordered_json RigResultToJson(const RigLocalizationResult& result,
   const RigImageResult& reference = result.images.front();
   if (result.success) out["pose"] = PoseToJson(*reference.cam_from_world);
   nlohmann::ordered_json& rig = out["rig"];
-  rig["reference_image"] = reference.alone.name;
+  rig["reference_image"] = reference.matched.name;
   if (result.success) rig["rig_from_world"] = PoseToJson(result.rig_from_world);
   rig["unknown_scale"] = result.unknown_scale;
   rig["scale"] = result.scale;
@@ -245,16 +245,15 @@ nlohmann::ordered_json RigResultToJson(const RigLocalizationResult& result,
   rig["ransac_iterations"] = result.ransac_iterations;
   rig["refined"] = result.refined;
   if (result.success) rig["mean_reprojection_error_px"] = result.mean_reprojection_error_px;
-  rig["images_localized_alone"] = result.images_localized_alone;
   if (result.covariance)
     out["covariance"] = CovarianceToJson(*result.covariance, result.covariance_calibration, {});
   if (result.geo) out["geo"] = GeoToJson(*result.geo);
   nlohmann::ordered_json& images = out["images"];
   images = nlohmann::ordered_json::array();
   for (const RigImageResult& image : result.images) {
-    const LocalizationResult& alone = image.alone;
+    const LocalizationResult& matched = image.matched;
     nlohmann::ordered_json record;
-    record["name"] = alone.name;
+    record["name"] = matched.name;
     const Eigen::Quaterniond& q = image.cam_from_rig.rotation;
     const Eigen::Vector3d& t = image.cam_from_rig.translation;
     record["cam_from_rig"] = {{"qvec", {q.w(), q.x(), q.y(), q.z()}},
@@ -262,19 +261,10 @@ nlohmann::ordered_json RigResultToJson(const RigLocalizationResult& result,
     if (image.cam_from_world) record["pose"] = PoseToJson(*image.cam_from_world);
     record["camera"] = CameraToJson(image.camera);
     record["num_inliers"] = image.num_inliers;
-    record["matches"] = {{"features", alone.num_features},
-                         {"forward", alone.forward_matches},
-                         {"back", alone.back_matches},
-                         {"correspondences", alone.correspondences}};
-    nlohmann::ordered_json& own = record["alone"];
-    own["success"] = alone.success;
-    own["num_inliers"] = alone.num_inliers;
-    if (alone.success) {
-      own["pose"] = {
-          {"qvec", alone.rotation}, {"tvec", alone.translation}, {"center", alone.center}};
-    } else {
-      own["failure_reason"] = alone.failure_reason;
-    }
+    record["matches"] = {{"features", matched.num_features},
+                         {"forward", matched.forward_matches},
+                         {"back", matched.back_matches},
+                         {"correspondences", matched.correspondences}};
     images.push_back(std::move(record));
   }
   out["times_ms"] = {{"images", result.seconds_images * 1e3},

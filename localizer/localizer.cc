@@ -485,7 +485,9 @@ LocalizationResult Localizer::Localize(const Query& query, const LocalizerOption
 
   const Stopwatch pose_time;
   QueryPose fit;
-  if (matched.failure_reason.empty()) {
+  if (matched.failure_reason.empty() && !options.estimate_pose) {
+    fit.pose.failure_reason = "matched only: the pose stage was not run";
+  } else if (matched.failure_reason.empty()) {
     fit = EstimateQueryPose(index_, query, matched.correspondences, options, pose_context);
     ConstrainFocalLength(index_, query, options, pose_context, &matched, &fit);
   } else {

@@ -34,22 +34,15 @@ void ValidateRigQuery(const RigQuery& query) {
   }
 }
 
-// The rig's view of an image: its camera as the pose stage takes it, and its correspondences.
-// A known camera's keypoints are undistorted by its model; a focal prior's are pixels from
-// the image centre, its camera the image's own estimate when it localized alone.
-RigCamera CameraOf(const RigImage& image, const LocalizationResult& alone) {
+// The rig's view of an image: its camera as the pose stage takes it. A known camera's
+// keypoints are undistorted by its model; a focal prior's are pixels from the image centre, its
+// f the prior's, refined with the rig.
+RigCamera CameraOf(const RigImage& image) {
   RigCamera camera;
   camera.cam_from_rig = image.cam_from_rig;
   const QueryCamera& q = image.query.camera;
-  if (q.FocalKnown()) {
-    camera.camera = {MeanFocalLength(q.model_id, q.params), 0.0};
-  } else if (alone.success && alone.focal_estimated) {
-    camera.camera = {alone.camera.params.at(0), alone.camera.params.at(3)};
-    camera.refine_intrinsics = true;
-  } else {
-    camera.camera = {MeanFocalLength(q.model_id, q.params), 0.0};
-    camera.refine_intrinsics = true;
-  }
+  camera.camera = {MeanFocalLength(q.model_id, q.params), 0.0};
+  camera.refine_intrinsics = !q.FocalKnown();
   return camera;
 }
 
@@ -64,9 +57,11 @@ RigLocalizationResult LocalizeRig(const Localizer& localizer, const RigQuery& qu
   result.name = query.name;
   result.unknown_scale = query.unknown_scale;
 
-  // Each image alone: the paper's pipeline, keeping its correspondences.
-  LocalizerOptions alone_options = options;
-  alone_options.keep_correspondences = true;
+  // Each image's correspondences: the paper's matching on it (forward matching, voting,
+  // back-matching), without its own pose stage.
+  LocalizerOptions image_options = options;
+  image_options.keep_correspondences = true;
+  image_options.estimate_pose = false;
   std::vector<RigCamera> cameras;
   std::vector<RigObservation> observations;
   std::vector<std::pair<uint32_t, uint32_t>> origin;  // (image, correspondence) per observation
@@ -75,14 +70,19 @@ RigLocalizationResult LocalizeRig(const Localizer& localizer, const RigQuery& qu
   for (uint32_t c = 0; c < query.images.size(); ++c) {
     const RigImage& image = query.images[c];
     RigImageResult& out = result.images.emplace_back();
-    out.alone = localizer.Localize(image.query, alone_options);
+    if (image.query.NumFeatures() == 0) {
+      // A camera that sees nothing (the sky, a blank wall) adds nothing; the others may.
+      out.matched.name = image.query.name;
+      out.matched.failure_reason = "the image has no features";
+    } else {
+      out.matched = localizer.Localize(image.query, image_options);
+    }
     out.cam_from_rig = image.cam_from_rig;
-    result.images_localized_alone += out.alone.success;
-    extraction += out.alone.times.extraction;
-    cameras.push_back(CameraOf(image, out.alone));
+    extraction += out.matched.times.extraction;
+    cameras.push_back(CameraOf(image));
     const QueryCamera& camera = image.query.camera;
     const std::array<double, 2> center = camera.ImageCenter();
-    const std::vector<FeatureMatch>& pairs = out.alone.kept_correspondences;
+    const std::vector<FeatureMatch>& pairs = out.matched.kept_correspondences;
     for (uint32_t k = 0; k < pairs.size(); ++k) {
       const std::array<double, 2> pixel = {image.query.keypoints[2 * pairs[k].feature],
                                            image.query.keypoints[2 * pairs[k].feature + 1]};
@@ -115,10 +115,7 @@ RigLocalizationResult LocalizeRig(const Localizer& localizer, const RigQuery& qu
   result.success = pose.success;
   result.failure_reason = pose.failure_reason;
   if (observations.empty()) {
-    result.failure_reason =
-        result.images.size() > 1
-            ? "no image matched the model"
-            : "no image matched the model: " + result.images.front().alone.failure_reason;
+    result.failure_reason = "no image matched the model";
   }
   for (uint32_t c = 0; c < result.images.size(); ++c) {
     RigImageResult& image = result.images[c];
@@ -144,7 +141,7 @@ RigLocalizationResult LocalizeRig(const Localizer& localizer, const RigQuery& qu
     for (size_t i = 0; i < observations.size(); ++i) {
       if (!pose.inliers[i]) continue;
       const auto [c, k] = origin[i];
-      const FeatureMatch& match = result.images[c].alone.kept_correspondences[k];
+      const FeatureMatch& match = result.images[c].matched.kept_correspondences[k];
       result.images[c].inliers.push_back(
           {match.feature, index.view_points()[match.view], match.view});
     }
@@ -161,7 +158,7 @@ RigLocalizationResult LocalizeRig(const Localizer& localizer, const RigQuery& qu
   }
   // The correspondences were the rig's input; the images' records need not carry them.
   if (!options.keep_correspondences) {
-    for (RigImageResult& image : result.images) image.alone.kept_correspondences.clear();
+    for (RigImageResult& image : result.images) image.matched.kept_correspondences.clear();
   }
   result.seconds_rig_pose = pose_time.Seconds();
   result.seconds_total = total.Seconds();

@@ -36,9 +36,9 @@ struct RigQuery {
 };
 
 struct RigImageResult {
-  // The paper's pipeline on the image alone, whose correspondences (kept_correspondences)
-  // the rig pools; its pose is the image's own, had it been localized alone.
-  LocalizationResult alone;
+  // The paper's matching on the image (forward matching, voting, back-matching; no pose
+  // stage): its counts, and its correspondences (kept_correspondences), which the rig pools.
+  LocalizationResult matched;
   CameraPose cam_from_rig;
   QueryCamera camera;  // as the rig's refinement left it (a focal prior's f and k refined)
   // On the rig's success: cam_from_rig * rig_from_world, and the rig's inliers in this image.
@@ -67,13 +67,12 @@ struct RigLocalizationResult {
   // On a georeferenced index: the reference camera on the globe.
   std::optional<GeoPose> geo;
   std::vector<RigImageResult> images;
-  uint32_t images_localized_alone = 0;
-  double seconds_images = 0;    // the images' own pipelines
+  double seconds_images = 0;    // the images' matching
   double seconds_rig_pose = 0;  // the rig's RANSAC, refinement and covariance
   double seconds_total = 0;     // with the images' photo extraction
 };
 
-// Localizes each image alone (its correspondences), then the rig from all of them. Throws
+// Matches each image (its correspondences), then fits the rig's pose to all of them. Throws
 // InputError naming the frame for a frame that cannot be processed: no images, an image
 // without a known camera or focal prior, a cam_from_rig that is not finite or whose quaternion
 // is not of unit length, an unknown scale with one image.

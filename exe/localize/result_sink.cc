@@ -75,9 +75,8 @@ void ResultSink::WriteRig(const RigLocalizationResult& result, const QueryOption
         std::snprintf(position, sizeof(position), " position +- %.3g model units (95 %%),",
                       Radius95(result.covariance->Position()));
       }
-      std::printf("%s: rig localized, %u inliers over %zu images (%u localized alone),%s %.1f ms\n",
-                  result.name.c_str(), result.num_inliers, result.images.size(),
-                  result.images_localized_alone, position, result.seconds_total * 1e3);
+      std::printf("%s: rig localized, %u inliers over %zu images,%s %.1f ms\n", result.name.c_str(),
+                  result.num_inliers, result.images.size(), position, result.seconds_total * 1e3);
     } else {
       std::printf("%s: not localized: %s\n", result.name.c_str(), result.failure_reason.c_str());
     }
@@ -85,7 +84,7 @@ void ResultSink::WriteRig(const RigLocalizationResult& result, const QueryOption
   }
   if (poses_file_ && result.success) {
     for (const RigImageResult& image : result.images)
-      Append(*poses_file_, PoseLine(image.alone.name, *image.cam_from_world));
+      Append(*poses_file_, PoseLine(image.matched.name, *image.cam_from_world));
   }
 }
 

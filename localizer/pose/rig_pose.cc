@@ -91,29 +91,36 @@ class RigProblem {
 
   int num_params() const { return num_params_; }
 
-  // False when a point is behind its camera or a value is not finite.
-  bool Evaluate(const RigState& x, bool linearize, RigNormal* out) const {
+  // False when a point is behind its camera or a value is not finite. With `linearize`, the
+  // normal equations too, and with `covariance` HuberCovariance's sums. The Jacobian of a point
+  // has the pose columns (theta, C, and s) and its camera's two intrinsics columns: the sums
+  // are kept as blocks, fixed-size, and put together once.
+  bool Evaluate(const RigState& x, bool linearize, RigNormal* out, bool covariance = false) const {
     const int n = num_params_;
     out->cost = 0.0;
-    if (linearize) {
-      out->h = Eigen::MatrixXd::Zero(n, n);
-      out->g = Eigen::VectorXd::Zero(n);
-      out->covariance_terms = Linearization();
-      out->covariance_terms.design = Eigen::MatrixXd::Zero(n, n);
-      out->covariance_terms.prior = Eigen::MatrixXd::Zero(n, n);
-    }
     const double a2 = options_.loss_scale_px * options_.loss_scale_px;
     const bool robust = a2 > 0.0;
     const Eigen::Matrix3d rig_from_world = x.world_from_rig.transpose();
-    Eigen::Matrix<double, 2, Eigen::Dynamic> jac(2, n);
+    const size_t cameras = rig_.size();
+    // Per camera: world offset to camera coordinates, and its scaled translation.
+    std::vector<Eigen::Matrix3d> to_cam(cameras);
+    for (size_t c = 0; c < cameras; ++c)
+      to_cam[c] = rig_[c].cam_from_rig.RotationMatrix() * rig_from_world;
+    using Pose = Eigen::Matrix<double, 7, 7>;
+    Pose h_pp = Pose::Zero(), d_pp = Pose::Zero();
+    Eigen::Matrix<double, 7, 1> g_p = Eigen::Matrix<double, 7, 1>::Zero();
+    std::vector<Eigen::Matrix<double, 7, 2>> h_pi(cameras, Eigen::Matrix<double, 7, 2>::Zero());
+    std::vector<Eigen::Matrix<double, 7, 2>> d_pi(cameras, Eigen::Matrix<double, 7, 2>::Zero());
+    std::vector<Eigen::Matrix2d> h_ii(cameras, Eigen::Matrix2d::Zero());
+    std::vector<Eigen::Matrix2d> d_ii(cameras, Eigen::Matrix2d::Zero());
+    std::vector<Eigen::Vector2d> g_i(cameras, Eigen::Vector2d::Zero());
+    Linearization terms;
     for (const uint32_t i : indices_) {
       const RigObservation& o = observations_[i];
       const RigCamera& rc = rig_[o.camera];
       const RadialCamera& camera = x.cameras[o.camera];
-      const Eigen::Matrix3d rc_rot = rc.cam_from_rig.RotationMatrix();
       const Eigen::Vector3d offset = o.point3D - x.center;
-      const Eigen::Vector3d q =
-          rc_rot * (rig_from_world * offset) + x.scale * rc.cam_from_rig.translation;
+      const Eigen::Vector3d q = to_cam[o.camera] * offset + x.scale * rc.cam_from_rig.translation;
       if (!(q.z() > 0.0)) return false;
       const Eigen::Vector2d u = q.hnormalized();
       const double uu = u.squaredNorm();
@@ -131,37 +138,69 @@ class RigProblem {
         out->cost += 0.5 * s;
       }
       if (!linearize) continue;
-      // d(pixel)/du, du/dq, then dq/d(theta, C, s).
+      // d(pixel)/du, du/dq, then dq/d(theta, C, s); d(pixel)/d(f, k).
       const Eigen::Matrix2d dpix_du = camera.focal_length_px * (d * Eigen::Matrix2d::Identity() +
                                                                 2.0 * camera.k * u * u.transpose());
       Eigen::Matrix<double, 2, 3> du_dq;
       du_dq << 1.0, 0.0, -u.x(), 0.0, 1.0, -u.y();
-      du_dq /= q.z();
-      const Eigen::Matrix<double, 2, 3> dpix_dq = dpix_du * du_dq;
-      const Eigen::Matrix3d to_cam = rc_rot * rig_from_world;
+      const Eigen::Matrix<double, 2, 3> dpix_dq = dpix_du * du_dq / q.z();
+      const Eigen::Matrix<double, 2, 3> dpix_dc = dpix_dq * to_cam[o.camera];
       Eigen::Matrix3d offset_cross;
       offset_cross << 0.0, -offset.z(), offset.y(), offset.z(), 0.0, -offset.x(), -offset.y(),
           offset.x(), 0.0;
-      jac.setZero();
-      jac.leftCols<3>() = dpix_dq * to_cam * offset_cross;
-      jac.middleCols<3>(3) = -dpix_dq * to_cam;
-      if (options_.refine_scale) jac.col(6) = dpix_dq * rc.cam_from_rig.translation;
-      if (const int col = intrinsics_column_[o.camera]; col >= 0) {
-        jac.col(col) = d * u;
-        jac.col(col + 1) = camera.focal_length_px * uu * u;
+      Eigen::Matrix<double, 2, 7> jp;
+      jp.leftCols<3>() = dpix_dc * offset_cross;
+      jp.middleCols<3>(3) = -dpix_dc;
+      jp.col(6) = options_.refine_scale ? Eigen::Vector2d(dpix_dq * rc.cam_from_rig.translation)
+                                        : Eigen::Vector2d::Zero();
+      h_pp.noalias() += rho1 * jp.transpose() * jp;
+      g_p.noalias() += rho1 * jp.transpose() * r;
+      const bool intrinsics = intrinsics_column_[o.camera] >= 0;
+      Eigen::Matrix2d ji;
+      if (intrinsics) {
+        ji.col(0) = d * u;
+        ji.col(1) = camera.focal_length_px * uu * u;
+        h_pi[o.camera].noalias() += rho1 * jp.transpose() * ji;
+        h_ii[o.camera].noalias() += rho1 * ji.transpose() * ji;
+        g_i[o.camera].noalias() += rho1 * ji.transpose() * r;
       }
-      const Eigen::VectorXd jr = jac.transpose() * r;
-      const Eigen::MatrixXd jj = jac.transpose() * jac;
-      out->h += rho1 * jj;
-      out->g += rho1 * jr;
-      Linearization& terms = out->covariance_terms;
-      terms.design += jj;
+      if (!covariance) continue;
+      d_pp.noalias() += jp.transpose() * jp;
+      if (intrinsics) {
+        d_pi[o.camera].noalias() += jp.transpose() * ji;
+        d_ii[o.camera].noalias() += ji.transpose() * ji;
+      }
       const double curvature = rho1 + rho2 * s;
       terms.squared_scores += rho1 * rho1 * s;
       terms.curvature += curvature;
       terms.squared_curvature += curvature * curvature;
     }
-    return std::isfinite(out->cost) && (!linearize || (out->h.allFinite() && out->g.allFinite()));
+    if (!std::isfinite(out->cost)) return false;
+    if (!linearize) return true;
+    const int p = 6 + int{options_.refine_scale};
+    const auto assemble = [&](const Pose& pp, const std::vector<Eigen::Matrix<double, 7, 2>>& pi,
+                              const std::vector<Eigen::Matrix2d>& ii, Eigen::MatrixXd* full) {
+      *full = Eigen::MatrixXd::Zero(n, n);
+      full->topLeftCorner(p, p) = pp.topLeftCorner(p, p);
+      for (size_t c = 0; c < cameras; ++c) {
+        const int col = intrinsics_column_[c];
+        if (col < 0) continue;
+        full->block(0, col, p, 2) = pi[c].topRows(p);
+        full->block(col, 0, 2, p) = pi[c].topRows(p).transpose();
+        full->block<2, 2>(col, col) = ii[c];
+      }
+    };
+    assemble(h_pp, h_pi, h_ii, &out->h);
+    out->g = Eigen::VectorXd::Zero(n);
+    out->g.head(p) = g_p.head(p);
+    for (size_t c = 0; c < cameras; ++c)
+      if (const int col = intrinsics_column_[c]; col >= 0) out->g.segment<2>(col) = g_i[c];
+    if (covariance) {
+      assemble(d_pp, d_pi, d_ii, &terms.design);
+      terms.prior = Eigen::MatrixXd::Zero(n, n);
+      out->covariance_terms = std::move(terms);
+    }
+    return out->h.allFinite() && out->g.allFinite();
   }
 
   RigState Plus(const RigState& x, const Eigen::VectorXd& step) const {
@@ -207,12 +246,13 @@ bool Minimize(const RigProblem& problem, int max_iterations, RigState* x) {
     const Eigen::VectorXd step = -damped.ldlt().solve(at.g);
     if (!step.allFinite()) return false;
     const RigState candidate = problem.Plus(*x, step);
+    // Linearized at once: most steps are taken, and one pass gives the cost and the equations.
     RigNormal next;
-    if (problem.Sane(candidate) && problem.Evaluate(candidate, false, &next) &&
+    if (problem.Sane(candidate) && problem.Evaluate(candidate, true, &next) &&
         next.cost < at.cost) {
       const double decrease = at.cost - next.cost;
       *x = candidate;
-      if (!problem.Evaluate(*x, true, &at)) return false;
+      at = std::move(next);
       lambda = std::max(lambda / 10.0, 1e-12);
       if (decrease <= 1e-10 * at.cost || step.norm() <= 1e-12) break;
     } else {
@@ -416,13 +456,15 @@ RigPoseResult EstimateRigPose(std::span<const RigCamera> cameras,
     return result;
   }
 
-  // The final refinement on RANSAC's inliers, in rounds as a single uncalibrated camera's
-  // (absolute_pose.h): each round re-scores every correspondence with the refined pose and
-  // cameras and refines again on the new inliers, until they stop changing; a round is kept
-  // unless it loses more than 2 % of RANSAC's inliers.
+  // The final refinement on RANSAC's inliers, kept unless it loses more than 2 % of them; with
+  // focal-prior cameras in rounds as a single uncalibrated camera's (absolute_pose.h): each
+  // round re-scores every correspondence with the refined pose and cameras and refines again on
+  // the new inliers, until they stop changing.
   const size_t ransac_inliers = inliers.size();
-  for (int round = 0; options.refine && round < std::max(1, options.camera_refinement_rounds);
-       ++round) {
+  const bool any_intrinsics = std::any_of(cameras.begin(), cameras.end(),
+                                          [](const RigCamera& c) { return c.refine_intrinsics; });
+  const int rounds = any_intrinsics ? std::max(1, options.camera_refinement_rounds) : 1;
+  for (int round = 0; options.refine && round < rounds; ++round) {
     std::vector<uint32_t> per_camera(cameras.size(), 0);
     for (const uint32_t i : inliers) ++per_camera[observations[i].camera];
     std::vector<RigCamera> rig(cameras.begin(), cameras.end());
@@ -481,7 +523,7 @@ RigPoseResult EstimateRigPose(std::span<const RigCamera> cameras,
   refinement.refine_scale = unknown_scale;
   const RigProblem problem(rig, observations, inliers, refinement);
   RigNormal at;
-  if (problem.Evaluate(RigState::Of(result.pose, result.cameras), true, &at)) {
+  if (problem.Evaluate(RigState::Of(result.pose, result.cameras), true, &at, /*covariance=*/true)) {
     if (const std::optional<Eigen::MatrixXd> covariance =
             HuberCovariance(at.covariance_terms, inliers.size())) {
       PoseCovariance pose_covariance;

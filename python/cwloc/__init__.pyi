@@ -164,7 +164,6 @@ class RigImageResult:
     translation: npt.NDArray[np.float64]
     center: npt.NDArray[np.float64]
     num_inliers: int
-    localized_alone: bool
     camera: Camera
 
 class RigResult:

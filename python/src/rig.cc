@@ -77,8 +77,6 @@ void BindRig(py::module_& m) {
           "center", [](const I& r) { return Vector(r.center); },
           "float64 (3,): the camera centre, model frame")
       .def_readonly("num_inliers", &I::num_inliers, "The rig's inliers in this image")
-      .def_readonly("localized_alone", &I::localized_alone,
-                    "Whether the image's own pipeline localized it")
       .def_readonly("camera", &I::camera, "The camera used: a focal prior refined with the rig");
   using R = api::RigResult;
   py::class_<R>(m, "RigResult",

@@ -193,9 +193,8 @@ struct RigImageResult {
   std::array<double, 4> rotation{1, 0, 0, 0};  // cam_from_world
   std::array<double, 3> translation{};
   std::array<double, 3> center{};
-  uint32_t num_inliers = 0;      // the rig's inliers in this image
-  bool localized_alone = false;  // its own pipeline localized it
-  Camera camera;                 // as used: a focal prior refined with the rig pose
+  uint32_t num_inliers = 0;  // the rig's inliers in this image
+  Camera camera;             // as used: a focal prior refined with the rig pose
 };
 
 struct RigResult {
@@ -264,8 +263,8 @@ class CWLOC_API Localizer {
   Result LocalizeGreyImage(const uint8_t* pixels, uint32_t width, uint32_t height, size_t stride,
                            const Camera& camera, const Options& options = Options()) const;
 
-  // Several images localized as one generalized camera (cwloc-localize --frames): each image's
-  // own pipeline finds its correspondences, one robust pose fits them all. unknown_scale: the
+  // Several images localized as one generalized camera (cwloc-localize --frames): the paper's
+  // matching on each image finds its correspondences, one robust pose fits them all. unknown_scale: the
   // cam_from_rig translations are known up to one scale, which is estimated.
   RigResult LocalizeRig(const std::vector<RigImage>& images, bool unknown_scale = false,
                         const Options& options = Options(),
