@@ -36,6 +36,10 @@ inline constexpr InputKind kQueryListFile{"a query or image list", 256'000'000};
 inline constexpr InputKind kPriorsFile{"a priors file", 256'000'000};
 // Motion files (--motion): a million frames at 256 bytes a line.
 inline constexpr InputKind kMotionFile{"a motion file", 256'000'000};
+// Rig configs (cwloc-localize --rig): a few cameras each; 16 MB are thousands of rigs.
+inline constexpr InputKind kRigConfigFile{"a rig config", 16'000'000};
+// Frames files (cwloc-localize --frames): a million images at 256 bytes a line.
+inline constexpr InputKind kFramesFile{"a frames file", 256'000'000};
 // Georef files (cwloc-index --georef): a million images at 256 bytes a line.
 inline constexpr InputKind kGeorefFile{"a georef file", 256'000'000};
 // Clustering files (cwloc-index --cluster-file): a million images at 256 bytes a line.

@@ -10,16 +10,18 @@ is localized alone (cwloc-localize --database --query-list), then grouped into f
   K crops    each query cut into K windows side by side (K = 3, 6; full height; the database's
              own SIFT features inside each): a narrow rig of one centre, whose single images
              are weak (as bench/make_zoomed_queries.py's crops)
-  vio-K      K consecutive queries with their relative poses disturbed as VIO drift would
-             (0.5 deg and 2 % of each translation, 1 sigma), known scale and --frames-scale
-             unknown (translations times a random factor); only for sequences (--vio)
+  vio-K      K consecutive queries (K = 3, 5) with their relative poses disturbed as VIO drift
+             would (0.1 deg and 0.5 %, or 0.5 deg and 2 % of each translation, 1 sigma), known
+             scale and --frames-scale unknown (translations times a random factor in [0.5, 2]);
+             only for sequences (--vio)
 
 and a generated city's rigs of 2-6 cameras (cwloc-synth --rig-cameras, --rig rig_config.json,
 its demo preset with 400 and with 120 features per image), whose frames include cameras that see
 nothing and, with few features, frames no single image localizes.
 
-Per kind of frame it prints: frames; frames any image localizes alone; frames the rig localizes
-(of those, and of the frames no image localizes alone); the median over frames of the reference
+Per kind of frame it prints: frames; frames any image localizes alone; frames the rig localizes;
+frames an image localizes alone but the rig does not; frames the rig localizes of those no image
+localizes alone, and of those where only one image matched; the median over frames of the reference
 camera's position error (metres) for the rig, for the reference image alone and for the best
 single image of each frame (an oracle's pick; the frames both localize); and the median extra time of a rig frame over its images' own pipelines
 (the rig pose stage), ms.
@@ -136,16 +138,17 @@ def localize(index, args, out, accept=(0, 1)):
 
 class Table:
     def __init__(self):
-        print("| data set | frames | any image alone | rig localized | rig, where none alone "
+        print("| data set | frames | any image alone | rig localized | rig lost, where one alone "
+              "| rig, where none alone "
               "| rig, where one image matched "
               "| median error (m): rig / reference alone / best single | rig pose stage (ms) "
               "| rig total / sum of images alone |")
-        print("|---|---|---|---|---|---|---|---|---|")
+        print("|---|---|---|---|---|---|---|---|---|---|")
 
     @staticmethod
     def row(label, frames, singles, truth, scale):
         """frames: rig records; singles: name -> single record (success with pose) or None."""
-        any_alone = rig_ok = none_alone = rig_took = one_seen = one_took = 0
+        any_alone = rig_ok = none_alone = rig_took = one_seen = one_took = rig_lost = 0
         rig_errors, reference_errors, single_errors, extra, ratio = [], [], [], [], []
         for record in frames:
             names = [image["name"] for image in record["images"]]
@@ -155,6 +158,7 @@ class Table:
             none_alone += not localized
             one = sum(image["matches"]["correspondences"] > 0 for image in record["images"]) == 1
             one_seen += one
+            rig_lost += bool(localized) and not record["success"]
             if record["success"]:
                 rig_ok += 1
                 rig_took += not localized
@@ -173,23 +177,23 @@ class Table:
             # The best single image of the frame (an oracle's pick), each against its own truth.
             single_errors.append(min(error(s["name"], s["pose"]) for s in localized))
         med = lambda v: f"{statistics.median(v):.4g}" if v else "-"
-        print(f"| {label} | {len(frames)} | {any_alone} | {rig_ok} | {rig_took} of {none_alone} | "
+        print(f"| {label} | {len(frames)} | {any_alone} | {rig_ok} | {rig_lost} | "
+              f"{rig_took} of {none_alone} | "
               f"{one_took} of {one_seen} | "
               f"{med(rig_errors)} / {med(reference_errors)} / {med(single_errors)} | {med(extra)} | "
               f"{med(ratio)} |")
         sys.stdout.flush()
 
 
-def singles_of(index, data, out_dir, names=None, feature_dir=None):
-    """Each query alone: name -> record."""
-    if feature_dir is None:
-        args = ["--database", os.path.join(data, "database.db"), "--query-list",
-                os.path.join(data, "queries_with_intrinsics.txt")]
-    else:
-        args = ["--query-list", os.path.join(feature_dir, "list.txt")]
+def singles_of(index, data, out_dir):
+    """Each query alone: name -> record. Run twice, the first to warm the page cache (the index
+    is memory-mapped), so that the times compare with the rigs' that follow."""
+    args = ["--database", os.path.join(data, "database.db"), "--query-list",
+            os.path.join(data, "queries_with_intrinsics.txt")]
+    out = os.path.join(out_dir, "singles.jsonl")
     # A generated rig's camera that sees nothing has no features: an error record (exit 2).
-    return {r["name"]: r for r in localize(index, args, os.path.join(out_dir, "singles.jsonl"),
-                                           accept=(0, 1, 2))}
+    localize(index, args, out, accept=(0, 1, 2))
+    return {r["name"]: r for r in localize(index, args, out, accept=(0, 1, 2))}
 
 
 def groups_in_order(names, k):
@@ -306,13 +310,14 @@ def dataset(arg, work, table, vio, rng):
                           os.path.join(out_dir, f"crops-{parts}.jsonl"))
         table.row(f"{name}, {parts} crops", frames, crop_singles, crop_truth, scale)
     if vio:
-        for k in (3, 5):
-            for unknown in (False, True):
-                label = f"vio-{k}" + ("-unknown" if unknown else "")
-                table.row(f"{name}, {label}",
-                          rig_frames(index, data, out_dir, truth, names, k, label,
-                                     noise=(0.5, 0.02), unknown=unknown, rng=rng),
-                          singles, truth, scale)
+        for noise in ((0.1, 0.005), (0.5, 0.02)):
+            for k in (3, 5):
+                for unknown in (False, True):
+                    label = f"vio-{k}-{noise[0]}deg" + ("-unknown-scale" if unknown else "")
+                    table.row(f"{name}, {label}",
+                              rig_frames(index, data, out_dir, truth, names, k, label,
+                                         noise=noise, unknown=unknown, rng=rng),
+                              singles, truth, scale)
 
 
 def synth(cameras, features, work, table):

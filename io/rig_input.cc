@@ -15,9 +15,6 @@ namespace {
 
 using nlohmann::json;
 
-// A rig config is a few cameras; a megabyte is thousands of them.
-constexpr InputKind kRigConfigFile{"a rig config", 16'000'000};
-
 template <size_t N>
 std::array<double, N> Numbers(const json& camera, const char* key, const std::string& where) {
   const auto it = camera.find(key);
@@ -192,7 +189,7 @@ std::vector<RigFrameInput> FramesOfRigs(const std::vector<std::vector<RigConfigC
 
 std::vector<RigFrameInput> ReadFramesFile(const std::filesystem::path& path,
                                           const std::filesystem::path& base) {
-  CheckInputFile(path, kQueryListFile);
+  CheckInputFile(path, kFramesFile);
   std::ifstream in(path);
   if (!in) throw InputError(path.string() + ": cannot open the frames file");
   std::vector<RigFrameInput> frames;

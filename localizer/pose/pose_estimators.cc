@@ -10,11 +10,42 @@
 namespace cwloc {
 namespace {
 
-// MSAC score sum_i min(r_i^2, max_sq) of f * pi(R X_i + t) - x_i; a point behind the camera
-// counts as an outlier. The squared errors of a block of points are computed independently
-// (the loop vectorizes), then summed in point order, so the score is the plain loop's to the
-// bit. Stops after a block once the sum reaches `bound` (terms are >= 0, so the model has
-// lost): most of RANSAC's wrong hypotheses are dropped after a block or two.
+void CollectInliers(std::span<const Eigen::Vector2d> points2D,
+                    std::span<const Eigen::Vector3d> points3D, const CameraPose& pose, double f,
+                    double max_sq, std::vector<uint32_t>* inliers) {
+  inliers->clear();
+  const Eigen::Matrix3d rot = pose.rotation.toRotationMatrix();
+  for (size_t i = 0; i < points2D.size(); ++i) {
+    const Eigen::Vector3d z = rot * points3D[i] + pose.translation;
+    if (z(2) > 0.0 && (f * z.hnormalized() - points2D[i]).squaredNorm() < max_sq) {
+      inliers->push_back(static_cast<uint32_t>(i));
+    }
+  }
+}
+
+// Every k-th inlier, so that at most max_points remain (local_optimization.h).
+void Thin(uint32_t max_points, std::vector<uint32_t>* inliers) {
+  if (max_points == 0 || inliers->size() <= max_points) return;
+  const size_t stride = (inliers->size() + max_points - 1) / max_points;
+  size_t kept = 0;
+  for (size_t i = 0; i < inliers->size(); i += stride) (*inliers)[kept++] = (*inliers)[i];
+  inliers->resize(kept);
+}
+
+}  // namespace
+
+ScoringColumns::ScoringColumns(std::span<const Eigen::Vector2d> points2D,
+                               std::span<const Eigen::Vector3d> points3D) {
+  const size_t n = std::min(points2D.size(), points3D.size());
+  for (std::vector<double>* column : {&x, &y, &z, &u, &v}) column->resize(n);
+  for (size_t i = 0; i < n; ++i) {
+    x[i] = points3D[i](0), y[i] = points3D[i](1), z[i] = points3D[i](2);
+    u[i] = points2D[i](0), v[i] = points2D[i](1);
+  }
+}
+
+// The score is the plain loop's to the bit; most of RANSAC's wrong hypotheses are dropped after
+// a block or two.
 double MsacScore(const ScoringColumns& points, const CameraPose& pose, double f, double max_sq,
                  double bound, uint32_t* num_inliers) {
   const Eigen::Matrix3d rot = pose.rotation.toRotationMatrix();
@@ -57,40 +88,6 @@ double MsacScore(const ScoringColumns& points, const CameraPose& pose, double f,
   }
   *num_inliers = inliers;
   return score;
-}
-
-void CollectInliers(std::span<const Eigen::Vector2d> points2D,
-                    std::span<const Eigen::Vector3d> points3D, const CameraPose& pose, double f,
-                    double max_sq, std::vector<uint32_t>* inliers) {
-  inliers->clear();
-  const Eigen::Matrix3d rot = pose.rotation.toRotationMatrix();
-  for (size_t i = 0; i < points2D.size(); ++i) {
-    const Eigen::Vector3d z = rot * points3D[i] + pose.translation;
-    if (z(2) > 0.0 && (f * z.hnormalized() - points2D[i]).squaredNorm() < max_sq) {
-      inliers->push_back(static_cast<uint32_t>(i));
-    }
-  }
-}
-
-// Every k-th inlier, so that at most max_points remain (local_optimization.h).
-void Thin(uint32_t max_points, std::vector<uint32_t>* inliers) {
-  if (max_points == 0 || inliers->size() <= max_points) return;
-  const size_t stride = (inliers->size() + max_points - 1) / max_points;
-  size_t kept = 0;
-  for (size_t i = 0; i < inliers->size(); i += stride) (*inliers)[kept++] = (*inliers)[i];
-  inliers->resize(kept);
-}
-
-}  // namespace
-
-ScoringColumns::ScoringColumns(std::span<const Eigen::Vector2d> points2D,
-                               std::span<const Eigen::Vector3d> points3D) {
-  const size_t n = std::min(points2D.size(), points3D.size());
-  for (std::vector<double>* column : {&x, &y, &z, &u, &v}) column->resize(n);
-  for (size_t i = 0; i < n; ++i) {
-    x[i] = points3D[i](0), y[i] = points3D[i](1), z[i] = points3D[i](2);
-    u[i] = points2D[i](0), v[i] = points2D[i](1);
-  }
 }
 
 namespace {

@@ -24,6 +24,13 @@ struct ScoringColumns {
   std::vector<double> x, y, z, u, v;
 };
 
+// MSAC score sum_i min(r_i^2, max_sq) of r_i = f * pi(R X_i + t) - (u_i, v_i) over the columns
+// (u, v in the units of f times normalised coordinates); a point behind the camera counts as an
+// outlier. The squared errors of a block of points are computed independently (the loop
+// vectorizes), then summed in point order; stops after a block once the sum reaches `bound`.
+double MsacScore(const ScoringColumns& points, const CameraPose& pose, double f, double max_sq,
+                 double bound, uint32_t* num_inliers);
+
 // A gravity prior's test of hypotheses (GravityRejectionAngle, gravity_prior.h): GenerateModels
 // drops poses whose angle between R in_world and in_camera exceeds max_angle.
 struct GravityCheck {

@@ -8,6 +8,7 @@
 
 #include "localizer/pose/generalized_pose.h"
 #include "localizer/pose/p3p.h"
+#include "localizer/pose/pose_estimators.h"
 #include "localizer/pose/refine_pose_solver.h"
 
 namespace cwloc {
@@ -275,29 +276,32 @@ class RigData {
         lo_iterations_(lo_iterations),
         by_camera_(rig.size()) {
     for (const RigCamera& camera : rig) cameras_.push_back(camera.camera);
+    std::vector<std::vector<Eigen::Vector2d>> pixels(rig.size());
+    std::vector<std::vector<Eigen::Vector3d>> points(rig.size());
     for (uint32_t i = 0; i < observations.size(); ++i) {
       const RigObservation& o = observations[i];
       bearings_.push_back(
           (o.pixel / rig[o.camera].camera.focal_length_px).homogeneous().normalized());
       by_camera_[o.camera].push_back(i);
+      pixels[o.camera].push_back(o.pixel);
+      points[o.camera].push_back(o.point3D);
     }
+    for (size_t c = 0; c < rig.size(); ++c) columns_.emplace_back(pixels[c], points[c]);
   }
 
   size_t NumData() const { return observations_.size(); }
 
+  // RANSAC's score: each camera's observations in vectorized columns (pose_estimators.h), with
+  // the pinhole camera of RANSAC's hypotheses (k = 0: only the final refinement estimates k).
   double Score(const RigPose& model, uint32_t* num_inliers, double bound) const {
-    const CameraMaps maps(rig_, model);
     double score = 0.0;
     uint32_t inliers = 0;
-    for (const RigObservation& o : observations_) {
-      const double e = SquaredError(maps, cameras_, o);
-      if (e < max_sq_) {
-        score += e;
-        ++inliers;
-      } else {
-        score += max_sq_;
-      }
-      if (score >= bound) break;
+    for (size_t c = 0; c < rig_.size() && score < bound; ++c) {
+      if (columns_[c].x.empty()) continue;
+      uint32_t camera_inliers = 0;
+      score += MsacScore(columns_[c], model.CameraFromWorld(rig_[c].cam_from_rig),
+                         cameras_[c].focal_length_px, max_sq_, bound - score, &camera_inliers);
+      inliers += camera_inliers;
     }
     *num_inliers = inliers;
     return score;
@@ -339,6 +343,7 @@ class RigData {
   double max_sq_;
   int lo_iterations_;
   std::vector<std::vector<uint32_t>> by_camera_;
+  std::vector<ScoringColumns> columns_;  // per camera, for Score
 };
 
 // Known scale: GeneralizedP3P on three correspondences of any cameras.
