@@ -19,12 +19,16 @@ and a generated city's rigs of 2-6 cameras (cwloc-synth --rig-cameras, --rig rig
 its demo preset with 400 and with 120 features per image), whose frames include cameras that see
 nothing and, with few features, frames no single image localizes.
 
-Per kind of frame it prints: frames; frames any image localizes alone; frames the rig localizes;
-frames an image localizes alone but the rig does not; frames the rig localizes of those no image
-localizes alone, and of those where only one image matched; the median over frames of the reference
-camera's position error (metres) for the rig, for the reference image alone and for the best
-single image of each frame (an oracle's pick; the frames both localize); and the median extra time of a rig frame over its images' own pipelines
-(the rig pose stage), ms.
+Per kind of frame it prints: frames; frames any image localizes alone; frames the rig
+localizes; frames an image localizes alone but the rig does not; frames the rig localizes of
+those no image localizes alone, and of those where only one image matched; the median over
+frames of the reference camera's position error (metres) for the rig, for the reference image
+alone and for the best single image of each frame (an oracle's pick; the frames both localize);
+the median time of the rig's pose stage; and a rig frame's total time minus its images'
+localized alone (median and maximum over the frames all of whose images have a record alone),
+ms. The images alone run twice, the first warming the page cache (the index is memory-mapped).
+Last, for each rig-K frames file, hyperfine's median of the whole command against the same
+images as a query list: the milliseconds a frame adds over its images localized alone.
 
     bench/rig_benchmark.py WORKDIR [DATASET ...] [--vio DATASET ...] [--synth N ...]
                            [--synth-features F ...]
@@ -48,6 +52,7 @@ import numpy as np
 TOP = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 BIN = os.environ.get("CWLOC_BIN", os.path.join(TOP, "build", "bin"))
 SHARED = os.path.join(TOP, "..", "shared", "data")
+TIMES = []  # (label, ms a rig frame adds over its images alone, spread)
 
 
 def run(args, accept=(0, 1)):
@@ -142,7 +147,7 @@ class Table:
               "| rig, where none alone "
               "| rig, where one image matched "
               "| median error (m): rig / reference alone / best single | rig pose stage (ms) "
-              "| rig total / sum of images alone |")
+              "| rig total minus its images alone (ms): median, max |")
         print("|---|---|---|---|---|---|---|---|---|---|")
 
     @staticmethod
@@ -165,7 +170,7 @@ class Table:
                 one_took += one
             extra.append(record["times_ms"]["rig_pose"])
             if all(s and "times_ms" in s for s in alone):
-                ratio.append(record["times_ms"]["total"] /
+                ratio.append(record["times_ms"]["total"] -
                              sum(s["times_ms"]["total"] for s in alone))
             if not (record["success"] and localized):
                 continue
@@ -181,7 +186,7 @@ class Table:
               f"{rig_took} of {none_alone} | "
               f"{one_took} of {one_seen} | "
               f"{med(rig_errors)} / {med(reference_errors)} / {med(single_errors)} | {med(extra)} | "
-              f"{med(ratio)} |")
+              f"{med(ratio)}, {max(ratio):.3g} |" if ratio else "- |")
         sys.stdout.flush()
 
 
@@ -198,6 +203,30 @@ def singles_of(index, data, out_dir):
 
 def groups_in_order(names, k):
     return [names[i:i + k] for i in range(0, len(names) - k + 1, k)]
+
+
+def timing(index, rig_args, alone_args, frames, out_dir, label):
+    """hyperfine: the rig command against its images as single queries, whole commands in one
+    run (index open and reading included): (ms per frame the rig adds, its spread)."""
+    tool = [os.path.join(BIN, "cwloc-localize"), "--index", index, "-q", "-o", "/dev/null"]
+    report = os.path.join(out_dir, f"timing-{label}.json")
+    # -i: a generated rig's images that see nothing are error records (exit 2) alone.
+    run(["hyperfine", "-N", "-i", "--warmup", "2", "--runs", "15", "--export-json", report,
+         " ".join(tool + rig_args), " ".join(tool + alone_args)])
+    rig, alone = json.load(open(report))["results"]
+    extra = (rig["median"] - alone["median"]) * 1e3 / frames
+    TIMES.append((label, extra, math.hypot(rig["stddev"], alone["stddev"]) * 1e3 / frames))
+
+
+def time_frames_file(index, data, frames_path, out_dir, label):
+    """timing() of a --frames file against its images as a query list."""
+    lines = [line.split() for line in open(frames_path) if line.strip()]
+    query_list = os.path.join(out_dir, f"timing-{os.path.basename(frames_path)}")
+    with open(query_list, "w") as out:
+        out.write("\n".join(" ".join([f[1]] + f[9:]) for f in lines) + "\n")
+    database = ["--database", os.path.join(data, "database.db")]
+    timing(index, database + ["--frames", frames_path], database + ["--query-list", query_list],
+           len({f[0] for f in lines}), out_dir, label)
 
 
 def rig_frames(index, data, out_dir, truth, names, k, label, noise=None, unknown=False, rng=None):
@@ -294,6 +323,8 @@ def dataset(arg, work, table, vio, rng):
         if len(names) >= k:
             table.row(f"{name}, rig-{k}", rig_frames(index, data, out_dir, truth, names, k, f"rig-{k}"),
                       singles, truth, scale)
+            time_frames_file(index, data, os.path.join(out_dir, f"frames-rig-{k}.txt"), out_dir,
+                             f"{name}, rig-{k}")
     # Narrow rigs of crops: every crop of a photo shares its pose (cam_from_rig the identity).
     for parts in (3, 6):
         feature_dir, crops = crop_features(data, out_dir, truth, parts)
@@ -335,6 +366,10 @@ def synth(cameras, features, work, table):
                       os.path.join(out_dir, "rig.jsonl"))
     table.row(f"generated city, {cameras}-camera rig, {features} features", frames, singles, truth,
               1.0)
+    database = ["--database", os.path.join(city, "database.db"), "--query-list",
+                os.path.join(city, "queries_with_intrinsics.txt")]
+    timing(index, ["--rig", os.path.join(city, "rig_config.json")] + database, database,
+           len(frames), out_dir, f"generated city, {cameras}-camera rig, {features} features")
     # Weak images (blur, low texture): each query image keeps every 6th of its features.
     db = sqlite3.connect(os.path.join(city, "database.db"))
     sparse_dir = os.path.join(out_dir, "sparse")
@@ -374,6 +409,10 @@ def main():
     for features in args.synth_features:
         for cameras in args.synth:
             synth(cameras, features, args.work, table)
+    print("\n| frames (hyperfine, whole commands) | a rig frame minus its images alone, ms |")
+    print("|---|---|")
+    for label, extra, spread in TIMES:
+        print(f"| {label} | {extra:+.2f} +- {spread:.2f} |")
 
 
 if __name__ == "__main__":

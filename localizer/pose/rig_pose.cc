@@ -264,6 +264,16 @@ bool Minimize(const RigProblem& problem, int max_iterations, RigState* x) {
   return problem.Sane(*x);
 }
 
+// The observations within sqrt(max_sq) pixels of their projection (and in front).
+void CollectInliers(std::span<const RigCamera> rig, std::span<const RadialCamera> cameras,
+                    std::span<const RigObservation> observations, const RigPose& pose,
+                    double max_sq, std::vector<uint32_t>* inliers) {
+  inliers->clear();
+  const CameraMaps maps(rig, pose);
+  for (uint32_t i = 0; i < observations.size(); ++i)
+    if (SquaredError(maps, cameras, observations[i]) < max_sq) inliers->push_back(i);
+}
+
 // RANSAC's view of the observations: unit bearings in their cameras (ignoring k, which only
 // the refinement estimates), each camera's observations, and the threshold.
 class RigData {
@@ -308,10 +318,7 @@ class RigData {
   }
 
   void Inliers(const RigPose& model, std::vector<uint32_t>* inliers) const {
-    inliers->clear();
-    const CameraMaps maps(rig_, model);
-    for (uint32_t i = 0; i < observations_.size(); ++i)
-      if (SquaredError(maps, cameras_, observations_[i]) < max_sq_) inliers->push_back(i);
+    CollectInliers(rig_, cameras_, observations_, model, max_sq_, inliers);
   }
 
   // Least squares on at most 256 of the model's inliers, spread evenly (as the single camera's
@@ -336,6 +343,7 @@ class RigData {
     return {cam.Center(), cam.rotation.conjugate() * bearings_[i]};
   }
 
+ protected:
   std::span<const RigCamera> rig_;
   std::span<const RigObservation> observations_;
   std::vector<RadialCamera> cameras_;
@@ -481,10 +489,9 @@ RigPoseResult EstimateRigPose(std::span<const RigCamera> cameras,
     RigPose pose = result.pose;
     std::vector<RadialCamera> refined_cameras = result.cameras;
     if (!RefineRigPose(rig, observations, inliers, refinement, &pose, &refined_cameras)) break;
-    RigData refined_scorer(rig, observations, options.max_error_px, options.lo_iterations);
-    refined_scorer.cameras_ = refined_cameras;
     std::vector<uint32_t> refined_inliers;
-    refined_scorer.Inliers(pose, &refined_inliers);
+    CollectInliers(rig, refined_cameras, observations, pose,
+                   options.max_error_px * options.max_error_px, &refined_inliers);
     if (refined_inliers.size() * 50 < ransac_inliers * 49) break;
     result.pose = pose;
     result.cameras = refined_cameras;
