@@ -8,6 +8,14 @@
 
 namespace cwloc {
 
+std::string RestOfLine(std::istream& fields) {
+  std::string rest;
+  std::getline(fields, rest);
+  rest.erase(0, rest.find_first_not_of(" \t\r"));
+  rest.erase(rest.find_last_not_of(" \t\r") + 1);
+  return rest;
+}
+
 std::vector<QueryListEntry> ReadQueryList(const std::filesystem::path& list) {
   CheckInputFile(list, kQueryListFile);
   std::ifstream in(list);
@@ -18,9 +26,7 @@ std::vector<QueryListEntry> ReadQueryList(const std::filesystem::path& list) {
     std::istringstream fields(line);
     QueryListEntry entry;
     if (!(fields >> entry.name) || entry.name[0] == '#') continue;
-    std::getline(fields, entry.camera);
-    entry.camera.erase(0, entry.camera.find_first_not_of(" \t\r"));
-    entry.camera.erase(entry.camera.find_last_not_of(" \t\r") + 1);
+    entry.camera = RestOfLine(fields);
     entries.push_back(std::move(entry));
   }
   if (in.bad()) throw InputError(list.string() + ": cannot read the list");

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <filesystem>
+#include <istream>
 #include <string>
 #include <vector>
 
@@ -12,6 +13,10 @@ struct QueryListEntry {
   std::string name;
   std::string camera;
 };
+
+// The rest of a line after the fields read so far, without its surrounding blanks (a list
+// line's camera, "MODEL W H PARAMS").
+std::string RestOfLine(std::istream& fields);
 
 // Every entry of a list file; blank lines and lines starting with '#' are skipped. Throws
 // InputError naming the list when it cannot be read, is not a regular file or is over

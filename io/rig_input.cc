@@ -217,10 +217,7 @@ std::vector<RigFrameInput> ReadFramesFile(const std::filesystem::path& path,
         PoseFromParts({v[0], v[1], v[2], v[3]}, {v[4], v[5], v[6]});
     if (const auto* problem = std::get_if<std::string>(&pose))
       throw InputError(where + ": cam_from_rig: " + *problem);
-    std::string camera;
-    std::getline(fields, camera);
-    camera.erase(0, camera.find_first_not_of(" \t\r"));
-    camera.erase(camera.find_last_not_of(" \t\r") + 1);
+    const std::string camera = RestOfLine(fields);
     const auto [seen, first] = last_line_of.emplace(frame, number);
     if (!first) {
       if (frames.back().name != frame) {

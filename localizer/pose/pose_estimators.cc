@@ -23,15 +23,6 @@ void CollectInliers(std::span<const Eigen::Vector2d> points2D,
   }
 }
 
-// Every k-th inlier, so that at most max_points remain (local_optimization.h).
-void Thin(uint32_t max_points, std::vector<uint32_t>* inliers) {
-  if (max_points == 0 || inliers->size() <= max_points) return;
-  const size_t stride = (inliers->size() + max_points - 1) / max_points;
-  size_t kept = 0;
-  for (size_t i = 0; i < inliers->size(); i += stride) (*inliers)[kept++] = (*inliers)[i];
-  inliers->resize(kept);
-}
-
 }  // namespace
 
 ScoringColumns::ScoringColumns(std::span<const Eigen::Vector2d> points2D,
@@ -42,6 +33,14 @@ ScoringColumns::ScoringColumns(std::span<const Eigen::Vector2d> points2D,
     x[i] = points3D[i](0), y[i] = points3D[i](1), z[i] = points3D[i](2);
     u[i] = points2D[i](0), v[i] = points2D[i](1);
   }
+}
+
+void Thin(uint32_t max_points, std::vector<uint32_t>* inliers) {
+  if (max_points == 0 || inliers->size() <= max_points) return;
+  const size_t stride = (inliers->size() + max_points - 1) / max_points;
+  size_t kept = 0;
+  for (size_t i = 0; i < inliers->size(); i += stride) (*inliers)[kept++] = (*inliers)[i];
+  inliers->resize(kept);
 }
 
 // The score is the plain loop's to the bit; most of RANSAC's wrong hypotheses are dropped after

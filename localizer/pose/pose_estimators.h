@@ -31,6 +31,10 @@ struct ScoringColumns {
 double MsacScore(const ScoringColumns& points, const CameraPose& pose, double f, double max_sq,
                  double bound, uint32_t* num_inliers);
 
+// Every k-th inlier, so that at most max_points remain (0: all): the local optimisation's
+// share of a hypothesis' inliers (LocalOptimizationOptions::max_points).
+void Thin(uint32_t max_points, std::vector<uint32_t>* inliers);
+
 // A gravity prior's test of hypotheses (GravityRejectionAngle, gravity_prior.h): GenerateModels
 // drops poses whose angle between R in_world and in_camera exceeds max_angle.
 struct GravityCheck {

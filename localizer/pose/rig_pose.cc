@@ -321,21 +321,19 @@ class RigData {
     CollectInliers(rig_, cameras_, observations_, model, max_sq_, inliers);
   }
 
-  // Least squares on at most 256 of the model's inliers, spread evenly (as the single camera's
-  // local optimisation, local_optimization.h), pose and scale only.
+  // Least squares on the single camera's share of the model's inliers, spread evenly
+  // (LocalOptimizationOptions::max_points), pose and scale only.
   void Refine(RigPose* model, bool refine_scale) const {
     std::vector<uint32_t> inliers;
     Inliers(*model, &inliers);
     if (inliers.size() < 4) return;
-    const size_t stride = (inliers.size() + 255) / 256;
-    std::vector<uint32_t> thinned;
-    for (size_t i = 0; i < inliers.size(); i += stride) thinned.push_back(inliers[i]);
+    Thin(LocalOptimizationOptions().max_points, &inliers);
     RigRefinementOptions options;
     options.max_iterations = lo_iterations_;
     options.refine_scale = refine_scale;
     options.refine_intrinsics = false;
     std::vector<RadialCamera> cameras = cameras_;
-    RefineRigPose(rig_, observations_, thinned, options, model, &cameras);
+    RefineRigPose(rig_, observations_, inliers, options, model, &cameras);
   }
 
   RigRay Ray(uint32_t i) const {
@@ -423,6 +421,19 @@ class RigPoseScaleEstimator : public RigData {
 // Refinement of a focal-prior camera's intrinsics needs this many of its inliers.
 constexpr uint32_t kMinInliersForIntrinsics = 12;
 
+// The final refinement's rig: a focal-prior camera's intrinsics are refined only where it has
+// kMinInliersForIntrinsics of `inliers`.
+std::vector<RigCamera> FinalRig(std::span<const RigCamera> cameras,
+                                std::span<const RigObservation> observations,
+                                std::span<const uint32_t> inliers) {
+  std::vector<uint32_t> per_camera(cameras.size(), 0);
+  for (const uint32_t i : inliers) ++per_camera[observations[i].camera];
+  std::vector<RigCamera> rig(cameras.begin(), cameras.end());
+  for (size_t c = 0; c < rig.size(); ++c)
+    rig[c].refine_intrinsics &= per_camera[c] >= kMinInliersForIntrinsics;
+  return rig;
+}
+
 }  // namespace
 
 bool RefineRigPose(std::span<const RigCamera> rig, std::span<const RigObservation> observations,
@@ -477,15 +488,11 @@ RigPoseResult EstimateRigPose(std::span<const RigCamera> cameras,
   const bool any_intrinsics = std::any_of(cameras.begin(), cameras.end(),
                                           [](const RigCamera& c) { return c.refine_intrinsics; });
   const int rounds = any_intrinsics ? std::max(1, options.camera_refinement_rounds) : 1;
+  RigRefinementOptions refinement;
+  refinement.loss_scale_px = options.loss_scale_px;
+  refinement.refine_scale = unknown_scale;
   for (int round = 0; options.refine && round < rounds; ++round) {
-    std::vector<uint32_t> per_camera(cameras.size(), 0);
-    for (const uint32_t i : inliers) ++per_camera[observations[i].camera];
-    std::vector<RigCamera> rig(cameras.begin(), cameras.end());
-    for (size_t c = 0; c < rig.size(); ++c)
-      rig[c].refine_intrinsics &= per_camera[c] >= kMinInliersForIntrinsics;
-    RigRefinementOptions refinement;
-    refinement.loss_scale_px = options.loss_scale_px;
-    refinement.refine_scale = unknown_scale;
+    const std::vector<RigCamera> rig = FinalRig(cameras, observations, inliers);
     RigPose pose = result.pose;
     std::vector<RadialCamera> refined_cameras = result.cameras;
     if (!RefineRigPose(rig, observations, inliers, refinement, &pose, &refined_cameras)) break;
@@ -527,12 +534,7 @@ RigPoseResult EstimateRigPose(std::span<const RigCamera> cameras,
   result.success = true;
 
   // The covariance at the reported pose, with the final refinement's loss and parameters.
-  std::vector<RigCamera> rig(cameras.begin(), cameras.end());
-  for (size_t c = 0; c < rig.size(); ++c)
-    rig[c].refine_intrinsics &= result.inliers_per_camera[c] >= kMinInliersForIntrinsics;
-  RigRefinementOptions refinement;
-  refinement.loss_scale_px = options.loss_scale_px;
-  refinement.refine_scale = unknown_scale;
+  const std::vector<RigCamera> rig = FinalRig(cameras, observations, inliers);
   const RigProblem problem(rig, observations, inliers, refinement);
   RigNormal at;
   if (problem.Evaluate(RigState::Of(result.pose, result.cameras), true, &at, /*covariance=*/true)) {
