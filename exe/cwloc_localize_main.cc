@@ -33,6 +33,7 @@
 #include "exe/localize/localize_cli.h"
 #include "exe/localize/localize_rigs.h"
 #include "exe/localize/result_sink.h"
+#include "exe/localize/table_flags.h"
 #include "exe/tool_main.h"
 #include "format/index.h"
 #include "io/camera_spec.h"
@@ -449,75 +450,6 @@ int Run(const CliOptions& cli) {
   if (errors > 0) return kExitBadInput;
   return failed > 0 ? kExitNotLocalized : kExitOk;
 }
-
-}  // namespace
-}  // namespace cwloc
-
-namespace cwloc {
-namespace {
-
-// The option table's flags. Each value is kept as given and goes through the table once
-// parsing is done, so cwloc-localize refuses what libcwloc refuses, with the same message.
-class TableFlags {
- public:
-  void AddTo(CLI::App* app) {
-    const QueryOptions defaults;
-    const std::span<const OptionSpec> table = OptionTable();
-    texts_.resize(table.size());
-    switches_ = std::make_unique<bool[]>(table.size());
-    for (size_t i = 0; i < table.size(); ++i) {
-      const OptionSpec& spec = table[i];
-      const OptionValue value = spec.get(defaults);
-      const std::string flag = "--" + std::string(spec.flag);
-      CLI::Option* option = nullptr;
-      if (const bool* on = std::get_if<bool>(&value)) {
-        switches_[i] = *on;
-        // A switch that is on by default is turned off by --no-NAME.
-        const std::string names = *on ? flag + ",!--no-" + std::string(spec.flag) : flag;
-        option = app->add_flag(names, switches_[i], std::string(spec.help));
-      } else {
-        option = app->add_option(flag, texts_[i], std::string(spec.help))
-                     ->default_str(FormatOptionValue(value))
-                     ->type_name(TypeName(spec, value));
-      }
-      option->group(kGroup);
-      options_.push_back(option);
-    }
-  }
-
-  // Every flag given, through the table: ParseOption checks a value, a switch has no range,
-  // the defaults are in range (option_table_test), and CheckOptionRules adds the rules between
-  // options.
-  void Apply(QueryOptions* options) const {
-    const std::span<const OptionSpec> table = OptionTable();
-    for (size_t i = 0; i < table.size(); ++i) {
-      if (options_[i]->count() == 0) continue;
-      const OptionSpec& spec = table[i];
-      const bool is_switch = spec.type == OptionValue(false).index();
-      spec.set(options, is_switch ? OptionValue(switches_[i]) : ParseOption(spec, texts_[i]));
-    }
-    CheckOptionRules(*options);
-  }
-
-  static constexpr const char* kGroup =
-      "Localization (also cwloc::api::Options, cwloc_options_set)";
-
- private:
-  static std::string TypeName(const OptionSpec& spec, const OptionValue& value) {
-    if (!spec.range.names.empty()) {
-      std::string names;
-      for (std::string_view name : spec.range.names)
-        names += (names.empty() ? "" : "|") + std::string(name);
-      return "{" + names + "}";
-    }
-    if (std::holds_alternative<double>(value)) return "FLOAT";
-    return std::holds_alternative<int32_t>(value) ? "INT" : "UINT";
-  }
-
-  std::vector<std::string> texts_;
-  std::unique_ptr<bool[]> switches_;  // CLI11 sets bools, and vector<bool> has none to point at
-  std::vector<CLI::Option*> options_;
-};
 
 }  // namespace
 }  // namespace cwloc

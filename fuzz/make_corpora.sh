@@ -12,7 +12,7 @@ work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
 
 rm -rf "$corpus"
-mkdir -p "$corpus"/{index,colmap_model,colmap_database,feature_file,query_list,photo,georef}
+mkdir -p "$corpus"/{index,colmap_model,colmap_database,feature_file,query_list,photo,georef,serve_request}
 
 # A scene of 4 registered images and ~70 points, placed on the globe.
 "$bin/cwloc-synth" --blocks 1 --queries 2 --camera-spacing 15 --features-per-image 100 \
@@ -63,4 +63,14 @@ PY
 
 cp "$scene/georef.txt" "$corpus/georef/scene.txt"
 head -3 "$scene/georef.txt" | awk '{print $0, 2.5}' >"$corpus/georef/with-sigmas.txt"
+# cwloc-serve's request parts (fuzz/serve_request_fuzzer.cc: a first byte picks the part).
+request="$corpus/serve_request"
+printf 'o{"max-features": 4000, "nb": 5, "camera": "SIMPLE_RADIAL 640 480 500 320 240 0.01", "prior_position": [47.1, 8.2, 30], "motion": "1 0 0 0 0.1 0 0 1 0.5", "use-exif-gps": true, "name": "a"}' \
+  >"$request/options.txt"
+printf 'g{"id":"1","sensorReadings":{"cameraReadings":[{"imageFormat":"GRAY8","size":[2,2],"imageBytes":"AAECAw==","params":{"model":"PINHOLE","modelParams":[500,500,1,1]}}],"geolocationReadings":[{"latitude":47.1,"longitude":8.2,"accuracy":20}]}}' \
+  >"$request/geopose.txt"
+{ printf 'f'; sed -n 1,3p "$corpus/feature_file/six.txt" | sed '1s/.*/2 128/'; } >"$request/features.txt"
+python3 -c "import struct, sys; sys.stdout.buffer.write(b'fCWLF' + struct.pack('<II4f', 1, 2, 1.5, 2.5, 3.5, 4.5) + bytes(range(256)))" \
+  >"$request/features-binary.bin"
+
 du -sh "$corpus"/*

@@ -6,7 +6,7 @@
 #   fuzz/run.sh BUILD_DIR [--seconds S] [--runs N] [--jobs J] [--out OUT_DIR] [TARGET...]
 # --seconds bounds each target's time (default 60), --runs its executions (default none); the
 # first reached ends it. Targets: index colmap_model colmap_database feature_file query_list
-# photo georef (default all). J targets run at once (default 1).
+# photo georef serve_request (default all that are built). J targets run at once (default 1).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build="${1:?usage: fuzz/run.sh BUILD_DIR [--seconds S] [--runs N] [--jobs J] [--out DIR] [TARGET...]}"
@@ -22,7 +22,11 @@ while [ $# -gt 0 ]; do
     *) targets+=("$1"); shift ;;
   esac
 done
-[ ${#targets[@]} -gt 0 ] || targets=(index colmap_model colmap_database feature_file query_list photo georef)
+if [ ${#targets[@]} -eq 0 ]; then
+  targets=(index colmap_model colmap_database feature_file query_list photo georef)
+  # cwloc-serve's requests, in builds with the server (CWLOC_WITH_SERVE).
+  [ -x "$build/bin/cwloc-fuzz-serve-request" ] && targets+=(serve_request)
+fi
 out="${out:-$build/fuzz-runs}"
 mkdir -p "$out"
 

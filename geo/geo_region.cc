@@ -46,11 +46,11 @@ EnuRegion::EnuRegion(const GeoFrame& frame, const GeoRegion& region)
       horizontal_(!region.height_m),
       radius_(region.radius_m) {}
 
-bool EnuRegion::Contains(const Eigen::Vector3d& enu) const {
+double EnuRegion::Distance(const Eigen::Vector3d& enu) const {
   Eigen::Vector3d offset = enu - center_;
   // Without a height, the ENU "up" offset of a distant fix is mostly the earth's curvature.
   if (horizontal_) offset.z() = 0;
-  return offset.norm() <= radius_;
+  return offset.norm();
 }
 
 }  // namespace cwloc

@@ -34,7 +34,9 @@ std::optional<std::vector<double>> ParseFiniteNumbers(const std::string& text);
 class EnuRegion {
  public:
   EnuRegion(const GeoFrame& frame, const GeoRegion& region);
-  bool Contains(const Eigen::Vector3d& enu) const;
+  bool Contains(const Eigen::Vector3d& enu) const { return Distance(enu) <= radius_; }
+  // Metres from the centre; horizontal when the region has no height.
+  double Distance(const Eigen::Vector3d& enu) const;
 
  private:
   Eigen::Vector3d center_;

@@ -1,8 +1,11 @@
 #include "io/feature_file.h"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <cstring>
 #include <fstream>
+#include <iterator>
 #include <string>
 #include <string_view>
 
@@ -37,11 +40,26 @@ bool ParseNumber(std::string_view token, T* value) {
 
 void ReadFeatureFile(const std::filesystem::path& path, Query* query) {
   CheckInputFile(path, kFeatureFile);
-  std::ifstream in(path);
+  std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path.string() + ": cannot open feature file");
-  const std::string name = path.string();
-  std::string line;
-  if (!std::getline(in, line))
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (in.bad()) throw InputError(path.string() + ": cannot read feature file");
+  ParseFeatureText(text, path.string(), query);
+}
+
+void ParseFeatureText(std::string_view text, const std::string& name, Query* query) {
+  size_t line_number = 0;
+  // The next line, without its newline; false at the end of the text.
+  const auto next_line = [&](std::string_view* line) {
+    if (text.empty()) return false;
+    const size_t end = text.find('\n');
+    *line = text.substr(0, end);
+    text.remove_prefix(end == std::string_view::npos ? text.size() : end + 1);
+    ++line_number;
+    return true;
+  };
+  std::string_view line;
+  if (!next_line(&line))
     throw InputError(name + ": empty feature file; expected 'NUM_FEATURES 128'");
   std::string_view header = line;
   uint64_t count = 0;
@@ -57,11 +75,13 @@ void ReadFeatureFile(const std::filesystem::path& path, Query* query) {
     throw InputError(name + ":1: " + std::to_string(count) + " features is more than 10 million");
   query->keypoints.clear();
   query->descriptors.clear();
-  query->keypoints.reserve(count * 2);
-  query->descriptors.reserve(count * 128);
+  // A feature's line has at least 264 characters: reserve no more than the text can hold.
+  const uint64_t room = std::min<uint64_t>(count, text.size() / 264 + 1);
+  query->keypoints.reserve(room * 2);
+  query->descriptors.reserve(room * 128);
   for (uint64_t i = 0; i < count; ++i) {
     const std::string where = name + ":" + std::to_string(i + 2);
-    if (!std::getline(in, line)) {
+    if (!next_line(&line)) {
       throw InputError(where + ": file ends after " + std::to_string(i) + " of " +
                        std::to_string(count) + " features");
     }
@@ -84,6 +104,36 @@ void ReadFeatureFile(const std::filesystem::path& path, Query* query) {
     }
     if (!NextToken(rest).empty()) throw InputError(where + ": more than 128 descriptor values");
   }
+}
+
+void ParseFeatureBinary(std::span<const uint8_t> bytes, const std::string& source, Query* query) {
+  constexpr size_t kHeader = 12;
+  if (bytes.size() < kHeader || std::memcmp(bytes.data(), kFeatureBinaryMagic, 4) != 0)
+    throw InputError(source + ": not binary features (they start with 'CWLF')");
+  const auto u32 = [&](size_t at) {
+    return uint32_t{bytes[at]} | uint32_t{bytes[at + 1]} << 8 | uint32_t{bytes[at + 2]} << 16 |
+           uint32_t{bytes[at + 3]} << 24;
+  };
+  if (u32(4) != 1)
+    throw InputError(source + ": binary features of version " + std::to_string(u32(4)) +
+                     ", expected 1");
+  const uint64_t count = u32(8);
+  const uint64_t expected = kHeader + count * (2 * sizeof(float) + 128);
+  if (bytes.size() != expected) {
+    throw InputError(source + ": " + std::to_string(count) + " binary features take " +
+                     std::to_string(expected) + " bytes, got " + std::to_string(bytes.size()));
+  }
+  query->keypoints.resize(count * 2);
+  for (uint64_t i = 0; i < count * 2; ++i) {
+    const uint32_t bits = u32(kHeader + i * 4);
+    float value;
+    std::memcpy(&value, &bits, sizeof(value));
+    if (!std::isfinite(value))
+      throw InputError(source + ": feature " + std::to_string(i / 2) + " has a non-finite pixel");
+    query->keypoints[i] = value;
+  }
+  const uint8_t* descriptors = bytes.data() + kHeader + count * 2 * sizeof(float);
+  query->descriptors.assign(descriptors, descriptors + count * 128);
 }
 
 }  // namespace cwloc

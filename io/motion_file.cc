@@ -10,6 +10,16 @@
 
 namespace cwloc {
 
+std::variant<FrameMotion, std::string> ParseMotion(const std::string& numbers,
+                                                   std::string_view layout) {
+  const auto v = ParseFiniteNumbers(numbers);
+  if (!v || (v->size() != 7 && v->size() != 9))
+    return "expected '" + std::string(layout) + "' (seven or nine numbers)";
+  const bool sigmas = v->size() == 9;
+  return MetricMotion({(*v)[0], (*v)[1], (*v)[2], (*v)[3]}, {(*v)[4], (*v)[5], (*v)[6]},
+                      sigmas ? (*v)[7] : 0.0, sigmas ? (*v)[8] : 0.0);
+}
+
 std::unordered_map<std::string, MotionLine> ReadMotionFile(const std::filesystem::path& path) {
   CheckInputFile(path, kMotionFile);
   std::ifstream in(path);
@@ -23,16 +33,8 @@ std::unordered_map<std::string, MotionLine> ReadMotionFile(const std::filesystem
     if (!(fields >> name) || name[0] == '#') continue;
     std::string rest;
     std::getline(fields, rest);
-    const auto v = ParseFiniteNumbers(rest);
-    if (!v || (v->size() != 7 && v->size() != 9)) {
-      throw InputError(where +
-                       ": expected 'NAME QW QX QY QZ TX TY TZ [SIGMA_ROT_DEG SIGMA_POS]' (seven "
-                       "or nine numbers)");
-    }
-    const bool sigmas = v->size() == 9;
     std::variant<FrameMotion, std::string> motion =
-        MetricMotion({(*v)[0], (*v)[1], (*v)[2], (*v)[3]}, {(*v)[4], (*v)[5], (*v)[6]},
-                     sigmas ? (*v)[7] : 0.0, sigmas ? (*v)[8] : 0.0);
+        ParseMotion(rest, "NAME QW QX QY QZ TX TY TZ [SIGMA_ROT_DEG SIGMA_POS]");
     if (const auto* problem = std::get_if<std::string>(&motion))
       throw InputError(where + ": " + *problem);
     if (!motions.emplace(name, MotionLine{std::get<FrameMotion>(motion), number}).second)

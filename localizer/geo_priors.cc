@@ -1,5 +1,8 @@
 #include "localizer/geo_priors.h"
 
+#include <algorithm>
+#include <limits>
+
 #include "geo/geo_region.h"
 #include "geo/index_georeference.h"
 
@@ -22,6 +25,18 @@ std::vector<char> IndexGeo::ClustersNear(const PositionPrior& prior,
   for (uint32_t c = 0; c < clusters.num_clusters(); ++c) {
     for (uint32_t i = clusters.offsets[c]; i < clusters.offsets[c + 1] && !near[c]; ++i)
       near[c] = region.Contains(image_centers_enu_[clusters.images[i]]);
+  }
+  return near;
+}
+
+IndexGeo::CamerasNear IndexGeo::CamerasWithin(const PositionPrior& region) const {
+  const EnuRegion enu_region(frame_, region);
+  CamerasNear near;
+  near.nearest_m = std::numeric_limits<double>::infinity();
+  for (const Eigen::Vector3d& center : image_centers_enu_) {
+    const double distance = enu_region.Distance(center);
+    near.count += distance <= region.radius_m;
+    near.nearest_m = std::min(near.nearest_m, distance);
   }
   return near;
 }

@@ -27,6 +27,14 @@ class IndexGeo {
   // the prior has no height).
   std::vector<char> ClustersNear(const PositionPrior& prior, const ClusterMembers& clusters) const;
 
+  // How many model cameras lie within the region (cwloc-serve's coverage), and the distance in
+  // metres from its centre to the nearest camera (horizontal when it has no height).
+  struct CamerasNear {
+    uint32_t count = 0;
+    double nearest_m = 0;
+  };
+  CamerasNear CamerasWithin(const PositionPrior& region) const;
+
   // The direction gravity pulls, in the model frame: the ellipsoid normal at the prior's
   // position when there is one, else at the ENU origin.
   Eigen::Vector3d GravityInModel(const std::optional<PositionPrior>& prior) const;

@@ -14,6 +14,9 @@ packages=(
   # Video files (cwloc-localize --video; never in the device build), and ffmpeg to make the
   # tests' videos.
   libavformat-dev libavcodec-dev libavutil-dev libswscale-dev ffmpeg
+  # cwloc-serve (docs/serve.md): its HTTP library and the viewer's three.js; wrk for its load
+  # benchmark.
+  libcpp-httplib-dev libjs-three wrk
   colmap hyperfine valgrind time python3 python3-jsonschema python3-matplotlib clang-format
   # The Python module (docs/python.md): pybind11 and Python's headers, numpy, its tests, pip's
   # offline build in a venv; Dask.

@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <map>
+#include <string>
+#include <vector>
 
 #include "cwloc/version.h"
 #include "tests/test_util.h"
@@ -36,20 +38,27 @@ TEST_P(ToolCli, HelpExitsZeroAndDescribesTheTool) {
 
 TEST_P(ToolCli, UnknownOptionIsAUsageError) {
   // CLI11 reports missing required options first, so give each tool its required ones.
-  const std::map<std::string, std::string> required = {
-      {"cwloc-index", "info x.cwl"}, {"cwloc-localize", "--index x.cwl"}, {"cwloc-synth", "-o x"}};
+  const std::map<std::string, std::string> required = {{"cwloc-index", "info x.cwl"},
+                                                       {"cwloc-localize", "--index x.cwl"},
+                                                       {"cwloc-synth", "-o x"},
+                                                       {"cwloc-serve", "--index x.cwl"}};
   std::string output;
   EXPECT_EQ(Run(required.at(GetParam()) + " --no-such-option", &output), 2) << output;
   EXPECT_THAT(output, HasSubstr("--no-such-option"));
 }
 
-INSTANTIATE_TEST_SUITE_P(AllTools, ToolCli,
-                         testing::Values("cwloc-index", "cwloc-localize", "cwloc-synth"),
-                         [](const auto& param_info) {
-                           std::string name = param_info.param;
-                           std::erase(name, '-');
-                           return name;
-                         });
+// cwloc-serve in builds that have it (CWLOC_WITH_SERVE).
+const std::vector<std::string> kTools = {"cwloc-index", "cwloc-localize", "cwloc-synth",
+#ifdef CWLOC_TEST_SERVE
+                                         "cwloc-serve"
+#endif
+};
+
+INSTANTIATE_TEST_SUITE_P(AllTools, ToolCli, testing::ValuesIn(kTools), [](const auto& param_info) {
+  std::string name = param_info.param;
+  std::erase(name, '-');
+  return name;
+});
 
 TEST(IndexCli, BuildWithoutRequiredOptionsNamesTheMissingOne) {
   std::string output;

@@ -334,27 +334,9 @@ TEST_F(HerzJesuTest, AGeorefFileFromStrechasCamerasFitsToItsAlignmentResidual) {
   Georeference strecha_as_enu;
   strecha_as_enu.origin = origin;
   const GeoFrame strecha(strecha_as_enu);
-  auto strecha_center = [&](const std::string& name) {
-    std::ifstream in(data_ / "strecha_gt_cameras" / (name + ".camera"));
-    std::vector<double> values;
-    for (double v; in >> v;) values.push_back(v);
-    // K (9), distortion (3), R (9), C (3), w h.
-    EXPECT_EQ(values.size(), 26u) << name;
-    return Eigen::Vector3d(values[21], values[22], values[23]);
-  };
   test::TempDir dir;
   const auto georef = dir / "georef.txt";
-  {
-    std::ofstream out(georef);
-    for (const IndexImage& image : index_->images()) {
-      const std::string name(index_->ImageName(image));
-      const Geodetic g = strecha.EnuToGeodetic(strecha_center(name));
-      char line[256];
-      std::snprintf(line, sizeof(line), "%s %.12f %.12f %.6f\n", name.c_str(), g.latitude_deg,
-                    g.longitude_deg, g.height_m);
-      out << line;
-    }
-  }
+  test::WriteStrechaGeorefFile(data_, *index_, origin, georef);
   IndexBuildOptions options;
   options.model_dir = data_ / "mapping_model" / "bin";
   options.database_path = data_ / "database.db";
@@ -387,7 +369,7 @@ TEST_F(HerzJesuTest, AGeorefFileFromStrechasCamerasFitsToItsAlignmentResidual) {
     ASSERT_TRUE(b.geo.has_value());
     const Eigen::Vector3d on_globe =
         strecha.GeodeticToEnu({b.geo->latitude_deg, b.geo->longitude_deg, b.geo->height_m});
-    EXPECT_LT((on_globe - strecha_center(name)).norm(), 0.08) << name;
+    EXPECT_LT((on_globe - test::StrechaCenter(data_, name)).norm(), 0.08) << name;
   }
 }
 
