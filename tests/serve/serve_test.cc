@@ -206,7 +206,7 @@ TEST_F(ServeTest, ASessionTracksFramesAsTheCliSequenceDoes) {
   std::string images;
   for (const std::string& frame : frames) images += " --image " + test::Quote(Photo(frame));
   const std::vector<json> cli = LocalizeWithTheCli("--index " + test::Quote(shared_->index) +
-                                                   " --sequence --max-features 3000" + images);
+                                                   " --sequence --max-image-size 800" + images);
   ASSERT_EQ(cli.size(), frames.size());
 
   ServeProcess server({"--index", shared_->index.string(), "--session-ttl", "60"});
