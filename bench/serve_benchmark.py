@@ -162,7 +162,8 @@ def wrk(port, workload, seconds, connections, work):
 
 def open_loop(port, workload, rate, seconds, deadline_s=None):
     """Requests at fixed times (rate per second) whatever the answers' latency; per answer its
-    status and latency from its scheduled time (s)."""
+    status, latency from its scheduled time (s), whether it localized, and when it came (s from
+    the first request's time)."""
     jobs = queue.Queue()
     results, lock = [], threading.Lock()
     start = time.monotonic() + 0.2
@@ -188,7 +189,7 @@ def open_loop(port, workload, rate, seconds, deadline_s=None):
                 except (http.client.HTTPException, OSError):
                     connection, status, localized = None, 0, False
             with lock:
-                results.append((status, time.monotonic() - when, localized))
+                results.append((status, time.monotonic() - when, localized, time.monotonic() - start))
 
     total = int(rate * seconds)
     threads = [threading.Thread(target=client) for _ in range(min(64, max(4, int(rate) * 2)))]
@@ -201,6 +202,14 @@ def open_loop(port, workload, rate, seconds, deadline_s=None):
     for thread in threads:
         thread.join()
     return results
+
+
+def statuses_text(results):
+    """"200: N 503: M ..." (0: no answer: the connection failed)."""
+    counts = {}
+    for status, _, _, _ in results:
+        counts[status] = counts.get(status, 0) + 1
+    return " ".join(f"{s}: {n}" for s, n in sorted(counts.items()))
 
 
 def percentile(values, p):
@@ -244,23 +253,20 @@ def main():
         server = Server(index, args.threads)
         steady = open_loop(server.port, load, 0.8 * rate, args.seconds)
         server.stop()
-        latencies = [l for s, l, _ in steady if s == 200]
+        latencies = [l for s, l, _, _ in steady if s == 200]
         p50, p99 = percentile(latencies, 50), percentile(latencies, 99)
-        rows.append((load.name, "80 %", f"{0.8 * rate:.1f}/s", f"{len(latencies)}/{len(steady)} "
-                     "answered 200", f"p50 {p50 * 1e3:.1f} ms, p99 {p99 * 1e3:.1f} ms",
+        rows.append((load.name, "80 %", f"{0.8 * rate:.1f}/s", statuses_text(steady),
+                     f"p50 {p50 * 1e3:.1f} ms, p99 {p99 * 1e3:.1f} ms",
                      f"p99/p50 {p99 / p50:.2f}"))
 
         budget_ms = max(200, int(4 * 1e3 * args.threads / rate))
         server = Server(index, args.threads, ["--budget-ms", str(budget_ms)])
         over = open_loop(server.port, load, 2 * rate, args.seconds)
         server.stop()
-        statuses = {}
-        for s, _, _ in over:
-            statuses[s] = statuses.get(s, 0) + 1
-        late = sum(1 for s, l, _ in over if l > budget_ms / 1e3 + 0.5)
-        localized = sum(1 for _, _, ok in over if ok) / args.seconds
+        late = sum(1 for s, l, _, _ in over if l > budget_ms / 1e3 + 0.5)
+        localized = sum(1 for _, _, ok, _ in over if ok) / max(t for _, _, _, t in over)
         rows.append((load.name, "200 %", f"{2 * rate:.1f}/s, --budget-ms {budget_ms}",
-                     " ".join(f"{s}: {n}" for s, n in sorted(statuses.items())),
+                     statuses_text(over),
                      f"{late} later than the budget + 0.5 s",
                      f"{localized:.1f} localized/s ({localized / rate:.2f} of throughput)"))
         if (load.name == "photos") == args.soak_photos:
@@ -268,21 +274,29 @@ def main():
 
     if args.soak_seconds > 0:
         server = Server(index, args.threads)
-        rss = {}
-        timer = threading.Timer(30, lambda: rss.setdefault("start", server.rss_kib()))
-        timer.start()
+        rss, stop = [], threading.Event()
+
+        def sample():  # every 30 s: the first after the warm-up, the trend after
+            while not stop.wait(30):
+                rss.append(server.rss_kib())
+
+        sampler = threading.Thread(target=sample)
+        sampler.start()
         soak = open_loop(server.port, soak_load, soak_rate, args.soak_seconds)
-        rss["end"] = server.rss_kib()
+        stop.set()
+        sampler.join()
+        rss = {"start": rss[0] if rss else server.rss_kib(), "end": server.rss_kib(), "all": rss}
         server.stop()
-        errors = sum(1 for s, _, _ in soak if s != 200)
         rows.append((soak_load.name, f"soak {args.soak_seconds} s", f"{soak_rate:.1f}/s",
-                     f"{len(soak)} requests, {errors} errors",
+                     statuses_text(soak),
                      f"RSS {rss.get('start', 0) / 1024:.1f} -> {rss['end'] / 1024:.1f} MiB",
                      f"{100 * (rss['end'] / rss.get('start', rss['end']) - 1):+.1f} %"))
 
     widths = [max(len(str(r[i])) for r in rows) for i in range(6)]
     for row in rows:
         print("  ".join(str(c).ljust(w) for c, w in zip(row, widths)))
+    if args.soak_seconds > 0:
+        print("soak RSS every 30 s (MiB): " + " ".join(f"{k / 1024:.1f}" for k in rss["all"]))
 
 
 if __name__ == "__main__":

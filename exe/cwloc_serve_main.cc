@@ -1,6 +1,9 @@
 // cwloc-serve: answers localization requests over HTTP from memory-mapped cwloc indexes
 // (docs/serve.md).
 #include <signal.h>
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
 
 #include <CLI/CLI.hpp>
 #include <cstdio>
@@ -65,6 +68,12 @@ int Run(const ServeCli& cli, ServeOptions options) {
   options.max_body_bytes = static_cast<size_t>(cli.max_body_mb * (1 << 20));
   if (!cli.token_file.empty()) options.token = ReadTokenFile(cli.token_file);
 
+#ifdef __GLIBC__
+  // A request's body and features are megabytes, freed when it ends. glibc's threshold for
+  // giving such blocks back to the system rises with each one freed, after which they stay in
+  // its per-thread arenas, which the server's connection threads multiply.
+  mallopt(M_MMAP_THRESHOLD, 1 << 20);
+#endif
   sigset_t signals;
   sigemptyset(&signals);
   for (const int signal_number : {SIGTERM, SIGINT, SIGHUP}) sigaddset(&signals, signal_number);

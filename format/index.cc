@@ -114,6 +114,10 @@ Index Index::Open(const std::filesystem::path& path) {
   if (file.FindSection(section::kViewKeypoints) != nullptr) {
     index.view_keypoints_ = file.Section<ViewKeypoint>(section::kViewKeypoints);
   }
+  if (file.FindSection(section::kPointColors) != nullptr) {
+    index.point_colors_ = file.Section<PointColor>(section::kPointColors);
+    require_count("PRGB", index.point_colors_.size(), index.num_points_, "point");
+  }
   index.covisibility_offsets_ = file.Section<uint32_t>(section::kCovisOffsets);
   index.covisibility_edges_ = file.Section<CovisibilityEdge>(section::kCovisEdges);
   file.Section<char>(section::kManifest);

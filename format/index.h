@@ -48,6 +48,8 @@ class Index {
   std::span<const uint32_t> view_points() const { return view_points_; }
   // Empty unless the index was built with --keypoints.
   std::span<const ViewKeypoint> view_keypoints() const { return view_keypoints_; }
+  // Empty unless the index was built with --point-colors (format 1.4's optional PRGB).
+  std::span<const PointColor> point_colors() const { return point_colors_; }
   // v_NN per view (full) or per point (coded(): the nearest over the point's clusters).
   std::span<const float> view_neighbor_distances() const { return view_neighbor_distances_; }
   std::span<const float> point_neighbor_distances() const { return point_neighbor_distances_; }
@@ -106,6 +108,7 @@ class Index {
   std::span<const uint8_t> descriptors_;
   std::span<const uint32_t> view_points_;
   std::span<const ViewKeypoint> view_keypoints_;
+  std::span<const PointColor> point_colors_;
   std::span<const float> view_neighbor_distances_;
   std::span<const float> point_neighbor_distances_;
   DescriptorCodes codes_;

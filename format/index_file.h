@@ -62,7 +62,7 @@ struct SectionData {
 };
 
 // The format minor a file with these sections declares: the oldest 1.x that knows them all
-// (1.1 without the compact index's sections, 1.2 with them, 1.3 with PCAL).
+// (1.1 without the compact index's sections, 1.2 with them, 1.3 with PCAL, 1.4 with PRGB).
 uint16_t FormatMinorOf(std::span<const SectionData> sections);
 
 // Writes an index atomically through an AtomicFile (base/atomic_file.h: an unnamed

@@ -18,7 +18,7 @@ static_assert(
 inline constexpr char kIndexMagic[8] = {'C', 'W', 'L', 'O', 'C', 'I', 'D', 'X'};
 inline constexpr uint32_t kByteOrderMark = 0x01020304;
 inline constexpr uint16_t kFormatMajor = 1;
-inline constexpr uint16_t kFormatMinor = 3;
+inline constexpr uint16_t kFormatMinor = 4;
 inline constexpr uint64_t kSectionAlignment = 64;
 
 // Feature bits: a reader refuses a file with a required bit it does not know.
@@ -94,6 +94,8 @@ inline constexpr uint32_t kPointOrigin = SectionTag("PORG");   // one IndexPoint
 inline constexpr uint32_t kPointOffsets = SectionTag("PNTF");  // IndexPointOffset per point
 // Optional (format 1.3): the pose covariance's calibration on the model.
 inline constexpr uint32_t kCovarianceCalibration = SectionTag("PCAL");
+// Optional (format 1.4): each point's colour in the COLMAP model, for viewers.
+inline constexpr uint32_t kPointColors = SectionTag("PRGB");
 inline constexpr uint32_t kAll[] = {kManifest,      kCameras,
                                     kImages,        kStrings,
                                     kPoints,        kTracks,
@@ -104,7 +106,8 @@ inline constexpr uint32_t kAll[] = {kManifest,      kCameras,
                                     kCovisEdges,    kGeoreference,
                                     kCodebook,      kPointCodes,
                                     kPointNeighbor, kPointOrigin,
-                                    kPointOffsets,  kCovarianceCalibration};
+                                    kPointOffsets,  kCovarianceCalibration,
+                                    kPointColors};
 }  // namespace section
 
 // "DESC" for a tag, with non-printable bytes escaped, for messages.

@@ -72,6 +72,12 @@ struct ViewKeypoint {
 };
 static_assert(sizeof(ViewKeypoint) == 8);
 
+// PRGB (optional, format 1.4): a point's colour as COLMAP's points3D store it (8-bit R, G, B).
+struct PointColor {
+  uint8_t rgb[3];
+};
+static_assert(sizeof(PointColor) == 3 && alignof(PointColor) == 1);
+
 // CVED: an edge of the co-visibility graph; CVOF[i]..CVOF[i+1] are image i's edges,
 // sorted by image index.
 struct CovisibilityEdge {

@@ -23,6 +23,7 @@ uint16_t FormatMinorOf(std::span<const SectionData> sections) {
         section.tag == section::kPointOffsets)
       minor = std::max<uint16_t>(minor, 2);
     if (section.tag == section::kCovarianceCalibration) minor = std::max<uint16_t>(minor, 3);
+    if (section.tag == section::kPointColors) minor = std::max<uint16_t>(minor, 4);
   }
   return minor;
 }

@@ -165,6 +165,8 @@ void WriteIndexOfViews(ModelViews views, const Clustering& clustering,
       {"view_neighbor", coded ? "per point: nearest other point's decoded code in any cluster "
                                 "that sees the point"
                               : "nearest view of another 3D point in the same cluster"}};
+  // Absent: no colours, as before format 1.4 (and the manifest of an index without them is too).
+  if (options.point_colors) manifest["build_parameters"]["point_colors"] = true;
   if (coded) {  // absent: a full index, as before format 1.2
     manifest["build_parameters"]["descriptors"] = {{"storage", "point_codes"},
                                                    {"per_point", "mean of its views"},
@@ -200,6 +202,7 @@ void WriteIndexOfViews(ModelViews views, const Clustering& clustering,
     contents.descriptors = views.descriptors;
   }
   if (options.keypoints) contents.view_keypoints = views.view_keypoints;
+  if (options.point_colors) contents.point_colors = views.point_colors;
   if (georeference) contents.georeference = &georeference->section;
   if (calibration) contents.covariance_calibration = &calibration->section;
   WriteIndex(output, contents, std::move(manifest));

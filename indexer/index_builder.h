@@ -27,8 +27,9 @@ struct IndexBuildOptions {
   // The global forest: num_trees (4, the paper's FLANN setting) and max_leaf_size; its seed,
   // threads and progress are set from this build's.
   KdForestBuildOptions forest;
-  uint64_t seed = 0;       // kd-forest randomization and k-means initialisation
-  bool keypoints = false;  // also store each view's keypoint (optional section VKXY, 8 B/view)
+  uint64_t seed = 0;          // kd-forest randomization and k-means initialisation
+  bool keypoints = false;     // also store each view's keypoint (optional section VKXY, 8 B/view)
+  bool point_colors = false;  // also store each point's colour (optional section PRGB, 3 B/point)
   // 0: every view's 128-byte descriptor (DESC). Else a compact index: one code of this many
   // bytes per 3D point (PQCB, PCOD, PVNN; indexer/point_codes.h).
   uint32_t code_bytes = 0;

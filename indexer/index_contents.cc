@@ -47,6 +47,10 @@ void WriteIndex(const std::filesystem::path& path, const IndexContents& contents
     // Optional: the localizer does not read model keypoints; tools that draw matches do.
     sections.push_back(MakeSection(section::kViewKeypoints, contents.view_keypoints, /*flags=*/0));
   }
+  if (!contents.point_colors.empty()) {
+    // Optional: for viewers (cwloc-serve's map); the localizer does not read them.
+    sections.push_back(MakeSection(section::kPointColors, contents.point_colors, /*flags=*/0));
+  }
   if (contents.georeference != nullptr) {
     sections.push_back(MakeSection(section::kGeoreference,
                                    std::span<const IndexGeoreference>(contents.georeference, 1),

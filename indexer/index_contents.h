@@ -32,6 +32,7 @@ struct IndexContents {
   std::span<const uint32_t> covisibility_offsets;
   std::span<const CovisibilityEdge> covisibility_edges;
   std::span<const ViewKeypoint> view_keypoints;     // optional section; empty: not written
+  std::span<const PointColor> point_colors;         // optional section; empty: not written
   const IndexGeoreference* georeference = nullptr;  // optional section
   const IndexCovarianceCalibration* covariance_calibration = nullptr;  // optional section
 };

@@ -78,6 +78,7 @@ struct Tile {
   std::vector<uint32_t> view_points;
   std::vector<float> neighbor_distances;
   std::vector<ViewKeypoint> view_keypoints;
+  std::vector<PointColor> point_colors;
   std::vector<uint32_t> covisibility_offsets;
   std::vector<CovisibilityEdge> covisibility_edges;
   uint32_t num_clusters = 0;
@@ -129,6 +130,7 @@ Tile CutTile(const Index& parent, const std::vector<char>& keep_cluster) {
     }
     if (tile.tracks.size() == first_track) continue;
     parent_points.push_back(p);
+    if (!parent.point_colors().empty()) tile.point_colors.push_back(parent.point_colors()[p]);
     if (coded) {
       IndexPointOffset offset = parent.point_offsets()[p];
       offset.first_track = static_cast<uint32_t>(first_track);
@@ -259,6 +261,7 @@ IndexExtractReport ExtractIndex(const IndexExtractOptions& options) {
   contents.covisibility_offsets = tile.covisibility_offsets;
   contents.covisibility_edges = tile.covisibility_edges;
   contents.view_keypoints = tile.view_keypoints;
+  contents.point_colors = tile.point_colors;
   contents.georeference = parent.georeference();
   contents.covariance_calibration = parent.covariance_calibration();
   IndexPointOrigin origin{};

@@ -49,6 +49,7 @@ ModelViews GatherModelViews(const colmap::Reconstruction& model,
     std::copy(point.xyz.begin(), point.xyz.end(), p.xyz);
     views.points.push_back(p);
     views.point_ids.push_back(point_id);
+    views.point_colors.push_back({{point.color[0], point.color[1], point.color[2]}});
   }
 
   const size_t total_views = model.NumObservations();
@@ -126,6 +127,7 @@ ModelViews GatherModelViews(const colmap::Reconstruction& model,
   std::vector<uint32_t> new_index(views.points.size(), UINT32_MAX);
   std::vector<IndexPoint> kept_points;
   std::vector<point3D_t> kept_ids;
+  std::vector<PointColor> kept_colors;
   for (size_t p = 0; p < views.points.size(); ++p) {
     const uint32_t length = counts[p + 1] - counts[p];
     if (length == 0) continue;
@@ -135,10 +137,12 @@ ModelViews GatherModelViews(const colmap::Reconstruction& model,
     point.track_length = length;
     kept_points.push_back(point);
     kept_ids.push_back(views.point_ids[p]);
+    kept_colors.push_back(views.point_colors[p]);
   }
   for (uint32_t& point : views.view_points) point = new_index[point];
   views.points = std::move(kept_points);
   views.point_ids = std::move(kept_ids);
+  views.point_colors = std::move(kept_colors);
   return views;
 }
 
@@ -165,6 +169,7 @@ ModelViews WithoutImages(const ModelViews& views, const std::vector<bool>& left_
     new_point[p] = static_cast<uint32_t>(out.points.size());
     out.points.push_back(point);
     out.point_ids.push_back(views.point_ids[p]);
+    if (!views.point_colors.empty()) out.point_colors.push_back(views.point_colors[p]);
   }
   std::vector<uint32_t> new_view(views.num_views(), UINT32_MAX);
   const bool keypoints = !views.view_keypoints.empty();

@@ -16,13 +16,14 @@ namespace cwloc {
 // image's views are contiguous.
 struct ModelViews {
   std::vector<IndexCamera> cameras;
-  std::vector<IndexImage> images;     // cluster left 0; filled by the clustering step
-  std::string strings;                // image names
-  std::vector<IndexPoint> points;     // 3D points with at least one view, in id order
-  std::vector<point3D_t> point_ids;   // COLMAP id of each point
-  std::vector<uint32_t> tracks;       // view indices, grouped by point
-  std::vector<uint8_t> descriptors;   // views x 128
-  std::vector<uint32_t> view_points;  // point index of each view
+  std::vector<IndexImage> images;        // cluster left 0; filled by the clustering step
+  std::string strings;                   // image names
+  std::vector<IndexPoint> points;        // 3D points with at least one view, in id order
+  std::vector<point3D_t> point_ids;      // COLMAP id of each point
+  std::vector<PointColor> point_colors;  // each point's colour in the model
+  std::vector<uint32_t> tracks;          // view indices, grouped by point
+  std::vector<uint8_t> descriptors;      // views x 128
+  std::vector<uint32_t> view_points;     // point index of each view
   std::vector<ViewKeypoint> view_keypoints;
 
   size_t num_views() const { return view_points.size(); }

@@ -102,22 +102,42 @@ void Server::Impl::BoundByDeadline(Clock::time_point deadline, QueryOptions* que
   budget = budget > 0 ? std::min(budget, left_ms) : left_ms;
 }
 
-void Server::Impl::RunOnWorker(const std::function<void()>& job, Clock::time_point deadline) {
+double ServiceTimes::Expected(bool photo) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return seconds_[photo];
+}
+
+void ServiceTimes::Add(bool photo, double seconds) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  double& average = seconds_[photo];
+  average = average == 0 ? seconds : 0.9 * average + 0.1 * seconds;
+}
+
+void Server::Impl::RunOnWorker(const std::function<void()>& job, bool photo,
+                               Clock::time_point deadline) {
   std::exception_ptr error;
   const std::function<void()> caught = [&] {
+    const Clock::time_point start = Clock::now();
     try {
       job();
     } catch (...) {
       error = std::current_exception();
     }
+    service_times.Add(photo, std::chrono::duration<double>(Clock::now() - start).count());
   };
-  switch (work.Run(caught, deadline)) {
+  const Clock::time_point start_by =
+      deadline -
+      std::chrono::microseconds(static_cast<int64_t>(service_times.Expected(photo) * 1e6));
+  switch (work.Run(caught, start_by)) {
     case WorkQueue::Outcome::kDone:
       break;
     case WorkQueue::Outcome::kQueueFull:
       throw HttpError{503, BusyMessage(work.capacity()), "overloaded"};
     case WorkQueue::Outcome::kExpired:
-      throw HttpError{503, "busy: no worker was free within --budget-ms; retry later", "expired"};
+      throw HttpError{503,
+                      "busy: no worker was free early enough to answer within --budget-ms; retry "
+                      "later",
+                      "expired"};
     case WorkQueue::Outcome::kStopped:
       throw HttpError{503, "the server is stopping", "stopping"};
   }
@@ -130,18 +150,18 @@ void Server::Impl::Localize(const httplib::Request& req, httplib::Response& res)
   RequestInputs inputs = InputsOf(OptionsPart(req));
   const RequestBody body = BodyOf(req);
   if (!body.filename.empty() && inputs.name == "query") inputs.name = body.filename;
+  const BodyKind kind = BodyKindOf(body.content_type, body.bytes);
   nlohmann::ordered_json record;
   RunOnWorker(
       [&] {
-        const Query query =
-            QueryFromBody(body.bytes, BodyKindOf(body.content_type, body.bytes), inputs, body.what);
+        const Query query = QueryFromBody(body.bytes, kind, inputs, body.what);
         BoundByDeadline(deadline, &inputs.options);
         const LocalizationResult result =
             served->localizer.Localize(query, inputs.options.localizer);
         metrics.CountResult(result.success, result.times);
         record = ResultToJson(result, inputs.options);
       },
-      deadline);
+      kind == BodyKind::kPhoto, deadline);
   SetJson(res, record);
 }
 
@@ -167,7 +187,7 @@ void Server::Impl::GeoPose(const httplib::Request& req, httplib::Response& res) 
         result = served->localizer.Localize(query, inputs.options.localizer);
         metrics.CountResult(result->success, result->times);
       },
-      deadline);
+      /*photo=*/true, deadline);
   if (!result->success) {
     throw HttpError{422, "not localized: " + result->failure_reason, "not_localized"};
   }
@@ -218,18 +238,18 @@ void Server::Impl::SessionFrame(const httplib::Request& req, httplib::Response& 
     throw HttpError{409, "session '" + id + "' is still tracking its previous frame",
                     "session_busy"};
   }
+  const BodyKind kind = BodyKindOf(body.content_type, body.bytes);
   nlohmann::ordered_json record;
   RunOnWorker(
       [&] {
-        const Query query =
-            QueryFromBody(body.bytes, BodyKindOf(body.content_type, body.bytes), inputs, body.what);
+        const Query query = QueryFromBody(body.bytes, kind, inputs, body.what);
         const LocalizationResult result =
             session->tracker.Track(query, inputs.timestamp, inputs.motion);
         ++session->frames;
         metrics.CountResult(result.success, result.times);
         record = ResultToJson(result, session->inputs.options);
       },
-      deadline);
+      kind == BodyKind::kPhoto, deadline);
   SetJson(res, record);
 }
 
@@ -283,15 +303,20 @@ void Server::Impl::Map(const httplib::Request& req, httplib::Response& res) {
   const size_t stride =
       max_points == 0 ? 0 : std::max<size_t>(1, (index.num_points() + max_points - 1) / max_points);
   std::vector<float> points;
+  std::vector<uint8_t> colors;  // when the index has them (cwloc-index build --point-colors)
+  const std::span<const PointColor> point_colors = index.point_colors();
   for (size_t p = 0; stride > 0 && p < index.num_points(); p += stride) {
     const std::array<double, 3> xyz = index.PointXyz(static_cast<uint32_t>(p));
     points.insert(points.end(), {static_cast<float>(xyz[0]), static_cast<float>(xyz[1]),
                                  static_cast<float>(xyz[2])});
+    if (!point_colors.empty())
+      colors.insert(colors.end(), point_colors[p].rgb, point_colors[p].rgb + 3);
   }
   nlohmann::ordered_json answer;
   answer["index"] = served->spec.name;
   answer["num_points"] = index.num_points();
   answer["points"] = points;
+  if (!point_colors.empty()) answer["colors"] = colors;
   answer["cameras"] = nlohmann::json::array();
   for (const IndexImage& image : index.images()) {
     const Eigen::Vector3d center = CameraCenterOf(image);

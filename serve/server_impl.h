@@ -9,6 +9,7 @@
 #include <chrono>
 #include <functional>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 
@@ -34,6 +35,20 @@ std::string BusyMessage(size_t capacity);
 // Sets a JSON error body {"error": message, "status": status}.
 void SetError(httplib::Response& res, const HttpError& error);
 
+// Recent queries' seconds on a worker, for photos and for features (a photo's SIFT takes 20-50
+// times a query's matching): how long before its deadline a waiting request must start to
+// finish within --budget-ms, so that a worker does not spend a photo's SIFT on an answer that
+// the budget then cuts short.
+class ServiceTimes {
+ public:
+  double Expected(bool photo) const;
+  void Add(bool photo, double seconds);
+
+ private:
+  mutable std::mutex mutex_;
+  double seconds_[2] = {0, 0};  // exponential moving averages: features, photos
+};
+
 struct Server::Impl {
   explicit Impl(ServeOptions options_in);
 
@@ -51,9 +66,11 @@ struct Server::Impl {
   std::shared_ptr<const ServedIndex> IndexOf(const httplib::Request& req) const;
   // The server's defaults, and the request's options part or body when it has one.
   RequestInputs InputsOf(const std::string& options_json) const;
-  // Runs `work` on a worker within the request's deadline; throws HttpError 503 when the
-  // queue is full or the deadline passes first. `work` may throw HttpError or InputError.
-  void RunOnWorker(const std::function<void()>& work, WorkQueue::Clock::time_point deadline);
+  // Runs `work` (a photo's query, or features') on a worker within the request's deadline;
+  // throws HttpError 503 when the queue is full or no worker is free early enough to finish
+  // by the deadline. `work` may throw HttpError or InputError.
+  void RunOnWorker(const std::function<void()>& work, bool photo,
+                   WorkQueue::Clock::time_point deadline);
   // The request's deadline under --budget-ms (far away without one).
   WorkQueue::Clock::time_point DeadlineFrom(WorkQueue::Clock::time_point start) const;
   // The localizer's budget for a query whose features are known now: the request's rest.
@@ -64,6 +81,7 @@ struct Server::Impl {
   IndexRegistry registry;
   WorkQueue work;
   SessionTable sessions;
+  ServiceTimes service_times;
   Metrics metrics;
   httplib::Server http;
   std::atomic<bool> stopping{false};

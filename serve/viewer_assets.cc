@@ -5,6 +5,7 @@ extern "C" {
 #define CWLOC_VIEWER_FILE(symbol) extern const char symbol[], symbol##_end[];
 CWLOC_VIEWER_FILE(cwloc_viewer_index_html)
 CWLOC_VIEWER_FILE(cwloc_viewer_viewer_js)
+CWLOC_VIEWER_FILE(cwloc_viewer_geometry_js)
 CWLOC_VIEWER_FILE(cwloc_viewer_three_js)
 CWLOC_VIEWER_FILE(cwloc_viewer_orbit_controls_js)
 #undef CWLOC_VIEWER_FILE
@@ -25,6 +26,8 @@ std::span<const ViewerAsset> ViewerAssets() {
        Bytes(cwloc_viewer_index_html, cwloc_viewer_index_html_end)},
       {"/viewer/viewer.js", "viewer.js", "text/javascript",
        Bytes(cwloc_viewer_viewer_js, cwloc_viewer_viewer_js_end)},
+      {"/viewer/geometry.js", "geometry.js", "text/javascript",
+       Bytes(cwloc_viewer_geometry_js, cwloc_viewer_geometry_js_end)},
       {"/viewer/three.min.js", "three.min.js", "text/javascript",
        Bytes(cwloc_viewer_three_js, cwloc_viewer_three_js_end)},
       {"/viewer/OrbitControls.js", "OrbitControls.js", "text/javascript",

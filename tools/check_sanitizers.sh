@@ -56,6 +56,8 @@ case "$mode" in
     asan_skipped+='|^TrackerTest\.TheCliTracksAQueryListAsASequence$'  # TrackerTest, VideoCliTest (the CLI's tracker)
     asan_skipped+='|^LocalizeInterruptTest\.AnInterruptedRunKeepsEveryFinishedRecord$'  # LocalizeKillTest
     asan_skipped+='|^ServeTest\.TheViewerShowsThePoseTheApiReturned$'  # ServeTest (the page is JavaScript)
+    asan_skipped+='|^ServeTest\.APhotoGetsTheCliPoseBitForBit$'  # ServeTest.InfoAndMetricsSayWhatWasServed
+    asan_skipped+='|^ServeTest\.GeoPoseAndCoverageOnAGeoreferencedIndex$'  # serve_request fuzzer, LocalizerApiGeoTest
     # A test that spawns our tools runs them sanitized too; any report fails the test.
     if ! ASAN_OPTIONS=abort_on_error=1:detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
       ctest --test-dir build-asan --output-on-failure -j "$jobs" -E "$asan_skipped" \

@@ -13,6 +13,7 @@
 'use strict';
 
 (function () {
+  const { percentile, worldFromCam, sceneFrame, frustumLines, focalsOf, symmetricEigen3 } = CwlocGeometry;
   const MAX_POINTS = 100000;  // asked of /v1/map: enough to see the structure, light to draw
   const CHI2_3D_95 = 7.815;   // the chi-square quantile for 3 degrees of freedom at 95 %
   const TOKEN_KEY = 'cwloc.token';
@@ -24,15 +25,16 @@
     trajectory: 0xffb36b,
     ellipsoid: 0x4ad8ff,
   };
-  // Points are coloured by height along the estimated up direction (blue low, pale yellow high):
-  // /v1/map has no colours, and height shows a building's or a street's structure best.
+  // Points take the model's colours when the index has them (cwloc-index build --point-colors);
+  // otherwise their height along the estimated up direction (blue low, pale yellow high), which
+  // shows a building's or a street's structure best.
   const RAMP = ['#2b4ab0', '#2f8fd0', '#3cc4b4', '#9ad96b', '#f2ec8a'];
 
   const $ = (id) => document.getElementById(id);
   const ui = {
     view: $('view'), indexInfo: $('index-info'), indexChoice: $('index-choice'),
     indexSelect: $('index-select'), token: $('token'), input: $('photo-input'),
-    status: $('status'), result: $('result'), legendRamp: $('legend-ramp'),
+    status: $('status'), result: $('result'), legendRamp: $('legend-ramp'), legend: $('legend-height'),
   };
   ui.legendRamp.style.background = `linear-gradient(to right, ${RAMP.join(', ')})`;
 
@@ -74,14 +76,6 @@
     try {
       if (token) localStorage.setItem(TOKEN_KEY, token); else localStorage.removeItem(TOKEN_KEY);
     } catch (e) { /* kept in the field only */ }
-  }
-
-  // The value at `fraction` (0.5: the median) of a sorted copy: SfM points have outliers, which
-  // medians and percentiles shrug off where means and extremes would not.
-  function percentile(values, fraction) {
-    if (values.length === 0) return 0;
-    const sorted = Float64Array.from(values).sort();
-    return sorted[Math.min(sorted.length - 1, Math.floor(fraction * sorted.length))];
   }
 
   // ---------------------------------------------------------------- the server's API
@@ -185,12 +179,6 @@
     }
   }
 
-  // COLMAP's cam_from_world [w, x, y, z] -> three.js world_from_cam (the inverse: conjugate).
-  function worldFromCam(qvec) {
-    const [w, x, y, z] = qvec;
-    return new THREE.Quaternion(-x, -y, -z, w).normalize();
-  }
-
   // Colours along RAMP, t in [0, 1].
   const rampColors = RAMP.map((hex) => new THREE.Color(hex));
   function rampColor(t, out) {
@@ -199,93 +187,20 @@
     return out.copy(rampColors[i]).lerp(rampColors[i + 1], scaled - i);
   }
 
-  // Centre: per-axis median; extent: the 85th percentile of the distances to it; up: minus the
-  // cameras' mean y axis; view: from the cameras towards the points, seen level.
-  function sceneFrame(xyz, cameras) {
-    const n = xyz.length / 3;
-    const center = new THREE.Vector3();
-    if (n > 0) {
-      const axis = (k) => { const a = new Float64Array(n); for (let i = 0; i < n; i++) a[i] = xyz[3 * i + k]; return a; };
-      center.set(percentile(axis(0), 0.5), percentile(axis(1), 0.5), percentile(axis(2), 0.5));
-    } else if (cameras.length > 0) {
-      for (const c of cameras) center.add(c.center);
-      center.divideScalar(cameras.length);
-    }
-    const distances = new Float64Array(n);
-    for (let i = 0; i < n; i++) {
-      distances[i] = Math.hypot(xyz[3 * i] - center.x, xyz[3 * i + 1] - center.y, xyz[3 * i + 2] - center.z);
-    }
-    let extent = percentile(distances, 0.85);
-    if (!(extent > 0)) {
-      extent = cameras.reduce((m, c) => Math.max(m, c.center.distanceTo(center)), 0) || 1;
-    }
-
-    const up = new THREE.Vector3();
-    const forward = new THREE.Vector3();
-    const cameraMean = new THREE.Vector3();
-    for (const c of cameras) {
-      up.sub(new THREE.Vector3(0, 1, 0).applyQuaternion(c.rotation));
-      forward.add(new THREE.Vector3(0, 0, 1).applyQuaternion(c.rotation));
-      cameraMean.add(c.center);
-    }
-    if (up.lengthSq() < 1e-12) up.set(0, -1, 0);  // no cameras: COLMAP models often have y down
-    up.normalize();
-
-    // Looking the way the photographers looked makes the first view familiar.
-    const level = (v) => v.clone().addScaledVector(up, -v.dot(up));
-    let viewDir = new THREE.Vector3();
-    if (cameras.length > 0) {
-      cameraMean.divideScalar(cameras.length);
-      viewDir = level(center.clone().sub(cameraMean));
-      if (viewDir.length() < 0.1 * extent) viewDir = level(forward);  // cameras all around
-    }
-    if (viewDir.lengthSq() < 1e-12) {
-      viewDir = level(new THREE.Vector3(1, 0, 0));
-      if (viewDir.lengthSq() < 1e-12) viewDir = level(new THREE.Vector3(0, 0, 1));
-    }
-    viewDir.normalize();
-
-    // The box to show first, in (right, up, forward) coordinates: most points (percentiles
-    // drop the outliers) and every camera.
-    const axes = [new THREE.Vector3().crossVectors(viewDir, up), up.clone(), viewDir.clone()];
-    const box = axes.map((axis) => {
-      const along = new Float64Array(n);
-      for (let i = 0; i < n; i++) along[i] = xyz[3 * i] * axis.x + xyz[3 * i + 1] * axis.y + xyz[3 * i + 2] * axis.z;
-      let low = n ? percentile(along, 0.03) : Infinity;
-      let high = n ? percentile(along, 0.97) : -Infinity;
-      for (const c of cameras) { low = Math.min(low, c.center.dot(axis)); high = Math.max(high, c.center.dot(axis)); }
-      if (!(low <= high)) { low = center.dot(axis) - extent; high = center.dot(axis) + extent; }
-      return [low, high];
-    });
-    const home = new THREE.Vector3();
-    axes.forEach((axis, k) => home.addScaledVector(axis, (box[k][0] + box[k][1]) / 2));
-    const halfSizes = box.map(([low, high]) => Math.max((high - low) / 2, extent * 0.05));
-    return { center, extent, up, viewDir, home, halfSizes };
-  }
-
-  // A frustum's lines in the camera frame (x right, y down, z forward), depth 1, for an image of
-  // half-sizes hw, hh at depth 1; with a tick above the top edge to tell up from down.
-  function frustumLines(hw, hh, withUpTick) {
-    const a = [0, 0, 0];
-    const c = [[-hw, -hh, 1], [hw, -hh, 1], [hw, hh, 1], [-hw, hh, 1]];  // top left, clockwise
-    const segments = [];
-    for (let i = 0; i < 4; i++) segments.push(a, c[i], c[i], c[(i + 1) % 4]);
-    if (withUpTick) {
-      const tip = [0, -hh * 1.45, 1];
-      segments.push([-hw * 0.35, -hh, 1], tip, tip, [hw * 0.35, -hh, 1]);
-    }
-    return segments;
-  }
-
-  // The index's cameras as small frusta, all in one geometry. /v1/map gives no intrinsics, so
-  // they have a nominal 4:3 field of view of about 65 degrees.
+  // The index's cameras as small frusta, all in one geometry, each with its image's proportions
+  // and field of view.
   function mapCameraFrusta(cameras, size) {
-    const local = frustumLines(0.64, 0.48, false).map((p) => new THREE.Vector3(...p).multiplyScalar(size));
-    const positions = new Float32Array(cameras.length * local.length * 3);
+    const shapes = cameras.map((c) => {
+      const [fx, fy] = focalsOf(c.camera);
+      const hw = (c.camera.width / 2) / (fx || c.camera.width);
+      const hh = (c.camera.height / 2) / (fy || c.camera.width);
+      return frustumLines(hw, hh, false).map((p) => new THREE.Vector3(...p).multiplyScalar(size));
+    });
+    const positions = new Float32Array(shapes.reduce((n, s) => n + s.length * 3, 0));
     let k = 0;
     const v = new THREE.Vector3();
-    for (const c of cameras) {
-      for (const p of local) {
+    for (const [i, c] of cameras.entries()) {
+      for (const p of shapes[i]) {
         v.copy(p).applyQuaternion(c.rotation).add(c.center);
         positions[k++] = v.x; positions[k++] = v.y; positions[k++] = v.z;
       }
@@ -295,8 +210,13 @@
     return new THREE.LineSegments(geometry, new THREE.LineBasicMaterial({ color: COLORS.mapCamera }));
   }
 
-  function pointCloud(xyz) {
+  function pointCloud(xyz, rgb) {
     const n = xyz.length / 3;
+    if (rgb && rgb.length === xyz.length) {
+      ui.legend.hidden = true;  // the height ramp does not apply
+      return pointsObject(xyz, Float32Array.from(rgb, (c) => c / 255));
+    }
+    ui.legend.hidden = false;
     const heights = new Float64Array(n);
     for (let i = 0; i < n; i++) {
       heights[i] = (xyz[3 * i] - frame.center.x) * frame.up.x + (xyz[3 * i + 1] - frame.center.y) * frame.up.y +
@@ -310,6 +230,10 @@
       rampColor((heights[i] - low) / (high - low || 1), color);
       colors[3 * i] = color.r; colors[3 * i + 1] = color.g; colors[3 * i + 2] = color.b;
     }
+    return pointsObject(xyz, colors);
+  }
+
+  function pointsObject(xyz, colors) {
     const geometry = new THREE.BufferGeometry();
     geometry.setAttribute('position', new THREE.BufferAttribute(Float32Array.from(xyz), 3));
     geometry.setAttribute('color', new THREE.BufferAttribute(colors, 3));
@@ -414,9 +338,10 @@
     if (name !== indexName) return;  // another index was chosen meanwhile
     const cameras = map.cameras.map((c) => ({
       name: c.name, rotation: worldFromCam(c.rotation), center: new THREE.Vector3(...c.center),
+      camera: c.camera,
     }));
     frame = sceneFrame(map.points, cameras);
-    points = pointCloud(map.points);
+    points = pointCloud(map.points, map.colors);
     mapGroup.add(points, mapCameraFrusta(cameras, frame.extent * 0.06));
     makeControls();
     showAll();
@@ -464,14 +389,6 @@
     trajectory = null;
     ui.result.hidden = true;
     ui.result.replaceChildren();
-  }
-
-  // The focal lengths in pixels from COLMAP's camera parameters: models with one focal length
-  // (SIMPLE_*, RADIAL, ...) list it first; the others list fx, fy first.
-  function focalsOf(cameraRecord) {
-    const p = cameraRecord.params || [];
-    const twoFocals = /^(PINHOLE|OPENCV|OPENCV_FISHEYE|FULL_OPENCV|FOV|THIN_PRISM_FISHEYE)$/.test(cameraRecord.model);
-    return twoFocals ? [p[0], p[1]] : [p[0], p[0]];
   }
 
   // The photo as a small texture for the frustum's image plane. The server reads pixels as
@@ -534,38 +451,6 @@
     const ellipsoid = ellipsoidObject(record);
     if (ellipsoid) group.add(ellipsoid);
     return group;
-  }
-
-  // The eigenvalues and eigenvectors (columns of `vectors`) of a symmetric 3x3 matrix, by
-  // Jacobi rotations: short, and exact enough for a drawing.
-  function symmetricEigen3(matrix) {
-    const a = matrix.map((row) => row.slice());
-    const v = [[1, 0, 0], [0, 1, 0], [0, 0, 1]];
-    const scale = Math.abs(a[0][0]) + Math.abs(a[1][1]) + Math.abs(a[2][2]) || 1;
-    for (let sweep = 0; sweep < 50; sweep++) {
-      const off = Math.abs(a[0][1]) + Math.abs(a[0][2]) + Math.abs(a[1][2]);
-      if (off <= 1e-15 * scale) break;
-      for (const [p, q] of [[0, 1], [0, 2], [1, 2]]) {
-        if (a[p][q] === 0) continue;
-        const theta = (a[q][q] - a[p][p]) / (2 * a[p][q]);
-        const t = (theta >= 0 ? 1 : -1) / (Math.abs(theta) + Math.sqrt(theta * theta + 1));
-        const c = 1 / Math.sqrt(t * t + 1);
-        const s = t * c;
-        for (let k = 0; k < 3; k++) {  // a = a J
-          const akp = a[k][p], akq = a[k][q];
-          a[k][p] = c * akp - s * akq; a[k][q] = s * akp + c * akq;
-        }
-        for (let k = 0; k < 3; k++) {  // a = J^T a
-          const apk = a[p][k], aqk = a[q][k];
-          a[p][k] = c * apk - s * aqk; a[q][k] = s * apk + c * aqk;
-        }
-        for (let k = 0; k < 3; k++) {  // v = v J
-          const vkp = v[k][p], vkq = v[k][q];
-          v[k][p] = c * vkp - s * vkq; v[k][q] = s * vkp + c * vkq;
-        }
-      }
-    }
-    return { values: [a[0][0], a[1][1], a[2][2]], vectors: v };
   }
 
   // The 95 % region of the camera centre: covariance.pose is over (rotation vector, centre), so

@@ -29,7 +29,7 @@ TEST(BuildOptionTableTest, FlagsAreUniqueAndTheDefaultsAreInRange) {
     EXPECT_FALSE(spec.help.empty()) << spec.flag;
     EXPECT_EQ(&FindBuildOption(spec.flag), &spec);
   }
-  EXPECT_EQ(flags.size(), 14u);
+  EXPECT_EQ(flags.size(), 15u);
   EXPECT_EQ(ValidationError(IndexBuildOptions()), "");
   EXPECT_EQ(test::InputErrorOf([] { FindBuildOption("tree"); }), "unknown option 'tree'");
 }

@@ -5,10 +5,12 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <set>
 
 #include "format/index.h"
+#include "indexer/index_extract.h"
 #include "tests/indexer/indexer_fixture.h"
 
 namespace cwloc {
@@ -18,6 +20,9 @@ using testing::HasSubstr;
 
 class IndexBuilderTest : public test::IndexerFixture {
  protected:
+  static std::string ImageNameAt(const Index& index, size_t image) {
+    return std::string(index.ImageName(index.images()[image]));
+  }
   IndexBuildOptions Options() const {
     IndexBuildOptions options;
     options.model_dir = model_dir_;
@@ -93,6 +98,54 @@ TEST_F(IndexBuilderTest, KeypointsAreAnOptionalSection) {
   EXPECT_EQ(with.view_keypoints().size(), with.num_views());
   EXPECT_EQ(with.file().FindSection(section::kViewKeypoints)->flags & kSectionRequired, 0u);
   EXPECT_NO_THROW(with.Validate());
+}
+
+// --point-colors: each point's colour in the model, kept by a tile for its points.
+TEST_F(IndexBuilderTest, PointColorsAreTheModelsAndAnOptionalSectionATileKeeps) {
+  BuildIndex(Options());
+  const Index without = Index::Open(index_path_);
+  EXPECT_TRUE(without.point_colors().empty());
+  EXPECT_EQ(without.file().FindSection(section::kPointColors), nullptr);
+  EXPECT_FALSE(
+      nlohmann::json::parse(without.manifest_json())["build_parameters"].contains("point_colors"));
+
+  IndexBuildOptions options = Options();
+  options.point_colors = true;
+  options.output_path = dir_ / "colored.cwl";
+  BuildIndex(options);
+  const Index with = Index::Open(options.output_path);
+  EXPECT_EQ(with.file().FindSection(section::kPointColors)->flags & kSectionRequired, 0u);
+  EXPECT_EQ(with.file().header().format_minor, 4);
+  EXPECT_TRUE(
+      nlohmann::json::parse(with.manifest_json())["build_parameters"]["point_colors"].get<bool>());
+  // The model's colour of the point at each stored position.
+  std::map<std::array<double, 3>, std::array<uint8_t, 3>> color_at;
+  std::set<std::array<uint8_t, 3>> colors;
+  for (const auto& [id, point] : model_.points3D) {
+    color_at[point.xyz] = point.color;
+    colors.insert(point.color);
+  }
+  ASSERT_GT(colors.size(), 1u);  // the fixture's points are not all one colour
+  const auto expect_model_colors = [&](const Index& index) {
+    ASSERT_EQ(index.point_colors().size(), index.num_points());
+    for (uint32_t p = 0; p < index.num_points(); ++p) {
+      const PointColor& stored = index.point_colors()[p];
+      EXPECT_EQ((std::array<uint8_t, 3>{stored.rgb[0], stored.rgb[1], stored.rgb[2]}),
+                color_at.at(index.PointXyz(p)))
+          << p;
+    }
+  };
+  expect_model_colors(with);
+
+  std::ofstream(dir_ / "images.txt") << ImageNameAt(with, 0) << "\n";
+  IndexExtractOptions extract;
+  extract.index_path = options.output_path;
+  extract.images_file = dir_ / "images.txt";
+  extract.output_path = dir_ / "tile.cwl";
+  ExtractIndex(extract);
+  const Index tile = Index::Open(extract.output_path);
+  EXPECT_LT(tile.num_points(), with.num_points());
+  expect_model_colors(tile);
 }
 
 TEST_F(IndexBuilderTest, ViewNeighborDistanceIsTheExactNearestOtherPointInTheImage) {

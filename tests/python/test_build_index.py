@@ -86,7 +86,7 @@ def test_keywords_are_the_build_option_table_and_the_cli_flags(tmp_path):
     and there are no others, so that the two surfaces cannot drift apart."""
     table = re.findall(r'^CWLOC_BUILD_OPTION\(\s*"([a-z-]+)"',
                        (SOURCE / "indexer" / "build_option_table.inc").read_text(), re.M)
-    assert len(table) == 14
+    assert len(table) == 15
     with pytest.raises(cwloc.InvalidArgumentError) as error:
         cwloc.build_index("/nonexistent", "/nonexistent", tmp_path / "x.cwl", nonsense=1)
     accepted = re.fullmatch(r".*unknown option 'nonsense' \(one of (.*)\)", str(error.value))

@@ -301,7 +301,8 @@ TEST_F(ServeLimitsTest, AFullQueueAnswers503AtOnce) {
       expired[i] = response->status;
       if (response->status == 503) {
         EXPECT_EQ(json::parse(response->body)["error"],
-                  "busy: no worker was free within --budget-ms; retry later");
+                  "busy: no worker was free early enough to answer within --budget-ms; retry "
+                  "later");
       }
     });
   }

@@ -82,7 +82,8 @@ class ServeTest : public testing::Test {
     return json::parse(response->body);
   }
 
-  // herz_jesu_p25 placed on the globe at kOrigin (test::WriteStrechaGeorefFile), once per build.
+  // herz_jesu_p25 placed on the globe at kOrigin (test::WriteStrechaGeorefFile), with its
+  // points' colours, once per build.
   std::filesystem::path GeoreferencedIndex() const {
     const auto folder = test::SharedFixture("herz_georeferenced", [&](const auto& out) {
       const Index plain = Index::Open(shared_->index);
@@ -92,6 +93,7 @@ class ServeTest : public testing::Test {
       options.database_path = data_ / "database.db";
       options.output_path = out / "index.cwl";
       options.calibration_samples = 0;
+      options.point_colors = true;
       options.georeferencing.georef_file = out / "georef.txt";
       BuildIndex(options);
     });
@@ -323,6 +325,16 @@ TEST_F(ServeTest, GeoPoseAndCoverageOnAGeoreferencedIndex) {
   const json far = json::parse(client.Get("/v1/coverage?lat=0&lon=0")->body);
   EXPECT_FALSE(far["available"].get<bool>());
   EXPECT_EQ(far["indexes"][0]["cameras_within"], 0);
+
+  // The map's colours are the index's (--point-colors), when it has them.
+  const json colored = json::parse(client.Get("/v1/map?index=geo&max_points=100")->body);
+  ASSERT_EQ(colored["colors"].size(), colored["points"].size());
+  const Index geo_index_file = Index::Open(geo_index);
+  const PointColor& first = geo_index_file.point_colors()[0];
+  EXPECT_EQ(colored["colors"][0], first.rgb[0]);
+  EXPECT_EQ(colored["colors"][2], first.rgb[2]);
+  EXPECT_FALSE(
+      json::parse(client.Get("/v1/map?index=plain&max_points=100")->body).contains("colors"));
 
   const auto plain = client.Post("/v1/geopose?index=plain", request.dump(), "application/json");
   ASSERT_TRUE(plain);
