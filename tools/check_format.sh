@@ -8,11 +8,10 @@ if [ "${1:-}" = "--fix" ]; then
   clang-format -i "${files[@]}"
   exit 0
 fi
-bad=()
-for f in "${files[@]}"; do
-  clang-format --dry-run --Werror "$f" >/dev/null 2>&1 || bad+=("$f")
-done
-if [ ${#bad[@]} -gt 0 ]; then
+# Batches of files on every core: one clang-format per file took 40 s of CI's 30 minutes.
+if ! report=$(printf '%s\0' "${files[@]}" |
+  xargs -0 -P "$(nproc)" -n 50 clang-format --dry-run --Werror 2>&1 >/dev/null); then
+  mapfile -t bad < <(grep -oE '^[^:]+:[0-9]+:[0-9]+: (error|warning):' <<<"$report" | cut -d: -f1 | sort -u)
   printf 'not clang-format clean (run tools/check_format.sh --fix): %s\n' "${bad[@]}" >&2
   exit 1
 fi

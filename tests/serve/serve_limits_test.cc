@@ -30,8 +30,10 @@ class ServeLimitsTest : public testing::Test {
 
   // A query's features in the binary layout, and its camera.
   std::string BinaryFeatures() const {
+    PhotoOptions small;  // as a device extracts them, at a smaller size
+    small.max_image_size = 1024;
     const Query query =
-        LoadPhotoQuery(shared_->data / "query_images" / "0007.jpg", "0007.jpg", PhotoOptions{});
+        LoadPhotoQuery(shared_->data / "query_images" / "0007.jpg", "0007.jpg", small);
     std::string binary = "CWLF";
     const auto put_u32 = [&](uint32_t value) {
       for (int b = 0; b < 4; ++b) binary.push_back(static_cast<char>(value >> (8 * b) & 0xff));

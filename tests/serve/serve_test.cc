@@ -157,7 +157,9 @@ TEST_F(ServeTest, APhotoGetsTheCliPoseBitForBit) {
 }
 
 TEST_F(ServeTest, FeaturesAsTextOrBinaryGetTheCliPoseBitForBit) {
-  const Query extracted = LoadPhotoQuery(Photo("0007.jpg"), "0007.jpg", PhotoOptions{});
+  PhotoOptions small;  // features as a device extracts them, at a smaller size
+  small.max_image_size = 1024;
+  const Query extracted = LoadPhotoQuery(Photo("0007.jpg"), "0007.jpg", small);
   // COLMAP's text features, as cwloc-localize --features reads them.
   std::string text = std::to_string(extracted.NumFeatures()) + " 128\n";
   std::string binary = "CWLF";
