@@ -245,7 +245,6 @@ void Server::Impl::SessionFrame(const httplib::Request& req, httplib::Response& 
         const Query query = QueryFromBody(body.bytes, kind, inputs, body.what);
         const LocalizationResult result =
             session->tracker.Track(query, inputs.timestamp, inputs.motion);
-        ++session->frames;
         metrics.CountResult(result.success, result.times);
         record = ResultToJson(result, session->inputs.options);
       },

@@ -103,12 +103,11 @@ void IndexRegistry::Reload() {
   auto set = std::make_shared<const Set>(Open(specs_, verify_, generation() + 1));
   std::lock_guard<std::mutex> lock(mutex_);
   set_ = std::move(set);
-  ++generation_;
 }
 
 uint64_t IndexRegistry::generation() const {
   std::lock_guard<std::mutex> lock(mutex_);
-  return generation_;
+  return set_->front()->generation;  // every index of a set was opened by the same reload
 }
 
 }  // namespace cwloc

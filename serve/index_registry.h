@@ -61,7 +61,6 @@ class IndexRegistry {
   const bool verify_;
   mutable std::mutex mutex_;
   std::shared_ptr<const Set> set_;
-  uint64_t generation_ = 0;
   std::mutex reload_mutex_;  // one reload at a time
 };
 

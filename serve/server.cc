@@ -302,10 +302,7 @@ int Server::Bind() {
 
 void Server::Serve() { impl_->http.listen_after_bind(); }
 
-void Server::Stop() {
-  impl_->stopping = true;
-  impl_->http.stop();
-}
+void Server::Stop() { impl_->http.stop(); }
 
 bool Server::Reload() {
   try {

@@ -5,7 +5,6 @@
 
 #include <httplib.h>
 
-#include <atomic>
 #include <chrono>
 #include <functional>
 #include <memory>
@@ -84,7 +83,6 @@ struct Server::Impl {
   ServiceTimes service_times;
   Metrics metrics;
   httplib::Server http;
-  std::atomic<bool> stopping{false};
 };
 
 }  // namespace cwloc

@@ -27,7 +27,6 @@ struct Session {
   RequestInputs inputs;                      // every frame's defaults
   std::mutex busy;                           // one frame at a time
   Tracker tracker;
-  uint64_t frames = 0;
 };
 
 class SessionTable {

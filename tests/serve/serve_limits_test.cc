@@ -34,20 +34,7 @@ class ServeLimitsTest : public testing::Test {
     small.max_image_size = 1024;
     const Query query =
         LoadPhotoQuery(shared_->data / "query_images" / "0007.jpg", "0007.jpg", small);
-    std::string binary = "CWLF";
-    const auto put_u32 = [&](uint32_t value) {
-      for (int b = 0; b < 4; ++b) binary.push_back(static_cast<char>(value >> (8 * b) & 0xff));
-    };
-    put_u32(1);
-    put_u32(query.NumFeatures());
-    for (const float value : query.keypoints) {
-      uint32_t bits;
-      std::memcpy(&bits, &value, 4);
-      put_u32(bits);
-    }
-    binary.append(reinterpret_cast<const char*>(query.descriptors.data()),
-                  query.descriptors.size());
-    return binary;
+    return test::BinaryFeatureBody(query);
   }
   static constexpr const char* kCamera =
       R"({"camera": "SIMPLE_RADIAL 1536 1024 1375.7714362748345 768 512 -0.0008"})";

@@ -5,15 +5,36 @@
 #include <sys/types.h>
 
 #include <chrono>
+#include <cstdint>
+#include <cstring>
 #include <filesystem>
 #include <regex>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "localizer/query.h"
 #include "tests/test_util.h"
 
 namespace cwloc::test {
+
+// A query's features in cwloc-serve's binary layout (io/feature_file.h: "CWLF", version 1, N,
+// N x (x, y) float32, N x 128 descriptors; little-endian).
+inline std::string BinaryFeatureBody(const Query& query) {
+  std::string binary = "CWLF";
+  const auto put_u32 = [&](uint32_t value) {
+    for (int b = 0; b < 4; ++b) binary.push_back(static_cast<char>(value >> (8 * b) & 0xff));
+  };
+  put_u32(1);
+  put_u32(query.NumFeatures());
+  for (const float value : query.keypoints) {
+    uint32_t bits;
+    std::memcpy(&bits, &value, 4);
+    put_u32(bits);
+  }
+  binary.append(reinterpret_cast<const char*>(query.descriptors.data()), query.descriptors.size());
+  return binary;
+}
 
 class ServeProcess {
  public:

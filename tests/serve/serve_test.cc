@@ -162,12 +162,6 @@ TEST_F(ServeTest, FeaturesAsTextOrBinaryGetTheCliPoseBitForBit) {
   const Query extracted = LoadPhotoQuery(Photo("0007.jpg"), "0007.jpg", small);
   // COLMAP's text features, as cwloc-localize --features reads them.
   std::string text = std::to_string(extracted.NumFeatures()) + " 128\n";
-  std::string binary = "CWLF";
-  const auto put_u32 = [&](uint32_t value) {
-    for (int b = 0; b < 4; ++b) binary.push_back(static_cast<char>(value >> (8 * b) & 0xff));
-  };
-  put_u32(1);
-  put_u32(extracted.NumFeatures());
   for (uint32_t i = 0; i < extracted.NumFeatures(); ++i) {
     char line[64];
     std::snprintf(line, sizeof(line), "%.9g %.9g 1 0", extracted.keypoints[2 * i],
@@ -175,14 +169,8 @@ TEST_F(ServeTest, FeaturesAsTextOrBinaryGetTheCliPoseBitForBit) {
     text += line;
     for (int d = 0; d < 128; ++d) text += " " + std::to_string(extracted.Descriptor(i)[d]);
     text += "\n";
-    for (int c = 0; c < 2; ++c) {
-      uint32_t bits;
-      std::memcpy(&bits, &extracted.keypoints[2 * i + c], 4);
-      put_u32(bits);
-    }
   }
-  binary.append(reinterpret_cast<const char*>(extracted.descriptors.data()),
-                extracted.descriptors.size());
+  const std::string binary = test::BinaryFeatureBody(extracted);
   const auto feature_file = dir_ / "0007.txt";
   std::ofstream(feature_file) << text;
 
