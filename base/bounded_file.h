@@ -44,6 +44,8 @@ inline constexpr InputKind kFramesFile{"a frames file", 256'000'000};
 inline constexpr InputKind kGeorefFile{"a georef file", 256'000'000};
 // Clustering files (cwloc-index --cluster-file): a million images at 256 bytes a line.
 inline constexpr InputKind kClusterFile{"a clustering file", 256'000'000};
+// Image name lists (cwloc-index update --remove-images): a million names at 256 bytes a line.
+inline constexpr InputKind kImageNameList{"an image name list", 256'000'000};
 // Each file of a COLMAP sparse model, text or binary: images.txt holds every 2D point of every
 // image, about 40 bytes each, so a 100k-image city of 8k-keypoint photos has a 32 GB images.txt
 // (19 GB as .bin). The readers stream; memory grows with the model, not the file.

@@ -9,6 +9,7 @@
 #include "base/error.h"
 #include "base/stopwatch.h"
 #include "cwloc/version.h"
+#include "delta/apply_delta.h"
 #include "exe/tool_main.h"
 #include "format/index.h"
 #include "format/xxhash64.h"
@@ -16,6 +17,7 @@
 #include "indexer/index_build_flags.h"
 #include "indexer/index_builder.h"
 #include "indexer/index_extract.h"
+#include "indexer/index_update.h"
 
 namespace cwloc {
 namespace {
@@ -62,6 +64,60 @@ int RunBuild(const IndexBuildOptions& options, bool json) {
       report.seconds_clustering, report.seconds_calibration, report.seconds_point_codes,
       report.seconds_neighbor_distances, report.seconds_kd_forest, report.seconds_write);
   if (!report.georeference.is_null()) PrintGeoreference(report.georeference);
+  return kExitOk;
+}
+
+int RunUpdate(const IndexUpdateOptions& options, bool json) {
+  const IndexUpdateReport report = UpdateIndex(options);
+  if (json) {
+    std::cout << UpdateReportJson(options, report).dump(2) << "\n";
+    return kExitOk;
+  }
+  if (report.rebuilt) {
+    std::printf("rebuilt %s from the model (%zu images, %zu views, %.2f s): %s\n",
+                options.output_path.c_str(), report.num_images, report.num_views,
+                report.seconds_total, report.rebuild_reason.c_str());
+    if (!options.delta_path.empty())
+      std::printf("no delta written: devices need the whole index\n");
+    return kExitOk;
+  }
+  std::printf(
+      "wrote %s: %zu images (+%zu, -%zu, %zu changed), %zu points (+%zu, -%zu, %zu moved), %zu "
+      "views (+%zu, -%zu)\n",
+      options.output_path.c_str(), report.num_images, report.images_added, report.images_removed,
+      report.images_changed, report.num_points, report.points_added, report.points_removed,
+      report.points_moved, report.num_views, report.views_added, report.views_removed);
+  std::printf("%.1f MB; v_NN of %zu clusters recomputed (%zu old views changed); kd-forest %s\n",
+              report.file_bytes / 1e6, report.clusters_recomputed,
+              report.neighbor_distances_changed,
+              report.forest_rebuilt ? "rebuilt (balance bound)" : "updated by insertion");
+  if (!options.delta_path.empty()) {
+    std::printf("delta %s: %.3f MB (%.2f %% of the index)\n", options.delta_path.c_str(),
+                report.delta_bytes / 1e6,
+                100.0 * double(report.delta_bytes) / double(report.file_bytes));
+  }
+  std::printf("%.2f s (read %.2f, compare %.2f, v_NN %.2f, kd-forest and write %.2f)\n",
+              report.seconds_total, report.seconds_read, report.seconds_compare,
+              report.seconds_neighbor_distances, report.seconds_write);
+  return kExitOk;
+}
+
+int RunApply(const std::filesystem::path& index, const std::filesystem::path& delta,
+             const std::filesystem::path& output, int threads, bool json) {
+  const ApplyDeltaReport report = ApplyDelta(index, delta, output, threads);
+  if (json) {
+    const nlohmann::ordered_json out = {
+        {"output", output.string()},           {"file_bytes", report.file_bytes},
+        {"parent_views", report.parent_views}, {"views", report.child_views},
+        {"images", report.child_images},       {"seconds", report.seconds}};
+    std::cout << out.dump(2) << "\n";
+    return kExitOk;
+  }
+  std::printf(
+      "wrote %s: %zu images, %zu views (the parent had %zu); %.1f MB, checksum as the "
+      "delta names it; %.2f s\n",
+      output.c_str(), report.child_images, report.child_views, report.parent_views,
+      report.file_bytes / 1e6, report.seconds);
   return kExitOk;
 }
 
@@ -215,6 +271,20 @@ class BuildFlags {
     }
   }
 
+  // The flags given, by name, as values of their types (range-checked).
+  std::vector<std::pair<std::string, OptionValue>> Given() const {
+    std::vector<std::pair<std::string, OptionValue>> given;
+    const std::span<const BuildOptionSpec> table = BuildOptionTable();
+    for (size_t i = 0; i < table.size(); ++i) {
+      if (options_[i]->count() == 0) continue;
+      const BuildOptionSpec& spec = table[i];
+      given.emplace_back(std::string(spec.flag), IsSwitch(spec)
+                                                     ? OptionValue(switches_[i])
+                                                     : ParseBuildOption(spec, texts_[i]));
+    }
+    return given;
+  }
+
   // Every flag given, through the table; ValidateBuildOptions checks the ranges.
   void Apply(IndexBuildOptions* options, IndexBuildFlags* flags) const {
     const std::span<const BuildOptionSpec> table = BuildOptionTable();
@@ -252,8 +322,8 @@ class BuildFlags {
 
 int main(int argc, char** argv) {
   CLI::App app{
-      "cwloc-index: build a cwloc index from a COLMAP model and database, extract a region of one, "
-      "inspect or verify it"};
+      "cwloc-index: build a cwloc index from a COLMAP model and database, update it for a grown "
+      "model, apply a delta, extract a region of one, inspect or verify it"};
   app.set_version_flag("--version", std::string("cwloc-index ") + cwloc::kToolVersion);
   app.require_subcommand(1);
 
@@ -297,6 +367,38 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   extract->add_flag("--json", json, "Print the report as JSON");
 
+  cwloc::IndexUpdateOptions update_options;
+  auto* update = app.add_subcommand(
+      "update", "Update an index for a grown COLMAP model; optionally write the delta for devices");
+  update->add_option("--index", update_options.index_path, "The index of the model before")
+      ->required();
+  update->add_option("--model", update_options.model_dir, "The grown COLMAP sparse model")
+      ->required();
+  update->add_option("--database", update_options.database_path, "Its database.db (read only)")
+      ->required();
+  update->add_option("-o,--output", update_options.output_path, "Index file to write (atomically)")
+      ->required();
+  update->add_option("--delta", update_options.delta_path,
+                     "Also write the change as a delta file (cwloc-index apply)");
+  update->add_option("--remove-images", update_options.remove_images_file,
+                     "File of image names, one per line, to take out of the index");
+  update->add_flag("--rebuild-if-needed", update_options.rebuild_if_needed,
+                   "Build the index afresh when the model was not grown but changed");
+  cwloc::BuildFlags update_flags;
+  update_flags.AddTo(update);
+  update->add_flag("--json", json, "Print the report as JSON");
+
+  std::filesystem::path apply_index, apply_delta, apply_output;
+  int apply_threads = 0;
+  auto* apply = app.add_subcommand(
+      "apply", "Apply a delta of cwloc-index update to the index it was made for");
+  apply->add_option("--index", apply_index, "The index the delta was made for")->required();
+  apply->add_option("--delta", apply_delta, "The delta (cwloc-index update --delta)")->required();
+  apply->add_option("-o,--output", apply_output, "Index file to write (atomically)")->required();
+  apply->add_option("--threads", apply_threads, "Worker threads (0 = all cores)")
+      ->capture_default_str();
+  apply->add_flag("--json", json, "Print the report as JSON");
+
   std::string index_path;
   auto* info = app.add_subcommand("info", "Print an index's counts, sections and build parameters");
   info->add_option("index", index_path, "Index file")->required();
@@ -321,6 +423,15 @@ int main(int argc, char** argv) {
       if (!near.empty()) extract_options.near = cwloc::ParseGeoRegion(near, "--near");
       return cwloc::RunExtract(extract_options, json);
     }
+    if (update->parsed()) {
+      update_options.build_flags = update_flags.Given();
+      for (const auto& [flag, value] : update_options.build_flags) {
+        if (flag == "threads") update_options.threads = std::get<int32_t>(value);
+      }
+      return cwloc::RunUpdate(update_options, json);
+    }
+    if (apply->parsed())
+      return cwloc::RunApply(apply_index, apply_delta, apply_output, apply_threads, json);
     if (info->parsed()) return cwloc::RunInfo(index_path, json);
     return cwloc::RunVerify(index_path);
   });

@@ -118,6 +118,10 @@ Index Index::Open(const std::filesystem::path& path) {
     index.point_colors_ = file.Section<PointColor>(section::kPointColors);
     require_count("PRGB", index.point_colors_.size(), index.num_points_, "point");
   }
+  if (file.FindSection(section::kPointIds) != nullptr) {
+    index.point_ids_ = file.Section<uint64_t>(section::kPointIds);
+    require_count("PIDS", index.point_ids_.size(), index.num_points_, "point");
+  }
   index.covisibility_offsets_ = file.Section<uint32_t>(section::kCovisOffsets);
   index.covisibility_edges_ = file.Section<CovisibilityEdge>(section::kCovisEdges);
   file.Section<char>(section::kManifest);
@@ -250,6 +254,10 @@ void Index::Validate() const {
   auto fail = [&](const std::string& what) { throw InputError(name + ": " + what); };
   const size_t views = num_views();
 
+  for (size_t p = 1; p < point_ids_.size(); ++p) {
+    if (point_ids_[p] <= point_ids_[p - 1])
+      fail("PIDS[" + std::to_string(p) + "]: point ids must ascend");
+  }
   for (size_t i = 0; i < cameras_.size(); ++i) {
     const IndexCamera& camera = cameras_[i];
     const auto model = FindCameraModel(camera.model_id);

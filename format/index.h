@@ -50,6 +50,9 @@ class Index {
   std::span<const ViewKeypoint> view_keypoints() const { return view_keypoints_; }
   // Empty unless the index was built with --point-colors (format 1.4's optional PRGB).
   std::span<const PointColor> point_colors() const { return point_colors_; }
+  // Each point's COLMAP point3D id, ascending (format 1.5's optional PIDS); empty in older
+  // indexes, compact ones and tiles.
+  std::span<const uint64_t> point_ids() const { return point_ids_; }
   // v_NN per view (full) or per point (coded(): the nearest over the point's clusters).
   std::span<const float> view_neighbor_distances() const { return view_neighbor_distances_; }
   std::span<const float> point_neighbor_distances() const { return point_neighbor_distances_; }
@@ -109,6 +112,7 @@ class Index {
   std::span<const uint32_t> view_points_;
   std::span<const ViewKeypoint> view_keypoints_;
   std::span<const PointColor> point_colors_;
+  std::span<const uint64_t> point_ids_;
   std::span<const float> view_neighbor_distances_;
   std::span<const float> point_neighbor_distances_;
   DescriptorCodes codes_;

@@ -20,9 +20,8 @@ std::string Describe(const SectionEntry& entry, size_t index) {
 }
 
 // A required section with a tag this reader does not know means a newer writer.
-bool IsKnownTag(uint32_t tag) {
-  return std::find(std::begin(section::kAll), std::end(section::kAll), tag) !=
-         std::end(section::kAll);
+bool IsKnownTag(const ContainerKind& kind, uint32_t tag) {
+  return std::find(kind.known_tags.begin(), kind.known_tags.end(), tag) != kind.known_tags.end();
 }
 
 }  // namespace
@@ -42,7 +41,7 @@ std::string SectionTagName(uint32_t tag) {
   return name;
 }
 
-IndexFile IndexFile::Open(const std::filesystem::path& path) {
+IndexFile IndexFile::Open(const std::filesystem::path& path, const ContainerKind& kind) {
   const std::string name = path.string();
   // O_NONBLOCK: a named pipe opens at once, to be refused below, instead of waiting for a writer.
   const int fd = ::open(name.c_str(), O_RDONLY | O_CLOEXEC | O_NOCTTY | O_NONBLOCK);
@@ -69,21 +68,21 @@ IndexFile IndexFile::Open(const std::filesystem::path& path) {
   file.size_ = file_size;
   const FileHeader& header = file.header();
 
-  if (std::memcmp(header.magic, kIndexMagic, sizeof(kIndexMagic)) != 0) {
-    throw InputError(name + ": not a cwloc index (wrong magic; expected \"CWLOCIDX\")");
+  if (std::memcmp(header.magic, kind.magic, sizeof(header.magic)) != 0) {
+    throw InputError(name + ": not a " + kind.name + " (wrong magic; expected \"" +
+                     std::string(kind.magic, sizeof(header.magic)) + "\")");
   }
   if (header.byte_order_mark != kByteOrderMark) {
     throw InputError(name + ": wrong byte-order mark 0x" + HashHex(header.byte_order_mark) +
                      " (expected 0x" + HashHex(kByteOrderMark) + ")");
   }
-  if (header.format_major != kFormatMajor) {
-    throw InputError(name + ": index format " + std::to_string(header.format_major) + "." +
-                     std::to_string(header.format_minor) +
+  if (header.format_major != kind.major) {
+    throw InputError(name + ": " + kind.noun + " format " + std::to_string(header.format_major) +
+                     "." + std::to_string(header.format_minor) +
                      " is not readable by this cwloc, which reads format " +
-                     std::to_string(kFormatMajor) + ".x (up to " + std::to_string(kFormatMajor) +
-                     "." + std::to_string(kFormatMinor) +
-                     "); rebuild the index with this cwloc-index" +
-                     (header.format_major > kFormatMajor ? " or upgrade cwloc" : ""));
+                     std::to_string(kind.major) + ".x (up to " + std::to_string(kind.major) + "." +
+                     std::to_string(kind.max_minor) + "); " + kind.remedy +
+                     (header.format_major > kind.major ? " or upgrade cwloc" : ""));
   }
   const uint64_t header_checksum = XxHash64({file.data_, offsetof(FileHeader, header_checksum)});
   if (header_checksum != header.header_checksum) {
@@ -147,7 +146,7 @@ IndexFile IndexFile::Open(const std::filesystem::path& path) {
                        std::to_string(entry.count) + " elements of " +
                        std::to_string(entry.element_size) + " bytes");
     }
-    if ((entry.flags & kSectionRequired) && !IsKnownTag(entry.tag)) {
+    if ((entry.flags & kSectionRequired) && !IsKnownTag(kind, entry.tag)) {
       throw InputError(what + ": a required section unknown to this cwloc; upgrade cwloc");
     }
     previous_end = entry.offset + entry.size;

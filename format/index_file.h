@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -15,9 +16,26 @@ namespace cwloc {
 // the header, its checksum, the section table and every section's bounds, alignment and size,
 // never touching the big arrays. Section contents are checked where they are used, and fully
 // by VerifyChecksums() (and the indexer's verify command).
+// What a container file holds: a cwloc index, or a delta between two (delta/delta_file.h).
+// Both share the header, the section table and their checksums; the magic tells them apart.
+struct ContainerKind {
+  const char* magic;  // 8 characters
+  const char* name;   // "cwloc index": "not a cwloc index (wrong magic ...)"
+  const char* noun;   // "index": "index format 2.0 is not readable ..."
+  uint16_t major;     // the one major version a reader reads
+  uint16_t max_minor;
+  const char* remedy;                    // what to do about a major this cwloc does not read
+  std::span<const uint32_t> known_tags;  // a required section with another tag is refused
+};
+inline constexpr ContainerKind kIndexContainer{
+    "CWLOCIDX",   "cwloc index", "index",
+    kFormatMajor, kFormatMinor,  "rebuild the index with this cwloc-index",
+    section::kAll};
+
 class IndexFile {
  public:
-  static IndexFile Open(const std::filesystem::path& path);
+  static IndexFile Open(const std::filesystem::path& path,
+                        const ContainerKind& kind = kIndexContainer);
   IndexFile(IndexFile&& other) noexcept;
   IndexFile& operator=(IndexFile&& other) noexcept;
   ~IndexFile();
@@ -68,7 +86,12 @@ uint16_t FormatMinorOf(std::span<const SectionData> sections);
 // Writes an index atomically through an AtomicFile (base/atomic_file.h: an unnamed
 // temporary file in the target directory, fsync, put in place). The output depends only on the
 // sections given (padding is zero), so equal input gives equal bytes.
-void WriteIndexFile(const std::filesystem::path& path, std::span<const SectionData> sections);
+// `kind` and `minor` set the header (an index's minor is FormatMinorOf its sections). Returns the
+// header checksum written; with `expected_checksum`, a different one is refused (InputError)
+// before anything is written.
+uint64_t WriteIndexFile(const std::filesystem::path& path, std::span<const SectionData> sections,
+                        const ContainerKind& kind = kIndexContainer, uint16_t minor = 0,
+                        std::optional<uint64_t> expected_checksum = std::nullopt);
 
 template <typename T>
 SectionData MakeSection(uint32_t tag, std::span<const T> elements,

@@ -15,10 +15,9 @@ static_assert(
     std::endian::native == std::endian::little,
     "cwloc index files are little-endian and read in place; big-endian hosts are not supported");
 
-inline constexpr char kIndexMagic[8] = {'C', 'W', 'L', 'O', 'C', 'I', 'D', 'X'};
 inline constexpr uint32_t kByteOrderMark = 0x01020304;
 inline constexpr uint16_t kFormatMajor = 1;
-inline constexpr uint16_t kFormatMinor = 4;
+inline constexpr uint16_t kFormatMinor = 5;
 inline constexpr uint64_t kSectionAlignment = 64;
 
 // Feature bits: a reader refuses a file with a required bit it does not know.
@@ -96,6 +95,8 @@ inline constexpr uint32_t kPointOffsets = SectionTag("PNTF");  // IndexPointOffs
 inline constexpr uint32_t kCovarianceCalibration = SectionTag("PCAL");
 // Optional (format 1.4): each point's colour in the COLMAP model, for viewers.
 inline constexpr uint32_t kPointColors = SectionTag("PRGB");
+// Optional (format 1.5): each point's COLMAP point3D id, which `cwloc-index update` follows.
+inline constexpr uint32_t kPointIds = SectionTag("PIDS");
 inline constexpr uint32_t kAll[] = {kManifest,      kCameras,
                                     kImages,        kStrings,
                                     kPoints,        kTracks,
@@ -107,7 +108,7 @@ inline constexpr uint32_t kAll[] = {kManifest,      kCameras,
                                     kCodebook,      kPointCodes,
                                     kPointNeighbor, kPointOrigin,
                                     kPointOffsets,  kCovarianceCalibration,
-                                    kPointColors};
+                                    kPointColors,   kPointIds};
 }  // namespace section
 
 // "DESC" for a tag, with non-printable bytes escaped, for messages.

@@ -24,11 +24,14 @@ uint16_t FormatMinorOf(std::span<const SectionData> sections) {
       minor = std::max<uint16_t>(minor, 2);
     if (section.tag == section::kCovarianceCalibration) minor = std::max<uint16_t>(minor, 3);
     if (section.tag == section::kPointColors) minor = std::max<uint16_t>(minor, 4);
+    if (section.tag == section::kPointIds) minor = std::max<uint16_t>(minor, 5);
   }
   return minor;
 }
 
-void WriteIndexFile(const std::filesystem::path& path, std::span<const SectionData> sections) {
+uint64_t WriteIndexFile(const std::filesystem::path& path, std::span<const SectionData> sections,
+                        const ContainerKind& kind, uint16_t minor,
+                        std::optional<uint64_t> expected_checksum) {
   std::vector<SectionEntry> table(sections.size());
   uint64_t offset = sizeof(FileHeader);
   for (size_t i = 0; i < sections.size(); ++i) {
@@ -53,10 +56,10 @@ void WriteIndexFile(const std::filesystem::path& path, std::span<const SectionDa
 
   FileHeader header;
   std::memset(&header, 0, sizeof(header));
-  std::memcpy(header.magic, kIndexMagic, sizeof(kIndexMagic));
+  std::memcpy(header.magic, kind.magic, sizeof(header.magic));
   header.byte_order_mark = kByteOrderMark;
-  header.format_major = kFormatMajor;
-  header.format_minor = FormatMinorOf(sections);
+  header.format_major = kind.major;
+  header.format_minor = &kind == &kIndexContainer ? FormatMinorOf(sections) : minor;
   header.header_size = sizeof(FileHeader);
   header.section_entry_size = sizeof(SectionEntry);
   header.file_size = table_offset + table_bytes;
@@ -66,6 +69,11 @@ void WriteIndexFile(const std::filesystem::path& path, std::span<const SectionDa
       XxHash64({reinterpret_cast<const uint8_t*>(table.data()), table_bytes});
   header.header_checksum =
       XxHash64({reinterpret_cast<const uint8_t*>(&header), offsetof(FileHeader, header_checksum)});
+  if (expected_checksum && *expected_checksum != header.header_checksum) {
+    throw InputError(path.string() + ": not written: its header checksum would be " +
+                     HashHex(header.header_checksum) + ", not the expected " +
+                     HashHex(*expected_checksum));
+  }
 
   AtomicFile file(path);
   static constexpr uint8_t kZeros[kSectionAlignment] = {};
@@ -79,6 +87,7 @@ void WriteIndexFile(const std::filesystem::path& path, std::span<const SectionDa
   file.Write(kZeros, table_offset - written);
   file.Write(reinterpret_cast<const uint8_t*>(table.data()), table_bytes);
   file.Commit();
+  return header.header_checksum;
 }
 
 }  // namespace cwloc

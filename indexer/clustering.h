@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "indexer/covisibility.h"
+#include "delta/covisibility.h"
 #include "indexer/model_views.h"
 
 namespace cwloc {

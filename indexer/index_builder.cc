@@ -8,11 +8,11 @@
 #include "base/stopwatch.h"
 #include "colmap/reconstruction_io.h"
 #include "cwloc/version.h"
+#include "delta/covisibility.h"
 #include "format/xxhash64.h"
 #include "indexer/build_option_table.h"
 #include "indexer/covariance_calibration.h"
-#include "indexer/covisibility.h"
-#include "indexer/index_contents.h"
+#include "indexer/index_writer.h"
 #include "indexer/model_views.h"
 #include "indexer/neighbor_distances.h"
 #include "indexer/point_codes.h"
@@ -20,28 +20,6 @@
 #include "kdtree/kd_forest_builder.h"
 
 namespace cwloc {
-namespace {
-
-// XXH64 over the model files in name order: ties the index to the exact model it came from.
-std::string FingerprintModel(const std::filesystem::path& dir) {
-  std::vector<std::filesystem::path> files;
-  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
-    const std::string ext = entry.path().extension().string();
-    if (entry.is_regular_file() && (ext == ".bin" || ext == ".txt")) files.push_back(entry.path());
-  }
-  std::sort(files.begin(), files.end());
-  uint64_t hash = 0;
-  for (const auto& file : files) {
-    const std::vector<uint8_t> bytes = ReadFileBounded(file, kColmapModelFile);
-    const std::string name = file.filename().string();
-    hash = XxHash64({reinterpret_cast<const uint8_t*>(name.data()), name.size()}, hash);
-    hash = XxHash64(bytes, hash);
-  }
-  return "xxh64:" + HashHex(hash);
-}
-
-}  // namespace
-
 IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
   const Stopwatch total;
   IndexBuildReport report;
@@ -200,6 +178,7 @@ void WriteIndexOfViews(ModelViews views, const Clustering& clustering,
   } else {
     contents.points = views.points;
     contents.descriptors = views.descriptors;
+    contents.point_ids = views.point_ids;
   }
   if (options.keypoints) contents.view_keypoints = views.view_keypoints;
   if (options.point_colors) contents.point_colors = views.point_colors;
@@ -208,6 +187,23 @@ void WriteIndexOfViews(ModelViews views, const Clustering& clustering,
   WriteIndex(output, contents, std::move(manifest));
   report->seconds_write = stage.Seconds();
   report->file_bytes = std::filesystem::file_size(output);
+}
+
+std::string FingerprintModel(const std::filesystem::path& dir) {
+  std::vector<std::filesystem::path> files;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    const std::string ext = entry.path().extension().string();
+    if (entry.is_regular_file() && (ext == ".bin" || ext == ".txt")) files.push_back(entry.path());
+  }
+  std::sort(files.begin(), files.end());
+  uint64_t hash = 0;
+  for (const auto& file : files) {
+    const std::vector<uint8_t> bytes = ReadFileBounded(file, kColmapModelFile);
+    const std::string name = file.filename().string();
+    hash = XxHash64({reinterpret_cast<const uint8_t*>(name.data()), name.size()}, hash);
+    hash = XxHash64(bytes, hash);
+  }
+  return "xxh64:" + HashHex(hash);
 }
 
 nlohmann::ordered_json CountsJson(const IndexBuildReport& report) {

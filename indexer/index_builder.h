@@ -5,8 +5,8 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "delta/covisibility.h"
 #include "indexer/clustering.h"
-#include "indexer/covisibility.h"
 #include "indexer/georeferencing.h"
 #include "indexer/model_views.h"
 #include "kdtree/kd_forest_builder.h"
@@ -68,6 +68,10 @@ void WriteIndexOfViews(ModelViews views, const Clustering& clustering,
                        const CovarianceCalibration* calibration,
                        const nlohmann::ordered_json& source, const std::filesystem::path& output,
                        IndexBuildReport* report);
+
+// XXH64 over the model files in name order ("xxh64:HEX"): ties the index to the exact model it
+// came from (the manifest's source.model.fingerprint).
+std::string FingerprintModel(const std::filesystem::path& model_dir);
 
 // The counts of a build, as the manifest (which adds kd_nodes) and `cwloc-index build --json`
 // report them: cameras, images, points, views, clusters, covisibility_edges.

@@ -15,7 +15,7 @@
 #include "cwloc/version.h"
 #include "format/index.h"
 #include "geo/index_georeference.h"
-#include "indexer/index_contents.h"
+#include "indexer/index_writer.h"
 
 namespace cwloc {
 namespace {

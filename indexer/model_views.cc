@@ -7,6 +7,7 @@
 #include "base/error.h"
 #include "base/progress.h"
 #include "camera/camera_models.h"
+#include "delta/tracks.h"
 
 namespace cwloc {
 namespace {
@@ -30,7 +31,8 @@ IndexCamera ToIndexCamera(const colmap::Camera& camera) {
 }  // namespace
 
 ModelViews GatherModelViews(const colmap::Reconstruction& model,
-                            const colmap::DatabaseReader& database) {
+                            const colmap::DatabaseReader& database,
+                            const KnownViewRows& known_rows) {
   const std::string db_name = database.path().string();
   ModelViews views;
 
@@ -68,11 +70,19 @@ ModelViews GatherModelViews(const colmap::Reconstruction& model,
       throw InputError(db_name + ": model image " + std::to_string(image_id) + " '" + image.name +
                        "' has image_id " + std::to_string(stored->image_id) + " in the database");
     }
-    const colmap::Descriptors descriptors = database.ReadDescriptors(image_id);
-    if (descriptors.rows != image.points2D.size()) {
+    std::vector<point3D_t> observed;
+    for (const colmap::Point2D& point2D : image.points2D) {
+      if (point2D.point3D_id != kInvalidPoint3DId) observed.push_back(point2D.point3D_id);
+    }
+    const uint8_t* known = known_rows ? known_rows(image_id, observed) : nullptr;
+    const colmap::Descriptors descriptors =
+        known != nullptr ? colmap::Descriptors{} : database.ReadDescriptors(image_id);
+    const uint32_t num_descriptors =
+        known != nullptr ? database.NumDescriptors(image_id) : descriptors.rows;
+    if (num_descriptors != image.points2D.size()) {
       throw InputError(
           db_name + ": image " + std::to_string(image_id) + " '" + image.name + "' has " +
-          std::to_string(descriptors.rows) + " descriptors but " +
+          std::to_string(num_descriptors) + " descriptors but " +
           std::to_string(image.points2D.size()) +
           " 2D points in the model (the model and the database do not belong together)");
     }
@@ -105,7 +115,10 @@ ModelViews GatherModelViews(const colmap::Reconstruction& model,
       views.view_points.push_back(point->second);
       views.view_keypoints.push_back(
           {static_cast<float>(point2D.x), static_cast<float>(point2D.y)});
-      const uint8_t* row_bytes = descriptors.Row(static_cast<uint32_t>(i));
+      const uint8_t* row_bytes =
+          known != nullptr
+              ? known + (views.view_points.size() - 1 - row.first_view) * kDescriptorBytes
+              : descriptors.Row(static_cast<uint32_t>(i));
       views.descriptors.insert(views.descriptors.end(), row_bytes, row_bytes + kDescriptorBytes);
     }
     row.num_views = static_cast<uint32_t>(views.view_points.size()) - row.first_view;
@@ -114,28 +127,17 @@ ModelViews GatherModelViews(const colmap::Reconstruction& model,
   }
   progress.Finish();
 
-  // Tracks as CSR over views, grouped by point (counting sort keeps view order within a point).
-  std::vector<uint32_t> counts(views.points.size() + 1, 0);
-  for (uint32_t point : views.view_points) ++counts[point + 1];
-  for (size_t p = 0; p < views.points.size(); ++p) counts[p + 1] += counts[p];
-  views.tracks.resize(views.view_points.size());
-  std::vector<uint32_t> cursor(counts.begin(), counts.end() - 1);
-  for (uint32_t v = 0; v < views.view_points.size(); ++v)
-    views.tracks[cursor[views.view_points[v]]++] = v;
-
   // Drop points without views (none in a consistent model) and renumber.
+  std::vector<uint32_t> num_views(views.points.size(), 0);
+  for (uint32_t point : views.view_points) ++num_views[point];
   std::vector<uint32_t> new_index(views.points.size(), UINT32_MAX);
   std::vector<IndexPoint> kept_points;
   std::vector<point3D_t> kept_ids;
   std::vector<PointColor> kept_colors;
   for (size_t p = 0; p < views.points.size(); ++p) {
-    const uint32_t length = counts[p + 1] - counts[p];
-    if (length == 0) continue;
+    if (num_views[p] == 0) continue;
     new_index[p] = static_cast<uint32_t>(kept_points.size());
-    IndexPoint point = views.points[p];
-    point.first_track = counts[p];
-    point.track_length = length;
-    kept_points.push_back(point);
+    kept_points.push_back(views.points[p]);
     kept_ids.push_back(views.point_ids[p]);
     kept_colors.push_back(views.point_colors[p]);
   }
@@ -143,6 +145,7 @@ ModelViews GatherModelViews(const colmap::Reconstruction& model,
   views.points = std::move(kept_points);
   views.point_ids = std::move(kept_ids);
   views.point_colors = std::move(kept_colors);
+  views.tracks = TracksOfViews(views.view_points, views.points);
   return views;
 }
 

@@ -1,6 +1,8 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -36,8 +38,16 @@ struct ModelViews {
 // in the model are ignored (they may be queries). Throws InputError when a model image is
 // missing from the database, has another name there, or its descriptor count differs from its
 // number of 2D points.
+//
+// `known_rows`, when given, spares reading descriptors the caller already has (`cwloc-index
+// update`: an old image's, from the index): it returns the image's view rows (one 128-byte row
+// per observation, in point2D order) when its observations are of the points `point_ids` in this
+// order, else nullptr; the database then only confirms the image's descriptor count.
+using KnownViewRows =
+    std::function<const uint8_t*(image_t image_id, std::span<const point3D_t> point_ids)>;
 ModelViews GatherModelViews(const colmap::Reconstruction& model,
-                            const colmap::DatabaseReader& database);
+                            const colmap::DatabaseReader& database,
+                            const KnownViewRows& known_rows = {});
 
 // The views of the model without the images whose rows `left_out` marks, as `colmap
 // image_deleter` takes images out of a model: their views go, and so does every 3D point left

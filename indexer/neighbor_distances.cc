@@ -76,7 +76,9 @@ std::vector<uint32_t> ApproximateNearestOtherPoint(const ModelViews& views,
 }  // namespace
 
 std::vector<float> ComputeViewNeighborDistances(const ModelViews& views,
-                                                const Clustering& clustering, int num_threads) {
+                                                const Clustering& clustering, int num_threads,
+                                                const std::vector<bool>* only_clusters) {
+  const auto wanted = [&](size_t c) { return only_clusters == nullptr || (*only_clusters)[c]; };
   std::vector<std::vector<uint32_t>> cluster_images(clustering.num_clusters);
   std::vector<size_t> cluster_views(clustering.num_clusters, 0);
   for (uint32_t i = 0; i < views.images.size(); ++i) {
@@ -101,13 +103,13 @@ std::vector<float> ComputeViewNeighborDistances(const ModelViews& views,
   const int threads = ResolveThreads(num_threads);
   Progress progress("v_NN distances", clustering.num_clusters);
   ParallelFor(clustering.num_clusters, threads, [&](size_t c, int) {
-    if (cluster_views[c] > kExactNeighborMaxViews) return;  // below, one at a time with all threads
+    if (!wanted(c) || cluster_views[c] > kExactNeighborMaxViews) return;  // below, with all threads
     const std::vector<uint32_t> members = members_of(c);
     store(members, ExactNearestOtherPoint(views, members));
     progress.Advance();
   });
   for (size_t c = 0; c < clustering.num_clusters; ++c) {
-    if (cluster_views[c] <= kExactNeighborMaxViews) continue;
+    if (!wanted(c) || cluster_views[c] <= kExactNeighborMaxViews) continue;
     const std::vector<uint32_t> members = members_of(c);
     store(members, ApproximateNearestOtherPoint(views, members, threads));
     progress.Advance();

@@ -22,7 +22,11 @@ inline constexpr uint32_t kApproxNeighborChecks = 2048;
 // cluster's search found none among its kApproxNeighborCount neighbours. Exact for clusters of
 // at most kExactNeighborMaxViews views (sum of n^2 / 2 distances); approximate beyond, where a
 // missed nearest neighbour can only make the distance larger.
+// With `only_clusters` (one flag per cluster), only the flagged clusters' views get theirs (the
+// others stay +infinity): `cwloc-index update` recomputes the clusters it changed, exactly as
+// a build does.
 std::vector<float> ComputeViewNeighborDistances(const ModelViews& views,
-                                                const Clustering& clustering, int num_threads);
+                                                const Clustering& clustering, int num_threads,
+                                                const std::vector<bool>* only_clusters = nullptr);
 
 }  // namespace cwloc

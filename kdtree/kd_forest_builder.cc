@@ -510,4 +510,26 @@ KdForest BuildKdForest(std::span<const uint8_t> descriptors, const KdForestBuild
   return forest;
 }
 
+void AppendKdSubtree(std::span<const uint8_t> descriptors, std::span<uint32_t> rows,
+                     uint32_t max_leaf_size, uint64_t seed, uint64_t slot_base,
+                     std::vector<KdNode>* nodes) {
+  KdForestBuildOptions options;
+  options.max_leaf_size = max_leaf_size;
+  ForestBuilder builder(descriptors, options);
+  Scratch scratch;
+  const auto count = uint32_t(rows.size());
+  scratch.column.resize(count);
+  scratch.right.resize(count);
+  scratch.local_ids.resize(kLocalRows);
+  scratch.right_ids.resize(kLocalRows);
+  scratch.local_rows.resize(size_t(kLocalRows) * kDescriptorDim);
+  std::vector<KdNode> subtree;
+  builder.BuildSubtree(rows.data(), slot_base, 0, count, seed, &subtree, &scratch);
+  const auto base = uint32_t(nodes->size());
+  for (KdNode node : subtree) {
+    if (node.dim != kKdLeaf) node.index += base;
+    nodes->push_back(node);
+  }
+}
+
 }  // namespace cwloc

@@ -48,4 +48,12 @@ struct KdForest {
 // options or sizes.
 KdForest BuildKdForest(std::span<const uint8_t> descriptors, const KdForestBuildOptions& options);
 
+// The subtree BuildKdForest splits over `rows` (descriptor indices, reordered in place into its
+// leaf buckets' order), appended to `nodes` in preorder with absolute child indices; its leaves
+// own the slots [slot_base, slot_base + rows.size()). A function of (the rows' descriptors and
+// order, max_leaf_size, seed) only: UpdateKdForest splits an overfull leaf with it.
+void AppendKdSubtree(std::span<const uint8_t> descriptors, std::span<uint32_t> rows,
+                     uint32_t max_leaf_size, uint64_t seed, uint64_t slot_base,
+                     std::vector<KdNode>* nodes);
+
 }  // namespace cwloc

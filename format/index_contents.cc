@@ -1,18 +1,11 @@
-#include "indexer/index_contents.h"
-
-#include <string>
-#include <vector>
-
-#include "base/progress.h"
-#include "format/index_file.h"
+#include "format/index_contents.h"
 
 namespace cwloc {
 
-void WriteIndex(const std::filesystem::path& path, const IndexContents& contents,
-                nlohmann::ordered_json manifest) {
+std::vector<SectionData> IndexSectionsOf(const IndexContents& contents, std::string_view manifest) {
   const bool coded = contents.code_bytes != 0;
   std::vector<SectionData> sections = {
-      SectionData{section::kManifest},  // filled below, once the format version is known
+      MakeSection<char>(section::kManifest, {manifest.data(), manifest.size()}),
       MakeSection(section::kCameras, contents.cameras),
       MakeSection(section::kImages, contents.images),
       MakeSection<char>(section::kStrings, {contents.strings.data(), contents.strings.size()}),
@@ -51,6 +44,10 @@ void WriteIndex(const std::filesystem::path& path, const IndexContents& contents
     // Optional: for viewers (cwloc-serve's map); the localizer does not read them.
     sections.push_back(MakeSection(section::kPointColors, contents.point_colors, /*flags=*/0));
   }
+  if (!contents.point_ids.empty()) {
+    // Optional: what `cwloc-index update` recognizes the model's points by.
+    sections.push_back(MakeSection(section::kPointIds, contents.point_ids, /*flags=*/0));
+  }
   if (contents.georeference != nullptr) {
     sections.push_back(MakeSection(section::kGeoreference,
                                    std::span<const IndexGeoreference>(contents.georeference, 1),
@@ -62,29 +59,7 @@ void WriteIndex(const std::filesystem::path& path, const IndexContents& contents
                     std::span<const IndexCovarianceCalibration>(contents.covariance_calibration, 1),
                     /*flags=*/0));
   }
-  manifest["format_version"] =
-      std::to_string(kFormatMajor) + "." + std::to_string(FormatMinorOf(sections));
-  const std::string manifest_text = manifest.dump(2) + "\n";
-  sections[0] = MakeSection<char>(section::kManifest, {manifest_text.data(), manifest_text.size()});
-  WriteIndexFile(path, sections);
-}
-
-KdForest BuildIndexForest(std::span<const uint8_t> rows, KdForestBuildOptions options,
-                          uint64_t seed, int threads) {
-  options.seed = seed;
-  options.num_threads = static_cast<uint32_t>(threads);
-  Progress progress("kd-forest", 1000);
-  uint64_t permille_shown = 0;
-  options.progress = [&](double fraction) {
-    const auto permille = static_cast<uint64_t>(fraction * 1000);
-    if (permille > permille_shown) {
-      progress.Advance(permille - permille_shown);
-      permille_shown = permille;
-    }
-  };
-  KdForest forest = BuildKdForest(rows, options);
-  progress.Finish();
-  return forest;
+  return sections;
 }
 
 }  // namespace cwloc

@@ -1,4 +1,4 @@
-#include "indexer/covisibility.h"
+#include "delta/covisibility.h"
 
 #include <algorithm>
 

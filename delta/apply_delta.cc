@@ -1,0 +1,310 @@
+#include "delta/apply_delta.h"
+
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "base/error.h"
+#include "base/stopwatch.h"
+#include "delta/covisibility.h"
+#include "delta/tracks.h"
+#include "format/index_contents.h"
+#include "format/xxhash64.h"
+#include "kdtree/kd_forest_update.h"
+
+namespace cwloc {
+namespace {
+
+std::string FileName(const Index& index) { return index.file().path().string(); }
+
+// Child row -> parent row (kRemovedRow: a new row) and parent row -> child row of a delta's
+// runs; throws when the runs are not ascending, overlap, or leave either side's range.
+struct RowMaps {
+  std::vector<uint32_t> child_to_parent, parent_to_child;
+  size_t num_new = 0;
+};
+
+RowMaps MapRows(const std::vector<RowRun>& runs, size_t child_rows, size_t parent_rows,
+                const std::string& what, const std::string& name) {
+  RowMaps maps;
+  maps.child_to_parent.assign(child_rows, kRemovedRow);
+  maps.parent_to_child.assign(parent_rows, kRemovedRow);
+  uint64_t child_end = 0, parent_end = 0;
+  for (const RowRun& run : runs) {
+    const uint64_t child_last = uint64_t(run.child_first) + run.count;
+    const uint64_t parent_last = uint64_t(run.parent_first) + run.count;
+    if (run.count == 0 || run.child_first < child_end || run.parent_first < parent_end ||
+        child_last > child_rows || parent_last > parent_rows) {
+      throw InputError(name + ": the delta's " + what + " runs do not fit: a run of " +
+                       std::to_string(run.count) + " from parent row " +
+                       std::to_string(run.parent_first) + " to child row " +
+                       std::to_string(run.child_first) + " (" + std::to_string(parent_rows) +
+                       " parent and " + std::to_string(child_rows) +
+                       " child rows; runs ascend without overlap)");
+    }
+    for (uint32_t i = 0; i < run.count; ++i) {
+      maps.child_to_parent[run.child_first + i] = run.parent_first + i;
+      maps.parent_to_child[run.parent_first + i] = run.child_first + i;
+    }
+    child_end = child_last;
+    parent_end = parent_last;
+  }
+  for (uint32_t parent : maps.child_to_parent) maps.num_new += parent == kRemovedRow;
+  return maps;
+}
+
+template <typename T>
+void CheckCount(const std::vector<T>& rows, size_t expected, const char* tag,
+                const std::string& name) {
+  if (rows.size() != expected) {
+    throw InputError(name + ": the delta's section '" + tag + "' has " +
+                     std::to_string(rows.size()) + " rows, expected " + std::to_string(expected));
+  }
+}
+
+template <typename Change>
+void CheckChangedRows(const std::vector<Change>& changes, size_t rows, const char* tag,
+                      const std::string& name) {
+  for (size_t i = 0; i < changes.size(); ++i) {
+    if (changes[i].row >= rows || (i > 0 && changes[i].row <= changes[i - 1].row)) {
+      throw InputError(name + ": the delta's section '" + tag + "' names row " +
+                       std::to_string(changes[i].row) + " (of " + std::to_string(rows) +
+                       "; rows ascend)");
+    }
+  }
+}
+
+}  // namespace
+
+struct AppliedDelta::Child {
+  std::vector<uint8_t> descriptors;
+  std::vector<uint32_t> view_points;
+  std::vector<ViewKeypoint> view_keypoints;
+  std::vector<float> neighbor_distances;
+  std::vector<IndexPoint> points;
+  std::vector<PointColor> point_colors;
+  std::vector<uint64_t> point_ids;
+  std::vector<uint32_t> tracks;
+  CovisibilityGraph graph;
+  KdForest forest;
+};
+
+namespace {
+
+void CheckImages(const IndexDelta& delta, size_t* num_views, const std::string& name) {
+  uint64_t next_view = 0;
+  for (size_t i = 0; i < delta.images.size(); ++i) {
+    const IndexImage& image = delta.images[i];
+    if (image.first_view != next_view || image.camera_index >= delta.cameras.size() ||
+        uint64_t(image.name_offset) + image.name_size > delta.strings.size() ||
+        image.cluster >= delta.images.size()) {
+      throw InputError(name + ": the delta's image " + std::to_string(i) +
+                       " does not fit (its views must follow the previous image's, its camera, "
+                       "name and cluster be in range)");
+    }
+    next_view += image.num_views;
+  }
+  if (next_view >= UINT32_MAX) throw InputError(name + ": the delta's images hold too many views");
+  *num_views = next_view;
+}
+
+}  // namespace
+
+AppliedDelta::AppliedDelta(const Index& parent, const IndexDelta& delta,
+                           const std::string& delta_name, int threads)
+    : parent_(parent), delta_(delta), child_(std::make_unique<Child>()) {
+  const std::string& name = delta_name;
+  const FileHeader& parent_header = parent.file().header();
+  if (delta.header.parent_checksum != parent_header.header_checksum ||
+      delta.header.parent_file_size != parent_header.file_size) {
+    throw InputError(name + ": made for the index with checksum " +
+                     HashHex(delta.header.parent_checksum) + " (" +
+                     std::to_string(delta.header.parent_file_size) + " bytes), and " +
+                     FileName(parent) + " has " + HashHex(parent_header.header_checksum) + " (" +
+                     std::to_string(parent_header.file_size) +
+                     " bytes): apply a chain's deltas in order, each to the index the one "
+                     "before made");
+  }
+  const DeltaHeader& header = delta.header;
+  if (parent.coded()) {
+    throw InputError(FileName(parent) +
+                     ": a compact index takes no delta yet; rebuild it with cwloc-index build "
+                     "--compact from the grown model");
+  }
+  size_t child_views = 0;
+  CheckImages(delta, &child_views, name);
+  const RowMaps views = MapRows(delta.view_runs, child_views, parent.num_views(), "view", name);
+  const size_t child_points = delta.point_runs.empty() && delta.new_points.empty() ? 0 : [&] {
+    size_t covered = 0;
+    for (const RowRun& run : delta.point_runs) covered += run.count;
+    return covered + delta.new_points.size();
+  }();
+  const RowMaps points =
+      MapRows(delta.point_runs, child_points, parent.num_points(), "point", name);
+  CheckCount(delta.new_points, points.num_new, "NPNT", name);
+  if (delta.new_descriptors.size() != views.num_new * kDescriptorBytes) {
+    throw InputError(name + ": the delta's section 'NDSC' has " +
+                     std::to_string(delta.new_descriptors.size() / kDescriptorBytes) +
+                     " rows, expected " + std::to_string(views.num_new));
+  }
+  CheckCount(delta.new_view_points, views.num_new, "NV2P", name);
+  CheckCount(delta.new_view_neighbors, views.num_new, "NVNN", name);
+  const bool keypoints = !parent.view_keypoints().empty();
+  CheckCount(delta.new_view_keypoints, keypoints ? views.num_new : 0, "NVKP", name);
+  const bool colors = !parent.point_colors().empty();
+  CheckCount(delta.new_point_colors, colors ? points.num_new : 0, "NRGB", name);
+  const bool ids = !parent.point_ids().empty();
+  CheckCount(delta.new_point_ids, ids ? points.num_new : 0, "NPID", name);
+  CheckChangedRows(delta.view_point_changes, child_views, "CV2P", name);
+  CheckChangedRows(delta.view_neighbor_changes, child_views, "CVNN", name);
+  CheckChangedRows(delta.point_moves, child_points, "CPNT", name);
+  CheckChangedRows(delta.point_color_changes, colors ? child_points : 0, "CRGB", name);
+  if (header.forest_leaf_size == 0 || header.forest_leaf_size > kMaxKdLeafSize) {
+    throw InputError(name + ": the delta's kd leaf size " +
+                     std::to_string(header.forest_leaf_size) + " is not in 1.." +
+                     std::to_string(kMaxKdLeafSize));
+  }
+
+  Child& child = *child_;
+  child.descriptors.resize(child_views * kDescriptorBytes);
+  child.view_points.resize(child_views);
+  child.neighbor_distances.resize(child_views);
+  if (keypoints) child.view_keypoints.resize(child_views);
+  const std::span<const uint8_t> parent_descriptors = parent.descriptors();
+  size_t next_new = 0;
+  size_t next_change = 0;
+  for (uint32_t v = 0; v < child_views; ++v) {
+    const uint32_t from = views.child_to_parent[v];
+    uint32_t point;
+    if (from == kRemovedRow) {
+      std::memcpy(&child.descriptors[size_t(v) * kDescriptorBytes],
+                  &delta.new_descriptors[next_new * kDescriptorBytes], kDescriptorBytes);
+      point = delta.new_view_points[next_new];
+      child.neighbor_distances[v] = delta.new_view_neighbors[next_new];
+      if (keypoints) child.view_keypoints[v] = delta.new_view_keypoints[next_new];
+      ++next_new;
+    } else {
+      std::memcpy(&child.descriptors[size_t(v) * kDescriptorBytes],
+                  &parent_descriptors[size_t(from) * kDescriptorBytes], kDescriptorBytes);
+      const uint32_t parent_point = parent.view_points()[from];
+      point = parent_point < points.parent_to_child.size() ? points.parent_to_child[parent_point]
+                                                           : kRemovedRow;
+      child.neighbor_distances[v] = parent.view_neighbor_distances()[from];
+      if (keypoints) child.view_keypoints[v] = parent.view_keypoints()[from];
+    }
+    if (next_change < delta.view_point_changes.size() &&
+        delta.view_point_changes[next_change].row == v) {
+      point = delta.view_point_changes[next_change++].value;
+    }
+    if (point >= child_points) {
+      throw InputError(name + ": the delta gives view " + std::to_string(v) +
+                       " no point of the child's " + std::to_string(child_points));
+    }
+    child.view_points[v] = point;
+  }
+  for (const RowChange<float>& change : delta.view_neighbor_changes)
+    child.neighbor_distances[change.row] = change.value;
+
+  child.points.resize(child_points);
+  if (colors) child.point_colors.resize(child_points);
+  if (ids) child.point_ids.resize(child_points);
+  next_new = 0;
+  for (uint32_t p = 0; p < child_points; ++p) {
+    const uint32_t from = points.child_to_parent[p];
+    IndexPoint point{};
+    if (from == kRemovedRow) {
+      std::memcpy(point.xyz, delta.new_points[next_new].xyz, sizeof(point.xyz));
+      if (colors) child.point_colors[p] = delta.new_point_colors[next_new];
+      if (ids) child.point_ids[p] = delta.new_point_ids[next_new];
+      ++next_new;
+    } else {
+      const std::array<double, 3> xyz = parent.PointXyz(from);
+      std::copy(xyz.begin(), xyz.end(), point.xyz);
+      if (colors) child.point_colors[p] = parent.point_colors()[from];
+      if (ids) child.point_ids[p] = parent.point_ids()[from];
+    }
+    child.points[p] = point;
+  }
+  for (const PointMove& move : delta.point_moves)
+    std::memcpy(child.points[move.row].xyz, move.xyz, sizeof(move.xyz));
+  for (const PointColorChange& change : delta.point_color_changes)
+    child.point_colors[change.row] = change.color;
+  child.tracks = TracksOfViews(child.view_points, child.points);
+  for (uint32_t p = 0; p < child_points; ++p) {
+    if (child.points[p].track_length == 0)
+      throw InputError(name + ": the delta leaves point " + std::to_string(p) + " without views");
+  }
+
+  const std::vector<IndexImage> images = delta.images;
+  child.graph =
+      BuildCovisibilityGraph(images, child.points, child.tracks, child.view_points, threads);
+  if ((header.flags & kDeltaForestRebuilt) != 0) {
+    KdForestBuildOptions options;
+    options.num_trees = uint32_t(parent.kd_forest().NumTrees());
+    options.max_leaf_size = header.forest_leaf_size;
+    options.seed = header.forest_seed;
+    options.num_threads = uint32_t(threads);
+    child.forest = BuildKdForest(child.descriptors, options);
+  } else {
+    std::string error;
+    if (!ValidateKdForest(parent.kd_forest(), &error))
+      throw InputError(FileName(parent) + ": " + error);
+    std::vector<uint32_t> inserted;
+    for (uint32_t v = 0; v < child_views; ++v) {
+      if (views.child_to_parent[v] == kRemovedRow) inserted.push_back(v);
+    }
+    child.forest = UpdateKdForest(parent.kd_forest(), {views.parent_to_child, inserted},
+                                  child.descriptors, header.forest_leaf_size, header.forest_seed);
+  }
+}
+
+AppliedDelta::~AppliedDelta() = default;
+
+size_t AppliedDelta::num_kd_nodes() const { return child_->forest.nodes.size(); }
+
+uint64_t AppliedDelta::Write(const std::filesystem::path& output, std::string_view manifest,
+                             std::optional<uint64_t> expected_checksum) const {
+  const Child& child = *child_;
+  const IndexDelta& delta = delta_;
+  const Index& parent = parent_;
+
+  IndexContents contents;
+  contents.cameras = delta.cameras;
+  contents.images = delta.images;
+  contents.strings = delta.strings;
+  contents.points = child.points;
+  contents.tracks = child.tracks;
+  contents.descriptors = child.descriptors;
+  contents.view_points = child.view_points;
+  contents.neighbor_distances = child.neighbor_distances;
+  contents.forest = &child.forest;
+  contents.covisibility_offsets = child.graph.offsets;
+  contents.covisibility_edges = child.graph.edges;
+  contents.view_keypoints = child.view_keypoints;
+  contents.point_colors = child.point_colors;
+  contents.point_ids = child.point_ids;
+  contents.georeference = parent.georeference();
+  contents.covariance_calibration = parent.covariance_calibration();
+  const std::vector<SectionData> sections = IndexSectionsOf(contents, manifest);
+  return WriteIndexFile(output, sections, kIndexContainer, 0, expected_checksum);
+}
+
+ApplyDeltaReport ApplyDelta(const std::filesystem::path& index_path,
+                            const std::filesystem::path& delta_path,
+                            const std::filesystem::path& output, int threads) {
+  const Stopwatch stopwatch;
+  const IndexDelta delta = ReadDelta(delta_path);
+  const Index parent = Index::Open(index_path);
+  parent.file().VerifyChecksums();
+  AppliedDelta(parent, delta, delta_path.string(), threads)
+      .Write(output, delta.manifest, delta.header.child_checksum);
+  ApplyDeltaReport report;
+  report.parent_views = parent.num_views();
+  report.child_images = delta.images.size();
+  for (const IndexImage& image : delta.images) report.child_views += image.num_views;
+  report.file_bytes = std::filesystem::file_size(output);
+  report.seconds = stopwatch.Seconds();
+  return report;
+}
+
+}  // namespace cwloc

@@ -1,0 +1,53 @@
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "delta/delta_file.h"
+#include "format/index.h"
+
+namespace cwloc {
+
+// The child index that `delta` makes of `parent`, composed in memory: the delta's rows and
+// small sections, the parent's kept rows, and what both determine (tracks, co-visibility
+// graph, kd-forest, the parent's GEOR and PCAL). `cwloc-index update` writes its output with it
+// too, so that apply repeats it bit for bit. Borrows both.
+class AppliedDelta {
+ public:
+  // Refuses (InputError naming `delta_name`) a delta made for another parent (a chain applied
+  // out of order) and one whose rows do not fit the parent.
+  AppliedDelta(const Index& parent, const IndexDelta& delta, const std::string& delta_name,
+               int threads);
+  ~AppliedDelta();
+  AppliedDelta(const AppliedDelta&) = delete;
+  AppliedDelta& operator=(const AppliedDelta&) = delete;
+
+  size_t num_kd_nodes() const;
+  // Writes the child atomically with `manifest` as its MANI and returns its header checksum;
+  // refuses (InputError, nothing written) a child whose checksum is not `expected_checksum`.
+  uint64_t Write(const std::filesystem::path& output, std::string_view manifest,
+                 std::optional<uint64_t> expected_checksum) const;
+
+ private:
+  struct Child;
+  const Index& parent_;
+  const IndexDelta& delta_;
+  std::unique_ptr<Child> child_;
+};
+
+struct ApplyDeltaReport {
+  size_t parent_views = 0, child_views = 0, child_images = 0;
+  uint64_t file_bytes = 0;
+  double seconds = 0;
+};
+
+// `cwloc-index apply`: reads both files (verifying every checksum of each) and writes the
+// child, which must have the checksum the delta names.
+ApplyDeltaReport ApplyDelta(const std::filesystem::path& index_path,
+                            const std::filesystem::path& delta_path,
+                            const std::filesystem::path& output, int threads);
+
+}  // namespace cwloc

@@ -1,0 +1,645 @@
+#include "indexer/index_update.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <unordered_map>
+#include <unordered_set>
+
+#include "base/bounded_file.h"
+#include "base/parallel_for.h"
+#include "base/stopwatch.h"
+#include "colmap/reconstruction_io.h"
+#include "cwloc/version.h"
+#include "delta/apply_delta.h"
+#include "delta/covisibility.h"
+#include "format/index.h"
+#include "format/xxhash64.h"
+#include "geo/index_georeference.h"
+#include "indexer/build_option_table.h"
+#include "indexer/clustering.h"
+#include "indexer/index_build_flags.h"
+#include "indexer/index_builder.h"
+#include "indexer/model_views.h"
+#include "indexer/neighbor_distances.h"
+#include "kdtree/kd_forest_update.h"
+
+namespace cwloc {
+namespace {
+
+// An old image whose views the update takes from the index is compared with the database when
+// its row is a multiple of this: a database extracted again differs in every image.
+constexpr uint32_t kVerifiedImageStride = 64;
+
+constexpr const char* kFullBuildNeeded =
+    ": a full build is needed (cwloc-index build, or update --rebuild-if-needed)";
+
+// The build options an index was built with, as its manifest records them.
+struct ParentBuild {
+  IndexBuildOptions options;
+  IndexBuildFlags flags;
+  bool georeferenced = false;
+};
+
+ParentBuild ParentBuildOf(const nlohmann::ordered_json& manifest) {
+  ParentBuild parent;
+  const auto& build = manifest.at("build_parameters");
+  parent.options.forest.num_trees = build.at("kd_trees").get<uint32_t>();
+  parent.options.forest.max_leaf_size = build.at("kd_leaf_size").get<uint32_t>();
+  parent.options.seed = build.at("seed").get<uint64_t>();
+  parent.options.keypoints = build.at("keypoints").get<bool>();
+  parent.options.point_colors = build.value("point_colors", false);
+  if (build.contains("descriptors")) {
+    parent.options.code_bytes = build["descriptors"].at("code_bytes").get<uint32_t>();
+    parent.flags.compact = true;
+  }
+  const auto& clustering = build.at("clustering");
+  const std::string method = clustering.at("method").get<std::string>();
+  if (method == "file") {
+    parent.flags.cluster_file = clustering.at("file").get<std::string>();
+    parent.options.clustering.method = ClusteringMethod::kFile;
+    parent.options.clustering.file = parent.flags.cluster_file;
+  } else if (method == "covisibility") {
+    parent.flags.clusters = clustering.at("target_clusters").get<uint32_t>();
+    parent.options.clustering.method = ClusteringMethod::kCovisibility;
+    parent.options.clustering.target_clusters = *parent.flags.clusters;
+  }
+  parent.georeferenced = manifest.contains("georeference") && manifest["georeference"].is_object();
+  if (manifest.contains("covariance_calibration"))
+    parent.options.calibration_samples =
+        manifest["covariance_calibration"].value("sampled", parent.options.calibration_samples);
+  return parent;
+}
+
+// Build flags an update cannot honour without a build: the georeference and the covariance
+// calibration are kept from the parent.
+bool KeptFromParent(std::string_view flag) {
+  return flag == "georef" || flag == "georef-images" || flag == "model-frame" ||
+         flag == "georef-sigma" || flag == "calibration-samples";
+}
+
+void CheckBuildFlags(const IndexUpdateOptions& options, const ParentBuild& parent) {
+  for (const auto& [flag, value] : options.build_flags) {
+    if (flag == "threads") continue;
+    const BuildOptionSpec& spec = FindBuildOption(flag);
+    if (KeptFromParent(flag)) {
+      throw UpdateRefused(options.index_path.string() + ": --" + flag +
+                          " is a build option an update keeps from the index" + kFullBuildNeeded);
+    }
+    const std::optional<OptionValue> built = spec.get(parent.options, parent.flags);
+    const std::string built_text = built ? FormatOptionValue(*built) : "(none)";
+    if (!built || built_text != FormatOptionValue(value)) {
+      throw UpdateRefused(options.index_path.string() + ": the index was built with --" + flag +
+                          " " + built_text + ", and this update asks for --" + flag + " " +
+                          FormatOptionValue(value) + kFullBuildNeeded);
+    }
+  }
+}
+
+std::vector<std::string> ReadNameList(const std::filesystem::path& path) {
+  CheckInputFile(path, kImageNameList);
+  std::ifstream in(path);
+  if (!in) throw InputError(path.string() + ": cannot open");
+  std::vector<std::string> names;
+  for (std::string line; std::getline(in, line);) {
+    while (!line.empty() && (line.back() == '\r' || line.back() == ' ')) line.pop_back();
+    if (!line.empty() && line[0] != '#') names.push_back(line);
+  }
+  return names;
+}
+
+double Distance(const double* a, const double* b) {
+  return (Eigen::Map<const Eigen::Vector3d>(a) - Eigen::Map<const Eigen::Vector3d>(b)).norm();
+}
+
+double TurnRadians(const double* qa, const double* qb) {
+  const double dot = std::abs(qa[0] * qb[0] + qa[1] * qb[1] + qa[2] * qb[2] + qa[3] * qb[3]);
+  return 2 * std::acos(std::min(1.0, dot));
+}
+
+bool SameCamera(const IndexCamera& a, const IndexCamera& b) {
+  return a.model_id == b.model_id && a.width == b.width && a.height == b.height &&
+         a.num_params == b.num_params &&
+         std::memcmp(a.params, b.params, sizeof(double) * a.num_params) == 0;
+}
+
+// Appends child rows [child, child + count) taken from parent rows [parent, ...) to `runs`,
+// joining a run that ends where this one starts.
+void AddRun(std::vector<RowRun>* runs, uint32_t child, uint32_t parent) {
+  if (!runs->empty()) {
+    RowRun& last = runs->back();
+    if (last.child_first + last.count == child && last.parent_first + last.count == parent) {
+      ++last.count;
+      return;
+    }
+  }
+  runs->push_back({child, parent, 1});
+}
+
+const uint8_t* Row(std::span<const uint8_t> descriptors, size_t row) {
+  return descriptors.data() + row * kDescriptorBytes;
+}
+
+IndexUpdateReport Rebuild(const IndexUpdateOptions& options, const ParentBuild& parent,
+                          const std::string& reason) {
+  if (parent.georeferenced) {
+    bool georef_given = false;
+    for (const auto& [flag, value] : options.build_flags)
+      georef_given |= flag == "georef" || flag == "georef-images" || flag == "model-frame";
+    if (!georef_given) {
+      throw UpdateRefused(reason +
+                          "; --rebuild-if-needed cannot georeference the rebuilt index "
+                          "without the build's --georef, --georef-images or --model-frame");
+    }
+  }
+  IndexBuildOptions build = parent.options;
+  IndexBuildFlags flags = parent.flags;
+  for (const auto& [flag, value] : options.build_flags)
+    FindBuildOption(flag).set(value, &build, &flags);
+  build.model_dir = options.model_dir;
+  build.database_path = options.database_path;
+  build.output_path = options.output_path;
+  build.threads = options.threads;
+  ValidateBuildOptions(build, flags);
+  ApplyBuildFlags(flags, &build);
+  const IndexBuildReport built = BuildIndex(build);
+  IndexUpdateReport report;
+  report.rebuilt = true;
+  report.rebuild_reason = reason;
+  report.num_images = built.num_images;
+  report.num_points = built.num_points;
+  report.num_views = built.num_views;
+  report.num_clusters = built.num_clusters;
+  report.file_bytes = built.file_bytes;
+  report.seconds_total = built.seconds_total;
+  return report;
+}
+
+}  // namespace
+
+IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
+  const Stopwatch total;
+  IndexUpdateReport report;
+  const std::string parent_name = options.index_path.string();
+  const Index parent = Index::Open(options.index_path);
+  parent.file().VerifyChecksums();
+  const nlohmann::ordered_json parent_manifest =
+      nlohmann::ordered_json::parse(parent.manifest_json(), nullptr, false);
+  if (parent_manifest.is_discarded())
+    throw InputError(parent_name + ": section 'MANI' is not valid JSON");
+  if (parent_manifest.contains("extracted")) {
+    throw InputError(parent_name +
+                     ": a tile (cwloc-index extract) is not updated: update the index it was "
+                     "cut from, then extract the tile again or cut the delta");
+  }
+  const ParentBuild parent_build = ParentBuildOf(parent_manifest);
+  if (!options.delta_path.empty() && options.delta_path == options.output_path)
+    throw InputError(options.delta_path.string() + ": the delta and the index are one file");
+  try {
+    CheckBuildFlags(options, parent_build);
+    if (parent.coded()) {
+      throw UpdateRefused(parent_name +
+                          ": a compact index is not updated yet (its codes and point kd-forest "
+                          "would need re-coding)" +
+                          kFullBuildNeeded);
+    }
+    if (parent.point_ids().empty()) {
+      throw UpdateRefused(parent_name +
+                          ": the index has no point ids (section PIDS, written since format 1.5) "
+                          "to recognize the model's points by" +
+                          kFullBuildNeeded);
+    }
+  } catch (const UpdateRefused& refused) {
+    if (!options.rebuild_if_needed) throw;
+    return Rebuild(options, parent_build, refused.what());
+  }
+  const std::vector<std::string> removed_names = options.remove_images_file.empty()
+                                                     ? std::vector<std::string>{}
+                                                     : ReadNameList(options.remove_images_file);
+
+  // The grown model, gathered as a build gathers it.
+  Stopwatch stage;
+  try {
+    const colmap::Reconstruction model = colmap::ReadReconstruction(options.model_dir);
+    const colmap::DatabaseReader database(options.database_path);
+    // An old image whose observations are of the same points in the same order keeps its view
+    // rows, taken from the index instead of the database; one in kVerifiedImageStride of them is
+    // compared with the database, which must hold the same descriptors.
+    const std::span<const uint8_t> parent_descriptors = parent.descriptors();
+    std::unordered_map<uint32_t, uint32_t> parent_row_of_id;
+    for (uint32_t i = 0; i < parent.images().size(); ++i)
+      parent_row_of_id[parent.images()[i].image_id] = i;
+    std::vector<bool> rows_reused(parent.images().size(), false);
+    const KnownViewRows known_rows = [&](image_t image_id,
+                                         std::span<const point3D_t> point_ids) -> const uint8_t* {
+      const auto found = parent_row_of_id.find(uint32_t(image_id));
+      if (found == parent_row_of_id.end()) return nullptr;
+      const IndexImage& image = parent.images()[found->second];
+      if (image.num_views != point_ids.size()) return nullptr;
+      for (uint32_t k = 0; k < image.num_views; ++k) {
+        if (parent.point_ids()[parent.view_points()[image.first_view + k]] != point_ids[k])
+          return nullptr;
+      }
+      const uint8_t* rows = Row(parent_descriptors, image.first_view);
+      if (found->second % kVerifiedImageStride == 0) {
+        const colmap::Descriptors stored = database.ReadDescriptors(image_id);
+        const colmap::Image& model_image = model.images.at(image_id);
+        uint32_t k = 0;
+        for (uint32_t i = 0; i < model_image.points2D.size(); ++i) {
+          if (model_image.points2D[i].point3D_id == kInvalidPoint3DId) continue;
+          if (i >= stored.rows || std::memcmp(stored.Row(i), rows + size_t(k) * kDescriptorBytes,
+                                              kDescriptorBytes) != 0) {
+            throw UpdateRefused(options.database_path.string() + ": the descriptors of image '" +
+                                std::string(parent.ImageName(image)) +
+                                "' differ from those the index was built from" + kFullBuildNeeded);
+          }
+          ++k;
+        }
+      }
+      rows_reused[found->second] = true;
+      return rows;
+    };
+    ModelViews child = GatherModelViews(model, database, known_rows);
+    if (!removed_names.empty()) {
+      std::unordered_map<std::string_view, uint32_t> row_of_name;
+      for (uint32_t i = 0; i < child.images.size(); ++i)
+        row_of_name[child.ImageName(child.images[i])] = i;
+      std::vector<bool> left_out(child.images.size(), false);
+      for (const std::string& name : removed_names) {
+        const auto found = row_of_name.find(name);
+        if (found == row_of_name.end()) {
+          throw InputError(options.remove_images_file.string() + ": '" + name +
+                           "' is not an image of the model " + options.model_dir.string());
+        }
+        left_out[found->second] = true;
+      }
+      child = WithoutImages(child, left_out);
+    }
+    if (child.num_views() == 0)
+      throw InputError(options.model_dir.string() + ": the model has no 3D points with views");
+    report.seconds_read = stage.Seconds();
+
+    stage.Restart();
+    {
+      // Images by COLMAP id; an old one must keep its name, camera and pose.
+      const std::span<const IndexImage> parent_images = parent.images();
+      std::unordered_map<uint32_t, uint32_t> child_row_of_id;
+      for (uint32_t i = 0; i < child.images.size(); ++i)
+        child_row_of_id[child.images[i].image_id] = i;
+      std::vector<uint32_t> child_of_parent_image(parent_images.size(), kRemovedRow);
+      std::vector<uint32_t> parent_of_child_image(child.images.size(), kRemovedRow);
+      Eigen::AlignedBox3d box;
+      for (const IndexImage& image : parent_images) box.extend(CameraCenterOf(image));
+      const double extent = std::max(box.diagonal().norm(), 1e-9);
+      for (uint32_t i = 0; i < parent_images.size(); ++i) {
+        const IndexImage& old_image = parent_images[i];
+        const auto found = child_row_of_id.find(old_image.image_id);
+        if (found == child_row_of_id.end()) continue;  // removed
+        const IndexImage& image = child.images[found->second];
+        const std::string old_name(parent.ImageName(old_image));
+        if (child.ImageName(image) != old_name) {
+          throw UpdateRefused(
+              options.model_dir.string() + ": image " + std::to_string(image.image_id) + " is '" +
+              std::string(child.ImageName(image)) + "' in the model and '" + old_name +
+              "' in the index: not the model the index was built from" + kFullBuildNeeded);
+        }
+        if (!SameCamera(parent.cameras()[old_image.camera_index],
+                        child.cameras[image.camera_index])) {
+          throw UpdateRefused(options.model_dir.string() + ": the camera of image '" + old_name +
+                              "' changed (intrinsics refined again?)" + kFullBuildNeeded);
+        }
+        const double shift = (CameraCenterOf(old_image) - CameraCenterOf(image)).norm();
+        const double turn =
+            TurnRadians(old_image.cam_from_world_rotation, image.cam_from_world_rotation);
+        if (shift > kMaxCentreShift * extent || turn > kMaxPoseTurnRadians) {
+          char text[160];
+          std::snprintf(text, sizeof(text),
+                        "' moved by %.3g (%.2g of the cameras' extent) and turned %.3g degrees",
+                        shift, shift / extent, turn * 180 / M_PI);
+          throw UpdateRefused(options.model_dir.string() + ": the pose of image '" + old_name +
+                              text + ": the model was adjusted again, not grown" +
+                              kFullBuildNeeded);
+        }
+        child_of_parent_image[i] = found->second;
+        parent_of_child_image[found->second] = i;
+      }
+
+      // Views of the old images: the parent's rows found again, in order, among the image's.
+      std::vector<uint32_t> child_of_parent_view(parent.num_views(), kRemovedRow);
+      std::vector<uint32_t> parent_of_child_view(child.num_views(), kRemovedRow);
+      std::vector<bool> image_changed(child.images.size(), true);
+      for (uint32_t i = 0; i < parent_images.size(); ++i) {
+        if (child_of_parent_image[i] == kRemovedRow) {
+          report.images_removed++;
+          continue;
+        }
+        const IndexImage& old_image = parent_images[i];
+        const IndexImage& image = child.images[child_of_parent_image[i]];
+        const uint8_t* old_rows = Row(parent_descriptors, old_image.first_view);
+        const uint8_t* rows =
+            child.descriptors.data() + size_t(image.first_view) * kDescriptorBytes;
+        const bool same = rows_reused[i];
+        std::vector<uint32_t> unmatched;
+        for (uint32_t a = 0, b = 0; a < old_image.num_views; ++a) {
+          const uint8_t* old_row = old_rows + size_t(a) * kDescriptorBytes;
+          uint32_t found = b;
+          while (found < image.num_views &&
+                 std::memcmp(old_row, rows + size_t(found) * kDescriptorBytes, kDescriptorBytes) !=
+                     0)
+            ++found;
+          if (found == image.num_views) {
+            unmatched.push_back(a);
+            continue;
+          }
+          child_of_parent_view[old_image.first_view + a] = image.first_view + found;
+          parent_of_child_view[image.first_view + found] = old_image.first_view + a;
+          b = found + 1;
+        }
+        if (!unmatched.empty()) {
+          // Observations the model dropped still have their descriptors in the database;
+          // anything else means the database is not the one the index was built from.
+          const colmap::Descriptors stored = database.ReadDescriptors(image.image_id);
+          for (uint32_t a : unmatched) {
+            bool found = false;
+            for (uint32_t r = 0; r < stored.rows && !found; ++r)
+              found = std::memcmp(stored.Row(r), old_rows + size_t(a) * kDescriptorBytes,
+                                  kDescriptorBytes) == 0;
+            if (!found) {
+              throw UpdateRefused(options.database_path.string() + ": the descriptors of image '" +
+                                  std::string(parent.ImageName(old_image)) +
+                                  "' differ from those the index was built from" +
+                                  kFullBuildNeeded);
+            }
+          }
+        }
+        image_changed[child_of_parent_image[i]] = !same;
+      }
+
+      // Points: by their COLMAP ids, which ascend in both.
+      const std::span<const uint32_t> parent_view_points = parent.view_points();
+      const std::span<const uint64_t> parent_point_ids = parent.point_ids();
+      std::vector<uint32_t> child_of_parent_point(parent.num_points(), kRemovedRow);
+      std::vector<uint32_t> parent_of_child_point(child.points.size(), kRemovedRow);
+      for (uint32_t p = 0, q = 0; p < parent_point_ids.size() && q < child.point_ids.size();) {
+        if (parent_point_ids[p] < child.point_ids[q]) {
+          ++p;
+        } else if (child.point_ids[q] < parent_point_ids[p]) {
+          ++q;
+        } else {
+          child_of_parent_point[p] = q;
+          parent_of_child_point[q] = p;
+          ++p, ++q;
+        }
+      }
+
+      IndexDelta delta;
+      for (uint32_t w = 0; w < child.num_views(); ++w) {
+        const uint32_t v = parent_of_child_view[w];
+        if (v == kRemovedRow) {
+          report.views_added++;
+          continue;
+        }
+        AddRun(&delta.view_runs, w, v);
+        if (child_of_parent_point[parent_view_points[v]] != child.view_points[w]) {
+          delta.view_point_changes.push_back({w, child.view_points[w]});
+        }
+      }
+      report.views_removed = parent.num_views() - (child.num_views() - report.views_added);
+      std::vector<double> shifts;
+      const bool colors = !parent.point_colors().empty();
+      for (uint32_t p = 0; p < child.points.size(); ++p) {
+        const uint32_t from = parent_of_child_point[p];
+        if (from == kRemovedRow) {
+          report.points_added++;
+          delta.new_points.push_back(IndexPoint{
+              {child.points[p].xyz[0], child.points[p].xyz[1], child.points[p].xyz[2]}, 0, 0});
+          if (colors) delta.new_point_colors.push_back(child.point_colors[p]);
+          delta.new_point_ids.push_back(child.point_ids[p]);
+          continue;
+        }
+        AddRun(&delta.point_runs, p, from);
+        const std::array<double, 3> old_xyz = parent.PointXyz(from);
+        if (std::memcmp(old_xyz.data(), child.points[p].xyz, sizeof(old_xyz)) != 0) {
+          PointMove move{
+              p, 0, {child.points[p].xyz[0], child.points[p].xyz[1], child.points[p].xyz[2]}};
+          delta.point_moves.push_back(move);
+        }
+        shifts.push_back(Distance(old_xyz.data(), child.points[p].xyz));
+        if (colors && std::memcmp(&parent.point_colors()[from], &child.point_colors[p], 3) != 0)
+          delta.point_color_changes.push_back({p, child.point_colors[p], 0});
+      }
+      report.points_moved = delta.point_moves.size();
+      report.points_removed = parent.num_points() - (child.points.size() - report.points_added);
+      if (!shifts.empty()) {
+        std::nth_element(shifts.begin(), shifts.begin() + shifts.size() / 2, shifts.end());
+        const double median = shifts[shifts.size() / 2];
+        if (median > kMaxMedianPointShift * extent) {
+          char text[200];
+          std::snprintf(text, sizeof(text),
+                        ": the old 3D points moved by %.3g in the median (%.2g of the cameras' "
+                        "extent): the model was adjusted again, not grown",
+                        median, median / extent);
+          throw UpdateRefused(options.model_dir.string() + text + kFullBuildNeeded);
+        }
+      }
+
+      // Images whose views changed their points change their clusters' v_NN.
+      {
+        std::vector<uint32_t> image_of_view(child.num_views());
+        for (uint32_t i = 0; i < child.images.size(); ++i)
+          std::fill_n(image_of_view.begin() + child.images[i].first_view, child.images[i].num_views,
+                      i);
+        for (const auto& change : delta.view_point_changes)
+          image_changed[image_of_view[change.row]] = true;
+      }
+      report.seconds_compare = stage.Seconds();
+
+      // Clusters: an old image keeps its own, a new one joins the cluster of the old image it
+      // shares the most points with (a cluster of its own when it shares none); one cluster per
+      // image stays so. Clusters with a new, changed or removed image get their v_NN afresh.
+      stage.Restart();
+      const int threads = ResolveThreads(options.threads);
+      const CovisibilityGraph graph = BuildCovisibilityGraph(
+          child.images, child.points, child.tracks, child.view_points, threads);
+      Clustering clustering;
+      clustering.method =
+          parent_manifest["build_parameters"]["clustering"]["method"].get<std::string>();
+      const bool per_image = parent_build.options.clustering.method == ClusteringMethod::kPerImage;
+      std::vector<bool> lost_member(parent_images.size() + child.images.size(), false);
+      if (per_image) {
+        for (uint32_t i = 0; i < child.images.size(); ++i) clustering.cluster_of_image.push_back(i);
+        clustering.num_clusters = uint32_t(child.images.size());
+      } else {
+        // Old cluster ids first, then one id per new image that shares nothing with an old one.
+        std::vector<uint64_t> raw(child.images.size(), UINT64_MAX);
+        for (uint32_t i = 0; i < child.images.size(); ++i) {
+          if (parent_of_child_image[i] != kRemovedRow)
+            raw[i] = parent_images[parent_of_child_image[i]].cluster;
+        }
+        uint64_t next_id = parent_images.size();
+        for (uint32_t i = 0; i < child.images.size(); ++i) {
+          if (raw[i] != UINT64_MAX) continue;
+          uint32_t best_shared = 0;
+          for (uint32_t e = graph.offsets[i]; e < graph.offsets[i + 1]; ++e) {
+            const CovisibilityEdge& edge = graph.edges[e];
+            const uint32_t other = parent_of_child_image[edge.image_index];
+            if (other != kRemovedRow && edge.shared_points > best_shared) {
+              best_shared = edge.shared_points;
+              raw[i] = parent_images[other].cluster;
+            }
+          }
+          if (raw[i] == UINT64_MAX) raw[i] = next_id++;
+        }
+        std::map<uint64_t, uint32_t> dense;
+        for (uint64_t id : raw) dense.emplace(id, 0);
+        uint32_t next = 0;
+        for (auto& [id, value] : dense) value = next++;
+        for (uint64_t id : raw) clustering.cluster_of_image.push_back(dense[id]);
+        clustering.num_clusters = next;
+        for (uint32_t i = 0; i < parent_images.size(); ++i) {
+          if (child_of_parent_image[i] == kRemovedRow && dense.count(parent_images[i].cluster))
+            lost_member[dense[parent_images[i].cluster]] = true;
+        }
+      }
+      for (uint32_t i = 0; i < child.images.size(); ++i)
+        child.images[i].cluster = clustering.cluster_of_image[i];
+      std::vector<bool> dirty(clustering.num_clusters, false);
+      for (uint32_t i = 0; i < child.images.size(); ++i) {
+        report.images_added += parent_of_child_image[i] == kRemovedRow;
+        report.images_changed += parent_of_child_image[i] != kRemovedRow && image_changed[i];
+        if (image_changed[i]) dirty[clustering.cluster_of_image[i]] = true;
+      }
+      for (uint32_t c = 0; c < clustering.num_clusters; ++c) dirty[c] = dirty[c] || lost_member[c];
+      for (bool d : dirty) report.clusters_recomputed += d;
+      const std::vector<float> recomputed =
+          ComputeViewNeighborDistances(child, clustering, threads, &dirty);
+      const std::span<const float> parent_neighbors = parent.view_neighbor_distances();
+      for (uint32_t i = 0; i < child.images.size(); ++i) {
+        const IndexImage& image = child.images[i];
+        const bool fresh = dirty[image.cluster];
+        for (uint32_t w = image.first_view; w < image.first_view + image.num_views; ++w) {
+          const uint32_t v = parent_of_child_view[w];
+          if (v == kRemovedRow) {
+            delta.new_descriptors.insert(delta.new_descriptors.end(), Row(child.descriptors, w),
+                                         Row(child.descriptors, w) + kDescriptorBytes);
+            delta.new_view_points.push_back(child.view_points[w]);
+            delta.new_view_neighbors.push_back(recomputed[w]);
+            if (parent_build.options.keypoints)
+              delta.new_view_keypoints.push_back(child.view_keypoints[w]);
+          } else if (fresh &&
+                     std::memcmp(&recomputed[w], &parent_neighbors[v], sizeof(float)) != 0) {
+            delta.view_neighbor_changes.push_back({w, recomputed[w]});
+          }
+        }
+      }
+      report.neighbor_distances_changed = delta.view_neighbor_changes.size();
+      report.seconds_neighbor_distances = stage.Seconds();
+
+      // The kd-forest's balance bound, counted since its last full build.
+      stage.Restart();
+      nlohmann::ordered_json update_record =
+          parent_manifest.value("update", nlohmann::ordered_json::object());
+      uint64_t rows_at_build =
+          update_record.value("forest_rows_at_build", uint64_t(parent.num_views()));
+      uint64_t rows_inserted =
+          update_record.value("forest_rows_inserted", uint64_t{0}) + report.views_added;
+      report.forest_rebuilt =
+          double(rows_inserted) > kForestRebuildFraction * double(rows_at_build);
+      if (report.forest_rebuilt) rows_at_build = child.num_views(), rows_inserted = 0;
+
+      delta.header.parent_checksum = parent.file().header().header_checksum;
+      delta.header.parent_file_size = parent.file().header().file_size;
+      delta.header.forest_seed = parent_build.options.seed;
+      delta.header.forest_leaf_size = parent_build.options.forest.max_leaf_size;
+      delta.header.flags = report.forest_rebuilt ? kDeltaForestRebuilt : 0;
+      delta.cameras = child.cameras;
+      delta.images = child.images;
+      delta.strings = child.strings;
+      const AppliedDelta applied(parent, delta, "the update", threads);
+
+      report.num_images = child.images.size();
+      report.num_points = child.points.size();
+      report.num_views = child.num_views();
+      report.num_clusters = clustering.num_clusters;
+      nlohmann::ordered_json manifest = parent_manifest;
+      manifest["tool_version"] = kToolVersion;
+      IndexBuildReport counts;
+      counts.num_cameras = child.cameras.size();
+      counts.num_images = child.images.size();
+      counts.num_points = child.points.size();
+      counts.num_views = child.num_views();
+      counts.num_clusters = clustering.num_clusters;
+      counts.num_covisibility_edges = graph.edges.size();
+      manifest["counts"] = CountsJson(counts);
+      manifest["counts"]["kd_nodes"] = applied.num_kd_nodes();
+      manifest["build_parameters"]["clustering"]["num_clusters"] = clustering.num_clusters;
+      manifest["source"]["model"]["path"] = options.model_dir.string();
+      manifest["source"]["model"]["layout"] = model.rigs.empty() ? "classic" : "rigs";
+      manifest["source"]["model"]["fingerprint"] = FingerprintModel(options.model_dir);
+      manifest["source"]["database"]["path"] = options.database_path.string();
+      const uint64_t updates = update_record.value("updates", uint64_t{0}) + 1;
+      manifest["update"] = {
+          {"updates", updates},
+          {"images_added", update_record.value("images_added", uint64_t{0}) + report.images_added},
+          {"images_removed",
+           update_record.value("images_removed", uint64_t{0}) + report.images_removed},
+          {"forest_rows_at_build", rows_at_build},
+          {"forest_rows_inserted", rows_inserted},
+          {"parent",
+           {{"checksum", "xxh64:" + HashHex(delta.header.parent_checksum)},
+            {"file_bytes", delta.header.parent_file_size}}}};
+      delta.manifest = manifest.dump(2) + "\n";
+      delta.header.child_checksum =
+          applied.Write(options.output_path, delta.manifest, std::nullopt);
+      report.file_bytes = std::filesystem::file_size(options.output_path);
+      delta.header.child_file_size = report.file_bytes;
+      if (!options.delta_path.empty()) {
+        WriteDelta(options.delta_path, delta);
+        report.delta_bytes = std::filesystem::file_size(options.delta_path);
+      }
+      report.seconds_write = stage.Seconds();
+    }
+  } catch (const UpdateRefused& refused) {
+    if (!options.rebuild_if_needed) throw;
+    return Rebuild(options, parent_build, refused.what());
+  }
+  report.seconds_total = total.Seconds();
+  return report;
+}
+
+nlohmann::ordered_json UpdateReportJson(const IndexUpdateOptions& options,
+                                        const IndexUpdateReport& report) {
+  nlohmann::ordered_json out = {{"output", options.output_path.string()},
+                                {"file_bytes", report.file_bytes},
+                                {"rebuilt", report.rebuilt}};
+  if (report.rebuilt) out["rebuild_reason"] = report.rebuild_reason;
+  if (!options.delta_path.empty() && !report.rebuilt) {
+    out["delta"] = {{"path", options.delta_path.string()}, {"bytes", report.delta_bytes}};
+  }
+  out["counts"] = {{"images", report.num_images},
+                   {"points", report.num_points},
+                   {"views", report.num_views},
+                   {"clusters", report.num_clusters}};
+  out["changes"] = {{"images_added", report.images_added},
+                    {"images_removed", report.images_removed},
+                    {"images_changed", report.images_changed},
+                    {"views_added", report.views_added},
+                    {"views_removed", report.views_removed},
+                    {"points_added", report.points_added},
+                    {"points_removed", report.points_removed},
+                    {"points_moved", report.points_moved},
+                    {"clusters_recomputed", report.clusters_recomputed},
+                    {"neighbor_distances_changed", report.neighbor_distances_changed},
+                    {"forest_rebuilt", report.forest_rebuilt}};
+  out["seconds"] = {{"read", report.seconds_read},
+                    {"compare", report.seconds_compare},
+                    {"neighbor_distances", report.seconds_neighbor_distances},
+                    {"write", report.seconds_write},
+                    {"total", report.seconds_total}};
+  return out;
+}
+
+}  // namespace cwloc

@@ -1,0 +1,36 @@
+#pragma once
+
+// Updates a kd-forest for a changed set of rows without rebuilding it, as FAISS and HNSW add
+// vectors to a trained index: kept rows stay in their leaves (renumbered), removed ones leave,
+// and new rows descend the existing splits to a leaf; a leaf that grows past the bucket size is
+// split as the build splits (AppendKdSubtree). Used by `cwloc-index update` and `apply`, which
+// must give the same bytes: the output is a function of the inputs only.
+
+#include <cstdint>
+#include <limits>
+#include <span>
+
+#include "kdtree/kd_forest_builder.h"
+
+namespace cwloc {
+
+inline constexpr uint32_t kRemovedRow = std::numeric_limits<uint32_t>::max();
+
+struct KdForestChange {
+  // Row r of the parent forest is row parent_to_child[r] of the updated one, or kRemovedRow.
+  // Kept rows keep their order (r < s gives parent_to_child[r] < parent_to_child[s]).
+  std::span<const uint32_t> parent_to_child;
+  // The updated forest's rows that are not the parent's, ascending.
+  std::span<const uint32_t> inserted;
+};
+
+// The parent forest (a valid one: ValidateKdForest) with `change` applied, over `descriptors`
+// (the updated rows, N x 128). A new row goes left of a split when its value is at most `low`,
+// right when at least `high`, and between them to the nearer bound, which then moves to it, so
+// that the bounds the search prunes with stay exact. Throws std::invalid_argument when the
+// change does not fit the forest.
+KdForest UpdateKdForest(const KdForestView& parent, const KdForestChange& change,
+                        std::span<const uint8_t> descriptors, uint32_t max_leaf_size,
+                        uint64_t seed);
+
+}  // namespace cwloc
