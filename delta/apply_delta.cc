@@ -77,7 +77,9 @@ void CheckChangedRows(const std::vector<Change>& changes, size_t rows, const cha
 }  // namespace
 
 struct AppliedDelta::Child {
-  std::vector<uint8_t> descriptors;
+  // Every byte is written: no zero-filling of a gigabyte first.
+  std::unique_ptr<uint8_t[]> descriptor_bytes;
+  std::span<uint8_t> descriptors;
   std::vector<uint32_t> view_points;
   std::vector<ViewKeypoint> view_keypoints;
   std::vector<float> neighbor_distances;
@@ -166,7 +168,9 @@ AppliedDelta::AppliedDelta(const Index& parent, const IndexDelta& delta,
   }
 
   Child& child = *child_;
-  child.descriptors.resize(child_views * kDescriptorBytes);
+  child.descriptor_bytes =
+      std::make_unique_for_overwrite<uint8_t[]>(child_views * kDescriptorBytes);
+  child.descriptors = {child.descriptor_bytes.get(), child_views * kDescriptorBytes};
   child.view_points.resize(child_views);
   child.neighbor_distances.resize(child_views);
   if (keypoints) child.view_keypoints.resize(child_views);
@@ -253,14 +257,17 @@ AppliedDelta::AppliedDelta(const Index& parent, const IndexDelta& delta,
     for (uint32_t v = 0; v < child_views; ++v) {
       if (views.child_to_parent[v] == kRemovedRow) inserted.push_back(v);
     }
-    child.forest = UpdateKdForest(parent.kd_forest(), {views.parent_to_child, inserted},
-                                  child.descriptors, header.forest_leaf_size, header.forest_seed);
+    child.forest =
+        UpdateKdForest(parent.kd_forest(), {views.parent_to_child, inserted}, child.descriptors,
+                       header.forest_leaf_size, header.forest_seed, threads);
   }
 }
 
 AppliedDelta::~AppliedDelta() = default;
 
 size_t AppliedDelta::num_kd_nodes() const { return child_->forest.nodes.size(); }
+
+size_t AppliedDelta::num_covisibility_edges() const { return child_->graph.edges.size(); }
 
 uint64_t AppliedDelta::Write(const std::filesystem::path& output, std::string_view manifest,
                              std::optional<uint64_t> expected_checksum) const {

@@ -26,6 +26,7 @@ class AppliedDelta {
   AppliedDelta& operator=(const AppliedDelta&) = delete;
 
   size_t num_kd_nodes() const;
+  size_t num_covisibility_edges() const;
   // Writes the child atomically with `manifest` as its MANI and returns its header checksum;
   // refuses (InputError, nothing written) a child whose checksum is not `expected_checksum`.
   uint64_t Write(const std::filesystem::path& output, std::string_view manifest,

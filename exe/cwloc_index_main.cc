@@ -96,9 +96,11 @@ int RunUpdate(const IndexUpdateOptions& options, bool json) {
                 report.delta_bytes / 1e6,
                 100.0 * double(report.delta_bytes) / double(report.file_bytes));
   }
-  std::printf("%.2f s (read %.2f, compare %.2f, v_NN %.2f, kd-forest and write %.2f)\n",
-              report.seconds_total, report.seconds_read, report.seconds_compare,
-              report.seconds_neighbor_distances, report.seconds_write);
+  std::printf(
+      "%.2f s (read %.2f, compare %.2f, v_NN %.2f, tracks, co-visibility and kd-forest %.2f, "
+      "write %.2f)\n",
+      report.seconds_total, report.seconds_read, report.seconds_compare,
+      report.seconds_neighbor_distances, report.seconds_apply, report.seconds_write);
   return kExitOk;
 }
 

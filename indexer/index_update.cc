@@ -6,6 +6,7 @@
 #include <cstring>
 #include <fstream>
 #include <map>
+#include <memory>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -68,9 +69,11 @@ ParentBuild ParentBuildOf(const nlohmann::ordered_json& manifest) {
     parent.options.clustering.target_clusters = *parent.flags.clusters;
   }
   parent.georeferenced = manifest.contains("georeference") && manifest["georeference"].is_object();
-  if (manifest.contains("covariance_calibration"))
-    parent.options.calibration_samples =
-        manifest["covariance_calibration"].value("sampled", parent.options.calibration_samples);
+  // The calibration's sample count as it ran (at most the option's); none without PCAL.
+  parent.options.calibration_samples =
+      manifest.contains("covariance_calibration")
+          ? manifest["covariance_calibration"].value("sampled_images", uint32_t{0})
+          : 0;
   return parent;
 }
 
@@ -223,7 +226,10 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
   // The grown model, gathered as a build gathers it.
   Stopwatch stage;
   try {
-    const colmap::Reconstruction model = colmap::ReadReconstruction(options.model_dir);
+    // Freed once gathered: the index's arrays hold what the rest needs.
+    auto model =
+        std::make_unique<colmap::Reconstruction>(colmap::ReadReconstruction(options.model_dir));
+    const std::string layout = model->rigs.empty() ? "classic" : "rigs";
     const colmap::DatabaseReader database(options.database_path);
     // An old image whose observations are of the same points in the same order keeps its view
     // rows, taken from the index instead of the database; one in kVerifiedImageStride of them is
@@ -232,7 +238,6 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
     std::unordered_map<uint32_t, uint32_t> parent_row_of_id;
     for (uint32_t i = 0; i < parent.images().size(); ++i)
       parent_row_of_id[parent.images()[i].image_id] = i;
-    std::vector<bool> rows_reused(parent.images().size(), false);
     const KnownViewRows known_rows = [&](image_t image_id,
                                          std::span<const point3D_t> point_ids) -> const uint8_t* {
       const auto found = parent_row_of_id.find(uint32_t(image_id));
@@ -246,7 +251,7 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
       const uint8_t* rows = Row(parent_descriptors, image.first_view);
       if (found->second % kVerifiedImageStride == 0) {
         const colmap::Descriptors stored = database.ReadDescriptors(image_id);
-        const colmap::Image& model_image = model.images.at(image_id);
+        const colmap::Image& model_image = model->images.at(image_id);
         uint32_t k = 0;
         for (uint32_t i = 0; i < model_image.points2D.size(); ++i) {
           if (model_image.points2D[i].point3D_id == kInvalidPoint3DId) continue;
@@ -259,10 +264,10 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
           ++k;
         }
       }
-      rows_reused[found->second] = true;
       return rows;
     };
-    ModelViews child = GatherModelViews(model, database, known_rows);
+    ModelViews child = GatherModelViews(*model, database, known_rows);
+    model.reset();
     if (!removed_names.empty()) {
       std::unordered_map<std::string_view, uint32_t> row_of_name;
       for (uint32_t i = 0; i < child.images.size(); ++i)
@@ -277,6 +282,14 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
         left_out[found->second] = true;
       }
       child = WithoutImages(child, left_out);
+      // Only the kept images' names, as a build of the model without them stores them.
+      std::string names;
+      for (IndexImage& image : child.images) {
+        const std::string_view name = child.ImageName(image);
+        image.name_offset = uint32_t(names.size());
+        names += name;
+      }
+      child.strings = std::move(names);
     }
     if (child.num_views() == 0)
       throw InputError(options.model_dir.string() + ": the model has no 3D points with views");
@@ -341,7 +354,6 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
         const uint8_t* old_rows = Row(parent_descriptors, old_image.first_view);
         const uint8_t* rows =
             child.descriptors.data() + size_t(image.first_view) * kDescriptorBytes;
-        const bool same = rows_reused[i];
         std::vector<uint32_t> unmatched;
         for (uint32_t a = 0, b = 0; a < old_image.num_views; ++a) {
           const uint8_t* old_row = old_rows + size_t(a) * kDescriptorBytes;
@@ -375,7 +387,8 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
             }
           }
         }
-        image_changed[child_of_parent_image[i]] = !same;
+        image_changed[child_of_parent_image[i]] =
+            !(old_image.num_views == image.num_views && unmatched.empty());
       }
 
       // Points: by their COLMAP ids, which ascend in both.
@@ -462,12 +475,15 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
       // image stays so. Clusters with a new, changed or removed image get their v_NN afresh.
       stage.Restart();
       const int threads = ResolveThreads(options.threads);
-      const CovisibilityGraph graph = BuildCovisibilityGraph(
-          child.images, child.points, child.tracks, child.view_points, threads);
+      const bool per_image = parent_build.options.clustering.method == ClusteringMethod::kPerImage;
+      // The graph joins new images to clusters; apply makes the index's own.
+      const CovisibilityGraph graph =
+          per_image ? CovisibilityGraph{}
+                    : BuildCovisibilityGraph(child.images, child.points, child.tracks,
+                                             child.view_points, threads);
       Clustering clustering;
       clustering.method =
           parent_manifest["build_parameters"]["clustering"]["method"].get<std::string>();
-      const bool per_image = parent_build.options.clustering.method == ClusteringMethod::kPerImage;
       std::vector<bool> lost_member(parent_images.size() + child.images.size(), false);
       if (per_image) {
         for (uint32_t i = 0; i < child.images.size(); ++i) clustering.cluster_of_image.push_back(i);
@@ -536,6 +552,8 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
         }
       }
       report.neighbor_distances_changed = delta.view_neighbor_changes.size();
+      // The delta holds the new rows; the child's come from it and the parent, as on a device.
+      std::vector<uint8_t>().swap(child.descriptors);
       report.seconds_neighbor_distances = stage.Seconds();
 
       // The kd-forest's balance bound, counted since its last full build.
@@ -559,6 +577,8 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
       delta.images = child.images;
       delta.strings = child.strings;
       const AppliedDelta applied(parent, delta, "the update", threads);
+      report.seconds_apply = stage.Seconds();
+      stage.Restart();
 
       report.num_images = child.images.size();
       report.num_points = child.points.size();
@@ -572,12 +592,12 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
       counts.num_points = child.points.size();
       counts.num_views = child.num_views();
       counts.num_clusters = clustering.num_clusters;
-      counts.num_covisibility_edges = graph.edges.size();
+      counts.num_covisibility_edges = applied.num_covisibility_edges();
       manifest["counts"] = CountsJson(counts);
       manifest["counts"]["kd_nodes"] = applied.num_kd_nodes();
       manifest["build_parameters"]["clustering"]["num_clusters"] = clustering.num_clusters;
       manifest["source"]["model"]["path"] = options.model_dir.string();
-      manifest["source"]["model"]["layout"] = model.rigs.empty() ? "classic" : "rigs";
+      manifest["source"]["model"]["layout"] = layout;
       manifest["source"]["model"]["fingerprint"] = FingerprintModel(options.model_dir);
       manifest["source"]["database"]["path"] = options.database_path.string();
       const uint64_t updates = update_record.value("updates", uint64_t{0}) + 1;
@@ -637,6 +657,7 @@ nlohmann::ordered_json UpdateReportJson(const IndexUpdateOptions& options,
   out["seconds"] = {{"read", report.seconds_read},
                     {"compare", report.seconds_compare},
                     {"neighbor_distances", report.seconds_neighbor_distances},
+                    {"apply", report.seconds_apply},
                     {"write", report.seconds_write},
                     {"total", report.seconds_total}};
   return out;

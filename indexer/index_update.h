@@ -56,8 +56,10 @@ struct IndexUpdateReport {
   size_t num_images = 0, num_points = 0, num_views = 0, num_clusters = 0;
   bool forest_rebuilt = false;
   uint64_t file_bytes = 0, delta_bytes = 0;
-  double seconds_read = 0, seconds_compare = 0, seconds_neighbor_distances = 0, seconds_write = 0,
-         seconds_total = 0;
+  // seconds_apply: the child composed from the parent and the delta (tracks, co-visibility,
+  // kd-forest), as apply composes it.
+  double seconds_read = 0, seconds_compare = 0, seconds_neighbor_distances = 0, seconds_apply = 0,
+         seconds_write = 0, seconds_total = 0;
 };
 
 // Throws UpdateRefused (unless rebuild_if_needed) when the model was not grown from the one the

@@ -520,9 +520,11 @@ void AppendKdSubtree(std::span<const uint8_t> descriptors, std::span<uint32_t> r
   const auto count = uint32_t(rows.size());
   scratch.column.resize(count);
   scratch.right.resize(count);
-  scratch.local_ids.resize(kLocalRows);
-  scratch.right_ids.resize(kLocalRows);
-  scratch.local_rows.resize(size_t(kLocalRows) * kDescriptorDim);
+  // A small bucket split needs a copy of its own size only.
+  const uint32_t local = std::min(count, kLocalRows);
+  scratch.local_ids.resize(local);
+  scratch.right_ids.resize(local);
+  scratch.local_rows.resize(size_t(local) * kDescriptorDim);
   std::vector<KdNode> subtree;
   builder.BuildSubtree(rows.data(), slot_base, 0, count, seed, &subtree, &scratch);
   const auto base = uint32_t(nodes->size());

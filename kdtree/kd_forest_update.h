@@ -28,9 +28,10 @@ struct KdForestChange {
 // (the updated rows, N x 128). A new row goes left of a split when its value is at most `low`,
 // right when at least `high`, and between them to the nearer bound, which then moves to it, so
 // that the bounds the search prunes with stay exact. Throws std::invalid_argument when the
-// change does not fit the forest.
+// change does not fit the forest. Trees are updated in parallel on `num_threads` (0 = all
+// cores), which never changes the output.
 KdForest UpdateKdForest(const KdForestView& parent, const KdForestChange& change,
-                        std::span<const uint8_t> descriptors, uint32_t max_leaf_size,
-                        uint64_t seed);
+                        std::span<const uint8_t> descriptors, uint32_t max_leaf_size, uint64_t seed,
+                        int num_threads);
 
 }  // namespace cwloc

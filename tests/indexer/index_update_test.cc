@@ -1,0 +1,336 @@
+// cwloc-index update and apply: an updated index holds what a full build of the grown model
+// holds (every section but the manifest and the kd-forest, v_NN bit for bit), its kd-forest
+// finds every row, apply rebuilds it bit for bit, and each refusal says why.
+#include "indexer/index_update.h"
+
+#include <gmock/gmock.h>
+
+#include <fstream>
+#include <map>
+#include <set>
+
+#include "colmap/reconstruction_io.h"
+#include "delta/apply_delta.h"
+#include "format/index.h"
+#include "format/xxhash64.h"
+#include "kdtree/kd_forest.h"
+#include "tests/indexer/indexer_fixture.h"
+
+namespace cwloc {
+namespace {
+
+using testing::HasSubstr;
+
+constexpr const char* kFullBuildNeeded =
+    ": a full build is needed (cwloc-index build, or update --rebuild-if-needed)";
+
+class IndexUpdateTest : public test::IndexerFixture {
+ protected:
+  // The fixture's model without the images `ids`, as colmap image_deleter leaves it: their
+  // observations go, and so does every point left with fewer than two.
+  colmap::Reconstruction Without(const std::set<image_t>& ids) const {
+    colmap::Reconstruction model = model_;
+    for (image_t id : ids) model.images.erase(id);
+    for (auto it = model.points3D.begin(); it != model.points3D.end();) {
+      std::vector<colmap::TrackElement>& track = it->second.track;
+      std::erase_if(track, [&](const colmap::TrackElement& e) { return ids.count(e.image_id); });
+      if (track.size() >= 2) {
+        ++it;
+        continue;
+      }
+      for (const colmap::TrackElement& e : track)
+        model.images[e.image_id].points2D[e.point2D_idx].point3D_id = kInvalidPoint3DId;
+      it = model.points3D.erase(it);
+    }
+    return model;
+  }
+
+  std::filesystem::path WriteModel(const colmap::Reconstruction& model,
+                                   const std::string& name) const {
+    const std::filesystem::path dir = dir_ / name;
+    std::filesystem::create_directories(dir);
+    colmap::WriteReconstruction(model, dir, colmap::ModelFormat::kBinary);
+    return dir;
+  }
+
+  std::filesystem::path Build(const std::filesystem::path& model_dir, const std::string& name,
+                              uint32_t code_bytes = 0) const {
+    IndexBuildOptions options;
+    options.model_dir = model_dir;
+    options.database_path = database_path_;
+    options.output_path = dir_ / name;
+    options.calibration_samples = 0;
+    options.code_bytes = code_bytes;
+    if (code_bytes != 0) options.forest.num_trees = 2;
+    BuildIndex(options);
+    return options.output_path;
+  }
+
+  IndexUpdateOptions Update(const std::filesystem::path& parent,
+                            const std::filesystem::path& model_dir,
+                            const std::string& name) const {
+    IndexUpdateOptions options;
+    options.index_path = parent;
+    options.model_dir = model_dir;
+    options.database_path = database_path_;
+    options.output_path = dir_ / (name + ".cwl");
+    options.delta_path = dir_ / (name + ".cwld");
+    return options;
+  }
+
+  // The fixture's last `count` image ids: what a grown model adds to the old one.
+  std::set<image_t> LastImages(size_t count) const {
+    std::set<image_t> ids;
+    for (auto it = model_.images.rbegin(); ids.size() < count; ++it) ids.insert(it->first);
+    return ids;
+  }
+
+  static std::map<std::string, uint64_t> Checksums(const std::filesystem::path& path) {
+    const IndexFile file = IndexFile::Open(path);
+    std::map<std::string, uint64_t> out;
+    for (const SectionEntry& entry : file.sections()) out[SectionTagName(entry.tag)] = entry.checksum;
+    return out;
+  }
+
+  // Every section a full build and an update share: all but the manifest and the kd-forest.
+  static void ExpectSameAsFullBuild(const std::filesystem::path& updated,
+                                    const std::filesystem::path& full) {
+    std::map<std::string, uint64_t> a = Checksums(updated), b = Checksums(full);
+    for (const char* tag : {"MANI", "KDND", "KDRT", "KDLF"}) a.erase(tag), b.erase(tag);
+    EXPECT_EQ(a, b);
+    EXPECT_EQ(a.count("VNND"), 1u);
+    EXPECT_EQ(a.count("PIDS"), 1u);
+  }
+
+  // Each row's own descriptor, searched with a budget of one bucket (8 rows), finds the row at distance
+  // 0 in the first leaf it descends to: new rows sit where the search looks for them.
+  static void ExpectEveryRowFindsItself(const std::filesystem::path& path) {
+    const Index index = Index::Open(path);
+    index.Validate();
+    KdForestSearcher searcher(index.kd_forest());
+    KdSearchOptions options;
+    options.max_checks = 8;  // one bucket: the first leaf the search reaches
+    options.interleave = 1;
+    std::vector<KdNeighbor> nearest(1);
+    for (uint32_t row = 0; row < index.num_rows(); ++row) {
+      const KdSearchResult found =
+          searcher.Search(index.RowDescriptor(row, nullptr), options, nearest);
+      ASSERT_EQ(found.num_neighbors, 1u) << "row " << row;
+      ASSERT_EQ(nearest[0].distance, 0u) << "row " << row;
+    }
+  }
+};
+
+TEST_F(IndexUpdateTest, HoldsWhatAFullBuildOfTheGrownModelHoldsAndApplyRebuildsItBitForBit) {
+  const std::set<image_t> held_out = LastImages(3);
+  const auto old_index = Build(WriteModel(Without(held_out), "old"), "old.cwl");
+  const IndexUpdateOptions options = Update(old_index, model_dir_, "grown");
+  const IndexUpdateReport report = UpdateIndex(options);
+  const auto full_index = Build(model_dir_, "full.cwl");
+
+  EXPECT_FALSE(report.rebuilt);
+  EXPECT_EQ(report.images_added, 3u);
+  EXPECT_EQ(report.images_removed, 0u);
+  EXPECT_EQ(report.num_views, model_.NumObservations());
+  EXPECT_EQ(report.num_views,
+            Index::Open(old_index).num_views() + report.views_added - report.views_removed);
+  EXPECT_GT(report.views_added, 0u);
+  ExpectSameAsFullBuild(options.output_path, full_index);
+  ExpectEveryRowFindsItself(options.output_path);
+
+  const Index updated = Index::Open(options.output_path);
+  const auto manifest = nlohmann::json::parse(updated.manifest_json());
+  EXPECT_EQ(manifest["update"]["updates"], 1);
+  EXPECT_EQ(manifest["update"]["images_added"], 3);
+  EXPECT_EQ(manifest["counts"]["views"], model_.NumObservations());
+
+  const std::filesystem::path applied = dir_ / "applied.cwl";
+  ApplyDelta(old_index, options.delta_path, applied, 1);
+  EXPECT_EQ(test::ReadBytes(applied), test::ReadBytes(options.output_path));
+}
+
+TEST_F(IndexUpdateTest, AChainOfUpdatesAppliesInOrderAndRefusesAnyOtherOrder) {
+  const std::set<image_t> last_three = LastImages(3), last_one = LastImages(1);
+  const auto first = Build(WriteModel(Without(last_three), "first"), "first.cwl");
+  const IndexUpdateOptions to_second = Update(first, WriteModel(Without(last_one), "m2"), "second");
+  UpdateIndex(to_second);
+  const IndexUpdateOptions to_third = Update(to_second.output_path, model_dir_, "third");
+  UpdateIndex(to_third);
+  ExpectSameAsFullBuild(to_third.output_path, Build(model_dir_, "full.cwl"));
+  EXPECT_EQ(nlohmann::json::parse(Index::Open(to_third.output_path).manifest_json())["update"]
+                ["updates"],
+            2);
+
+  const std::filesystem::path second = dir_ / "applied_second.cwl", third = dir_ / "applied.cwl";
+  ApplyDelta(first, to_second.delta_path, second, 1);
+  ApplyDelta(second, to_third.delta_path, third, 1);
+  EXPECT_EQ(test::ReadBytes(third), test::ReadBytes(to_third.output_path));
+
+  const std::filesystem::path out_of_order = dir_ / "out_of_order.cwl";
+  const FileHeader first_header = IndexFile::Open(first).header();
+  const FileHeader second_header = IndexFile::Open(second).header();
+  try {
+    ApplyDelta(first, to_third.delta_path, out_of_order, 1);
+    FAIL() << "applied the second delta of a chain to the first index";
+  } catch (const InputError& error) {
+    EXPECT_EQ(std::string(error.what()),
+              to_third.delta_path.string() + ": made for the index with checksum " +
+                  HashHex(second_header.header_checksum) + " (" +
+                  std::to_string(second_header.file_size) + " bytes), and " + first.string() +
+                  " has " + HashHex(first_header.header_checksum) + " (" +
+                  std::to_string(first_header.file_size) +
+                  " bytes): apply a chain's deltas in order, each to the index the one before "
+                  "made");
+  }
+  EXPECT_FALSE(std::filesystem::exists(out_of_order));
+}
+
+TEST_F(IndexUpdateTest, RemovedImagesLeaveWhatAFullBuildWithoutThemHolds) {
+  const auto index = Build(model_dir_, "all.cwl");
+  const std::set<image_t> removed = {model_.images.begin()->first,
+                                     std::next(model_.images.begin(), 4)->first};
+  std::ofstream list(dir_ / "remove.txt");
+  for (image_t id : removed) list << model_.images.at(id).name << "\n";
+  list.close();
+  IndexUpdateOptions options = Update(index, model_dir_, "removed");
+  options.remove_images_file = dir_ / "remove.txt";
+  const IndexUpdateReport report = UpdateIndex(options);
+  EXPECT_EQ(report.images_removed, 2u);
+  EXPECT_EQ(report.images_added, 0u);
+  ExpectSameAsFullBuild(options.output_path, Build(WriteModel(Without(removed), "less"), "less.cwl"));
+  ExpectEveryRowFindsItself(options.output_path);
+  ApplyDelta(index, options.delta_path, dir_ / "applied.cwl", 1);
+  EXPECT_EQ(test::ReadBytes(dir_ / "applied.cwl"), test::ReadBytes(options.output_path));
+}
+
+TEST_F(IndexUpdateTest, RefusesAModelWhoseOldPosesMovedUnlessAskedToRebuild) {
+  const auto index = Build(WriteModel(Without(LastImages(2)), "old"), "old.cwl");
+  colmap::Reconstruction moved = model_;
+  colmap::Image& image = moved.images.begin()->second;
+  image.cam_from_world.translation[0] += 0.5;
+  const IndexUpdateOptions options = Update(index, WriteModel(moved, "moved"), "out");
+  try {
+    UpdateIndex(options);
+    FAIL() << "updated from a model adjusted again";
+  } catch (const UpdateRefused& refused) {
+    EXPECT_THAT(refused.what(), HasSubstr(options.model_dir.string() + ": the pose of image '" +
+                                          image.name + "' moved by 0.5 ("));
+    EXPECT_THAT(refused.what(), HasSubstr("the model was adjusted again, not grown" +
+                                          std::string(kFullBuildNeeded)));
+  }
+  EXPECT_FALSE(std::filesystem::exists(options.output_path));
+  EXPECT_FALSE(std::filesystem::exists(options.delta_path));
+
+  IndexUpdateOptions rebuild = options;
+  rebuild.rebuild_if_needed = true;
+  const IndexUpdateReport report = UpdateIndex(rebuild);
+  EXPECT_TRUE(report.rebuilt);
+  EXPECT_THAT(report.rebuild_reason, HasSubstr("moved by 0.5"));
+  EXPECT_FALSE(std::filesystem::exists(options.delta_path));
+  std::map<std::string, uint64_t> rebuilt = Checksums(options.output_path),
+                                  built = Checksums(Build(options.model_dir, "moved.cwl"));
+  rebuilt.erase("MANI"), built.erase("MANI");
+  EXPECT_EQ(rebuilt, built);
+}
+
+TEST_F(IndexUpdateTest, RefusesOtherBuildOptionsACompactIndexAndAnOtherDatabase) {
+  const auto index = Build(WriteModel(Without(LastImages(2)), "old"), "old.cwl");
+  IndexUpdateOptions options = Update(index, model_dir_, "out");
+  options.build_flags = {{"trees", OptionValue(uint32_t{8})}};
+  try {
+    UpdateIndex(options);
+    FAIL();
+  } catch (const UpdateRefused& refused) {
+    EXPECT_EQ(std::string(refused.what()),
+              index.string() + ": the index was built with --trees 4, and this update asks for "
+                               "--trees 8" + kFullBuildNeeded);
+  }
+  options.build_flags = {{"trees", OptionValue(uint32_t{4})}, {"threads", OptionValue(int32_t{1})}};
+  EXPECT_NO_THROW(UpdateIndex(options));
+
+  const auto compact = Build(dir_ / "old", "compact.cwl", 8);
+  try {
+    UpdateIndex(Update(compact, model_dir_, "compact_out"));
+    FAIL();
+  } catch (const UpdateRefused& refused) {
+    EXPECT_EQ(std::string(refused.what()),
+              compact.string() +
+                  ": a compact index is not updated yet (its codes and point kd-forest would need "
+                  "re-coding)" + kFullBuildNeeded);
+  }
+
+  // The database extracted again: the first image's descriptors differ.
+  {
+    colmap::DatabaseWriter writer(dir_ / "other.db");
+    for (const auto& [id, camera] : model_.cameras) writer.WriteCamera(camera);
+    for (const auto& [id, image] : model_.images) {
+      writer.WriteImage({id, image.name, image.camera_id});
+      std::vector<colmap::Keypoint> keypoints;
+      for (const colmap::Point2D& point : image.points2D)
+        keypoints.push_back({static_cast<float>(point.x), static_cast<float>(point.y)});
+      writer.WriteKeypoints(id, keypoints);
+      colmap::Descriptors descriptors = descriptors_.at(id);
+      if (id == model_.images.begin()->first) {
+        for (uint8_t& byte : descriptors.data) byte ^= 1;
+      }
+      writer.WriteDescriptors(id, descriptors);
+    }
+    writer.Commit();
+  }
+  IndexUpdateOptions other_database = Update(index, model_dir_, "other_database");
+  other_database.database_path = dir_ / "other.db";
+  try {
+    UpdateIndex(other_database);
+    FAIL();
+  } catch (const UpdateRefused& refused) {
+    EXPECT_EQ(std::string(refused.what()),
+              other_database.database_path.string() + ": the descriptors of image '" +
+                  model_.images.begin()->second.name +
+                  "' differ from those the index was built from" + kFullBuildNeeded);
+  }
+}
+
+TEST_F(IndexUpdateTest, ATruncatedOrCorruptDeltaIsNamedAndWritesNothing) {
+  const auto index = Build(WriteModel(Without(LastImages(2)), "old"), "old.cwl");
+  const IndexUpdateOptions options = Update(index, model_dir_, "grown");
+  UpdateIndex(options);
+  const std::vector<uint8_t> bytes = test::ReadBytes(options.delta_path);
+  const std::filesystem::path damaged = dir_ / "damaged.cwld", output = dir_ / "out.cwl";
+
+  test::WriteBytes(damaged, std::span(bytes).first(bytes.size() - 100));
+  try {
+    ApplyDelta(index, damaged, output, 1);
+    FAIL();
+  } catch (const InputError& error) {
+    EXPECT_EQ(std::string(error.what()),
+              damaged.string() + ": truncated or extended: the header says " +
+                  std::to_string(bytes.size()) + " bytes, the file has " +
+                  std::to_string(bytes.size() - 100));
+  }
+  std::vector<uint8_t> flipped = bytes;
+  const IndexFile file = IndexFile::Open(options.delta_path, kDeltaContainer);
+  const SectionEntry* descriptors = file.FindSection(delta_section::kNewDescriptors);
+  ASSERT_NE(descriptors, nullptr);
+  ASSERT_GT(descriptors->size, 0u);
+  flipped[descriptors->offset + 7] ^= 0x10;
+  test::WriteBytes(damaged, flipped);
+  try {
+    ApplyDelta(index, damaged, output, 1);
+    FAIL();
+  } catch (const InputError& error) {
+    EXPECT_THAT(error.what(), HasSubstr(damaged.string() + ": section "));
+    EXPECT_THAT(error.what(), HasSubstr(" 'NDSC': checksum mismatch"));
+  }
+  try {
+    ApplyDelta(index, index, output, 1);
+    FAIL();
+  } catch (const InputError& error) {
+    EXPECT_EQ(std::string(error.what()),
+              index.string() +
+                  ": not a cwloc index delta (wrong magic; expected \"CWLOCDLT\")");
+  }
+  EXPECT_FALSE(std::filesystem::exists(output));
+}
+
+}  // namespace
+}  // namespace cwloc
