@@ -149,6 +149,14 @@ const char* cwloc_version(void) { return cwloc::api::Version(); }
 
 const char* cwloc_last_error(void) { return last_error.c_str(); }
 
+cwloc_status cwloc_index_apply(const char* index_path, const char* delta_path,
+                               const char* output_path, int threads) {
+  if (index_path == nullptr || delta_path == nullptr || output_path == nullptr)
+    return Fail(CWLOC_ERROR_INVALID_ARGUMENT, "a path is NULL");
+  return Guarded(
+      [&] { cwloc::api::ApplyIndexDelta(index_path, delta_path, output_path, threads); });
+}
+
 cwloc_status cwloc_localizer_open(const char* index_path, int verify, cwloc_localizer** out) {
   if (out == nullptr) return Fail(CWLOC_ERROR_INVALID_ARGUMENT, "out is NULL");
   *out = nullptr;

@@ -9,6 +9,7 @@
 #include "base/error.h"
 #include "cwloc/cwloc.hpp"
 #include "cwloc/version.h"
+#include "delta/apply_delta.h"
 #include "format/index.h"
 #include "io/camera_spec.h"
 #include "io/feature_file.h"
@@ -529,6 +530,11 @@ Features ReadFeatureFile(const std::string& path) {
     cwloc::ReadFeatureFile(path, &query);
     return Features{std::move(query.keypoints), std::move(query.descriptors)};
   });
+}
+
+void ApplyIndexDelta(const std::string& index_path, const std::string& delta_path,
+                     const std::string& output_path, int threads) {
+  Translated([&] { cwloc::ApplyDelta(index_path, delta_path, output_path, threads); });
 }
 
 const char* Version() { return kToolVersion; }

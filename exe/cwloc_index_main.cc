@@ -217,6 +217,12 @@ int RunInfo(const std::string& path, bool json) {
               manifest["tool_version"].get<std::string>().c_str(),
               manifest["source"]["model"]["path"].get<std::string>().c_str());
   if (manifest.contains("extracted")) PrintExtracted(manifest["extracted"]);
+  if (manifest.contains("update")) {
+    const auto& update = manifest["update"];
+    std::printf("  updated %s times since its last full build: +%s, -%s images\n",
+                update["updates"].dump().c_str(), update["images_added"].dump().c_str(),
+                update["images_removed"].dump().c_str());
+  }
   if (manifest.contains("georeference") && manifest["georeference"].is_object())
     PrintGeoreference(manifest["georeference"]);
   std::printf("  descriptors: %s\n", DescriptorStorage(index).c_str());

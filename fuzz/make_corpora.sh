@@ -12,7 +12,7 @@ work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
 
 rm -rf "$corpus"
-mkdir -p "$corpus"/{index,colmap_model,colmap_database,feature_file,query_list,photo,georef,serve_request}
+mkdir -p "$corpus"/{index,delta,colmap_model,colmap_database,feature_file,query_list,photo,georef,serve_request}
 
 # A scene of 4 registered images and ~70 points, placed on the globe.
 "$bin/cwloc-synth" --blocks 1 --queries 2 --camera-spacing 15 --features-per-image 100 \
@@ -22,6 +22,20 @@ scene="$work/scene"
   --georef "$scene/georef.txt" -o "$corpus/index/georeferenced.cwl" >/dev/null
 "$bin/cwloc-index" build --model "$scene/mapping_model/bin" --database "$scene/database.db" \
   --keypoints -o "$corpus/index/with-keypoints.cwl" >/dev/null
+
+# A delta (fuzz/delta_fuzzer.cc: u32 parent size, the parent, the delta): the scene without its
+# last image, updated to the whole scene.
+last=$(sqlite3 "$scene/database.db" "select max(image_id) from images where name like 'map_%'")
+echo "$last" >"$work/last.txt"
+mkdir -p "$work/old"
+colmap image_deleter --input_path "$scene/mapping_model/bin" --output_path "$work/old" \
+  --image_ids_path "$work/last.txt" >/dev/null 2>&1
+"$bin/cwloc-index" build --model "$work/old" --database "$scene/database.db" \
+  --calibration-samples 0 -o "$work/old.cwl" >/dev/null
+"$bin/cwloc-index" update --index "$work/old.cwl" --model "$scene/mapping_model/bin" \
+  --database "$scene/database.db" -o "$work/new.cwl" --delta "$work/new.cwld" >/dev/null
+python3 -c "import os, struct, sys; p = open(sys.argv[1], 'rb').read(); sys.stdout.buffer.write(struct.pack('<I', len(p)) + p + open(sys.argv[2], 'rb').read())" \
+  "$work/old.cwl" "$work/new.cwld" >"$corpus/delta/grown-by-one-image.bin"
 
 # A compact index (format 1.2: PORG, PNTF, PQCB, PCOD, PVNN) needs 256 points to learn its codes,
 # more than the scene has: the golden one.

@@ -5,7 +5,7 @@
 # timeout-* or oom-* (rerun it: build-fuzz/bin/cwloc-fuzz-TARGET FILE).
 #   fuzz/run.sh BUILD_DIR [--seconds S] [--runs N] [--jobs J] [--out OUT_DIR] [TARGET...]
 # --seconds bounds each target's time (default 60), --runs its executions (default none); the
-# first reached ends it. Targets: index colmap_model colmap_database feature_file query_list
+# first reached ends it. Targets: index delta colmap_model colmap_database feature_file query_list
 # photo georef serve_request (default all that are built). J targets run at once (default 1).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -23,7 +23,7 @@ while [ $# -gt 0 ]; do
   esac
 done
 if [ ${#targets[@]} -eq 0 ]; then
-  targets=(index colmap_model colmap_database feature_file query_list photo georef)
+  targets=(index delta colmap_model colmap_database feature_file query_list photo georef)
   # cwloc-serve's requests, in builds with the server (CWLOC_WITH_SERVE).
   [ -x "$build/bin/cwloc-fuzz-serve-request" ] && targets+=(serve_request)
 fi

@@ -79,6 +79,7 @@ struct Tile {
   std::vector<float> neighbor_distances;
   std::vector<ViewKeypoint> view_keypoints;
   std::vector<PointColor> point_colors;
+  std::vector<uint64_t> point_ids;
   std::vector<uint32_t> covisibility_offsets;
   std::vector<CovisibilityEdge> covisibility_edges;
   uint32_t num_clusters = 0;
@@ -131,6 +132,7 @@ Tile CutTile(const Index& parent, const std::vector<char>& keep_cluster) {
     if (tile.tracks.size() == first_track) continue;
     parent_points.push_back(p);
     if (!parent.point_colors().empty()) tile.point_colors.push_back(parent.point_colors()[p]);
+    if (!parent.point_ids().empty()) tile.point_ids.push_back(parent.point_ids()[p]);
     if (coded) {
       IndexPointOffset offset = parent.point_offsets()[p];
       offset.first_track = static_cast<uint32_t>(first_track);
@@ -262,6 +264,7 @@ IndexExtractReport ExtractIndex(const IndexExtractOptions& options) {
   contents.covisibility_edges = tile.covisibility_edges;
   contents.view_keypoints = tile.view_keypoints;
   contents.point_colors = tile.point_colors;
+  contents.point_ids = tile.point_ids;
   contents.georeference = parent.georeference();
   contents.covariance_calibration = parent.covariance_calibration();
   IndexPointOrigin origin{};

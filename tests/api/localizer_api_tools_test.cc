@@ -13,10 +13,13 @@
 #include <sstream>
 
 #include "colmap/database.h"
+#include "colmap/reconstruction_io.h"
 #include "cwloc/cwloc.h"
 #include "cwloc/cwloc.hpp"
+#include "indexer/index_update.h"
 #include "photo/image_decode.h"
 #include "tests/api/api_test_util.h"
+#include "tests/colmap/model_without_images.h"
 #include "tests/localization_check.h"
 #include "tests/shared_data_index.h"
 #include "tests/test_util.h"
@@ -37,6 +40,59 @@ api::Features DatabaseFeatures(const colmap::DatabaseReader& db, const std::stri
   }
   features.descriptors = std::move(stored.descriptors.data);
   return features;
+}
+
+// A device applies the delta of a grown real model (herz_jesu_p25 without its last three
+// images, grown back) through either API and gets the update's bytes; another parent is refused
+// with the C API's status and message, and nothing is written.
+TEST(LocalizerApiToolsTest, AppliesAnIndexDeltaAsTheUpdateWroteIt) {
+  const auto data = test::SharedDataDir("herz_jesu_p25");
+  if (!data) GTEST_SKIP() << "../shared/data/herz_jesu_p25 not found";
+  const test::TempDir dir;
+  const colmap::Reconstruction model = colmap::ReadReconstruction(*data / "mapping_model" / "bin");
+  std::set<image_t> last;
+  for (auto it = model.images.rbegin(); last.size() < 3; ++it) last.insert(it->first);
+  std::filesystem::create_directories(dir / "old");
+  colmap::WriteReconstruction(test::ModelWithoutImages(model, last), dir / "old",
+                              colmap::ModelFormat::kBinary);
+  IndexBuildOptions build;
+  build.model_dir = dir / "old";
+  build.database_path = *data / "database.db";
+  build.output_path = dir / "old.cwl";
+  build.calibration_samples = 0;
+  BuildIndex(build);
+  IndexUpdateOptions update;
+  update.index_path = build.output_path;
+  update.model_dir = *data / "mapping_model" / "bin";
+  update.database_path = build.database_path;
+  update.output_path = dir / "updated.cwl";
+  update.delta_path = dir / "grown.cwld";
+  UpdateIndex(update);
+  const std::vector<uint8_t> updated = test::ReadBytes(update.output_path);
+
+  api::ApplyIndexDelta(build.output_path.string(), update.delta_path.string(),
+                       (dir / "cpp.cwl").string());
+  EXPECT_EQ(test::ReadBytes(dir / "cpp.cwl"), updated);
+  ASSERT_EQ(cwloc_index_apply(build.output_path.c_str(), update.delta_path.c_str(),
+                              (dir / "c.cwl").c_str(), 1),
+            CWLOC_OK)
+      << cwloc_last_error();
+  EXPECT_EQ(test::ReadBytes(dir / "c.cwl"), updated);
+
+  EXPECT_EQ(cwloc_index_apply(update.output_path.c_str(), update.delta_path.c_str(),
+                              (dir / "wrong.cwl").c_str(), 0),
+            CWLOC_ERROR_BAD_INPUT);
+  EXPECT_THAT(cwloc_last_error(), testing::HasSubstr(update.delta_path.string() +
+                                                     ": made for the index with checksum "));
+  EXPECT_FALSE(std::filesystem::exists(dir / "wrong.cwl"));
+  try {
+    api::ApplyIndexDelta(build.output_path.string(), build.output_path.string(),
+                         (dir / "wrong.cwl").string());
+    FAIL() << "applied an index as a delta";
+  } catch (const api::Error& error) {
+    EXPECT_EQ(error.code(), api::ErrorCode::kBadInput);
+    EXPECT_THAT(error.what(), testing::HasSubstr("not a cwloc index delta"));
+  }
 }
 
 // The library and the tool are one pipeline: identical poses and counts.

@@ -132,7 +132,7 @@ TEST_F(IndexFileTest, NewerMajorVersionNamesBothVersions) {
   EXPECT_EQ(
       OpenError(path_),
       path_.string() +
-          ": index format 2.1 is not readable by this cwloc, which reads format 1.x (up to 1.4); "
+          ": index format 2.1 is not readable by this cwloc, which reads format 1.x (up to 1.5); "
           "rebuild the index with this cwloc-index or upgrade cwloc");
 }
 

@@ -93,7 +93,7 @@ TEST_F(GeoreferencingTest, AGeorefFileIsFitExactlyAndStoredInSectionAndManifest)
   }
 
   const auto manifest = nlohmann::json::parse(index.manifest_json());
-  EXPECT_EQ(manifest["format_version"], "1.3");  // GEOR is 1.1's, PCAL 1.3's
+  EXPECT_EQ(manifest["format_version"], "1.5");  // GEOR is 1.1's, PCAL 1.3's, PIDS 1.5's
   const auto& georeference = manifest["georeference"];
   EXPECT_EQ(georeference["source"], "georef-file");
   EXPECT_EQ(georeference["path"], options.georef_file.string());

@@ -115,7 +115,7 @@ TEST_F(IndexBuilderTest, PointColorsAreTheModelsAndAnOptionalSectionATileKeeps) 
   BuildIndex(options);
   const Index with = Index::Open(options.output_path);
   EXPECT_EQ(with.file().FindSection(section::kPointColors)->flags & kSectionRequired, 0u);
-  EXPECT_EQ(with.file().header().format_minor, 4);
+  EXPECT_EQ(with.file().header().format_minor, 5);  // PIDS, which every full build writes
   EXPECT_TRUE(
       nlohmann::json::parse(with.manifest_json())["build_parameters"]["point_colors"].get<bool>());
   // The model's colour of the point at each stored position.

@@ -52,13 +52,50 @@ class IndexCliTest : public test::IndexerFixture {
   }
 };
 
+// update and apply from the command line: the same model updates to an index with the update
+// recorded (info --json against its schema), apply gives its bytes, a refusal exits 2 naming why.
+TEST_F(IndexCliTest, UpdateAndApplyRecordTheUpdateAndRefuseWithExitCode2) {
+  ASSERT_NO_FATAL_FAILURE(Build(" --calibration-samples 0"));
+  const auto updated = dir_ / "updated.cwl", delta = dir_ / "updated.cwld";
+  const std::string update = "update --index " + index_path_.string() + " --model " +
+                             model_dir_.string() + " --database " + database_path_.string() +
+                             " -o " + updated.string();
+  std::string output;
+  ASSERT_EQ(Run(update + " --delta " + delta.string(), &output), 0) << output;
+  EXPECT_THAT(output, HasSubstr("wrote " + updated.string() +
+                                ": 10 images (+0, -0, 0 changed), 400 points (+0, -0, 0 moved)"));
+  ASSERT_EQ(Run("info --json " + updated.string(), &output), 0) << output;
+  ExpectValidInfoJson(output);
+  const auto info = nlohmann::json::parse(output);
+  EXPECT_EQ(info["manifest"]["update"]["updates"], 1);
+  EXPECT_EQ(info["format_version"], "1.5");
+  ASSERT_EQ(Run("apply --index " + index_path_.string() + " --delta " + delta.string() + " -o " +
+                    (dir_ / "applied.cwl").string(),
+                &output),
+            0)
+      << output;
+  EXPECT_EQ(test::ReadBytes(dir_ / "applied.cwl"), test::ReadBytes(updated));
+
+  EXPECT_EQ(Run(update + " --leaf-size 4", &output), 2);
+  EXPECT_THAT(output, HasSubstr(index_path_.string() +
+                                ": the index was built with --leaf-size 8, and this update asks "
+                                "for --leaf-size 4: a full build is needed (cwloc-index build, "
+                                "or update --rebuild-if-needed)"));
+  EXPECT_EQ(Run("apply --index " + updated.string() + " --delta " + delta.string() + " -o " +
+                    (dir_ / "wrong.cwl").string(),
+                &output),
+            2);
+  EXPECT_THAT(output, HasSubstr(delta.string() + ": made for the index with checksum "));
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "wrong.cwl"));
+}
+
 TEST_F(IndexCliTest, BuildInfoAndVerifySucceed) {
   ASSERT_NO_FATAL_FAILURE(Build());
   std::string output;
   EXPECT_EQ(Run("info " + index_path_.string(), &output), 0) << output;
   EXPECT_THAT(output, HasSubstr("10 images, 400 points"));
   EXPECT_EQ(Run("verify " + index_path_.string(), &output), 0) << output;
-  EXPECT_THAT(output, HasSubstr(": OK: 15 section checksums and every stored index verified"));
+  EXPECT_THAT(output, HasSubstr(": OK: 16 section checksums and every stored index verified"));
 }
 
 TEST_F(IndexCliTest, InfoJsonValidatesAgainstItsSchema) {
@@ -130,7 +167,7 @@ TEST_F(IndexCliTest, VerifyReportsAFlippedByteInEverySection) {
     const IndexFile file = IndexFile::Open(index_path_);
     entries.assign(file.sections().begin(), file.sections().end());
   }
-  ASSERT_EQ(entries.size(), 15u);
+  ASSERT_EQ(entries.size(), 16u);
   // Named strings: "literal" + a temporary std::string trips GCC 12's -Wrestrict.
   const std::string corrupt = (dir_ / "corrupt.cwl").string();
   for (const SectionEntry& entry : entries) {
@@ -169,7 +206,7 @@ TEST_F(IndexCliTest, DamagedFilesGiveTheirOwnErrors) {
   WriteCorrupt(newer);
   EXPECT_EQ(Run("info " + corrupt, &output), 2);
   EXPECT_THAT(output,
-              HasSubstr("index format 3.3 is not readable by this cwloc, which reads format 1.x"));
+              HasSubstr("index format 3.5 is not readable by this cwloc, which reads format 1.x"));
 
   EXPECT_EQ(Run("info " + (dir_ / "missing.cwl").string(), &output), 2);
   EXPECT_THAT(output, HasSubstr("missing.cwl: cannot open: No such file or directory"));

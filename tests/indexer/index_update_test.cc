@@ -5,6 +5,8 @@
 
 #include <gmock/gmock.h>
 
+#include <algorithm>
+#include <chrono>
 #include <fstream>
 #include <map>
 #include <set>
@@ -14,6 +16,7 @@
 #include "format/index.h"
 #include "format/xxhash64.h"
 #include "kdtree/kd_forest.h"
+#include "tests/colmap/model_without_images.h"
 #include "tests/indexer/indexer_fixture.h"
 
 namespace cwloc {
@@ -26,23 +29,8 @@ constexpr const char* kFullBuildNeeded =
 
 class IndexUpdateTest : public test::IndexerFixture {
  protected:
-  // The fixture's model without the images `ids`, as colmap image_deleter leaves it: their
-  // observations go, and so does every point left with fewer than two.
   colmap::Reconstruction Without(const std::set<image_t>& ids) const {
-    colmap::Reconstruction model = model_;
-    for (image_t id : ids) model.images.erase(id);
-    for (auto it = model.points3D.begin(); it != model.points3D.end();) {
-      std::vector<colmap::TrackElement>& track = it->second.track;
-      std::erase_if(track, [&](const colmap::TrackElement& e) { return ids.count(e.image_id); });
-      if (track.size() >= 2) {
-        ++it;
-        continue;
-      }
-      for (const colmap::TrackElement& e : track)
-        model.images[e.image_id].points2D[e.point2D_idx].point3D_id = kInvalidPoint3DId;
-      it = model.points3D.erase(it);
-    }
-    return model;
+    return test::ModelWithoutImages(model_, ids);
   }
 
   std::filesystem::path WriteModel(const colmap::Reconstruction& model,
@@ -67,8 +55,7 @@ class IndexUpdateTest : public test::IndexerFixture {
   }
 
   IndexUpdateOptions Update(const std::filesystem::path& parent,
-                            const std::filesystem::path& model_dir,
-                            const std::string& name) const {
+                            const std::filesystem::path& model_dir, const std::string& name) const {
     IndexUpdateOptions options;
     options.index_path = parent;
     options.model_dir = model_dir;
@@ -88,7 +75,8 @@ class IndexUpdateTest : public test::IndexerFixture {
   static std::map<std::string, uint64_t> Checksums(const std::filesystem::path& path) {
     const IndexFile file = IndexFile::Open(path);
     std::map<std::string, uint64_t> out;
-    for (const SectionEntry& entry : file.sections()) out[SectionTagName(entry.tag)] = entry.checksum;
+    for (const SectionEntry& entry : file.sections())
+      out[SectionTagName(entry.tag)] = entry.checksum;
     return out;
   }
 
@@ -102,8 +90,8 @@ class IndexUpdateTest : public test::IndexerFixture {
     EXPECT_EQ(a.count("PIDS"), 1u);
   }
 
-  // Each row's own descriptor, searched with a budget of one bucket (8 rows), finds the row at distance
-  // 0 in the first leaf it descends to: new rows sit where the search looks for them.
+  // Each row's own descriptor, searched with a budget of one bucket (8 rows), finds the row at
+  // distance 0 in the first leaf it descends to: new rows sit where the search looks for them.
   static void ExpectEveryRowFindsItself(const std::filesystem::path& path) {
     const Index index = Index::Open(path);
     index.Validate();
@@ -157,9 +145,9 @@ TEST_F(IndexUpdateTest, AChainOfUpdatesAppliesInOrderAndRefusesAnyOtherOrder) {
   const IndexUpdateOptions to_third = Update(to_second.output_path, model_dir_, "third");
   UpdateIndex(to_third);
   ExpectSameAsFullBuild(to_third.output_path, Build(model_dir_, "full.cwl"));
-  EXPECT_EQ(nlohmann::json::parse(Index::Open(to_third.output_path).manifest_json())["update"]
-                ["updates"],
-            2);
+  EXPECT_EQ(
+      nlohmann::json::parse(Index::Open(to_third.output_path).manifest_json())["update"]["updates"],
+      2);
 
   const std::filesystem::path second = dir_ / "applied_second.cwl", third = dir_ / "applied.cwl";
   ApplyDelta(first, to_second.delta_path, second, 1);
@@ -197,7 +185,8 @@ TEST_F(IndexUpdateTest, RemovedImagesLeaveWhatAFullBuildWithoutThemHolds) {
   const IndexUpdateReport report = UpdateIndex(options);
   EXPECT_EQ(report.images_removed, 2u);
   EXPECT_EQ(report.images_added, 0u);
-  ExpectSameAsFullBuild(options.output_path, Build(WriteModel(Without(removed), "less"), "less.cwl"));
+  ExpectSameAsFullBuild(options.output_path,
+                        Build(WriteModel(Without(removed), "less"), "less.cwl"));
   ExpectEveryRowFindsItself(options.output_path);
   ApplyDelta(index, options.delta_path, dir_ / "applied.cwl", 1);
   EXPECT_EQ(test::ReadBytes(dir_ / "applied.cwl"), test::ReadBytes(options.output_path));
@@ -242,8 +231,10 @@ TEST_F(IndexUpdateTest, RefusesOtherBuildOptionsACompactIndexAndAnOtherDatabase)
     FAIL();
   } catch (const UpdateRefused& refused) {
     EXPECT_EQ(std::string(refused.what()),
-              index.string() + ": the index was built with --trees 4, and this update asks for "
-                               "--trees 8" + kFullBuildNeeded);
+              index.string() +
+                  ": the index was built with --trees 4, and this update asks for "
+                  "--trees 8" +
+                  kFullBuildNeeded);
   }
   options.build_flags = {{"trees", OptionValue(uint32_t{4})}, {"threads", OptionValue(int32_t{1})}};
   EXPECT_NO_THROW(UpdateIndex(options));
@@ -256,7 +247,8 @@ TEST_F(IndexUpdateTest, RefusesOtherBuildOptionsACompactIndexAndAnOtherDatabase)
     EXPECT_EQ(std::string(refused.what()),
               compact.string() +
                   ": a compact index is not updated yet (its codes and point kd-forest would need "
-                  "re-coding)" + kFullBuildNeeded);
+                  "re-coding)" +
+                  kFullBuildNeeded);
   }
 
   // The database extracted again: the first image's descriptors differ.
@@ -326,10 +318,66 @@ TEST_F(IndexUpdateTest, ATruncatedOrCorruptDeltaIsNamedAndWritesNothing) {
     FAIL();
   } catch (const InputError& error) {
     EXPECT_EQ(std::string(error.what()),
-              index.string() +
-                  ": not a cwloc index delta (wrong magic; expected \"CWLOCDLT\")");
+              index.string() + ": not a cwloc index delta (wrong magic; expected \"CWLOCDLT\")");
   }
   EXPECT_FALSE(std::filesystem::exists(output));
+}
+
+// SIGKILL at any moment of `update` or `apply` leaves the parent as it was, and each output
+// either absent (or as before) or complete, with nothing else but a killed writer's temporary.
+TEST_F(IndexUpdateTest, KilledUpdatesAndAppliesLeaveTheParentAndNoPartialOutput) {
+  const auto parent = Build(WriteModel(Without(LastImages(2)), "old"), "old.cwl");
+  const std::vector<uint8_t> parent_bytes = test::ReadBytes(parent);
+  const auto out_dir = dir_ / "out";
+  std::filesystem::create_directories(out_dir);
+  std::filesystem::create_directories(dir_ / "applied");
+  const auto updated = out_dir / "new.cwl", delta = out_dir / "new.cwld",
+             applied = dir_ / "applied" / "applied.cwl";
+  const std::string tool = test::ToolPath("cwloc-index").string();
+  const std::vector<std::string> update = {tool,         "update",
+                                           "--index",    parent.string(),
+                                           "--model",    model_dir_.string(),
+                                           "--database", database_path_.string(),
+                                           "--threads",  "1",
+                                           "-o",         updated.string(),
+                                           "--delta",    delta.string()};
+  const std::vector<std::string> apply = {tool,      "apply",         "--index",   parent.string(),
+                                          "--delta", delta.string(),  "--threads", "1",
+                                          "-o",      applied.string()};
+  for (const auto& [args, outputs] :
+       {std::pair{update, std::vector{updated, delta}}, std::pair{apply, std::vector{applied}}}) {
+    const auto start = std::chrono::steady_clock::now();
+    ASSERT_EQ(test::Wait(test::Spawn(args)), 0);
+    const auto duration = std::chrono::steady_clock::now() - start;
+    std::vector<std::vector<uint8_t>> complete;
+    for (const auto& output : outputs) complete.push_back(test::ReadBytes(output));
+    std::vector<pid_t> killed;
+    for (int kill_number = 0; kill_number < 12; ++kill_number) {
+      const bool replacing = kill_number % 2 == 1;
+      for (size_t i = 0; i < outputs.size(); ++i) {
+        std::filesystem::remove(outputs[i]);
+        if (replacing) test::WriteBytes(outputs[i], complete[i]);
+      }
+      const pid_t pid = test::Spawn(args);
+      killed.push_back(pid);
+      test::KillAfter(pid, duration * (test::Rng()() % 1000) / 1000);
+      EXPECT_TRUE(test::ReadBytes(parent) == parent_bytes) << "the parent changed";
+      for (const auto& entry : std::filesystem::directory_iterator(outputs[0].parent_path())) {
+        const auto it = std::find(outputs.begin(), outputs.end(), entry.path());
+        if (it != outputs.end()) {
+          EXPECT_TRUE(test::ReadBytes(entry.path()) == complete[it - outputs.begin()])
+              << "a partial " << entry.path() << " after kill " << kill_number;
+        } else {
+          bool temporary = false;
+          for (const auto& output : outputs)
+            temporary |= test::IsKilledWritersTemporary(entry.path().filename().string(),
+                                                        output.filename().string(), killed);
+          EXPECT_TRUE(temporary) << entry.path() << " after kill " << kill_number;
+        }
+      }
+    }
+    ASSERT_EQ(test::Wait(test::Spawn(args)), 0);
+  }
 }
 
 }  // namespace

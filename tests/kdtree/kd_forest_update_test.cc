@@ -101,9 +101,8 @@ TEST(KdForestUpdateTest, EveryRowIsWhereTheSearchLooksAndExhaustiveSearchStaysEx
   EXPECT_EQ(again.leaves, child.leaves);
   EXPECT_EQ(again.roots, child.roots);
   ASSERT_EQ(again.nodes.size(), child.nodes.size());
-  EXPECT_EQ(std::memcmp(again.nodes.data(), child.nodes.data(),
-                        child.nodes.size() * sizeof(KdNode)),
-            0);
+  EXPECT_EQ(
+      std::memcmp(again.nodes.data(), child.nodes.data(), child.nodes.size() * sizeof(KdNode)), 0);
 }
 
 TEST(KdForestUpdateTest, RefusesAChangeThatDoesNotFitTheForest) {
@@ -113,8 +112,9 @@ TEST(KdForestUpdateTest, RefusesAChangeThatDoesNotFitTheForest) {
   std::vector<uint32_t> identity(100);
   for (uint32_t r = 0; r < 100; ++r) identity[r] = r;
   const std::vector<uint32_t> none;
-  EXPECT_THROW(UpdateKdForest(forest.View(rows), {std::span(identity).first(99), none}, rows, 8, 0, 1),
-               std::invalid_argument);
+  EXPECT_THROW(
+      UpdateKdForest(forest.View(rows), {std::span(identity).first(99), none}, rows, 8, 0, 1),
+      std::invalid_argument);
   const std::vector<uint32_t> twice = {5, 5};
   EXPECT_THROW(UpdateKdForest(forest.View(rows), {identity, twice}, rows, 8, 0, 1),
                std::invalid_argument);

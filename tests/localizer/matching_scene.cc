@@ -144,6 +144,9 @@ void WriteMatchingIndex(const MatchingScene& scene, const std::filesystem::path&
   KdForestBuildOptions forest_options;
   forest_options.num_threads = 1;
   const KdForest forest = BuildKdForest(scene.descriptors, forest_options);
+  // Point p is COLMAP point p + 1 of the scene's model (matching_scene_test.cc writes it so).
+  std::vector<uint64_t> point_ids(scene.points.size());
+  for (size_t p = 0; p < point_ids.size(); ++p) point_ids[p] = p + 1;
   const std::string manifest = "{\"format_version\": \"" + std::to_string(kFormatMajor) + "." +
                                std::to_string(kFormatMinor) +
                                "\", \"tool\": \"tests/localizer/matching_scene.cc\"}\n";
@@ -163,6 +166,7 @@ void WriteMatchingIndex(const MatchingScene& scene, const std::filesystem::path&
       MakeSection(section::kKdLeaves, Span(forest.leaves)),
       MakeSection(section::kCovisOffsets, Span(scene.covisibility_offsets)),
       MakeSection(section::kCovisEdges, Span(scene.covisibility_edges)),
+      MakeSection(section::kPointIds, Span(point_ids), /*flags=*/0),
   };
   WriteIndexFile(path, sections);
 }

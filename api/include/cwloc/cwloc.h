@@ -129,6 +129,12 @@ typedef struct cwloc_rig_result cwloc_rig_result;
 CWLOC_C_API const char* cwloc_version(void);
 CWLOC_C_API const char* cwloc_last_error(void);
 
+/* Writes (atomically) the index that a delta of `cwloc-index update --delta` makes of the
+ * index it was made for, bit for bit (docs/format.md, "Deltas"); CWLOC_ERROR_BAD_INPUT and
+ * nothing written for a delta made for another index, or a damaged file. threads: 0 = all. */
+CWLOC_C_API cwloc_status cwloc_index_apply(const char* index_path, const char* delta_path,
+                                           const char* output_path, int threads);
+
 /* Opens an index file read-only (verify != 0: also check every checksum). */
 CWLOC_C_API cwloc_status cwloc_localizer_open(const char* index_path, int verify,
                                               cwloc_localizer** out);

@@ -327,6 +327,14 @@ class CWLOC_API Tracker {
 // what cwloc-localize --features reads.
 CWLOC_API Features ReadFeatureFile(const std::string& path);
 
+// Writes (atomically) the index that a delta of `cwloc-index update --delta` makes of the index
+// it was made for, bit for bit as the update wrote it (docs/format.md, "Deltas"). Throws Error
+// (kBadInput) naming the file for a delta made for another index (a chain applied out of
+// order), a truncated or corrupt delta or index; nothing is written then. threads: 0 = all
+// cores.
+CWLOC_API void ApplyIndexDelta(const std::string& index_path, const std::string& delta_path,
+                               const std::string& output_path, int threads = 0);
+
 // "0.1.0"
 CWLOC_API const char* Version();
 
