@@ -135,12 +135,27 @@ AppliedDelta::AppliedDelta(const Index& parent, const IndexDelta& delta,
   }
   size_t child_views = 0;
   CheckImages(delta, &child_views, name);
+  // The rows the runs and the delta's new rows give, checked before any row map is allocated:
+  // a delta describes no more rows than the parent and its own sections hold.
+  const auto rows_given = [&](const std::vector<RowRun>& runs, size_t parent_rows, size_t new_rows,
+                              const char* what) {
+    uint64_t kept = 0;
+    for (const RowRun& run : runs) kept += run.count;
+    if (kept > parent_rows) {
+      throw InputError(name + ": the delta's " + what + " runs keep " + std::to_string(kept) +
+                       " rows of a parent with " + std::to_string(parent_rows));
+    }
+    return size_t(kept + new_rows);
+  };
+  const size_t views_given = rows_given(delta.view_runs, parent.num_views(),
+                                        delta.new_descriptors.size() / kDescriptorBytes, "view");
+  if (views_given != child_views) {
+    throw InputError(name + ": the delta's runs and new views give " + std::to_string(views_given) +
+                     " views, its images " + std::to_string(child_views));
+  }
   const RowMaps views = MapRows(delta.view_runs, child_views, parent.num_views(), "view", name);
-  const size_t child_points = delta.point_runs.empty() && delta.new_points.empty() ? 0 : [&] {
-    size_t covered = 0;
-    for (const RowRun& run : delta.point_runs) covered += run.count;
-    return covered + delta.new_points.size();
-  }();
+  const size_t child_points =
+      rows_given(delta.point_runs, parent.num_points(), delta.new_points.size(), "point");
   const RowMaps points =
       MapRows(delta.point_runs, child_points, parent.num_points(), "point", name);
   CheckCount(delta.new_points, points.num_new, "NPNT", name);
@@ -152,6 +167,8 @@ AppliedDelta::AppliedDelta(const Index& parent, const IndexDelta& delta,
   CheckCount(delta.new_view_points, views.num_new, "NV2P", name);
   CheckCount(delta.new_view_neighbors, views.num_new, "NVNN", name);
   const bool keypoints = !parent.view_keypoints().empty();
+  if (keypoints && parent.view_keypoints().size() != parent.num_views())
+    throw InputError(FileName(parent) + ": section 'VKXY' does not have one row per view");
   CheckCount(delta.new_view_keypoints, keypoints ? views.num_new : 0, "NVKP", name);
   const bool colors = !parent.point_colors().empty();
   CheckCount(delta.new_point_colors, colors ? points.num_new : 0, "NRGB", name);

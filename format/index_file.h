@@ -93,6 +93,12 @@ uint64_t WriteIndexFile(const std::filesystem::path& path, std::span<const Secti
                         const ContainerKind& kind = kIndexContainer, uint16_t minor = 0,
                         std::optional<uint64_t> expected_checksum = std::nullopt);
 
+// Recomputes, in memory, every section checksum of a container whose table lies inside
+// `bytes`, then the table's and the header's (a section outside the bytes keeps its checksum):
+// what an edit that must get past the checksums does, as the corruption sweeps and the
+// fuzzers make edits.
+void RecomputeChecksums(std::span<uint8_t> bytes);
+
 template <typename T>
 SectionData MakeSection(uint32_t tag, std::span<const T> elements,
                         uint32_t flags = kSectionRequired) {

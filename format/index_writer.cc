@@ -90,4 +90,24 @@ uint64_t WriteIndexFile(const std::filesystem::path& path, std::span<const Secti
   return header.header_checksum;
 }
 
+void RecomputeChecksums(std::span<uint8_t> bytes) {
+  if (bytes.size() < sizeof(FileHeader)) return;
+  FileHeader header;
+  std::memcpy(&header, bytes.data(), sizeof(header));
+  const uint64_t table = header.section_table_offset;
+  const uint64_t count = header.section_count;
+  if (table > bytes.size() || count > (bytes.size() - table) / sizeof(SectionEntry)) return;
+  for (uint64_t i = 0; i < count; ++i) {
+    SectionEntry entry;
+    std::memcpy(&entry, &bytes[table + i * sizeof(entry)], sizeof(entry));
+    if (entry.offset > bytes.size() || entry.size > bytes.size() - entry.offset) continue;
+    entry.checksum = XxHash64(bytes.subspan(entry.offset, entry.size));
+    std::memcpy(&bytes[table + i * sizeof(entry)], &entry, sizeof(entry));
+  }
+  header.section_table_checksum = XxHash64(bytes.subspan(table, count * sizeof(SectionEntry)));
+  header.header_checksum =
+      XxHash64({reinterpret_cast<const uint8_t*>(&header), offsetof(FileHeader, header_checksum)});
+  std::memcpy(bytes.data(), &header, sizeof(header));
+}
+
 }  // namespace cwloc

@@ -16,13 +16,12 @@
 namespace cwloc {
 namespace {
 
-// The delta with every checksum right and its parent named as `parent`'s header says.
+// The delta with its parent named as `parent`'s header says and every checksum right.
 std::vector<uint8_t> Repaired(std::span<const uint8_t> delta, std::span<const uint8_t> parent) {
   std::vector<uint8_t> bytes(delta.begin(), delta.end());
   if (bytes.size() < sizeof(FileHeader) || parent.size() < sizeof(FileHeader)) return bytes;
-  FileHeader header;
+  FileHeader header, parent_header;
   std::memcpy(&header, bytes.data(), sizeof(header));
-  FileHeader parent_header;
   std::memcpy(&parent_header, parent.data(), sizeof(parent_header));
   const uint64_t table = header.section_table_offset;
   const uint64_t count = header.section_count;
@@ -30,22 +29,18 @@ std::vector<uint8_t> Repaired(std::span<const uint8_t> delta, std::span<const ui
   for (uint64_t i = 0; i < count; ++i) {
     SectionEntry entry;
     std::memcpy(&entry, &bytes[table + i * sizeof(entry)], sizeof(entry));
-    if (entry.offset > bytes.size() || entry.size > bytes.size() - entry.offset) continue;
-    if (entry.tag == delta_section::kHeader && entry.size >= sizeof(DeltaHeader)) {
-      DeltaHeader dhdr;
-      std::memcpy(&dhdr, &bytes[entry.offset], sizeof(dhdr));
-      dhdr.parent_checksum = parent_header.header_checksum;
-      dhdr.parent_file_size = parent_header.file_size;
-      std::memcpy(&bytes[entry.offset], &dhdr, sizeof(dhdr));
-    }
-    entry.checksum = XxHash64({&bytes[entry.offset], entry.size});
-    std::memcpy(&bytes[table + i * sizeof(entry)], &entry, sizeof(entry));
+    if (entry.tag != delta_section::kHeader || entry.offset > bytes.size() ||
+        entry.size > bytes.size() - entry.offset || entry.size < sizeof(DeltaHeader))
+      continue;
+    DeltaHeader dhdr;
+    std::memcpy(&dhdr, &bytes[entry.offset], sizeof(dhdr));
+    dhdr.parent_checksum = parent_header.header_checksum;
+    dhdr.parent_file_size = parent_header.file_size;
+    std::memcpy(&bytes[entry.offset], &dhdr, sizeof(dhdr));
   }
-  header.section_table_checksum = XxHash64({&bytes[table], count * sizeof(SectionEntry)});
   header.file_size = bytes.size();
-  header.header_checksum =
-      XxHash64({reinterpret_cast<const uint8_t*>(&header), offsetof(FileHeader, header_checksum)});
   std::memcpy(bytes.data(), &header, sizeof(header));
+  RecomputeChecksums(bytes);
   return bytes;
 }
 

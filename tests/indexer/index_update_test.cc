@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <chrono>
 #include <fstream>
+#include <iostream>
 #include <map>
 #include <set>
 
@@ -321,6 +322,59 @@ TEST_F(IndexUpdateTest, ATruncatedOrCorruptDeltaIsNamedAndWritesNothing) {
               index.string() + ": not a cwloc index delta (wrong magic; expected \"CWLOCDLT\")");
   }
   EXPECT_FALSE(std::filesystem::exists(output));
+}
+
+// The delta's corruption sweep: a flipped byte in its header, its section table and the first
+// bytes of every section (all of DHDR and the runs) is refused naming the delta with the stored
+// checksums; with the checksums recomputed over the flip, apply refuses it (InputError) or
+// writes the update's very bytes (a byte no one reads), and never writes another index.
+TEST_F(IndexUpdateTest, EveryFlippedDeltaByteIsRefusedOrChangesNothing) {
+  const auto parent = Build(WriteModel(Without(LastImages(2)), "old"), "old.cwl");
+  const IndexUpdateOptions options = Update(parent, model_dir_, "grown");
+  UpdateIndex(options);
+  const std::vector<uint8_t> original = test::ReadBytes(options.delta_path);
+  const std::vector<uint8_t> child = test::ReadBytes(options.output_path);
+  std::vector<uint64_t> offsets;
+  for (uint64_t b = 0; b < sizeof(FileHeader); ++b) offsets.push_back(b);
+  {
+    const IndexFile file = IndexFile::Open(options.delta_path, kDeltaContainer);
+    const FileHeader& header = file.header();
+    for (uint64_t b = 0; b < header.section_count * sizeof(SectionEntry); ++b)
+      offsets.push_back(header.section_table_offset + b);
+    for (const SectionEntry& entry : file.sections()) {
+      const bool whole = entry.tag == delta_section::kHeader ||
+                         entry.tag == delta_section::kViewRuns ||
+                         entry.tag == delta_section::kPointRuns;
+      for (uint64_t b = 0; b < std::min<uint64_t>(entry.size, whole ? entry.size : 48); ++b)
+        offsets.push_back(entry.offset + b);
+    }
+  }
+  const std::filesystem::path damaged = dir_ / "damaged.cwld", output = dir_ / "out.cwl";
+  int refused = 0, unchanged = 0;
+  for (const uint64_t offset : offsets) {
+    for (const bool repaired : {false, true}) {
+      std::vector<uint8_t> bytes = original;
+      bytes[offset] ^= offset % 2 ? 0x80 : 0x01;
+      if (repaired) RecomputeChecksums(bytes);
+      test::WriteBytes(damaged, bytes);
+      std::filesystem::remove(output);
+      try {
+        ApplyDelta(parent, damaged, output, 1);
+        ASSERT_TRUE(repaired) << "byte " << offset << " flipped under its stored checksums";
+        ASSERT_TRUE(test::ReadBytes(output) == child) << "byte " << offset;
+        ++unchanged;
+      } catch (const InputError& error) {
+        EXPECT_FALSE(std::filesystem::exists(output)) << "byte " << offset;
+        if (!repaired) {
+          EXPECT_THAT(error.what(), testing::StartsWith(damaged.string() + ": "));
+        }
+        ++refused;
+      }
+    }
+  }
+  EXPECT_GT(refused, int(offsets.size()));  // every unrepaired flip, and most repaired ones
+  std::cout << offsets.size() << " bytes flipped twice: " << refused << " refused, " << unchanged
+            << " changed nothing\n";
 }
 
 // SIGKILL at any moment of `update` or `apply` leaves the parent as it was, and each output
