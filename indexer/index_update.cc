@@ -238,6 +238,7 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
     std::unordered_map<uint32_t, uint32_t> parent_row_of_id;
     for (uint32_t i = 0; i < parent.images().size(); ++i)
       parent_row_of_id[parent.images()[i].image_id] = i;
+    std::vector<bool> rows_reused(parent.images().size(), false);
     const KnownViewRows known_rows = [&](image_t image_id,
                                          std::span<const point3D_t> point_ids) -> const uint8_t* {
       const auto found = parent_row_of_id.find(uint32_t(image_id));
@@ -264,6 +265,7 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
           ++k;
         }
       }
+      rows_reused[found->second] = true;
       return rows;
     };
     ModelViews child = GatherModelViews(*model, database, known_rows);
@@ -355,7 +357,13 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
         const uint8_t* rows =
             child.descriptors.data() + size_t(image.first_view) * kDescriptorBytes;
         std::vector<uint32_t> unmatched;
-        for (uint32_t a = 0, b = 0; a < old_image.num_views; ++a) {
+        // Rows copied from the parent, none dropped since (--remove-images): row for row.
+        const bool copied = rows_reused[i] && old_image.num_views == image.num_views;
+        for (uint32_t a = 0; copied && a < old_image.num_views; ++a) {
+          child_of_parent_view[old_image.first_view + a] = image.first_view + a;
+          parent_of_child_view[image.first_view + a] = old_image.first_view + a;
+        }
+        for (uint32_t a = 0, b = 0; !copied && a < old_image.num_views; ++a) {
           const uint8_t* old_row = old_rows + size_t(a) * kDescriptorBytes;
           uint32_t found = b;
           while (found < image.num_views &&
