@@ -30,6 +30,7 @@ from ._cwloc import (
     StageTimes,
     Tracker,
     Tracking,
+    apply_index_delta,
     default_options,
     read_feature_file,
     version,
@@ -42,7 +43,8 @@ __all__ = [
     "InternalError", "InvalidArgumentError", "Localizer", "Options", "OutOfMemoryError",
     "PoseCovariance", "PositionPrior", "RankedImage", "Result", "RigImageResult", "RigResult",
     "StageTimes", "Tracker",
-    "Tracking", "default_options", "read_feature_file", "version", "__version__",
+    "Tracking", "apply_index_delta", "default_options", "read_feature_file", "version",
+    "__version__",
 ]
 
 try:  # builds with the indexer (not a device build, -DCWLOC_WITH_COLMAP_DB=OFF)

@@ -138,6 +138,31 @@ TEST_F(IndexUpdateTest, HoldsWhatAFullBuildOfTheGrownModelHoldsAndApplyRebuildsI
   EXPECT_EQ(test::ReadBytes(applied), test::ReadBytes(options.output_path));
 }
 
+// The balance bound: rows inserted since the forest's build up to a quarter of its rows are
+// inserted; past it the update builds the forest afresh, as a build with the seed would.
+TEST_F(IndexUpdateTest, TheKdForestIsRebuiltOncePastItsBalanceBound) {
+  const auto full = Build(model_dir_, "full.cwl");
+  const size_t views = Index::Open(full).num_views();
+  for (const size_t held_out : {1, 4}) {
+    const auto old_index = Build(WriteModel(Without(LastImages(held_out)), "old"), "old.cwl");
+    const size_t old_views = Index::Open(old_index).num_views();
+    const IndexUpdateReport report =
+        UpdateIndex(Update(old_index, model_dir_, "grown" + std::to_string(held_out)));
+    const bool past_bound = double(report.views_added) > kForestRebuildFraction * double(old_views);
+    EXPECT_EQ(past_bound, held_out == 4) << report.views_added << " of " << old_views;
+    EXPECT_EQ(report.forest_rebuilt, past_bound);
+    const auto updated = Checksums(dir_ / ("grown" + std::to_string(held_out) + ".cwl"));
+    const auto built = Checksums(full);
+    for (const char* tag : {"KDND", "KDRT", "KDLF"})
+      EXPECT_EQ(updated.at(tag) == built.at(tag), past_bound) << tag;
+    const auto manifest = nlohmann::json::parse(
+        Index::Open(dir_ / ("grown" + std::to_string(held_out) + ".cwl")).manifest_json());
+    EXPECT_EQ(manifest["update"]["forest_rows_at_build"], past_bound ? views : old_views);
+    EXPECT_EQ(manifest["update"]["forest_rows_inserted"], past_bound ? 0 : report.views_added);
+    std::filesystem::remove_all(dir_ / "old");
+  }
+}
+
 TEST_F(IndexUpdateTest, AChainOfUpdatesAppliesInOrderAndRefusesAnyOtherOrder) {
   const std::set<image_t> last_three = LastImages(3), last_one = LastImages(1);
   const auto first = Build(WriteModel(Without(last_three), "first"), "first.cwl");

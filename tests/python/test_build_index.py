@@ -96,3 +96,19 @@ def test_keywords_are_the_build_option_table_and_the_cli_flags(tmp_path):
     listed = re.findall(r"^  (?:-[a-z],)?--([a-z-]+)", help_text, re.M)
     assert sorted(listed) == sorted(table + ["help", "model", "database", "output", "json"])
     assert all(name.replace("-", "_") in cwloc.build_index.__doc__ for name in table)
+
+
+def test_apply_index_delta_gives_the_updates_bytes(data, tmp_path):
+    """cwloc.apply_index_delta is `cwloc-index apply`: the bytes `update` wrote; another
+    parent is refused as bad input and nothing is written."""
+    model, database = data / "mapping_model" / "bin", data / "database.db"
+    index, updated, delta = tmp_path / "a.cwl", tmp_path / "b.cwl", tmp_path / "b.cwld"
+    cwloc.build_index(model, database, index, calibration_samples=0)
+    run([tool("cwloc-index"), "update", "--index", str(index), "--model", str(model),
+         "--database", str(database), "-o", str(updated), "--delta", str(delta)])
+    cwloc.apply_index_delta(index, delta, tmp_path / "applied.cwl", threads=1)
+    assert (tmp_path / "applied.cwl").read_bytes() == updated.read_bytes()
+    with pytest.raises(cwloc.BadInputError, match="made for the index with checksum"):
+        cwloc.apply_index_delta(updated, delta, tmp_path / "wrong.cwl")
+    assert not (tmp_path / "wrong.cwl").exists()
+
