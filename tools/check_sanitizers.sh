@@ -60,6 +60,7 @@ case "$mode" in
     asan_skipped+='|^ServeLimitsTest\.AFullQueueAnswers503AtOnce$'  # WorkQueueTest, ServeLimitsTest.SigtermFinishesTheRequestsInFlight
     asan_skipped+='|^ServeTest\.GeoPoseAndCoverageOnAGeoreferencedIndex$'  # serve_request fuzzer, LocalizerApiGeoTest
     asan_skipped+='|^IndexUpdateTest\.EveryFlippedDeltaByteIsRefusedOrChangesNothing$'  # delta fuzzer (repairs checksums too)
+    asan_skipped+='|^LocalizerApiToolsTest\.AppliesAnIndexDeltaAsTheUpdateWroteIt$'  # IndexUpdateTest (the same apply), delta fuzzer
     # A test that spawns our tools runs them sanitized too; any report fails the test.
     if ! ASAN_OPTIONS=abort_on_error=1:detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
       ctest --test-dir build-asan --output-on-failure -j "$jobs" -E "$asan_skipped" \
