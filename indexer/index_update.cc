@@ -26,17 +26,11 @@
 #include "indexer/index_builder.h"
 #include "indexer/model_views.h"
 #include "indexer/neighbor_distances.h"
+#include "indexer/update_correspondence.h"
 #include "kdtree/kd_forest_update.h"
 
 namespace cwloc {
 namespace {
-
-// An old image whose views the update takes from the index is compared with the database when
-// its row is a multiple of this: a database extracted again differs in every image.
-constexpr uint32_t kVerifiedImageStride = 64;
-
-constexpr const char* kFullBuildNeeded =
-    ": a full build is needed (cwloc-index build, or update --rebuild-if-needed)";
 
 // The build options an index was built with, as its manifest records them.
 struct ParentBuild {
@@ -102,31 +96,8 @@ void CheckBuildFlags(const IndexUpdateOptions& options, const ParentBuild& paren
   }
 }
 
-std::vector<std::string> ReadNameList(const std::filesystem::path& path) {
-  CheckInputFile(path, kImageNameList);
-  std::ifstream in(path);
-  if (!in) throw InputError(path.string() + ": cannot open");
-  std::vector<std::string> names;
-  for (std::string line; std::getline(in, line);) {
-    while (!line.empty() && (line.back() == '\r' || line.back() == ' ')) line.pop_back();
-    if (!line.empty() && line[0] != '#') names.push_back(line);
-  }
-  return names;
-}
-
 double Distance(const double* a, const double* b) {
   return (Eigen::Map<const Eigen::Vector3d>(a) - Eigen::Map<const Eigen::Vector3d>(b)).norm();
-}
-
-double TurnRadians(const double* qa, const double* qb) {
-  const double dot = std::abs(qa[0] * qb[0] + qa[1] * qb[1] + qa[2] * qb[2] + qa[3] * qb[3]);
-  return 2 * std::acos(std::min(1.0, dot));
-}
-
-bool SameCamera(const IndexCamera& a, const IndexCamera& b) {
-  return a.model_id == b.model_id && a.width == b.width && a.height == b.height &&
-         a.num_params == b.num_params &&
-         std::memcmp(a.params, b.params, sizeof(double) * a.num_params) == 0;
 }
 
 // Appends child rows [child, child + count) taken from parent rows [parent, ...) to `runs`,
@@ -140,10 +111,6 @@ void AddRun(std::vector<RowRun>* runs, uint32_t child, uint32_t parent) {
     }
   }
   runs->push_back({child, parent, 1});
-}
-
-const uint8_t* Row(std::span<const uint8_t> descriptors, size_t row) {
-  return descriptors.data() + row * kDescriptorBytes;
 }
 
 IndexUpdateReport Rebuild(const IndexUpdateOptions& options, const ParentBuild& parent,
@@ -219,202 +186,31 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
     if (!options.rebuild_if_needed) throw;
     return Rebuild(options, parent_build, refused.what());
   }
-  const std::vector<std::string> removed_names = options.remove_images_file.empty()
-                                                     ? std::vector<std::string>{}
-                                                     : ReadNameList(options.remove_images_file);
 
   // The grown model, gathered as a build gathers it.
   Stopwatch stage;
   try {
-    // Freed once gathered: the index's arrays hold what the rest needs.
-    auto model =
-        std::make_unique<colmap::Reconstruction>(colmap::ReadReconstruction(options.model_dir));
-    const std::string layout = model->rigs.empty() ? "classic" : "rigs";
     const colmap::DatabaseReader database(options.database_path);
-    // An old image whose observations are of the same points in the same order keeps its view
-    // rows, taken from the index instead of the database; one in kVerifiedImageStride of them is
-    // compared with the database, which must hold the same descriptors.
-    const std::span<const uint8_t> parent_descriptors = parent.descriptors();
-    std::unordered_map<uint32_t, uint32_t> parent_row_of_id;
-    for (uint32_t i = 0; i < parent.images().size(); ++i)
-      parent_row_of_id[parent.images()[i].image_id] = i;
-    std::vector<bool> rows_reused(parent.images().size(), false);
-    const KnownViewRows known_rows = [&](image_t image_id,
-                                         std::span<const point3D_t> point_ids) -> const uint8_t* {
-      const auto found = parent_row_of_id.find(uint32_t(image_id));
-      if (found == parent_row_of_id.end()) return nullptr;
-      const IndexImage& image = parent.images()[found->second];
-      if (image.num_views != point_ids.size()) return nullptr;
-      for (uint32_t k = 0; k < image.num_views; ++k) {
-        if (parent.point_ids()[parent.view_points()[image.first_view + k]] != point_ids[k])
-          return nullptr;
-      }
-      const uint8_t* rows = Row(parent_descriptors, image.first_view);
-      if (found->second % kVerifiedImageStride == 0) {
-        const colmap::Descriptors stored = database.ReadDescriptors(image_id);
-        const colmap::Image& model_image = model->images.at(image_id);
-        uint32_t k = 0;
-        for (uint32_t i = 0; i < model_image.points2D.size(); ++i) {
-          if (model_image.points2D[i].point3D_id == kInvalidPoint3DId) continue;
-          if (i >= stored.rows || std::memcmp(stored.Row(i), rows + size_t(k) * kDescriptorBytes,
-                                              kDescriptorBytes) != 0) {
-            throw UpdateRefused(options.database_path.string() + ": the descriptors of image '" +
-                                std::string(parent.ImageName(image)) +
-                                "' differ from those the index was built from" + kFullBuildNeeded);
-          }
-          ++k;
-        }
-      }
-      rows_reused[found->second] = true;
-      return rows;
-    };
-    ModelViews child = GatherModelViews(*model, database, known_rows);
-    model.reset();
-    if (!removed_names.empty()) {
-      std::unordered_map<std::string_view, uint32_t> row_of_name;
-      for (uint32_t i = 0; i < child.images.size(); ++i)
-        row_of_name[child.ImageName(child.images[i])] = i;
-      std::vector<bool> left_out(child.images.size(), false);
-      for (const std::string& name : removed_names) {
-        const auto found = row_of_name.find(name);
-        if (found == row_of_name.end()) {
-          throw InputError(options.remove_images_file.string() + ": '" + name +
-                           "' is not an image of the model " + options.model_dir.string());
-        }
-        left_out[found->second] = true;
-      }
-      child = WithoutImages(child, left_out);
-      // Only the kept images' names, as a build of the model without them stores them.
-      std::string names;
-      for (IndexImage& image : child.images) {
-        const std::string_view name = child.ImageName(image);
-        image.name_offset = uint32_t(names.size());
-        names += name;
-      }
-      child.strings = std::move(names);
-    }
+    GrownModel grown = ReadGrownModel(options, parent, database);
+    ModelViews& child = grown.views;
     if (child.num_views() == 0)
       throw InputError(options.model_dir.string() + ": the model has no 3D points with views");
     report.seconds_read = stage.Seconds();
 
     stage.Restart();
     {
-      // Images by COLMAP id; an old one must keep its name, camera and pose.
+      const Correspondence match = MatchToParent(options, parent, grown, database);
       const std::span<const IndexImage> parent_images = parent.images();
-      std::unordered_map<uint32_t, uint32_t> child_row_of_id;
-      for (uint32_t i = 0; i < child.images.size(); ++i)
-        child_row_of_id[child.images[i].image_id] = i;
-      std::vector<uint32_t> child_of_parent_image(parent_images.size(), kRemovedRow);
-      std::vector<uint32_t> parent_of_child_image(child.images.size(), kRemovedRow);
-      Eigen::AlignedBox3d box;
-      for (const IndexImage& image : parent_images) box.extend(CameraCenterOf(image));
-      const double extent = std::max(box.diagonal().norm(), 1e-9);
-      for (uint32_t i = 0; i < parent_images.size(); ++i) {
-        const IndexImage& old_image = parent_images[i];
-        const auto found = child_row_of_id.find(old_image.image_id);
-        if (found == child_row_of_id.end()) continue;  // removed
-        const IndexImage& image = child.images[found->second];
-        const std::string old_name(parent.ImageName(old_image));
-        if (child.ImageName(image) != old_name) {
-          throw UpdateRefused(
-              options.model_dir.string() + ": image " + std::to_string(image.image_id) + " is '" +
-              std::string(child.ImageName(image)) + "' in the model and '" + old_name +
-              "' in the index: not the model the index was built from" + kFullBuildNeeded);
-        }
-        if (!SameCamera(parent.cameras()[old_image.camera_index],
-                        child.cameras[image.camera_index])) {
-          throw UpdateRefused(options.model_dir.string() + ": the camera of image '" + old_name +
-                              "' changed (intrinsics refined again?)" + kFullBuildNeeded);
-        }
-        const double shift = (CameraCenterOf(old_image) - CameraCenterOf(image)).norm();
-        const double turn =
-            TurnRadians(old_image.cam_from_world_rotation, image.cam_from_world_rotation);
-        if (shift > kMaxCentreShift * extent || turn > kMaxPoseTurnRadians) {
-          char text[160];
-          std::snprintf(text, sizeof(text),
-                        "' moved by %.3g (%.2g of the cameras' extent) and turned %.3g degrees",
-                        shift, shift / extent, turn * 180 / M_PI);
-          throw UpdateRefused(options.model_dir.string() + ": the pose of image '" + old_name +
-                              text + ": the model was adjusted again, not grown" +
-                              kFullBuildNeeded);
-        }
-        child_of_parent_image[i] = found->second;
-        parent_of_child_image[found->second] = i;
-      }
-
-      // Views of the old images: the parent's rows found again, in order, among the image's.
-      std::vector<uint32_t> child_of_parent_view(parent.num_views(), kRemovedRow);
-      std::vector<uint32_t> parent_of_child_view(child.num_views(), kRemovedRow);
-      std::vector<bool> image_changed(child.images.size(), true);
-      for (uint32_t i = 0; i < parent_images.size(); ++i) {
-        if (child_of_parent_image[i] == kRemovedRow) {
-          report.images_removed++;
-          continue;
-        }
-        const IndexImage& old_image = parent_images[i];
-        const IndexImage& image = child.images[child_of_parent_image[i]];
-        const uint8_t* old_rows = Row(parent_descriptors, old_image.first_view);
-        const uint8_t* rows =
-            child.descriptors.data() + size_t(image.first_view) * kDescriptorBytes;
-        std::vector<uint32_t> unmatched;
-        // Rows copied from the parent, none dropped since (--remove-images): row for row.
-        const bool copied = rows_reused[i] && old_image.num_views == image.num_views;
-        for (uint32_t a = 0; copied && a < old_image.num_views; ++a) {
-          child_of_parent_view[old_image.first_view + a] = image.first_view + a;
-          parent_of_child_view[image.first_view + a] = old_image.first_view + a;
-        }
-        for (uint32_t a = 0, b = 0; !copied && a < old_image.num_views; ++a) {
-          const uint8_t* old_row = old_rows + size_t(a) * kDescriptorBytes;
-          uint32_t found = b;
-          while (found < image.num_views &&
-                 std::memcmp(old_row, rows + size_t(found) * kDescriptorBytes, kDescriptorBytes) !=
-                     0)
-            ++found;
-          if (found == image.num_views) {
-            unmatched.push_back(a);
-            continue;
-          }
-          child_of_parent_view[old_image.first_view + a] = image.first_view + found;
-          parent_of_child_view[image.first_view + found] = old_image.first_view + a;
-          b = found + 1;
-        }
-        if (!unmatched.empty()) {
-          // Observations the model dropped still have their descriptors in the database;
-          // anything else means the database is not the one the index was built from.
-          const colmap::Descriptors stored = database.ReadDescriptors(image.image_id);
-          for (uint32_t a : unmatched) {
-            bool found = false;
-            for (uint32_t r = 0; r < stored.rows && !found; ++r)
-              found = std::memcmp(stored.Row(r), old_rows + size_t(a) * kDescriptorBytes,
-                                  kDescriptorBytes) == 0;
-            if (!found) {
-              throw UpdateRefused(options.database_path.string() + ": the descriptors of image '" +
-                                  std::string(parent.ImageName(old_image)) +
-                                  "' differ from those the index was built from" +
-                                  kFullBuildNeeded);
-            }
-          }
-        }
-        image_changed[child_of_parent_image[i]] =
-            !(old_image.num_views == image.num_views && unmatched.empty());
-      }
-
-      // Points: by their COLMAP ids, which ascend in both.
+      const std::vector<uint32_t>& child_of_parent_image = match.child_of_parent_image;
+      const std::vector<uint32_t>& parent_of_child_image = match.parent_of_child_image;
+      const std::vector<uint32_t>& parent_of_child_view = match.parent_of_child_view;
+      const std::vector<uint32_t>& child_of_parent_point = match.child_of_parent_point;
+      const std::vector<uint32_t>& parent_of_child_point = match.parent_of_child_point;
+      std::vector<bool> image_changed = match.image_changed;
+      const double extent = match.extent;
       const std::span<const uint32_t> parent_view_points = parent.view_points();
-      const std::span<const uint64_t> parent_point_ids = parent.point_ids();
-      std::vector<uint32_t> child_of_parent_point(parent.num_points(), kRemovedRow);
-      std::vector<uint32_t> parent_of_child_point(child.points.size(), kRemovedRow);
-      for (uint32_t p = 0, q = 0; p < parent_point_ids.size() && q < child.point_ids.size();) {
-        if (parent_point_ids[p] < child.point_ids[q]) {
-          ++p;
-        } else if (child.point_ids[q] < parent_point_ids[p]) {
-          ++q;
-        } else {
-          child_of_parent_point[p] = q;
-          parent_of_child_point[q] = p;
-          ++p, ++q;
-        }
-      }
+      for (uint32_t parent_image : child_of_parent_image)
+        report.images_removed += parent_image == kRemovedRow;
 
       IndexDelta delta;
       for (uint32_t w = 0; w < child.num_views(); ++w) {
@@ -547,8 +343,8 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
         for (uint32_t w = image.first_view; w < image.first_view + image.num_views; ++w) {
           const uint32_t v = parent_of_child_view[w];
           if (v == kRemovedRow) {
-            delta.new_descriptors.insert(delta.new_descriptors.end(), Row(child.descriptors, w),
-                                         Row(child.descriptors, w) + kDescriptorBytes);
+            const uint8_t* row = &child.descriptors[size_t(w) * kDescriptorBytes];
+            delta.new_descriptors.insert(delta.new_descriptors.end(), row, row + kDescriptorBytes);
             delta.new_view_points.push_back(child.view_points[w]);
             delta.new_view_neighbors.push_back(recomputed[w]);
             if (parent_build.options.keypoints)
@@ -605,7 +401,7 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
       manifest["counts"]["kd_nodes"] = applied.num_kd_nodes();
       manifest["build_parameters"]["clustering"]["num_clusters"] = clustering.num_clusters;
       manifest["source"]["model"]["path"] = options.model_dir.string();
-      manifest["source"]["model"]["layout"] = layout;
+      manifest["source"]["model"]["layout"] = grown.layout;
       manifest["source"]["model"]["fingerprint"] = FingerprintModel(options.model_dir);
       manifest["source"]["database"]["path"] = options.database_path.string();
       const uint64_t updates = update_record.value("updates", uint64_t{0}) + 1;

@@ -41,6 +41,10 @@ inline constexpr double kMaxMedianPointShift = 1e-3;
 // exceed this fraction of the rows it was built over; then it is rebuilt (the balance bound).
 inline constexpr double kForestRebuildFraction = 0.25;
 
+// The end of every refusal's message.
+inline constexpr const char* kFullBuildNeeded =
+    ": a full build is needed (cwloc-index build, or update --rebuild-if-needed)";
+
 // Why an update is no update: a full build is needed.
 class UpdateRefused : public InputError {
  public:

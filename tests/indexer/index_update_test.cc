@@ -25,9 +25,6 @@ namespace {
 
 using testing::HasSubstr;
 
-constexpr const char* kFullBuildNeeded =
-    ": a full build is needed (cwloc-index build, or update --rebuild-if-needed)";
-
 class IndexUpdateTest : public test::IndexerFixture {
  protected:
   colmap::Reconstruction Without(const std::set<image_t>& ids) const {

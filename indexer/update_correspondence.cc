@@ -1,0 +1,255 @@
+#include "indexer/update_correspondence.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <memory>
+#include <unordered_map>
+
+#include "base/bounded_file.h"
+#include "colmap/reconstruction_io.h"
+#include "geo/index_georeference.h"
+#include "kdtree/kd_forest_update.h"
+
+namespace cwloc {
+namespace {
+
+// An old image whose views the update takes from the index is compared with the database when
+// its row is a multiple of this: a database extracted again differs in every image.
+constexpr uint32_t kVerifiedImageStride = 64;
+
+std::vector<std::string> ReadNameList(const std::filesystem::path& path) {
+  CheckInputFile(path, kImageNameList);
+  std::ifstream in(path);
+  if (!in) throw InputError(path.string() + ": cannot open");
+  std::vector<std::string> names;
+  for (std::string line; std::getline(in, line);) {
+    while (!line.empty() && (line.back() == '\r' || line.back() == ' ')) line.pop_back();
+    if (!line.empty() && line[0] != '#') names.push_back(line);
+  }
+  return names;
+}
+
+double TurnRadians(const double* qa, const double* qb) {
+  const double dot = std::abs(qa[0] * qb[0] + qa[1] * qb[1] + qa[2] * qb[2] + qa[3] * qb[3]);
+  return 2 * std::acos(std::min(1.0, dot));
+}
+
+bool SameCamera(const IndexCamera& a, const IndexCamera& b) {
+  return a.model_id == b.model_id && a.width == b.width && a.height == b.height &&
+         a.num_params == b.num_params &&
+         std::memcmp(a.params, b.params, sizeof(double) * a.num_params) == 0;
+}
+
+const uint8_t* Row(std::span<const uint8_t> descriptors, size_t row) {
+  return descriptors.data() + row * kDescriptorBytes;
+}
+
+}  // namespace
+
+GrownModel ReadGrownModel(const IndexUpdateOptions& options, const Index& parent,
+                          const colmap::DatabaseReader& database) {
+  // Freed once gathered: the index's arrays hold what the rest needs.
+  auto model =
+      std::make_unique<colmap::Reconstruction>(colmap::ReadReconstruction(options.model_dir));
+  GrownModel grown;
+  grown.layout = model->rigs.empty() ? "classic" : "rigs";
+  // An old image whose observations are of the same points in the same order keeps its view
+  // rows, taken from the index instead of the database; one in kVerifiedImageStride of them is
+  // compared with the database, which must hold the same descriptors.
+  const std::span<const uint8_t> parent_descriptors = parent.descriptors();
+  std::unordered_map<uint32_t, uint32_t> parent_row_of_id;
+  for (uint32_t i = 0; i < parent.images().size(); ++i)
+    parent_row_of_id[parent.images()[i].image_id] = i;
+  grown.rows_reused.assign(parent.images().size(), false);
+  const KnownViewRows known_rows = [&](image_t image_id,
+                                       std::span<const point3D_t> point_ids) -> const uint8_t* {
+    const auto found = parent_row_of_id.find(uint32_t(image_id));
+    if (found == parent_row_of_id.end()) return nullptr;
+    const IndexImage& image = parent.images()[found->second];
+    if (image.num_views != point_ids.size()) return nullptr;
+    for (uint32_t k = 0; k < image.num_views; ++k) {
+      if (parent.point_ids()[parent.view_points()[image.first_view + k]] != point_ids[k])
+        return nullptr;
+    }
+    const uint8_t* rows = Row(parent_descriptors, image.first_view);
+    if (found->second % kVerifiedImageStride == 0) {
+      const colmap::Descriptors stored = database.ReadDescriptors(image_id);
+      const colmap::Image& model_image = model->images.at(image_id);
+      uint32_t k = 0;
+      for (uint32_t i = 0; i < model_image.points2D.size(); ++i) {
+        if (model_image.points2D[i].point3D_id == kInvalidPoint3DId) continue;
+        if (i >= stored.rows || std::memcmp(stored.Row(i), rows + size_t(k) * kDescriptorBytes,
+                                            kDescriptorBytes) != 0) {
+          throw UpdateRefused(options.database_path.string() + ": the descriptors of image '" +
+                              std::string(parent.ImageName(image)) +
+                              "' differ from those the index was built from" + kFullBuildNeeded);
+        }
+        ++k;
+      }
+    }
+    grown.rows_reused[found->second] = true;
+    return rows;
+  };
+  grown.views = GatherModelViews(*model, database, known_rows);
+  model.reset();
+  const std::vector<std::string> removed_names =
+      options.remove_images_file.empty() ? std::vector<std::string>{}
+                                         : ReadNameList(options.remove_images_file);
+  ModelViews& child = grown.views;
+  if (!removed_names.empty()) {
+    std::unordered_map<std::string_view, uint32_t> row_of_name;
+    for (uint32_t i = 0; i < child.images.size(); ++i)
+      row_of_name[child.ImageName(child.images[i])] = i;
+    std::vector<bool> left_out(child.images.size(), false);
+    for (const std::string& name : removed_names) {
+      const auto found = row_of_name.find(name);
+      if (found == row_of_name.end()) {
+        throw InputError(options.remove_images_file.string() + ": '" + name +
+                         "' is not an image of the model " + options.model_dir.string());
+      }
+      left_out[found->second] = true;
+    }
+    child = WithoutImages(child, left_out);
+    // Only the kept images' names, as a build of the model without them stores them.
+    std::string names;
+    for (IndexImage& image : child.images) {
+      const std::string_view name = child.ImageName(image);
+      image.name_offset = uint32_t(names.size());
+      names += name;
+    }
+    child.strings = std::move(names);
+  }
+  return grown;
+}
+
+Correspondence MatchToParent(const IndexUpdateOptions& options, const Index& parent,
+                             const GrownModel& grown, const colmap::DatabaseReader& database) {
+  const ModelViews& child = grown.views;
+  const std::span<const uint8_t> parent_descriptors = parent.descriptors();
+  Correspondence match;
+  std::vector<uint32_t>& child_of_parent_image = match.child_of_parent_image;
+  std::vector<uint32_t>& parent_of_child_image = match.parent_of_child_image;
+  // Images by COLMAP id; an old one must keep its name, camera and pose.
+  const std::span<const IndexImage> parent_images = parent.images();
+  std::unordered_map<uint32_t, uint32_t> child_row_of_id;
+  for (uint32_t i = 0; i < child.images.size(); ++i)
+    child_row_of_id[child.images[i].image_id] = i;
+  child_of_parent_image.assign(parent_images.size(), kRemovedRow);
+  parent_of_child_image.assign(child.images.size(), kRemovedRow);
+  Eigen::AlignedBox3d box;
+  for (const IndexImage& image : parent_images) box.extend(CameraCenterOf(image));
+  const double extent = match.extent = std::max(box.diagonal().norm(), 1e-9);
+  for (uint32_t i = 0; i < parent_images.size(); ++i) {
+    const IndexImage& old_image = parent_images[i];
+    const auto found = child_row_of_id.find(old_image.image_id);
+    if (found == child_row_of_id.end()) continue;  // removed
+    const IndexImage& image = child.images[found->second];
+    const std::string old_name(parent.ImageName(old_image));
+    if (child.ImageName(image) != old_name) {
+      throw UpdateRefused(
+          options.model_dir.string() + ": image " + std::to_string(image.image_id) + " is '" +
+          std::string(child.ImageName(image)) + "' in the model and '" + old_name +
+          "' in the index: not the model the index was built from" + kFullBuildNeeded);
+    }
+    if (!SameCamera(parent.cameras()[old_image.camera_index],
+                    child.cameras[image.camera_index])) {
+      throw UpdateRefused(options.model_dir.string() + ": the camera of image '" + old_name +
+                          "' changed (intrinsics refined again?)" + kFullBuildNeeded);
+    }
+    const double shift = (CameraCenterOf(old_image) - CameraCenterOf(image)).norm();
+    const double turn =
+        TurnRadians(old_image.cam_from_world_rotation, image.cam_from_world_rotation);
+    if (shift > kMaxCentreShift * extent || turn > kMaxPoseTurnRadians) {
+      char text[160];
+      std::snprintf(text, sizeof(text),
+                    "' moved by %.3g (%.2g of the cameras' extent) and turned %.3g degrees",
+                    shift, shift / extent, turn * 180 / M_PI);
+      throw UpdateRefused(options.model_dir.string() + ": the pose of image '" + old_name +
+                          text + ": the model was adjusted again, not grown" +
+                          kFullBuildNeeded);
+    }
+    child_of_parent_image[i] = found->second;
+    parent_of_child_image[found->second] = i;
+  }
+
+  // Views of the old images: the parent's rows found again, in order, among the image's.
+  std::vector<uint32_t>& child_of_parent_view = match.child_of_parent_view;
+  std::vector<uint32_t>& parent_of_child_view = match.parent_of_child_view;
+  std::vector<bool>& image_changed = match.image_changed;
+  child_of_parent_view.assign(parent.num_views(), kRemovedRow);
+  parent_of_child_view.assign(child.num_views(), kRemovedRow);
+  image_changed.assign(child.images.size(), true);
+  for (uint32_t i = 0; i < parent_images.size(); ++i) {
+    if (child_of_parent_image[i] == kRemovedRow) continue;
+    const IndexImage& old_image = parent_images[i];
+    const IndexImage& image = child.images[child_of_parent_image[i]];
+    const uint8_t* old_rows = Row(parent_descriptors, old_image.first_view);
+    const uint8_t* rows =
+        child.descriptors.data() + size_t(image.first_view) * kDescriptorBytes;
+    std::vector<uint32_t> unmatched;
+    // Rows copied from the parent, none dropped since (--remove-images): row for row.
+    const bool copied = grown.rows_reused[i] && old_image.num_views == image.num_views;
+    for (uint32_t a = 0; copied && a < old_image.num_views; ++a) {
+      child_of_parent_view[old_image.first_view + a] = image.first_view + a;
+      parent_of_child_view[image.first_view + a] = old_image.first_view + a;
+    }
+    for (uint32_t a = 0, b = 0; !copied && a < old_image.num_views; ++a) {
+      const uint8_t* old_row = old_rows + size_t(a) * kDescriptorBytes;
+      uint32_t found = b;
+      while (found < image.num_views &&
+             std::memcmp(old_row, rows + size_t(found) * kDescriptorBytes, kDescriptorBytes) !=
+                 0)
+        ++found;
+      if (found == image.num_views) {
+        unmatched.push_back(a);
+        continue;
+      }
+      child_of_parent_view[old_image.first_view + a] = image.first_view + found;
+      parent_of_child_view[image.first_view + found] = old_image.first_view + a;
+      b = found + 1;
+    }
+    if (!unmatched.empty()) {
+      // Observations the model dropped still have their descriptors in the database;
+      // anything else means the database is not the one the index was built from.
+      const colmap::Descriptors stored = database.ReadDescriptors(image.image_id);
+      for (uint32_t a : unmatched) {
+        bool found = false;
+        for (uint32_t r = 0; r < stored.rows && !found; ++r)
+          found = std::memcmp(stored.Row(r), old_rows + size_t(a) * kDescriptorBytes,
+                              kDescriptorBytes) == 0;
+        if (!found) {
+          throw UpdateRefused(options.database_path.string() + ": the descriptors of image '" +
+                              std::string(parent.ImageName(old_image)) +
+                              "' differ from those the index was built from" +
+                              kFullBuildNeeded);
+        }
+      }
+    }
+    image_changed[child_of_parent_image[i]] =
+        !(old_image.num_views == image.num_views && unmatched.empty());
+  }
+
+  // Points: by their COLMAP ids, which ascend in both.
+  const std::span<const uint64_t> parent_point_ids = parent.point_ids();
+  std::vector<uint32_t>& child_of_parent_point = match.child_of_parent_point;
+  std::vector<uint32_t>& parent_of_child_point = match.parent_of_child_point;
+  child_of_parent_point.assign(parent.num_points(), kRemovedRow);
+  parent_of_child_point.assign(child.points.size(), kRemovedRow);
+  for (uint32_t p = 0, q = 0; p < parent_point_ids.size() && q < child.point_ids.size();) {
+    if (parent_point_ids[p] < child.point_ids[q]) {
+      ++p;
+    } else if (child.point_ids[q] < parent_point_ids[p]) {
+      ++q;
+    } else {
+      child_of_parent_point[p] = q;
+      parent_of_child_point[q] = p;
+      ++p, ++q;
+    }
+  }
+  return match;
+}
+
+}  // namespace cwloc
