@@ -29,8 +29,8 @@ inline constexpr uint64_t kNoSizeLimit = std::numeric_limits<uint64_t>::max();
 inline constexpr InputKind kPhotoFile{"an image", 512'000'000};
 // COLMAP text feature files (--features): 100k features are ~50 MB of text, 1 GB about 2M.
 inline constexpr InputKind kFeatureFile{"a feature file", 1'000'000'000};
-// Query and image lists (--query-list, --image-list): a million queries with their cameras at
-// 256 bytes a line.
+// Query and image lists (--query-list, --image-list, cwloc-index extract --images and update
+// --remove-images): a million queries with their cameras at 256 bytes a line.
 inline constexpr InputKind kQueryListFile{"a query or image list", 256'000'000};
 // Priors files (--priors): a position and a gravity line for a million queries.
 inline constexpr InputKind kPriorsFile{"a priors file", 256'000'000};
@@ -44,8 +44,6 @@ inline constexpr InputKind kFramesFile{"a frames file", 256'000'000};
 inline constexpr InputKind kGeorefFile{"a georef file", 256'000'000};
 // Clustering files (cwloc-index --cluster-file): a million images at 256 bytes a line.
 inline constexpr InputKind kClusterFile{"a clustering file", 256'000'000};
-// Image name lists (cwloc-index update --remove-images): a million names at 256 bytes a line.
-inline constexpr InputKind kImageNameList{"an image name list", 256'000'000};
 // Each file of a COLMAP sparse model, text or binary: images.txt holds every 2D point of every
 // image, about 40 bytes each, so a 100k-image city of 8k-keypoint photos has a 32 GB images.txt
 // (19 GB as .bin). The readers stream; memory grows with the model, not the file.

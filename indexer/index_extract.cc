@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cstdio>
-#include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <unordered_map>
@@ -39,28 +38,20 @@ std::vector<char> ClustersNear(const Index& parent, const GeoRegion& near) {
 
 // Per parent cluster, 1 when it holds an image the list names ('#' comments, blank lines).
 std::vector<char> ClustersOfListedImages(const Index& parent, const std::filesystem::path& list) {
-  CheckInputFile(list, kQueryListFile);
-  std::ifstream in(list);
-  if (!in) throw InputError(list.string() + ": cannot open the image list");
   std::unordered_map<std::string_view, uint32_t> row_of_name;
   for (uint32_t i = 0; i < parent.images().size(); ++i)
     row_of_name.emplace(parent.ImageName(parent.images()[i]), i);
   std::vector<char> keep(parent.images().size(), 0);
-  size_t listed = 0;
-  std::string line;
-  for (int number = 1; std::getline(in, line); ++number) {
-    const size_t first = line.find_first_not_of(" \t\r");
-    if (first == std::string::npos || line[first] == '#') continue;
-    const std::string name = line.substr(first, line.find_last_not_of(" \t\r") + 1 - first);
-    const auto found = row_of_name.find(name);
+  const std::vector<ListedImage> listed = ReadImageNameList(list);
+  for (const ListedImage& image : listed) {
+    const auto found = row_of_name.find(image.name);
     if (found == row_of_name.end()) {
-      throw InputError(list.string() + ":" + std::to_string(number) + ": image '" + name +
+      throw InputError(list.string() + ":" + std::to_string(image.line) + ": image '" + image.name +
                        "' is not in " + parent.file().path().string());
     }
     keep[parent.images()[found->second].cluster] = 1;
-    ++listed;
   }
-  if (listed == 0) throw InputError(list.string() + ": no image names");
+  if (listed.empty()) throw InputError(list.string() + ": no image names");
   return keep;
 }
 

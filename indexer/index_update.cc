@@ -1,25 +1,19 @@
 #include "indexer/index_update.h"
 
-#include <Eigen/Geometry>
+#include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <fstream>
 #include <map>
-#include <memory>
-#include <unordered_map>
-#include <unordered_set>
 
-#include "base/bounded_file.h"
 #include "base/parallel_for.h"
 #include "base/stopwatch.h"
-#include "colmap/reconstruction_io.h"
+#include "colmap/database.h"
 #include "cwloc/version.h"
 #include "delta/apply_delta.h"
 #include "delta/covisibility.h"
 #include "format/index.h"
 #include "format/xxhash64.h"
-#include "geo/index_georeference.h"
 #include "indexer/build_option_table.h"
 #include "indexer/clustering.h"
 #include "indexer/index_build_flags.h"
@@ -288,7 +282,7 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
       Clustering clustering;
       clustering.method =
           parent_manifest["build_parameters"]["clustering"]["method"].get<std::string>();
-      std::vector<bool> lost_member(parent_images.size() + child.images.size(), false);
+      std::vector<uint32_t> lost_member;  // clusters an old image left
       if (per_image) {
         for (uint32_t i = 0; i < child.images.size(); ++i) clustering.cluster_of_image.push_back(i);
         clustering.num_clusters = uint32_t(child.images.size());
@@ -321,7 +315,7 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
         clustering.num_clusters = next;
         for (uint32_t i = 0; i < parent_images.size(); ++i) {
           if (child_of_parent_image[i] == kRemovedRow && dense.count(parent_images[i].cluster))
-            lost_member[dense[parent_images[i].cluster]] = true;
+            lost_member.push_back(dense[parent_images[i].cluster]);
         }
       }
       for (uint32_t i = 0; i < child.images.size(); ++i)
@@ -332,7 +326,7 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
         report.images_changed += parent_of_child_image[i] != kRemovedRow && image_changed[i];
         if (image_changed[i]) dirty[clustering.cluster_of_image[i]] = true;
       }
-      for (uint32_t c = 0; c < clustering.num_clusters; ++c) dirty[c] = dirty[c] || lost_member[c];
+      for (uint32_t c : lost_member) dirty[c] = true;
       for (bool d : dirty) report.clusters_recomputed += d;
       const std::vector<float> recomputed =
           ComputeViewNeighborDistances(child, clustering, threads, &dirty);

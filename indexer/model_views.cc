@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <cstring>
+#include <fstream>
 #include <unordered_map>
 
+#include "base/bounded_file.h"
 #include "base/error.h"
 #include "base/progress.h"
 #include "camera/camera_models.h"
@@ -162,7 +164,6 @@ ModelViews WithoutImages(const ModelViews& views, const std::vector<bool>& left_
   std::vector<uint32_t> new_point(views.points.size(), UINT32_MAX);
   ModelViews out;
   out.cameras = views.cameras;
-  out.strings = views.strings;
   for (uint32_t p = 0; p < views.points.size(); ++p) {
     const IndexPoint& point = views.points[p];
     uint32_t kept = 0;
@@ -174,17 +175,17 @@ ModelViews WithoutImages(const ModelViews& views, const std::vector<bool>& left_
     out.point_ids.push_back(views.point_ids[p]);
     if (!views.point_colors.empty()) out.point_colors.push_back(views.point_colors[p]);
   }
-  std::vector<uint32_t> new_view(views.num_views(), UINT32_MAX);
   const bool keypoints = !views.view_keypoints.empty();
   for (uint32_t i = 0; i < views.images.size(); ++i) {
     if (left_out[i]) continue;
     IndexImage row = views.images[i];
+    row.name_offset = static_cast<uint32_t>(out.strings.size());
+    out.strings += views.ImageName(views.images[i]);
     row.first_view = static_cast<uint32_t>(out.view_points.size());
     for (uint32_t v = views.images[i].first_view; v < views.images[i].first_view + row.num_views;
          ++v) {
       const uint32_t point = new_point[views.view_points[v]];
       if (point == UINT32_MAX) continue;
-      new_view[v] = static_cast<uint32_t>(out.view_points.size());
       out.view_points.push_back(point);
       if (keypoints) out.view_keypoints.push_back(views.view_keypoints[v]);
       const uint8_t* descriptor = views.descriptors.data() + size_t{v} * kDescriptorBytes;
@@ -200,18 +201,22 @@ ModelViews WithoutImages(const ModelViews& views, const std::vector<bool>& left_
     if (new_cluster[image.cluster] == UINT32_MAX) new_cluster[image.cluster] = num_clusters++;
     image.cluster = new_cluster[image.cluster];
   }
-  // Tracks keep their order: a point's first kept view first.
-  for (uint32_t p = 0; p < views.points.size(); ++p) {
-    if (new_point[p] == UINT32_MAX) continue;
-    IndexPoint& point = out.points[new_point[p]];
-    const uint32_t first = views.points[p].first_track, length = views.points[p].track_length;
-    point.first_track = static_cast<uint32_t>(out.tracks.size());
-    for (uint32_t t = first; t < first + length; ++t) {
-      if (new_view[views.tracks[t]] != UINT32_MAX) out.tracks.push_back(new_view[views.tracks[t]]);
-    }
-    point.track_length = static_cast<uint32_t>(out.tracks.size()) - point.first_track;
-  }
+  out.tracks = TracksOfViews(out.view_points, out.points);
   return out;
+}
+
+std::vector<ListedImage> ReadImageNameList(const std::filesystem::path& path) {
+  CheckInputFile(path, kQueryListFile);
+  std::ifstream in(path);
+  if (!in) throw InputError(path.string() + ": cannot open the image list");
+  std::vector<ListedImage> names;
+  std::string line;
+  for (int number = 1; std::getline(in, line); ++number) {
+    const size_t first = line.find_first_not_of(" \t\r");
+    if (first == std::string::npos || line[first] == '#') continue;
+    names.push_back({number, line.substr(first, line.find_last_not_of(" \t\r") + 1 - first)});
+  }
+  return names;
 }
 
 }  // namespace cwloc

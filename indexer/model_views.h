@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <filesystem>
 #include <functional>
 #include <span>
 #include <string>
@@ -51,8 +52,16 @@ ModelViews GatherModelViews(const colmap::Reconstruction& model,
 
 // The views of the model without the images whose rows `left_out` marks, as `colmap
 // image_deleter` takes images out of a model: their views go, and so does every 3D point left
-// with fewer than two views (with its last view). Cameras and image names stay; the images
-// keep their clusters, renumbered densely in their order.
+// with fewer than two views (with its last view). Cameras stay, and the kept images' names;
+// the images keep their clusters, renumbered densely in their order.
 ModelViews WithoutImages(const ModelViews& views, const std::vector<bool>& left_out);
+
+// An image name list (`cwloc-index extract --images`, `update --remove-images`): one name per
+// line, surrounding blanks trimmed, blank lines and '#' comments skipped.
+struct ListedImage {
+  int line;  // 1-based, for messages
+  std::string name;
+};
+std::vector<ListedImage> ReadImageNameList(const std::filesystem::path& path);
 
 }  // namespace cwloc

@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <fstream>
 #include <memory>
 #include <unordered_map>
 
@@ -20,21 +19,10 @@ namespace {
 // its row is a multiple of this: a database extracted again differs in every image.
 constexpr uint32_t kVerifiedImageStride = 64;
 
-std::vector<std::string> ReadNameList(const std::filesystem::path& path) {
-  CheckInputFile(path, kImageNameList);
-  std::ifstream in(path);
-  if (!in) throw InputError(path.string() + ": cannot open");
-  std::vector<std::string> names;
-  for (std::string line; std::getline(in, line);) {
-    while (!line.empty() && (line.back() == '\r' || line.back() == ' ')) line.pop_back();
-    if (!line.empty() && line[0] != '#') names.push_back(line);
-  }
-  return names;
-}
-
+// The angle between two cam_from_world rotations (w, x, y, z), exact for small ones.
 double TurnRadians(const double* qa, const double* qb) {
-  const double dot = std::abs(qa[0] * qb[0] + qa[1] * qb[1] + qa[2] * qb[2] + qa[3] * qb[3]);
-  return 2 * std::acos(std::min(1.0, dot));
+  return Eigen::Quaterniond(qa[0], qa[1], qa[2], qa[3])
+      .angularDistance(Eigen::Quaterniond(qb[0], qb[1], qb[2], qb[3]));
 }
 
 bool SameCamera(const IndexCamera& a, const IndexCamera& b) {
@@ -95,32 +83,22 @@ GrownModel ReadGrownModel(const IndexUpdateOptions& options, const Index& parent
   };
   grown.views = GatherModelViews(*model, database, known_rows);
   model.reset();
-  const std::vector<std::string> removed_names =
-      options.remove_images_file.empty() ? std::vector<std::string>{}
-                                         : ReadNameList(options.remove_images_file);
-  ModelViews& child = grown.views;
-  if (!removed_names.empty()) {
+  if (!options.remove_images_file.empty()) {
+    ModelViews& child = grown.views;
     std::unordered_map<std::string_view, uint32_t> row_of_name;
     for (uint32_t i = 0; i < child.images.size(); ++i)
       row_of_name[child.ImageName(child.images[i])] = i;
     std::vector<bool> left_out(child.images.size(), false);
-    for (const std::string& name : removed_names) {
-      const auto found = row_of_name.find(name);
+    for (const ListedImage& image : ReadImageNameList(options.remove_images_file)) {
+      const auto found = row_of_name.find(image.name);
       if (found == row_of_name.end()) {
-        throw InputError(options.remove_images_file.string() + ": '" + name +
-                         "' is not an image of the model " + options.model_dir.string());
+        throw InputError(options.remove_images_file.string() + ":" + std::to_string(image.line) +
+                         ": image '" + image.name + "' is not in the model " +
+                         options.model_dir.string());
       }
       left_out[found->second] = true;
     }
     child = WithoutImages(child, left_out);
-    // Only the kept images' names, as a build of the model without them stores them.
-    std::string names;
-    for (IndexImage& image : child.images) {
-      const std::string_view name = child.ImageName(image);
-      image.name_offset = uint32_t(names.size());
-      names += name;
-    }
-    child.strings = std::move(names);
   }
   return grown;
 }
@@ -135,8 +113,7 @@ Correspondence MatchToParent(const IndexUpdateOptions& options, const Index& par
   // Images by COLMAP id; an old one must keep its name, camera and pose.
   const std::span<const IndexImage> parent_images = parent.images();
   std::unordered_map<uint32_t, uint32_t> child_row_of_id;
-  for (uint32_t i = 0; i < child.images.size(); ++i)
-    child_row_of_id[child.images[i].image_id] = i;
+  for (uint32_t i = 0; i < child.images.size(); ++i) child_row_of_id[child.images[i].image_id] = i;
   child_of_parent_image.assign(parent_images.size(), kRemovedRow);
   parent_of_child_image.assign(child.images.size(), kRemovedRow);
   Eigen::AlignedBox3d box;
@@ -149,13 +126,12 @@ Correspondence MatchToParent(const IndexUpdateOptions& options, const Index& par
     const IndexImage& image = child.images[found->second];
     const std::string old_name(parent.ImageName(old_image));
     if (child.ImageName(image) != old_name) {
-      throw UpdateRefused(
-          options.model_dir.string() + ": image " + std::to_string(image.image_id) + " is '" +
-          std::string(child.ImageName(image)) + "' in the model and '" + old_name +
-          "' in the index: not the model the index was built from" + kFullBuildNeeded);
+      throw UpdateRefused(options.model_dir.string() + ": image " + std::to_string(image.image_id) +
+                          " is '" + std::string(child.ImageName(image)) + "' in the model and '" +
+                          old_name + "' in the index: not the model the index was built from" +
+                          kFullBuildNeeded);
     }
-    if (!SameCamera(parent.cameras()[old_image.camera_index],
-                    child.cameras[image.camera_index])) {
+    if (!SameCamera(parent.cameras()[old_image.camera_index], child.cameras[image.camera_index])) {
       throw UpdateRefused(options.model_dir.string() + ": the camera of image '" + old_name +
                           "' changed (intrinsics refined again?)" + kFullBuildNeeded);
     }
@@ -165,11 +141,10 @@ Correspondence MatchToParent(const IndexUpdateOptions& options, const Index& par
     if (shift > kMaxCentreShift * extent || turn > kMaxPoseTurnRadians) {
       char text[160];
       std::snprintf(text, sizeof(text),
-                    "' moved by %.3g (%.2g of the cameras' extent) and turned %.3g degrees",
-                    shift, shift / extent, turn * 180 / M_PI);
-      throw UpdateRefused(options.model_dir.string() + ": the pose of image '" + old_name +
-                          text + ": the model was adjusted again, not grown" +
-                          kFullBuildNeeded);
+                    "' moved by %.3g (%.2g of the cameras' extent) and turned %.3g degrees", shift,
+                    shift / extent, turn * 180 / M_PI);
+      throw UpdateRefused(options.model_dir.string() + ": the pose of image '" + old_name + text +
+                          ": the model was adjusted again, not grown" + kFullBuildNeeded);
     }
     child_of_parent_image[i] = found->second;
     parent_of_child_image[found->second] = i;
@@ -187,8 +162,7 @@ Correspondence MatchToParent(const IndexUpdateOptions& options, const Index& par
     const IndexImage& old_image = parent_images[i];
     const IndexImage& image = child.images[child_of_parent_image[i]];
     const uint8_t* old_rows = Row(parent_descriptors, old_image.first_view);
-    const uint8_t* rows =
-        child.descriptors.data() + size_t(image.first_view) * kDescriptorBytes;
+    const uint8_t* rows = child.descriptors.data() + size_t(image.first_view) * kDescriptorBytes;
     std::vector<uint32_t> unmatched;
     // Rows copied from the parent, none dropped since (--remove-images): row for row.
     const bool copied = grown.rows_reused[i] && old_image.num_views == image.num_views;
@@ -200,8 +174,7 @@ Correspondence MatchToParent(const IndexUpdateOptions& options, const Index& par
       const uint8_t* old_row = old_rows + size_t(a) * kDescriptorBytes;
       uint32_t found = b;
       while (found < image.num_views &&
-             std::memcmp(old_row, rows + size_t(found) * kDescriptorBytes, kDescriptorBytes) !=
-                 0)
+             std::memcmp(old_row, rows + size_t(found) * kDescriptorBytes, kDescriptorBytes) != 0)
         ++found;
       if (found == image.num_views) {
         unmatched.push_back(a);
@@ -223,8 +196,7 @@ Correspondence MatchToParent(const IndexUpdateOptions& options, const Index& par
         if (!found) {
           throw UpdateRefused(options.database_path.string() + ": the descriptors of image '" +
                               std::string(parent.ImageName(old_image)) +
-                              "' differ from those the index was built from" +
-                              kFullBuildNeeded);
+                              "' differ from those the index was built from" + kFullBuildNeeded);
         }
       }
     }

@@ -213,6 +213,20 @@ TEST_F(IndexUpdateTest, RemovedImagesLeaveWhatAFullBuildWithoutThemHolds) {
   ExpectEveryRowFindsItself(options.output_path);
   ApplyDelta(index, options.delta_path, dir_ / "applied.cwl", 1);
   EXPECT_EQ(test::ReadBytes(dir_ / "applied.cwl"), test::ReadBytes(options.output_path));
+
+  // A name the model does not have is named with its line, and nothing is written.
+  std::ofstream(dir_ / "unknown.txt") << "# images to take out\n\n  nowhere.jpg \n";
+  IndexUpdateOptions unknown = Update(index, model_dir_, "unknown");
+  unknown.remove_images_file = dir_ / "unknown.txt";
+  try {
+    UpdateIndex(unknown);
+    FAIL() << "removed an image the model does not have";
+  } catch (const InputError& error) {
+    EXPECT_EQ(std::string(error.what()), unknown.remove_images_file.string() +
+                                             ":3: image 'nowhere.jpg' is not in the model " +
+                                             model_dir_.string());
+  }
+  EXPECT_FALSE(std::filesystem::exists(unknown.output_path));
 }
 
 TEST_F(IndexUpdateTest, RefusesAModelWhoseOldPosesMovedUnlessAskedToRebuild) {

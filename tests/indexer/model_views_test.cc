@@ -37,6 +37,7 @@ TEST(ModelViewsTest, WithoutImagesIsColmapsImageDeleter) {
   ASSERT_EQ(rest.view_points, mapping.view_points);
   EXPECT_EQ(rest.tracks, mapping.tracks);
   EXPECT_EQ(rest.descriptors, mapping.descriptors);
+  EXPECT_EQ(rest.strings, mapping.strings);  // the left-out images' names go too
   for (size_t i = 0; i < rest.images.size(); ++i) {
     EXPECT_EQ(rest.ImageName(rest.images[i]), mapping.ImageName(mapping.images[i]));
     EXPECT_EQ(rest.images[i].first_view, mapping.images[i].first_view);
