@@ -89,6 +89,11 @@ struct AppliedDelta::Child {
   std::vector<uint32_t> tracks;
   CovisibilityGraph graph;
   KdForest forest;
+  // A compact child: positions as offsets from the parent's origin, codes with its codebook,
+  // and the codes decoded (the kd-forest's rows).
+  std::vector<IndexPointOffset> point_offsets;
+  std::vector<uint8_t> codes;
+  std::vector<uint8_t> decoded;
 };
 
 namespace {
@@ -128,10 +133,12 @@ AppliedDelta::AppliedDelta(const Index& parent, const IndexDelta& delta,
                      "before made");
   }
   const DeltaHeader& header = delta.header;
-  if (parent.coded()) {
-    throw InputError(FileName(parent) +
-                     ": a compact index takes no delta yet; rebuild it with cwloc-index build "
-                     "--compact from the grown model");
+  const bool coded = parent.coded();
+  const uint32_t code_bytes = parent.codes().code_bytes;
+  if (delta.code_bytes != code_bytes) {
+    throw InputError(name + ": the delta's point codes are of " + std::to_string(delta.code_bytes) +
+                     " bytes, " + FileName(parent) + "'s of " + std::to_string(code_bytes) +
+                     " (0: a full index, which stores descriptors)");
   }
   size_t child_views = 0;
   CheckImages(delta, &child_views, name);
@@ -147,8 +154,10 @@ AppliedDelta::AppliedDelta(const Index& parent, const IndexDelta& delta,
     }
     return size_t(kept + new_rows);
   };
-  const size_t views_given = rows_given(delta.view_runs, parent.num_views(),
-                                        delta.new_descriptors.size() / kDescriptorBytes, "view");
+  // A compact index stores no view descriptors: its new views are their points.
+  const size_t new_views =
+      coded ? delta.new_view_points.size() : delta.new_descriptors.size() / kDescriptorBytes;
+  const size_t views_given = rows_given(delta.view_runs, parent.num_views(), new_views, "view");
   if (views_given != child_views) {
     throw InputError(name + ": the delta's runs and new views give " + std::to_string(views_given) +
                      " views, its images " + std::to_string(child_views));
@@ -159,13 +168,20 @@ AppliedDelta::AppliedDelta(const Index& parent, const IndexDelta& delta,
   const RowMaps points =
       MapRows(delta.point_runs, child_points, parent.num_points(), "point", name);
   CheckCount(delta.new_points, points.num_new, "NPNT", name);
-  if (delta.new_descriptors.size() != views.num_new * kDescriptorBytes) {
+  if (delta.new_descriptors.size() != (coded ? 0 : views.num_new) * kDescriptorBytes) {
     throw InputError(name + ": the delta's section 'NDSC' has " +
                      std::to_string(delta.new_descriptors.size() / kDescriptorBytes) +
-                     " rows, expected " + std::to_string(views.num_new));
+                     " rows, expected " + std::to_string(coded ? 0 : views.num_new));
+  }
+  if (delta.new_point_codes.size() != points.num_new * code_bytes) {
+    throw InputError(name + ": the delta's section 'NCOD' has " +
+                     std::to_string(coded ? delta.new_point_codes.size() / code_bytes : 0) +
+                     " rows, expected " + std::to_string(points.num_new));
   }
   CheckCount(delta.new_view_points, views.num_new, "NV2P", name);
-  CheckCount(delta.new_view_neighbors, views.num_new, "NVNN", name);
+  // v_NN: per view in a full index, per point in a compact one.
+  const size_t neighbor_rows = coded ? child_points : child_views;
+  CheckCount(delta.new_view_neighbors, coded ? points.num_new : views.num_new, "NVNN", name);
   const bool keypoints = !parent.view_keypoints().empty();
   if (keypoints && parent.view_keypoints().size() != parent.num_views())
     throw InputError(FileName(parent) + ": section 'VKXY' does not have one row per view");
@@ -175,7 +191,7 @@ AppliedDelta::AppliedDelta(const Index& parent, const IndexDelta& delta,
   const bool ids = !parent.point_ids().empty();
   CheckCount(delta.new_point_ids, ids ? points.num_new : 0, "NPID", name);
   CheckChangedRows(delta.view_point_changes, child_views, "CV2P", name);
-  CheckChangedRows(delta.view_neighbor_changes, child_views, "CVNN", name);
+  CheckChangedRows(delta.view_neighbor_changes, neighbor_rows, "CVNN", name);
   CheckChangedRows(delta.point_moves, child_points, "CPNT", name);
   CheckChangedRows(delta.point_color_changes, colors ? child_points : 0, "CRGB", name);
   if (header.forest_leaf_size == 0 || header.forest_leaf_size > kMaxKdLeafSize) {
@@ -185,11 +201,12 @@ AppliedDelta::AppliedDelta(const Index& parent, const IndexDelta& delta,
   }
 
   Child& child = *child_;
+  const size_t descriptor_rows = coded ? 0 : child_views;
   child.descriptor_bytes =
-      std::make_unique_for_overwrite<uint8_t[]>(child_views * kDescriptorBytes);
-  child.descriptors = {child.descriptor_bytes.get(), child_views * kDescriptorBytes};
+      std::make_unique_for_overwrite<uint8_t[]>(descriptor_rows * kDescriptorBytes);
+  child.descriptors = {child.descriptor_bytes.get(), descriptor_rows * kDescriptorBytes};
   child.view_points.resize(child_views);
-  child.neighbor_distances.resize(child_views);
+  child.neighbor_distances.resize(neighbor_rows);
   if (keypoints) child.view_keypoints.resize(child_views);
   const std::span<const uint8_t> parent_descriptors = parent.descriptors();
   size_t next_new = 0;
@@ -198,19 +215,23 @@ AppliedDelta::AppliedDelta(const Index& parent, const IndexDelta& delta,
     const uint32_t from = views.child_to_parent[v];
     uint32_t point;
     if (from == kRemovedRow) {
-      std::memcpy(&child.descriptors[size_t(v) * kDescriptorBytes],
-                  &delta.new_descriptors[next_new * kDescriptorBytes], kDescriptorBytes);
+      if (!coded) {
+        std::memcpy(&child.descriptors[size_t(v) * kDescriptorBytes],
+                    &delta.new_descriptors[next_new * kDescriptorBytes], kDescriptorBytes);
+        child.neighbor_distances[v] = delta.new_view_neighbors[next_new];
+      }
       point = delta.new_view_points[next_new];
-      child.neighbor_distances[v] = delta.new_view_neighbors[next_new];
       if (keypoints) child.view_keypoints[v] = delta.new_view_keypoints[next_new];
       ++next_new;
     } else {
-      std::memcpy(&child.descriptors[size_t(v) * kDescriptorBytes],
-                  &parent_descriptors[size_t(from) * kDescriptorBytes], kDescriptorBytes);
+      if (!coded) {
+        std::memcpy(&child.descriptors[size_t(v) * kDescriptorBytes],
+                    &parent_descriptors[size_t(from) * kDescriptorBytes], kDescriptorBytes);
+        child.neighbor_distances[v] = parent.view_neighbor_distances()[from];
+      }
       const uint32_t parent_point = parent.view_points()[from];
       point = parent_point < points.parent_to_child.size() ? points.parent_to_child[parent_point]
                                                            : kRemovedRow;
-      child.neighbor_distances[v] = parent.view_neighbor_distances()[from];
       if (keypoints) child.view_keypoints[v] = parent.view_keypoints()[from];
     }
     if (next_change < delta.view_point_changes.size() &&
@@ -223,8 +244,6 @@ AppliedDelta::AppliedDelta(const Index& parent, const IndexDelta& delta,
     }
     child.view_points[v] = point;
   }
-  for (const RowChange<float>& change : delta.view_neighbor_changes)
-    child.neighbor_distances[change.row] = change.value;
 
   child.points.resize(child_points);
   if (colors) child.point_colors.resize(child_points);
@@ -237,15 +256,19 @@ AppliedDelta::AppliedDelta(const Index& parent, const IndexDelta& delta,
       std::memcpy(point.xyz, delta.new_points[next_new].xyz, sizeof(point.xyz));
       if (colors) child.point_colors[p] = delta.new_point_colors[next_new];
       if (ids) child.point_ids[p] = delta.new_point_ids[next_new];
+      if (coded) child.neighbor_distances[p] = delta.new_view_neighbors[next_new];
       ++next_new;
     } else {
       const std::array<double, 3> xyz = parent.PointXyz(from);
       std::copy(xyz.begin(), xyz.end(), point.xyz);
       if (colors) child.point_colors[p] = parent.point_colors()[from];
       if (ids) child.point_ids[p] = parent.point_ids()[from];
+      if (coded) child.neighbor_distances[p] = parent.point_neighbor_distances()[from];
     }
     child.points[p] = point;
   }
+  for (const RowChange<float>& change : delta.view_neighbor_changes)
+    child.neighbor_distances[change.row] = change.value;
   for (const PointMove& move : delta.point_moves)
     std::memcpy(child.points[move.row].xyz, move.xyz, sizeof(move.xyz));
   for (const PointColorChange& change : delta.point_color_changes)
@@ -256,28 +279,66 @@ AppliedDelta::AppliedDelta(const Index& parent, const IndexDelta& delta,
       throw InputError(name + ": the delta leaves point " + std::to_string(p) + " without views");
   }
 
+  if (coded) ComposeCodes(parent, delta, points.child_to_parent);
+
   const std::vector<IndexImage> images = delta.images;
   child.graph =
       BuildCovisibilityGraph(images, child.points, child.tracks, child.view_points, threads);
+  // The kd-forest's rows: views, or a compact index's points decoded.
+  const RowMaps& rows = coded ? points : views;
+  const std::span<const uint8_t> row_descriptors =
+      coded ? std::span<const uint8_t>(child.decoded) : child.descriptors;
   if ((header.flags & kDeltaForestRebuilt) != 0) {
     KdForestBuildOptions options;
     options.num_trees = uint32_t(parent.kd_forest().NumTrees());
     options.max_leaf_size = header.forest_leaf_size;
     options.seed = header.forest_seed;
     options.num_threads = uint32_t(threads);
-    child.forest = BuildKdForest(child.descriptors, options);
+    child.forest = BuildKdForest(row_descriptors, options);
   } else {
     std::string error;
     if (!ValidateKdForest(parent.kd_forest(), &error))
       throw InputError(FileName(parent) + ": " + error);
     std::vector<uint32_t> inserted;
-    for (uint32_t v = 0; v < child_views; ++v) {
-      if (views.child_to_parent[v] == kRemovedRow) inserted.push_back(v);
+    for (uint32_t row = 0; row < rows.child_to_parent.size(); ++row) {
+      if (rows.child_to_parent[row] == kRemovedRow) inserted.push_back(row);
     }
     child.forest =
-        UpdateKdForest(parent.kd_forest(), {views.parent_to_child, inserted}, child.descriptors,
+        UpdateKdForest(parent.kd_forest(), {rows.parent_to_child, inserted}, row_descriptors,
                        header.forest_leaf_size, header.forest_seed, threads);
   }
+}
+
+// A compact child's points: offsets from the parent's origin (a kept point that did not move
+// keeps its offset's bits), codes (the parent's, or the delta's for new points), decoded.
+void AppliedDelta::ComposeCodes(const Index& parent, const IndexDelta& delta,
+                                const std::vector<uint32_t>& parent_of_point) {
+  Child& child = *child_;
+  const IndexPointOrigin origin = parent.point_origin();
+  const DescriptorCodes& parent_codes = parent.codes();
+  const uint32_t code_bytes = parent_codes.code_bytes;
+  std::vector<bool> moved(child.points.size(), false);
+  for (const PointMove& move : delta.point_moves) moved[move.row] = true;
+  child.point_offsets.resize(child.points.size());
+  child.codes.resize(child.points.size() * code_bytes);
+  size_t next_new = 0;
+  for (uint32_t p = 0; p < child.points.size(); ++p) {
+    const uint32_t from = parent_of_point[p];
+    IndexPointOffset& offset = child.point_offsets[p];
+    offset.first_track = child.points[p].first_track;
+    if (from != kRemovedRow && !moved[p]) {
+      std::memcpy(offset.offset, parent.point_offsets()[from].offset, sizeof(offset.offset));
+    } else {
+      for (int i = 0; i < 3; ++i) offset.offset[i] = float(child.points[p].xyz[i] - origin.xyz[i]);
+    }
+    const uint8_t* code = from != kRemovedRow ? parent_codes.Code(from)
+                                              : &delta.new_point_codes[next_new++ * code_bytes];
+    std::memcpy(&child.codes[size_t(p) * code_bytes], code, code_bytes);
+  }
+  const DescriptorCodes codes{parent_codes.codebook, child.codes, code_bytes};
+  child.decoded.resize(child.points.size() * kDescriptorBytes);
+  for (size_t p = 0; p < child.points.size(); ++p)
+    codes.Decode(p, &child.decoded[p * kDescriptorBytes]);
 }
 
 AppliedDelta::~AppliedDelta() = default;
@@ -296,9 +357,16 @@ uint64_t AppliedDelta::Write(const std::filesystem::path& output, std::string_vi
   contents.cameras = delta.cameras;
   contents.images = delta.images;
   contents.strings = delta.strings;
-  contents.points = child.points;
+  IndexPointOrigin origin{};
+  if (parent.coded()) {
+    KeepParentCoding(parent, &origin, &contents);
+    contents.point_offsets = child.point_offsets;
+    contents.codes = child.codes;
+  } else {
+    contents.points = child.points;
+    contents.descriptors = child.descriptors;
+  }
   contents.tracks = child.tracks;
-  contents.descriptors = child.descriptors;
   contents.view_points = child.view_points;
   contents.neighbor_distances = child.neighbor_distances;
   contents.forest = &child.forest;

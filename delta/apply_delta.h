@@ -5,6 +5,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "delta/delta_file.h"
 #include "format/index.h"
@@ -34,6 +35,8 @@ class AppliedDelta {
 
  private:
   struct Child;
+  void ComposeCodes(const Index& parent, const IndexDelta& delta,
+                    const std::vector<uint32_t>& parent_of_point);
   const Index& parent_;
   const IndexDelta& delta_;
   std::unique_ptr<Child> child_;

@@ -25,7 +25,7 @@ std::vector<T> Rows(const IndexFile& file, uint32_t tag) {
 
 void WriteDelta(const std::filesystem::path& path, const IndexDelta& delta) {
   using namespace delta_section;
-  const std::vector<SectionData> sections = {
+  std::vector<SectionData> sections = {
       MakeSection(kHeader, std::span<const DeltaHeader>(&delta.header, 1)),
       MakeSection<char>(section::kManifest, {delta.manifest.data(), delta.manifest.size()}),
       SectionOf(section::kCameras, delta.cameras),
@@ -46,7 +46,12 @@ void WriteDelta(const std::filesystem::path& path, const IndexDelta& delta) {
       SectionOf(kPointMoves, delta.point_moves),
       SectionOf(kPointColorChanges, delta.point_color_changes),
   };
-  WriteIndexFile(path, sections, kDeltaContainer, kDeltaFormatMinor);
+  // A compact parent's delta is 1.1; a full one's stays 1.0, readable by 1.0's apply.
+  if (delta.code_bytes != 0) {
+    sections.push_back({kNewPointCodes, kSectionRequired, delta.code_bytes,
+                        delta.new_point_codes.size() / delta.code_bytes, delta.new_point_codes});
+  }
+  WriteIndexFile(path, sections, kDeltaContainer, delta.code_bytes != 0 ? 1 : 0);
 }
 
 IndexDelta ReadDelta(const std::filesystem::path& path) {
@@ -74,6 +79,12 @@ IndexDelta ReadDelta(const std::filesystem::path& path) {
                        std::to_string(entry.element_size) + " bytes, expected 128");
     const uint8_t* bytes = file.bytes().data() + entry.offset;
     delta.new_descriptors.assign(bytes, bytes + entry.size);
+  }
+  if (file.FindSection(kNewPointCodes) != nullptr) {  // whether it fits the parent: apply's
+    const SectionEntry& entry = *file.FindSection(kNewPointCodes);
+    const uint8_t* bytes = file.bytes().data() + entry.offset;
+    delta.new_point_codes.assign(bytes, bytes + entry.size);
+    delta.code_bytes = entry.element_size;
   }
   delta.new_view_points = Rows<uint32_t>(file, kNewViewPoints);
   delta.new_view_keypoints = Rows<ViewKeypoint>(file, kNewViewKeypoints);

@@ -18,7 +18,8 @@
 namespace cwloc {
 
 inline constexpr uint16_t kDeltaFormatMajor = 1;
-inline constexpr uint16_t kDeltaFormatMinor = 0;
+// 1.1: NCOD, the deltas of compact indexes.
+inline constexpr uint16_t kDeltaFormatMinor = 1;
 // Section DHDR (one element): which parent the delta applies to, which child it makes.
 struct DeltaHeader {
   uint64_t parent_checksum;  // the parent file's header checksum (it covers every section's)
@@ -76,6 +77,7 @@ inline constexpr uint32_t kNewPointIds = SectionTag("NPID");
 inline constexpr uint32_t kNewPointColors = SectionTag("NRGB");
 inline constexpr uint32_t kPointMoves = SectionTag("CPNT");
 inline constexpr uint32_t kPointColorChanges = SectionTag("CRGB");
+inline constexpr uint32_t kNewPointCodes = SectionTag("NCOD");
 inline constexpr uint32_t kAll[] = {kHeader,
                                     section::kManifest,
                                     section::kCameras,
@@ -93,7 +95,8 @@ inline constexpr uint32_t kAll[] = {kHeader,
                                     kNewPointIds,
                                     kNewPointColors,
                                     kPointMoves,
-                                    kPointColorChanges};
+                                    kPointColorChanges,
+                                    kNewPointCodes};
 }  // namespace delta_section
 
 inline constexpr ContainerKind kDeltaContainer{
@@ -105,7 +108,9 @@ inline constexpr ContainerKind kDeltaContainer{
     "make the delta again with this cwloc-index update, or rebuild the index",
     delta_section::kAll};
 
-// A delta in memory: the sections of the file, owned.
+// A delta in memory: the sections of the file, owned. For a compact parent (codes per point)
+// new views carry no descriptors, NVNN and CVNN are per point (PVNN), and a point whose track
+// changed is a new point (its code is the mean of its views' descriptors coded anew).
 struct IndexDelta {
   DeltaHeader header{};
   std::string manifest;  // the child's MANI, whole
@@ -114,16 +119,18 @@ struct IndexDelta {
   std::string strings;
   std::vector<RowRun> view_runs, point_runs;  // ascending, not overlapping
   // The child's views no run covers, in row order.
-  std::vector<uint8_t> new_descriptors;  // x 128
+  std::vector<uint8_t> new_descriptors;  // x 128; none for a compact parent
   std::vector<uint32_t> new_view_points;
-  std::vector<ViewKeypoint> new_view_keypoints;  // when the index stores keypoints
-  std::vector<float> new_view_neighbors;
+  std::vector<ViewKeypoint> new_view_keypoints;         // when the index stores keypoints
+  std::vector<float> new_view_neighbors;                // per new point for a compact parent
   std::vector<RowChange<uint32_t>> view_point_changes;  // ascending rows
-  std::vector<RowChange<float>> view_neighbor_changes;
+  std::vector<RowChange<float>> view_neighbor_changes;  // point rows for a compact parent
   // The child's points no run covers, in row order (first_track and track_length zero).
   std::vector<IndexPoint> new_points;
   std::vector<uint64_t> new_point_ids;       // COLMAP ids (PIDS)
   std::vector<PointColor> new_point_colors;  // when the index stores colours
+  std::vector<uint8_t> new_point_codes;      // x code_bytes, for a compact parent
+  uint32_t code_bytes = 0;                   // NCOD's element size; 0: no NCOD
   std::vector<PointMove> point_moves;
   std::vector<PointColorChange> point_color_changes;
 };

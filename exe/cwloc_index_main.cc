@@ -82,14 +82,15 @@ int RunUpdate(const IndexUpdateOptions& options, bool json) {
     return kExitOk;
   }
   std::printf(
-      "wrote %s: %zu images (+%zu, -%zu, %zu changed), %zu points (+%zu, -%zu, %zu moved), %zu "
-      "views (+%zu, -%zu)\n",
+      "wrote %s: %zu images (+%zu, -%zu, %zu changed), %zu points (+%zu, -%zu, %zu moved, %zu "
+      "re-coded), %zu views (+%zu, -%zu)\n",
       options.output_path.c_str(), report.num_images, report.images_added, report.images_removed,
       report.images_changed, report.num_points, report.points_added, report.points_removed,
-      report.points_moved, report.num_views, report.views_added, report.views_removed);
-  std::printf("%.1f MB; v_NN of %zu clusters recomputed (%zu old views changed); kd-forest %s\n",
+      report.points_moved, report.points_recoded, report.num_views, report.views_added,
+      report.views_removed);
+  std::printf("%.1f MB; v_NN of %zu clusters recomputed (%zu old %s changed); kd-forest %s\n",
               report.file_bytes / 1e6, report.clusters_recomputed,
-              report.neighbor_distances_changed,
+              report.neighbor_distances_changed, report.coded ? "points" : "views",
               report.forest_rebuilt ? "rebuilt (balance bound)" : "updated by insertion");
   if (!options.delta_path.empty()) {
     std::printf("delta %s: %.3f MB (%.2f %% of the index)\n", options.delta_path.c_str(),

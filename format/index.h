@@ -51,7 +51,7 @@ class Index {
   // Empty unless the index was built with --point-colors (format 1.4's optional PRGB).
   std::span<const PointColor> point_colors() const { return point_colors_; }
   // Each point's COLMAP point3D id, ascending (format 1.5's optional PIDS); empty in older
-  // indexes, compact ones and tiles.
+  // indexes.
   std::span<const uint64_t> point_ids() const { return point_ids_; }
   // v_NN per view (full) or per point (coded(): the nearest over the point's clusters).
   std::span<const float> view_neighbor_distances() const { return view_neighbor_distances_; }

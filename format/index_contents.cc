@@ -1,6 +1,15 @@
 #include "format/index_contents.h"
 
+#include "format/index.h"
+
 namespace cwloc {
+
+void KeepParentCoding(const Index& parent, IndexPointOrigin* origin, IndexContents* contents) {
+  *origin = parent.point_origin();
+  contents->point_origin = origin;
+  contents->codebook = parent.codes().codebook;
+  contents->code_bytes = parent.codes().code_bytes;
+}
 
 std::vector<SectionData> IndexSectionsOf(const IndexContents& contents, std::string_view manifest) {
   const bool coded = contents.code_bytes != 0;

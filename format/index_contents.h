@@ -38,6 +38,11 @@ struct IndexContents {
   const IndexCovarianceCalibration* covariance_calibration = nullptr;  // optional section
 };
 
+class Index;
+// What a child of `parent` (a tile, an applied delta) keeps of a compact parent: its codebook,
+// code size and point origin, copied into `origin`, which `contents` then points to.
+void KeepParentCoding(const Index& parent, IndexPointOrigin* origin, IndexContents* contents);
+
 // The sections of an index file with these contents, in the file's order, `manifest` (JSON
 // text, borrowed) first. Its format version is FormatMinorOf the result.
 std::vector<SectionData> IndexSectionsOf(const IndexContents& contents, std::string_view manifest);

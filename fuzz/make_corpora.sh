@@ -37,6 +37,23 @@ colmap image_deleter --input_path "$scene/mapping_model/bin" --output_path "$wor
 python3 -c "import os, struct, sys; p = open(sys.argv[1], 'rb').read(); sys.stdout.buffer.write(struct.pack('<I', len(p)) + p + open(sys.argv[2], 'rb').read())" \
   "$work/old.cwl" "$work/new.cwld" >"$corpus/delta/grown-by-one-image.bin"
 
+# A compact index's delta (1.1: NCOD): a scene with enough points (256) to learn codes from.
+"$bin/cwloc-synth" --blocks 1 --queries 1 --camera-spacing 15 --features-per-image 400 \
+  -o "$work/compact_scene" >/dev/null
+compact_scene="$work/compact_scene"
+last=$(sqlite3 "$compact_scene/database.db" "select max(image_id) from images where name like 'map_%'")
+echo "$last" >"$work/compact_last.txt"
+mkdir -p "$work/compact_old"
+colmap image_deleter --input_path "$compact_scene/mapping_model/bin" \
+  --output_path "$work/compact_old" --image_ids_path "$work/compact_last.txt" >/dev/null 2>&1
+"$bin/cwloc-index" build --compact --code-bytes 8 --model "$work/compact_old" \
+  --database "$compact_scene/database.db" --calibration-samples 0 -o "$work/compact_old.cwl" >/dev/null
+"$bin/cwloc-index" update --index "$work/compact_old.cwl" \
+  --model "$compact_scene/mapping_model/bin" --database "$compact_scene/database.db" \
+  -o "$work/compact_new.cwl" --delta "$work/compact_new.cwld" >/dev/null
+python3 -c "import os, struct, sys; p = open(sys.argv[1], 'rb').read(); sys.stdout.buffer.write(struct.pack('<I', len(p)) + p + open(sys.argv[2], 'rb').read())" \
+  "$work/compact_old.cwl" "$work/compact_new.cwld" >"$corpus/delta/compact-grown-by-one-image.bin"
+
 # A compact index (format 1.2: PORG, PNTF, PQCB, PCOD, PVNN) needs 256 points to learn its codes,
 # more than the scene has: the golden one.
 cp tests/data/golden/index-1.2.cwl "$corpus/index/compact.cwl"

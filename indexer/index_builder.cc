@@ -103,7 +103,7 @@ void WriteIndexOfViews(ModelViews views, const Clustering& clustering,
   // The full index's v_NN is per view; the compact one's per point, on the decoded codes
   // (this overwrites the views' descriptors, which it no longer stores).
   const std::vector<float> neighbor_distances =
-      coded ? ComputePointNeighborDistances(&views, point_codes, clustering, threads)
+      coded ? ComputePointNeighborDistances(&views, point_codes.decoded, clustering, threads)
             : ComputeViewNeighborDistances(views, clustering, threads);
   report->seconds_neighbor_distances = stage.Seconds();
 
@@ -178,8 +178,8 @@ void WriteIndexOfViews(ModelViews views, const Clustering& clustering,
   } else {
     contents.points = views.points;
     contents.descriptors = views.descriptors;
-    contents.point_ids = views.point_ids;
   }
+  contents.point_ids = views.point_ids;  // what `update` follows the model's points by
   if (options.keypoints) contents.view_keypoints = views.view_keypoints;
   if (options.point_colors) contents.point_colors = views.point_colors;
   if (georeference) contents.georeference = &georeference->section;

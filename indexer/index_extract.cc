@@ -260,12 +260,9 @@ IndexExtractReport ExtractIndex(const IndexExtractOptions& options) {
   contents.covariance_calibration = parent.covariance_calibration();
   IndexPointOrigin origin{};
   if (parent.coded()) {
-    origin = parent.point_origin();
-    contents.point_origin = &origin;
+    KeepParentCoding(parent, &origin, &contents);
     contents.point_offsets = tile.point_offsets;
-    contents.codebook = parent.codes().codebook;
     contents.codes = tile.codes;
-    contents.code_bytes = parent.codes().code_bytes;
   } else {
     contents.points = tile.points;
     contents.descriptors = tile.descriptors;

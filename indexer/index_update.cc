@@ -20,6 +20,7 @@
 #include "indexer/index_builder.h"
 #include "indexer/model_views.h"
 #include "indexer/neighbor_distances.h"
+#include "indexer/point_codes.h"
 #include "indexer/update_correspondence.h"
 #include "kdtree/kd_forest_update.h"
 
@@ -142,6 +143,76 @@ IndexUpdateReport Rebuild(const IndexUpdateOptions& options, const ParentBuild& 
   return report;
 }
 
+// A compact index codes each point by the mean of its views' descriptors: an old point that
+// gained or lost views is coded anew, and the delta carries it as a new point (its old row
+// leaves the kd-forest, its new one is inserted). Returns how many.
+size_t RecodeChangedPoints(const Index& parent, const ModelViews& child, Correspondence* match) {
+  std::vector<uint32_t> kept_views(child.points.size(), 0);
+  for (uint32_t w = 0; w < child.num_views(); ++w)
+    kept_views[child.view_points[w]] += match->parent_of_child_view[w] != kRemovedRow;
+  size_t recoded = 0;
+  for (uint32_t q = 0; q < child.points.size(); ++q) {
+    const uint32_t p = match->parent_of_child_point[q];
+    if (p == kRemovedRow) continue;
+    if (kept_views[q] == parent.TrackOf(p).size() && kept_views[q] == child.points[q].track_length)
+      continue;
+    match->parent_of_child_point[q] = kRemovedRow;
+    match->child_of_parent_point[p] = kRemovedRow;
+    ++recoded;
+  }
+  return recoded;
+}
+
+// A compact child point's offset from the parent's origin, as apply stores it.
+std::array<float, 3> OffsetOf(const IndexPoint& point, const IndexPointOrigin& origin) {
+  return {float(point.xyz[0] - origin.xyz[0]), float(point.xyz[1] - origin.xyz[1]),
+          float(point.xyz[2] - origin.xyz[2])};
+}
+
+// PVNN of a compact child: a point with a view in a changed cluster (`computed` on entry) gets
+// it afresh, the smallest over all its clusters, which are computed too; the others keep the
+// parent's, as nothing they see changed. Fills the delta's NVNN (new points) and CVNN; returns
+// the clusters computed.
+size_t ComputeCompactNeighborDistances(const Index& parent, ModelViews& child,
+                                       const Clustering& clustering,
+                                       const std::vector<uint32_t>& image_of_view,
+                                       const std::vector<uint32_t>& parent_of_child_point,
+                                       std::vector<bool> computed, int threads, IndexDelta* delta) {
+  const size_t num_points = child.points.size();
+  const auto cluster_of_view = [&](uint32_t w) { return child.images[image_of_view[w]].cluster; };
+  std::vector<bool> affected(num_points, false);
+  for (uint32_t w = 0; w < child.num_views(); ++w)
+    if (computed[cluster_of_view(w)]) affected[child.view_points[w]] = true;
+  for (uint32_t w = 0; w < child.num_views(); ++w)
+    if (affected[child.view_points[w]]) computed[cluster_of_view(w)] = true;
+
+  const DescriptorCodes& parent_codes = parent.codes();
+  const uint32_t code_bytes = parent_codes.code_bytes;
+  std::vector<uint8_t> codes(num_points * code_bytes);
+  size_t next_new = 0;
+  for (uint32_t q = 0; q < num_points; ++q) {
+    const uint32_t from = parent_of_child_point[q];
+    const uint8_t* code = from != kRemovedRow ? parent_codes.Code(from)
+                                              : &delta->new_point_codes[next_new++ * code_bytes];
+    std::memcpy(&codes[size_t(q) * code_bytes], code, code_bytes);
+  }
+  const DescriptorCodes child_codes{parent_codes.codebook, codes, code_bytes};
+  std::vector<uint8_t> decoded(num_points * kDescriptorBytes);
+  for (size_t q = 0; q < num_points; ++q) child_codes.Decode(q, &decoded[q * kDescriptorBytes]);
+  const std::vector<float> fresh =
+      ComputePointNeighborDistances(&child, decoded, clustering, threads, &computed);
+  const std::span<const float> parent_neighbors = parent.point_neighbor_distances();
+  for (uint32_t q = 0; q < num_points; ++q) {
+    const uint32_t from = parent_of_child_point[q];
+    if (from == kRemovedRow) {
+      delta->new_view_neighbors.push_back(fresh[q]);
+    } else if (affected[q] && std::memcmp(&fresh[q], &parent_neighbors[from], sizeof(float)) != 0) {
+      delta->view_neighbor_changes.push_back({q, fresh[q]});
+    }
+  }
+  return size_t(std::count(computed.begin(), computed.end(), true));
+}
+
 }  // namespace
 
 IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
@@ -164,12 +235,6 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
     throw InputError(options.delta_path.string() + ": the delta and the index are one file");
   try {
     CheckBuildFlags(options, parent_build);
-    if (parent.coded()) {
-      throw UpdateRefused(parent_name +
-                          ": a compact index is not updated yet (its codes and point kd-forest "
-                          "would need re-coding)" +
-                          kFullBuildNeeded);
-    }
     if (parent.point_ids().empty()) {
       throw UpdateRefused(parent_name +
                           ": the index has no point ids (section PIDS, written since format 1.5) "
@@ -193,7 +258,10 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
 
     stage.Restart();
     {
-      const Correspondence match = MatchToParent(options, parent, grown, database);
+      Correspondence match = MatchToParent(options, parent, grown, database);
+      const bool coded = report.coded = parent.coded();
+      if (coded) report.points_recoded = RecodeChangedPoints(parent, child, &match);
+      const int threads = ResolveThreads(options.threads);
       const std::span<const IndexImage> parent_images = parent.images();
       const std::vector<uint32_t>& child_of_parent_image = match.child_of_parent_image;
       const std::vector<uint32_t>& parent_of_child_image = match.parent_of_child_image;
@@ -221,10 +289,12 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
       report.views_removed = parent.num_views() - (child.num_views() - report.views_added);
       std::vector<double> shifts;
       const bool colors = !parent.point_colors().empty();
+      const IndexPointOrigin origin = parent.point_origin();
+      std::vector<uint32_t> new_point_rows;
       for (uint32_t p = 0; p < child.points.size(); ++p) {
         const uint32_t from = parent_of_child_point[p];
         if (from == kRemovedRow) {
-          report.points_added++;
+          new_point_rows.push_back(p);
           delta.new_points.push_back(IndexPoint{
               {child.points[p].xyz[0], child.points[p].xyz[1], child.points[p].xyz[2]}, 0, 0});
           if (colors) delta.new_point_colors.push_back(child.point_colors[p]);
@@ -233,7 +303,12 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
         }
         AddRun(&delta.point_runs, p, from);
         const std::array<double, 3> old_xyz = parent.PointXyz(from);
-        if (std::memcmp(old_xyz.data(), child.points[p].xyz, sizeof(old_xyz)) != 0) {
+        // A compact index stores float offsets: a point moved when its offset changes.
+        const bool moved =
+            coded ? std::memcmp(OffsetOf(child.points[p], origin).data(),
+                                parent.point_offsets()[from].offset, sizeof(float) * 3) != 0
+                  : std::memcmp(old_xyz.data(), child.points[p].xyz, sizeof(old_xyz)) != 0;
+        if (moved) {
           PointMove move{
               p, 0, {child.points[p].xyz[0], child.points[p].xyz[1], child.points[p].xyz[2]}};
           delta.point_moves.push_back(move);
@@ -242,7 +317,13 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
         if (colors && std::memcmp(&parent.point_colors()[from], &child.point_colors[p], 3) != 0)
           delta.point_color_changes.push_back({p, child.point_colors[p], 0});
       }
+      report.points_added = new_point_rows.size() - report.points_recoded;
       report.points_moved = delta.point_moves.size();
+      if (coded) {
+        delta.code_bytes = parent.codes().code_bytes;
+        delta.new_point_codes = CodePointsWithCodebook(
+            child, new_point_rows, parent.codes().codebook, delta.code_bytes, threads);
+      }
       report.points_removed = parent.num_points() - (child.points.size() - report.points_added);
       if (!shifts.empty()) {
         std::nth_element(shifts.begin(), shifts.begin() + shifts.size() / 2, shifts.end());
@@ -258,21 +339,18 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
       }
 
       // Images whose views changed their points change their clusters' v_NN.
-      {
-        std::vector<uint32_t> image_of_view(child.num_views());
-        for (uint32_t i = 0; i < child.images.size(); ++i)
-          std::fill_n(image_of_view.begin() + child.images[i].first_view, child.images[i].num_views,
-                      i);
-        for (const auto& change : delta.view_point_changes)
-          image_changed[image_of_view[change.row]] = true;
-      }
+      std::vector<uint32_t> image_of_view(child.num_views());
+      for (uint32_t i = 0; i < child.images.size(); ++i)
+        std::fill_n(image_of_view.begin() + child.images[i].first_view, child.images[i].num_views,
+                    i);
+      for (const auto& change : delta.view_point_changes)
+        image_changed[image_of_view[change.row]] = true;
       report.seconds_compare = stage.Seconds();
 
       // Clusters: an old image keeps its own, a new one joins the cluster of the old image it
       // shares the most points with (a cluster of its own when it shares none); one cluster per
       // image stays so. Clusters with a new, changed or removed image get their v_NN afresh.
       stage.Restart();
-      const int threads = ResolveThreads(options.threads);
       const bool per_image = parent_build.options.clustering.method == ClusteringMethod::kPerImage;
       // The graph joins new images to clusters; apply makes the index's own.
       const CovisibilityGraph graph =
@@ -328,26 +406,36 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
       }
       for (uint32_t c : lost_member) dirty[c] = true;
       for (bool d : dirty) report.clusters_recomputed += d;
-      const std::vector<float> recomputed =
-          ComputeViewNeighborDistances(child, clustering, threads, &dirty);
-      const std::span<const float> parent_neighbors = parent.view_neighbor_distances();
-      for (uint32_t i = 0; i < child.images.size(); ++i) {
-        const IndexImage& image = child.images[i];
-        const bool fresh = dirty[image.cluster];
-        for (uint32_t w = image.first_view; w < image.first_view + image.num_views; ++w) {
-          const uint32_t v = parent_of_child_view[w];
-          if (v == kRemovedRow) {
-            const uint8_t* row = &child.descriptors[size_t(w) * kDescriptorBytes];
-            delta.new_descriptors.insert(delta.new_descriptors.end(), row, row + kDescriptorBytes);
-            delta.new_view_points.push_back(child.view_points[w]);
-            delta.new_view_neighbors.push_back(recomputed[w]);
-            if (parent_build.options.keypoints)
-              delta.new_view_keypoints.push_back(child.view_keypoints[w]);
-          } else if (fresh &&
-                     std::memcmp(&recomputed[w], &parent_neighbors[v], sizeof(float)) != 0) {
-            delta.view_neighbor_changes.push_back({w, recomputed[w]});
+      if (coded) {
+        report.clusters_recomputed =
+            ComputeCompactNeighborDistances(parent, child, clustering, image_of_view,
+                                            parent_of_child_point, dirty, threads, &delta);
+      } else {
+        const std::vector<float> recomputed =
+            ComputeViewNeighborDistances(child, clustering, threads, &dirty);
+        const std::span<const float> parent_neighbors = parent.view_neighbor_distances();
+        for (uint32_t i = 0; i < child.images.size(); ++i) {
+          const IndexImage& image = child.images[i];
+          const bool fresh = dirty[image.cluster];
+          for (uint32_t w = image.first_view; w < image.first_view + image.num_views; ++w) {
+            const uint32_t v = parent_of_child_view[w];
+            if (v == kRemovedRow) {
+              const uint8_t* row = &child.descriptors[size_t(w) * kDescriptorBytes];
+              delta.new_descriptors.insert(delta.new_descriptors.end(), row,
+                                           row + kDescriptorBytes);
+              delta.new_view_neighbors.push_back(recomputed[w]);
+            } else if (fresh &&
+                       std::memcmp(&recomputed[w], &parent_neighbors[v], sizeof(float)) != 0) {
+              delta.view_neighbor_changes.push_back({w, recomputed[w]});
+            }
           }
         }
+      }
+      for (uint32_t w = 0; w < child.num_views(); ++w) {
+        if (parent_of_child_view[w] != kRemovedRow) continue;
+        delta.new_view_points.push_back(child.view_points[w]);
+        if (parent_build.options.keypoints)
+          delta.new_view_keypoints.push_back(child.view_keypoints[w]);
       }
       report.neighbor_distances_changed = delta.view_neighbor_changes.size();
       // The delta holds the new rows; the child's come from it and the parent, as on a device.
@@ -358,13 +446,15 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
       stage.Restart();
       nlohmann::ordered_json update_record =
           parent_manifest.value("update", nlohmann::ordered_json::object());
+      // Its rows: views, or a compact index's points (new and re-coded ones inserted).
       uint64_t rows_at_build =
-          update_record.value("forest_rows_at_build", uint64_t(parent.num_views()));
-      uint64_t rows_inserted =
-          update_record.value("forest_rows_inserted", uint64_t{0}) + report.views_added;
+          update_record.value("forest_rows_at_build", uint64_t(parent.num_rows()));
+      uint64_t rows_inserted = update_record.value("forest_rows_inserted", uint64_t{0}) +
+                               (coded ? new_point_rows.size() : report.views_added);
       report.forest_rebuilt =
           double(rows_inserted) > kForestRebuildFraction * double(rows_at_build);
-      if (report.forest_rebuilt) rows_at_build = child.num_views(), rows_inserted = 0;
+      if (report.forest_rebuilt)
+        rows_at_build = coded ? child.points.size() : child.num_views(), rows_inserted = 0;
 
       delta.header.parent_checksum = parent.file().header().header_checksum;
       delta.header.parent_file_size = parent.file().header().file_size;
@@ -449,6 +539,7 @@ nlohmann::ordered_json UpdateReportJson(const IndexUpdateOptions& options,
                     {"points_added", report.points_added},
                     {"points_removed", report.points_removed},
                     {"points_moved", report.points_moved},
+                    {"points_recoded", report.points_recoded},
                     {"clusters_recomputed", report.clusters_recomputed},
                     {"neighbor_distances_changed", report.neighbor_distances_changed},
                     {"forest_rebuilt", report.forest_rebuilt}};

@@ -57,8 +57,10 @@ struct IndexUpdateReport {
   size_t images_added = 0, images_removed = 0, images_changed = 0;
   size_t views_added = 0, views_removed = 0, points_added = 0, points_removed = 0;
   size_t points_moved = 0, clusters_recomputed = 0, neighbor_distances_changed = 0;
+  size_t points_recoded = 0;  // a compact index's old points whose views changed: coded anew
   size_t num_images = 0, num_points = 0, num_views = 0, num_clusters = 0;
   bool forest_rebuilt = false;
+  bool coded = false;  // a compact index: v_NN (and the kd-forest's rows) per point
   uint64_t file_bytes = 0, delta_bytes = 0;
   // seconds_apply: the child composed from the parent and the delta (tracks, co-visibility,
   // kd-forest), as apply composes it.

@@ -17,19 +17,23 @@ constexpr size_t kDims = DescriptorCodes::kDims;
 constexpr uint32_t kTrainingPoints = 100000;
 constexpr uint32_t kTrainingIterations = 15;
 
+// Point p's views' descriptors averaged and rounded.
+void MeanDescriptor(const ModelViews& views, size_t p, uint8_t* mean) {
+  const IndexPoint& point = views.points[p];
+  uint32_t sum[kDims] = {};
+  for (uint32_t t = point.first_track; t < point.first_track + point.track_length; ++t) {
+    const uint8_t* descriptor = &views.descriptors[size_t{views.tracks[t]} * kDims];
+    for (size_t d = 0; d < kDims; ++d) sum[d] += descriptor[d];
+  }
+  for (size_t d = 0; d < kDims; ++d)
+    mean[d] = static_cast<uint8_t>((sum[d] + point.track_length / 2) /
+                                   std::max<uint32_t>(point.track_length, 1));
+}
+
 std::vector<uint8_t> MeanDescriptors(const ModelViews& views, int num_threads) {
   std::vector<uint8_t> means(views.points.size() * kDims);
-  ParallelFor(views.points.size(), num_threads, [&](size_t p) {
-    const IndexPoint& point = views.points[p];
-    uint32_t sum[kDims] = {};
-    for (uint32_t t = point.first_track; t < point.first_track + point.track_length; ++t) {
-      const uint8_t* descriptor = &views.descriptors[size_t{views.tracks[t]} * kDims];
-      for (size_t d = 0; d < kDims; ++d) sum[d] += descriptor[d];
-    }
-    for (size_t d = 0; d < kDims; ++d)
-      means[p * kDims + d] = static_cast<uint8_t>((sum[d] + point.track_length / 2) /
-                                                  std::max<uint32_t>(point.track_length, 1));
-  });
+  ParallelFor(views.points.size(), num_threads,
+              [&](size_t p) { MeanDescriptor(views, p, &means[p * kDims]); });
   return means;
 }
 
@@ -63,6 +67,19 @@ PointCodes CodePointDescriptors(const ModelViews& views, uint32_t code_bytes, ui
   return out;
 }
 
+std::vector<uint8_t> CodePointsWithCodebook(const ModelViews& views, std::span<const uint32_t> rows,
+                                            std::span<const uint8_t> codebook, uint32_t code_bytes,
+                                            int num_threads) {
+  const ProductQuantizer quantizer = ProductQuantizer::FromCodebook(codebook, code_bytes);
+  std::vector<uint8_t> codes(rows.size() * code_bytes);
+  ParallelFor(rows.size(), num_threads, [&](size_t i) {
+    uint8_t mean[kDims];
+    MeanDescriptor(views, rows[i], mean);
+    quantizer.Encode(mean, &codes[i * code_bytes]);
+  });
+  return codes;
+}
+
 PointOffsets OffsetPoints(const std::vector<IndexPoint>& points) {
   PointOffsets out{};
   for (const IndexPoint& point : points)
@@ -76,13 +93,16 @@ PointOffsets OffsetPoints(const std::vector<IndexPoint>& points) {
   return out;
 }
 
-std::vector<float> ComputePointNeighborDistances(ModelViews* views, const PointCodes& codes,
-                                                 const Clustering& clustering, int num_threads) {
+std::vector<float> ComputePointNeighborDistances(ModelViews* views,
+                                                 std::span<const uint8_t> decoded,
+                                                 const Clustering& clustering, int num_threads,
+                                                 const std::vector<bool>* only_clusters) {
   for (size_t v = 0; v < views->num_views(); ++v) {
-    std::copy_n(&codes.decoded[size_t{views->view_points[v]} * kDims], kDims,
+    std::copy_n(&decoded[size_t{views->view_points[v]} * kDims], kDims,
                 &views->descriptors[v * kDims]);
   }
-  const std::vector<float> per_view = ComputeViewNeighborDistances(*views, clustering, num_threads);
+  const std::vector<float> per_view =
+      ComputeViewNeighborDistances(*views, clustering, num_threads, only_clusters);
   std::vector<float> per_point(views->points.size(), std::numeric_limits<float>::infinity());
   for (size_t v = 0; v < per_view.size(); ++v) {
     float& distance = per_point[views->view_points[v]];

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "indexer/clustering.h"
@@ -22,6 +23,12 @@ struct PointCodes {
 PointCodes CodePointDescriptors(const ModelViews& views, uint32_t code_bytes, uint64_t seed,
                                 int num_threads);
 
+// Codes the points `rows` (their views' mean descriptors) with a stored codebook: a compact
+// index's new and changed points in `cwloc-index update`. rows.size() x code_bytes.
+std::vector<uint8_t> CodePointsWithCodebook(const ModelViews& views, std::span<const uint32_t> rows,
+                                            std::span<const uint8_t> codebook, uint32_t code_bytes,
+                                            int num_threads);
+
 // PORG and PNTF: the points as float offsets from their mean position, with their tracks.
 struct PointOffsets {
   IndexPointOrigin origin;
@@ -32,7 +39,11 @@ PointOffsets OffsetPoints(const std::vector<IndexPoint>& points);
 // PVNN: per point, the distance from its decoded descriptor to the nearest other point's, over
 // every cluster that sees it (the smallest of ComputeViewNeighborDistances over its views when
 // each view carries its point's decoded descriptor). Replaces views->descriptors by those.
-std::vector<float> ComputePointNeighborDistances(ModelViews* views, const PointCodes& codes,
-                                                 const Clustering& clustering, int num_threads);
+// `decoded`: points x 128. With `only_clusters`, a point gets the smallest over its views in
+// the flagged clusters (+infinity without one): exact for a point whose clusters are all flagged.
+std::vector<float> ComputePointNeighborDistances(ModelViews* views,
+                                                 std::span<const uint8_t> decoded,
+                                                 const Clustering& clustering, int num_threads,
+                                                 const std::vector<bool>* only_clusters = nullptr);
 
 }  // namespace cwloc

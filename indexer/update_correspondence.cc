@@ -54,6 +54,8 @@ GrownModel ReadGrownModel(const IndexUpdateOptions& options, const Index& parent
   grown.rows_reused.assign(parent.images().size(), false);
   const KnownViewRows known_rows = [&](image_t image_id,
                                        std::span<const point3D_t> point_ids) -> const uint8_t* {
+    // A compact index stores no view descriptors: every image's come from the database.
+    if (parent.coded()) return nullptr;
     const auto found = parent_row_of_id.find(uint32_t(image_id));
     if (found == parent_row_of_id.end()) return nullptr;
     const IndexImage& image = parent.images()[found->second];
@@ -150,7 +152,16 @@ Correspondence MatchToParent(const IndexUpdateOptions& options, const Index& par
     parent_of_child_image[found->second] = i;
   }
 
-  // Views of the old images: the parent's rows found again, in order, among the image's.
+  // Views of the old images: the parent's rows found again, in order, among the image's: by
+  // descriptor, or in a compact index (which stores none) by point id.
+  const auto same_view = [&](uint32_t parent_view, uint32_t child_view) {
+    if (parent.coded()) {
+      return parent.point_ids()[parent.view_points()[parent_view]] ==
+             child.point_ids[child.view_points[child_view]];
+    }
+    return std::memcmp(Row(parent_descriptors, parent_view), Row(child.descriptors, child_view),
+                       kDescriptorBytes) == 0;
+  };
   std::vector<uint32_t>& child_of_parent_view = match.child_of_parent_view;
   std::vector<uint32_t>& parent_of_child_view = match.parent_of_child_view;
   std::vector<bool>& image_changed = match.image_changed;
@@ -161,8 +172,6 @@ Correspondence MatchToParent(const IndexUpdateOptions& options, const Index& par
     if (child_of_parent_image[i] == kRemovedRow) continue;
     const IndexImage& old_image = parent_images[i];
     const IndexImage& image = child.images[child_of_parent_image[i]];
-    const uint8_t* old_rows = Row(parent_descriptors, old_image.first_view);
-    const uint8_t* rows = child.descriptors.data() + size_t(image.first_view) * kDescriptorBytes;
     std::vector<uint32_t> unmatched;
     // Rows copied from the parent, none dropped since (--remove-images): row for row.
     const bool copied = grown.rows_reused[i] && old_image.num_views == image.num_views;
@@ -171,10 +180,9 @@ Correspondence MatchToParent(const IndexUpdateOptions& options, const Index& par
       parent_of_child_view[image.first_view + a] = old_image.first_view + a;
     }
     for (uint32_t a = 0, b = 0; !copied && a < old_image.num_views; ++a) {
-      const uint8_t* old_row = old_rows + size_t(a) * kDescriptorBytes;
       uint32_t found = b;
       while (found < image.num_views &&
-             std::memcmp(old_row, rows + size_t(found) * kDescriptorBytes, kDescriptorBytes) != 0)
+             !same_view(old_image.first_view + a, image.first_view + found))
         ++found;
       if (found == image.num_views) {
         unmatched.push_back(a);
@@ -184,14 +192,14 @@ Correspondence MatchToParent(const IndexUpdateOptions& options, const Index& par
       parent_of_child_view[image.first_view + found] = old_image.first_view + a;
       b = found + 1;
     }
-    if (!unmatched.empty()) {
+    if (!unmatched.empty() && !parent.coded()) {
       // Observations the model dropped still have their descriptors in the database;
       // anything else means the database is not the one the index was built from.
       const colmap::Descriptors stored = database.ReadDescriptors(image.image_id);
       for (uint32_t a : unmatched) {
         bool found = false;
         for (uint32_t r = 0; r < stored.rows && !found; ++r)
-          found = std::memcmp(stored.Row(r), old_rows + size_t(a) * kDescriptorBytes,
+          found = std::memcmp(stored.Row(r), Row(parent_descriptors, old_image.first_view + a),
                               kDescriptorBytes) == 0;
         if (!found) {
           throw UpdateRefused(options.database_path.string() + ": the descriptors of image '" +

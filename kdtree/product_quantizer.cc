@@ -139,6 +139,17 @@ void ProductQuantizer::Encode(const uint8_t* descriptor, uint8_t* code) const {
   EncodeAny(descriptor, code);
 }
 
+ProductQuantizer ProductQuantizer::FromCodebook(std::span<const uint8_t> codebook,
+                                                uint32_t num_subspaces) {
+  if (num_subspaces == 0 || kDims % num_subspaces != 0 ||
+      codebook.size() != size_t{kCentroids} * kDims) {
+    throw InputError("a codebook of " + std::to_string(codebook.size()) + " bytes for " +
+                     std::to_string(num_subspaces) + " subspaces: expected " +
+                     std::to_string(kCentroids * kDims) + " bytes and a divisor of 128");
+  }
+  return ProductQuantizer(num_subspaces, std::vector<float>(codebook.begin(), codebook.end()));
+}
+
 void ProductQuantizer::Encode(const float* vector, uint8_t* code) const { EncodeAny(vector, code); }
 
 template <typename T>

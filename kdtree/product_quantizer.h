@@ -37,6 +37,10 @@ class ProductQuantizer {
   static ProductQuantizer Train(std::span<const float> vectors,
                                 const ProductQuantizerOptions& options);
 
+  // The quantizer of a stored uint8 codebook (DescriptorCodes layout): what `cwloc-index
+  // update` codes a compact index's new points with, as the index decodes them.
+  static ProductQuantizer FromCodebook(std::span<const uint8_t> codebook, uint32_t num_subspaces);
+
   uint32_t num_subspaces() const { return num_subspaces_; }
   uint32_t subspace_dims() const { return kDims / num_subspaces_; }
 

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <ranges>
 #include <set>
 
 #include "format/index.h"
@@ -165,16 +166,20 @@ TEST_F(IndexBuilderTest, ViewNeighborDistanceIsTheExactNearestOtherPointInTheIma
   }
 }
 
-TEST_F(IndexBuilderTest, CompactIndexCodesEachPointsMeanDescriptorInFormat1_2) {
+// Format 1.2's sections, and 1.5's point ids (what `update` follows the model's points by).
+TEST_F(IndexBuilderTest, CompactIndexCodesEachPointsMeanDescriptorAndKeepsPointIds) {
   IndexBuildOptions options = Options();
   options.code_bytes = 16;
-  options.calibration_samples = 0;  // PCAL would make it 1.3
+  options.calibration_samples = 0;
   BuildIndex(options);
   const Index index = Index::Open(index_path_);
   EXPECT_NO_THROW(index.Validate());
   EXPECT_NO_THROW(index.file().VerifyChecksums());
-  EXPECT_EQ(index.file().header().format_minor, 2);
-  EXPECT_EQ(nlohmann::json::parse(index.manifest_json()).at("format_version"), "1.2");
+  EXPECT_EQ(index.file().header().format_minor, 5);
+  EXPECT_EQ(nlohmann::json::parse(index.manifest_json()).at("format_version"), "1.5");
+  ASSERT_EQ(index.point_ids().size(), model_.points3D.size());
+  EXPECT_TRUE(std::equal(index.point_ids().begin(), index.point_ids().end(),
+                         std::views::keys(model_.points3D).begin()));
   EXPECT_EQ(nlohmann::json::parse(index.manifest_json())
                 .at("build_parameters")
                 .at("descriptors")

@@ -62,8 +62,10 @@ TEST_F(IndexCliTest, UpdateAndApplyRecordTheUpdateAndRefuseWithExitCode2) {
                              " -o " + updated.string();
   std::string output;
   ASSERT_EQ(Run(update + " --delta " + delta.string(), &output), 0) << output;
-  EXPECT_THAT(output, HasSubstr("wrote " + updated.string() +
-                                ": 10 images (+0, -0, 0 changed), 400 points (+0, -0, 0 moved)"));
+  EXPECT_THAT(
+      output,
+      HasSubstr("wrote " + updated.string() +
+                ": 10 images (+0, -0, 0 changed), 400 points (+0, -0, 0 moved, 0 re-coded)"));
   ASSERT_EQ(Run("info --json " + updated.string(), &output), 0) << output;
   ExpectValidInfoJson(output);
   const auto info = nlohmann::json::parse(output);
@@ -113,15 +115,15 @@ TEST_F(IndexCliTest, CompactBuildSaysHowItStoresDescriptorsInInfoAndItsSchema) {
   ASSERT_NO_FATAL_FAILURE(Build(" --compact"));
   std::string output;
   EXPECT_EQ(Run("info " + index_path_.string(), &output), 0) << output;
-  EXPECT_THAT(output, HasSubstr(": cwloc index format 1.3, "));
+  EXPECT_THAT(output, HasSubstr(": cwloc index format 1.5, "));
   EXPECT_THAT(output, testing::ContainsRegex(
                           "descriptors: one 32-byte product-quantization code per 3D point "
                           "\\([0-9.]+ views per point\\)"));
   EXPECT_EQ(Run("verify " + index_path_.string(), &output), 0) << output;
-  EXPECT_THAT(output, HasSubstr(": OK: 17 section checksums and every stored index verified"));
+  EXPECT_THAT(output, HasSubstr(": OK: 18 section checksums and every stored index verified"));
   ASSERT_EQ(Run("info --json " + index_path_.string(), &output), 0) << output;
   const auto info = nlohmann::json::parse(output);
-  EXPECT_EQ(info["format_version"], "1.3");  // PCAL
+  EXPECT_EQ(info["format_version"], "1.5");  // PCAL, PIDS
   EXPECT_EQ(info["manifest"]["build_parameters"]["descriptors"]["code_bytes"], 32);
   EXPECT_DOUBLE_EQ(info["bytes_per_view"].get<double>(),
                    double(info["file_bytes"].get<uint64_t>()) /

@@ -16,6 +16,7 @@
 #include "delta/apply_delta.h"
 #include "format/index.h"
 #include "format/xxhash64.h"
+#include "indexer/point_codes.h"
 #include "kdtree/kd_forest.h"
 #include "tests/colmap/model_without_images.h"
 #include "tests/indexer/indexer_fixture.h"
@@ -24,6 +25,37 @@ namespace cwloc {
 namespace {
 
 using testing::HasSubstr;
+
+// A compact index whose codebook is its parent's, with one row per point of `model_dir`, whose
+// PVNN is what the build's computation gives on the index's own clusters and decoded codes.
+void ExpectCompactAndExact(const std::filesystem::path& path, const std::filesystem::path& parent,
+                           const std::filesystem::path& model_dir,
+                           const std::filesystem::path& database_path) {
+  const Index index = Index::Open(path);
+  index.Validate();
+  ASSERT_TRUE(index.coded());
+  const Index parent_index = Index::Open(parent);
+  const std::span<const uint8_t> codebook = parent_index.codes().codebook;
+  EXPECT_TRUE(std::equal(index.codes().codebook.begin(), index.codes().codebook.end(),
+                         codebook.begin(), codebook.end()));
+  ModelViews views = GatherModelViews(colmap::ReadReconstruction(model_dir),
+                                      colmap::DatabaseReader(database_path));
+  ASSERT_EQ(views.images.size(), index.images().size());
+  ASSERT_EQ(views.num_views(), index.num_views());
+  ASSERT_EQ(views.points.size(), index.num_points());
+  Clustering clustering;
+  for (const IndexImage& image : index.images()) {
+    clustering.cluster_of_image.push_back(image.cluster);
+    clustering.num_clusters = std::max(clustering.num_clusters, image.cluster + 1);
+  }
+  std::vector<uint8_t> decoded(index.num_points() * 128);
+  for (uint32_t p = 0; p < index.num_points(); ++p)
+    index.codes().Decode(p, &decoded[size_t(p) * 128]);
+  const std::vector<float> expected = ComputePointNeighborDistances(&views, decoded, clustering, 2);
+  const std::span<const float> stored = index.point_neighbor_distances();
+  ASSERT_EQ(stored.size(), expected.size());
+  for (size_t p = 0; p < expected.size(); ++p) ASSERT_EQ(stored[p], expected[p]) << "point " << p;
+}
 
 class IndexUpdateTest : public test::IndexerFixture {
  protected:
@@ -98,9 +130,10 @@ class IndexUpdateTest : public test::IndexerFixture {
     options.max_checks = 8;  // one bucket: the first leaf the search reaches
     options.interleave = 1;
     std::vector<KdNeighbor> nearest(1);
+    uint8_t scratch[128];  // a compact index's rows are codes, decoded here
     for (uint32_t row = 0; row < index.num_rows(); ++row) {
       const KdSearchResult found =
-          searcher.Search(index.RowDescriptor(row, nullptr), options, nearest);
+          searcher.Search(index.RowDescriptor(row, scratch), options, nearest);
       ASSERT_EQ(found.num_neighbors, 1u) << "row " << row;
       ASSERT_EQ(nearest[0].distance, 0u) << "row " << row;
     }
@@ -229,6 +262,65 @@ TEST_F(IndexUpdateTest, RemovedImagesLeaveWhatAFullBuildWithoutThemHolds) {
   EXPECT_FALSE(std::filesystem::exists(unknown.output_path));
 }
 
+// A compact index: new points and old ones whose views changed are coded with the index's own
+// codebook, PVNN equals what the build's computation gives on the updated index's codes and
+// clusters, every point row finds itself, and apply rebuilds it bit for bit (also a removal).
+TEST_F(IndexUpdateTest, ACompactIndexCodesNewPointsWithItsCodebookAndKeepsPvnnExact) {
+  const auto old_index = Build(WriteModel(Without(LastImages(3)), "old"), "old.cwl", 8);
+  const IndexUpdateOptions options = Update(old_index, model_dir_, "grown");
+  const IndexUpdateReport report = UpdateIndex(options);
+  EXPECT_FALSE(report.rebuilt);
+  EXPECT_EQ(report.images_added, 3u);
+  EXPECT_GT(report.points_added, 0u);
+  EXPECT_GT(report.points_recoded, 0u);  // old points the new images see
+  ExpectCompactAndExact(options.output_path, old_index, model_dir_, database_path_);
+  ExpectEveryRowFindsItself(options.output_path);
+  ApplyDelta(old_index, options.delta_path, dir_ / "applied.cwl", 1);
+  EXPECT_EQ(test::ReadBytes(dir_ / "applied.cwl"), test::ReadBytes(options.output_path));
+
+  const std::set<image_t> removed = {std::next(model_.images.begin(), 2)->first};
+  std::ofstream(dir_ / "remove.txt") << model_.images.at(*removed.begin()).name << "\n";
+  IndexUpdateOptions removal = Update(options.output_path, model_dir_, "removed");
+  removal.remove_images_file = dir_ / "remove.txt";
+  const IndexUpdateReport removed_report = UpdateIndex(removal);
+  EXPECT_EQ(removed_report.images_removed, 1u);
+  EXPECT_GT(removed_report.points_removed, 0u);
+  ExpectCompactAndExact(removal.output_path, old_index, WriteModel(Without(removed), "less"),
+                        database_path_);
+  ExpectEveryRowFindsItself(removal.output_path);
+  ApplyDelta(options.output_path, removal.delta_path, dir_ / "applied_removal.cwl", 2);
+  EXPECT_EQ(test::ReadBytes(dir_ / "applied_removal.cwl"), test::ReadBytes(removal.output_path));
+}
+
+// A new image that sees two old points: the clusters of the images that see those points are
+// recomputed, and so are the other clusters of every point in them, whose v_NN the points'
+// PVNN takes when smaller; PVNN stays exact (it would not without the second step).
+TEST_F(IndexUpdateTest, ACompactUpdateTouchingTwoPointsComputesTheirNeighboursClustersToo) {
+  const image_t added = *LastImages(1).begin();
+  const colmap::Reconstruction old_model = Without({added});
+  colmap::Reconstruction grown = model_;
+  uint32_t kept = 0;
+  for (colmap::Point2D& point : grown.images.at(added).points2D) {
+    if (point.point3D_id == kInvalidPoint3DId) continue;
+    if (kept < 2 && old_model.points3D.count(point.point3D_id) > 0) {
+      ++kept;
+      continue;
+    }
+    std::erase_if(grown.points3D.at(point.point3D_id).track,
+                  [&](const colmap::TrackElement& e) { return e.image_id == added; });
+    point.point3D_id = kInvalidPoint3DId;
+  }
+  grown = test::ModelWithoutImages(grown, {});  // points left with one view go
+  ASSERT_EQ(kept, 2u);
+  const auto old_index = Build(WriteModel(old_model, "old"), "old.cwl", 8);
+  const std::filesystem::path grown_dir = WriteModel(grown, "grown_model");
+  const IndexUpdateOptions options = Update(old_index, grown_dir, "grown");
+  const IndexUpdateReport report = UpdateIndex(options);
+  EXPECT_EQ(report.points_recoded, 2u);
+  EXPECT_EQ(report.points_added, 0u);
+  ExpectCompactAndExact(options.output_path, old_index, grown_dir, database_path_);
+}
+
 TEST_F(IndexUpdateTest, RefusesAModelWhoseOldPosesMovedUnlessAskedToRebuild) {
   const auto index = Build(WriteModel(Without(LastImages(2)), "old"), "old.cwl");
   colmap::Reconstruction moved = model_;
@@ -259,7 +351,7 @@ TEST_F(IndexUpdateTest, RefusesAModelWhoseOldPosesMovedUnlessAskedToRebuild) {
   EXPECT_EQ(rebuilt, built);
 }
 
-TEST_F(IndexUpdateTest, RefusesOtherBuildOptionsACompactIndexAndAnOtherDatabase) {
+TEST_F(IndexUpdateTest, RefusesOtherBuildOptionsAndAnOtherDatabase) {
   const auto index = Build(WriteModel(Without(LastImages(2)), "old"), "old.cwl");
   IndexUpdateOptions options = Update(index, model_dir_, "out");
   options.build_flags = {{"trees", OptionValue(uint32_t{8})}};
@@ -275,18 +367,6 @@ TEST_F(IndexUpdateTest, RefusesOtherBuildOptionsACompactIndexAndAnOtherDatabase)
   }
   options.build_flags = {{"trees", OptionValue(uint32_t{4})}, {"threads", OptionValue(int32_t{1})}};
   EXPECT_NO_THROW(UpdateIndex(options));
-
-  const auto compact = Build(dir_ / "old", "compact.cwl", 8);
-  try {
-    UpdateIndex(Update(compact, model_dir_, "compact_out"));
-    FAIL();
-  } catch (const UpdateRefused& refused) {
-    EXPECT_EQ(std::string(refused.what()),
-              compact.string() +
-                  ": a compact index is not updated yet (its codes and point kd-forest would need "
-                  "re-coding)" +
-                  kFullBuildNeeded);
-  }
 
   // The database extracted again: the first image's descriptors differ.
   {
@@ -468,6 +548,39 @@ TEST_F(IndexUpdateTest, KilledUpdatesAndAppliesLeaveTheParentAndNoPartialOutput)
     }
     ASSERT_EQ(test::Wait(test::Spawn(args)), 0);
   }
+}
+
+// On a real model: PVNN exact where the clusters the new images change share points with the
+// others (whose v_NN their points' PVNN takes when smaller).
+TEST(IndexUpdateSharedData, ACompactHerzJesuGrownByThreeImagesKeepsPvnnExact) {
+  CWLOC_REQUIRE_SHARED_DATA(data, "herz_jesu_p25");
+  test::TempDir dir;
+  const colmap::Reconstruction model = colmap::ReadReconstruction(data / "mapping_model" / "bin");
+  std::set<image_t> held_out;
+  for (auto it = model.images.rbegin(); held_out.size() < 3; ++it) held_out.insert(it->first);
+  const std::filesystem::path old_model = dir / "old_model";
+  std::filesystem::create_directories(old_model);
+  colmap::WriteReconstruction(test::ModelWithoutImages(model, held_out), old_model,
+                              colmap::ModelFormat::kBinary);
+  IndexBuildOptions build;
+  build.model_dir = old_model;
+  build.database_path = data / "database.db";
+  build.output_path = dir / "old.cwl";
+  build.calibration_samples = 0;
+  build.code_bytes = 16;
+  BuildIndex(build);
+  IndexUpdateOptions options;
+  options.index_path = build.output_path;
+  options.model_dir = data / "mapping_model" / "bin";
+  options.database_path = build.database_path;
+  options.output_path = dir / "grown.cwl";
+  options.delta_path = dir / "grown.cwld";
+  const IndexUpdateReport report = UpdateIndex(options);
+  EXPECT_EQ(report.images_added, 3u);
+  ExpectCompactAndExact(options.output_path, build.output_path, options.model_dir,
+                        options.database_path);
+  ApplyDelta(build.output_path, options.delta_path, dir / "applied.cwl", 2);
+  EXPECT_EQ(test::ReadBytes(dir / "applied.cwl"), test::ReadBytes(options.output_path));
 }
 
 }  // namespace
