@@ -61,6 +61,11 @@ case "$mode" in
     asan_skipped+='|^ServeTest\.GeoPoseAndCoverageOnAGeoreferencedIndex$'  # serve_request fuzzer, LocalizerApiGeoTest
     asan_skipped+='|^IndexUpdateTest\.EveryFlippedDeltaByteIsRefusedOrChangesNothing$'  # delta fuzzer (repairs checksums too)
     asan_skipped+='|^LocalizerApiToolsTest\.AppliesAnIndexDeltaAsTheUpdateWroteIt$'  # IndexUpdateTest (the same apply), delta fuzzer
+    asan_skipped+='|^IndexUpdateSharedData\.ACompactHerzJesuGrownByThreeImagesKeepsPvnnExact$'  # IndexUpdateTest.ACompact* (the same paths on the fixture)
+    asan_skipped+='|^FullAndCompact/TileTest\.ATileLocalizesItsQueriesAsTheWholeIndexWithTheSamePrior/'  # TileTest.ATileOfListedImagesHoldsTheirClusters, HerzJesuTest (localization)
+    asan_skipped+='|^LocalizerApiGeoToolsTest\.GeoPosesWithoutPriorsAreCwlocLocalizes$'  # LocalizerApiGeoTest
+    asan_skipped+='|^ServeTest\.FeaturesAsTextOrBinaryGetTheCliPoseBitForBit$'  # serve_request fuzzer, ServeTest.InfoAndMetricsSayWhatWasServed
+    asan_skipped+='|^EstimateRigPose\.TheCovarianceCoversTheTruth$'  # EstimateRigPose.* (each computes the covariance; this one checks its coverage over many poses)
     # A test that spawns our tools runs them sanitized too; any report fails the test.
     if ! ASAN_OPTIONS=abort_on_error=1:detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
       ctest --test-dir build-asan --output-on-failure -j "$jobs" -E "$asan_skipped" \
