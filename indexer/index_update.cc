@@ -12,6 +12,7 @@
 #include "cwloc/version.h"
 #include "delta/apply_delta.h"
 #include "delta/covisibility.h"
+#include "delta/make_delta.h"
 #include "format/index.h"
 #include "format/xxhash64.h"
 #include "indexer/build_option_table.h"
@@ -95,19 +96,6 @@ double Distance(const double* a, const double* b) {
   return (Eigen::Map<const Eigen::Vector3d>(a) - Eigen::Map<const Eigen::Vector3d>(b)).norm();
 }
 
-// Appends child rows [child, child + count) taken from parent rows [parent, ...) to `runs`,
-// joining a run that ends where this one starts.
-void AddRun(std::vector<RowRun>* runs, uint32_t child, uint32_t parent) {
-  if (!runs->empty()) {
-    RowRun& last = runs->back();
-    if (last.child_first + last.count == child && last.parent_first + last.count == parent) {
-      ++last.count;
-      return;
-    }
-  }
-  runs->push_back({child, parent, 1});
-}
-
 IndexUpdateReport Rebuild(const IndexUpdateOptions& options, const ParentBuild& parent,
                           const std::string& reason) {
   if (parent.georeferenced) {
@@ -163,21 +151,16 @@ size_t RecodeChangedPoints(const Index& parent, const ModelViews& child, Corresp
   return recoded;
 }
 
-// A compact child point's offset from the parent's origin, as apply stores it.
-std::array<float, 3> OffsetOf(const IndexPoint& point, const IndexPointOrigin& origin) {
-  return {float(point.xyz[0] - origin.xyz[0]), float(point.xyz[1] - origin.xyz[1]),
-          float(point.xyz[2] - origin.xyz[2])};
-}
-
 // PVNN of a compact child: a point with a view in a changed cluster (`computed` on entry) gets
 // it afresh, the smallest over all its clusters, which are computed too; the others keep the
-// parent's, as nothing they see changed. Fills the delta's NVNN (new points) and CVNN; returns
-// the clusters computed.
-size_t ComputeCompactNeighborDistances(const Index& parent, ModelViews& child,
-                                       const Clustering& clustering,
-                                       const std::vector<uint32_t>& image_of_view,
-                                       const std::vector<uint32_t>& parent_of_child_point,
-                                       std::vector<bool> computed, int threads, IndexDelta* delta) {
+// parent's, as nothing they see changed. `codes`: the child's, points x code bytes.
+std::vector<float> CompactNeighborDistances(const Index& parent, ModelViews& child,
+                                            const Clustering& clustering,
+                                            const std::vector<uint32_t>& image_of_view,
+                                            const std::vector<uint32_t>& parent_of_child_point,
+                                            std::span<const uint8_t> codes,
+                                            std::vector<bool> computed, int threads,
+                                            size_t* clusters_computed) {
   const size_t num_points = child.points.size();
   const auto cluster_of_view = [&](uint32_t w) { return child.images[image_of_view[w]].cluster; };
   std::vector<bool> affected(num_points, false);
@@ -185,32 +168,18 @@ size_t ComputeCompactNeighborDistances(const Index& parent, ModelViews& child,
     if (computed[cluster_of_view(w)]) affected[child.view_points[w]] = true;
   for (uint32_t w = 0; w < child.num_views(); ++w)
     if (affected[child.view_points[w]]) computed[cluster_of_view(w)] = true;
+  *clusters_computed = size_t(std::count(computed.begin(), computed.end(), true));
 
-  const DescriptorCodes& parent_codes = parent.codes();
-  const uint32_t code_bytes = parent_codes.code_bytes;
-  std::vector<uint8_t> codes(num_points * code_bytes);
-  size_t next_new = 0;
-  for (uint32_t q = 0; q < num_points; ++q) {
-    const uint32_t from = parent_of_child_point[q];
-    const uint8_t* code = from != kRemovedRow ? parent_codes.Code(from)
-                                              : &delta->new_point_codes[next_new++ * code_bytes];
-    std::memcpy(&codes[size_t(q) * code_bytes], code, code_bytes);
-  }
-  const DescriptorCodes child_codes{parent_codes.codebook, codes, code_bytes};
+  const DescriptorCodes child_codes{parent.codes().codebook, codes, parent.codes().code_bytes};
   std::vector<uint8_t> decoded(num_points * kDescriptorBytes);
   for (size_t q = 0; q < num_points; ++q) child_codes.Decode(q, &decoded[q * kDescriptorBytes]);
-  const std::vector<float> fresh =
+  std::vector<float> distances =
       ComputePointNeighborDistances(&child, decoded, clustering, threads, &computed);
-  const std::span<const float> parent_neighbors = parent.point_neighbor_distances();
   for (uint32_t q = 0; q < num_points; ++q) {
     const uint32_t from = parent_of_child_point[q];
-    if (from == kRemovedRow) {
-      delta->new_view_neighbors.push_back(fresh[q]);
-    } else if (affected[q] && std::memcmp(&fresh[q], &parent_neighbors[from], sizeof(float)) != 0) {
-      delta->view_neighbor_changes.push_back({q, fresh[q]});
-    }
+    if (from != kRemovedRow && !affected[q]) distances[q] = parent.point_neighbor_distances()[from];
   }
-  return size_t(std::count(computed.begin(), computed.end(), true));
+  return distances;
 }
 
 }  // namespace
@@ -270,60 +239,23 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
       const std::vector<uint32_t>& parent_of_child_point = match.parent_of_child_point;
       std::vector<bool> image_changed = match.image_changed;
       const double extent = match.extent;
-      const std::span<const uint32_t> parent_view_points = parent.view_points();
       for (uint32_t parent_image : child_of_parent_image)
         report.images_removed += parent_image == kRemovedRow;
-
-      IndexDelta delta;
-      for (uint32_t w = 0; w < child.num_views(); ++w) {
-        const uint32_t v = parent_of_child_view[w];
-        if (v == kRemovedRow) {
-          report.views_added++;
-          continue;
-        }
-        AddRun(&delta.view_runs, w, v);
-        if (child_of_parent_point[parent_view_points[v]] != child.view_points[w]) {
-          delta.view_point_changes.push_back({w, child.view_points[w]});
-        }
-      }
+      for (uint32_t v : parent_of_child_view) report.views_added += v == kRemovedRow;
       report.views_removed = parent.num_views() - (child.num_views() - report.views_added);
+
+      // Old points may be refined (a bundle adjustment with fixed poses), not moved far.
       std::vector<double> shifts;
-      const bool colors = !parent.point_colors().empty();
-      const IndexPointOrigin origin = parent.point_origin();
       std::vector<uint32_t> new_point_rows;
       for (uint32_t p = 0; p < child.points.size(); ++p) {
         const uint32_t from = parent_of_child_point[p];
         if (from == kRemovedRow) {
           new_point_rows.push_back(p);
-          delta.new_points.push_back(IndexPoint{
-              {child.points[p].xyz[0], child.points[p].xyz[1], child.points[p].xyz[2]}, 0, 0});
-          if (colors) delta.new_point_colors.push_back(child.point_colors[p]);
-          delta.new_point_ids.push_back(child.point_ids[p]);
           continue;
         }
-        AddRun(&delta.point_runs, p, from);
-        const std::array<double, 3> old_xyz = parent.PointXyz(from);
-        // A compact index stores float offsets: a point moved when its offset changes.
-        const bool moved =
-            coded ? std::memcmp(OffsetOf(child.points[p], origin).data(),
-                                parent.point_offsets()[from].offset, sizeof(float) * 3) != 0
-                  : std::memcmp(old_xyz.data(), child.points[p].xyz, sizeof(old_xyz)) != 0;
-        if (moved) {
-          PointMove move{
-              p, 0, {child.points[p].xyz[0], child.points[p].xyz[1], child.points[p].xyz[2]}};
-          delta.point_moves.push_back(move);
-        }
-        shifts.push_back(Distance(old_xyz.data(), child.points[p].xyz));
-        if (colors && std::memcmp(&parent.point_colors()[from], &child.point_colors[p], 3) != 0)
-          delta.point_color_changes.push_back({p, child.point_colors[p], 0});
+        shifts.push_back(Distance(parent.PointXyz(from).data(), child.points[p].xyz));
       }
       report.points_added = new_point_rows.size() - report.points_recoded;
-      report.points_moved = delta.point_moves.size();
-      if (coded) {
-        delta.code_bytes = parent.codes().code_bytes;
-        delta.new_point_codes = CodePointsWithCodebook(
-            child, new_point_rows, parent.codes().codebook, delta.code_bytes, threads);
-      }
       report.points_removed = parent.num_points() - (child.points.size() - report.points_added);
       if (!shifts.empty()) {
         std::nth_element(shifts.begin(), shifts.begin() + shifts.size() / 2, shifts.end());
@@ -337,14 +269,34 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
           throw UpdateRefused(options.model_dir.string() + text + kFullBuildNeeded);
         }
       }
+      // A compact index's codes: the parent's, and its codebook's for new and re-coded points.
+      std::vector<uint8_t> codes;
+      if (coded) {
+        const DescriptorCodes& parent_codes = parent.codes();
+        const uint32_t code_bytes = parent_codes.code_bytes;
+        const std::vector<uint8_t> new_codes = CodePointsWithCodebook(
+            child, new_point_rows, parent_codes.codebook, code_bytes, threads);
+        codes.resize(child.points.size() * code_bytes);
+        size_t next_new = 0;
+        for (uint32_t p = 0; p < child.points.size(); ++p) {
+          const uint32_t from = parent_of_child_point[p];
+          const uint8_t* code =
+              from != kRemovedRow ? parent_codes.Code(from) : &new_codes[next_new++ * code_bytes];
+          std::memcpy(&codes[size_t(p) * code_bytes], code, code_bytes);
+        }
+      }
 
       // Images whose views changed their points change their clusters' v_NN.
       std::vector<uint32_t> image_of_view(child.num_views());
       for (uint32_t i = 0; i < child.images.size(); ++i)
         std::fill_n(image_of_view.begin() + child.images[i].first_view, child.images[i].num_views,
                     i);
-      for (const auto& change : delta.view_point_changes)
-        image_changed[image_of_view[change.row]] = true;
+      for (uint32_t w = 0; w < child.num_views(); ++w) {
+        const uint32_t v = parent_of_child_view[w];
+        if (v != kRemovedRow &&
+            child_of_parent_point[parent.view_points()[v]] != child.view_points[w])
+          image_changed[image_of_view[w]] = true;
+      }
       report.seconds_compare = stage.Seconds();
 
       // Clusters: an old image keeps its own, a new one joins the cluster of the old image it
@@ -406,38 +358,36 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
       }
       for (uint32_t c : lost_member) dirty[c] = true;
       for (bool d : dirty) report.clusters_recomputed += d;
+      // The child's v_NN: afresh in the clusters recomputed, the parent's elsewhere.
+      std::vector<float> neighbor_distances;
       if (coded) {
-        report.clusters_recomputed =
-            ComputeCompactNeighborDistances(parent, child, clustering, image_of_view,
-                                            parent_of_child_point, dirty, threads, &delta);
+        neighbor_distances = CompactNeighborDistances(parent, child, clustering, image_of_view,
+                                                      parent_of_child_point, codes, dirty, threads,
+                                                      &report.clusters_recomputed);
       } else {
-        const std::vector<float> recomputed =
-            ComputeViewNeighborDistances(child, clustering, threads, &dirty);
-        const std::span<const float> parent_neighbors = parent.view_neighbor_distances();
-        for (uint32_t i = 0; i < child.images.size(); ++i) {
-          const IndexImage& image = child.images[i];
-          const bool fresh = dirty[image.cluster];
-          for (uint32_t w = image.first_view; w < image.first_view + image.num_views; ++w) {
-            const uint32_t v = parent_of_child_view[w];
-            if (v == kRemovedRow) {
-              const uint8_t* row = &child.descriptors[size_t(w) * kDescriptorBytes];
-              delta.new_descriptors.insert(delta.new_descriptors.end(), row,
-                                           row + kDescriptorBytes);
-              delta.new_view_neighbors.push_back(recomputed[w]);
-            } else if (fresh &&
-                       std::memcmp(&recomputed[w], &parent_neighbors[v], sizeof(float)) != 0) {
-              delta.view_neighbor_changes.push_back({w, recomputed[w]});
-            }
-          }
+        neighbor_distances = ComputeViewNeighborDistances(child, clustering, threads, &dirty);
+        for (uint32_t w = 0; w < child.num_views(); ++w) {
+          const uint32_t v = parent_of_child_view[w];
+          if (v != kRemovedRow && !dirty[child.images[image_of_view[w]].cluster])
+            neighbor_distances[w] = parent.view_neighbor_distances()[v];
         }
       }
-      for (uint32_t w = 0; w < child.num_views(); ++w) {
-        if (parent_of_child_view[w] != kRemovedRow) continue;
-        delta.new_view_points.push_back(child.view_points[w]);
-        if (parent_build.options.keypoints)
-          delta.new_view_keypoints.push_back(child.view_keypoints[w]);
-      }
-      report.neighbor_distances_changed = delta.view_neighbor_changes.size();
+      DeltaChild delta_child;
+      delta_child.cameras = child.cameras;
+      delta_child.images = child.images;
+      delta_child.strings = child.strings;
+      delta_child.parent_of_view = parent_of_child_view;
+      delta_child.descriptors = child.descriptors;
+      delta_child.view_points = child.view_points;
+      delta_child.view_keypoints = child.view_keypoints;
+      delta_child.neighbor_distances = neighbor_distances;
+      delta_child.parent_of_point = parent_of_child_point;
+      delta_child.points = child.points;
+      delta_child.point_ids = child.point_ids;
+      delta_child.point_colors = child.point_colors;
+      delta_child.codes = codes;
+      IndexDelta delta = MakeDelta(parent, delta_child);
+      report.points_moved = delta.point_moves.size();
       // The delta holds the new rows; the child's come from it and the parent, as on a device.
       std::vector<uint8_t>().swap(child.descriptors);
       report.seconds_neighbor_distances = stage.Seconds();
@@ -456,14 +406,9 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
       if (report.forest_rebuilt)
         rows_at_build = coded ? child.points.size() : child.num_views(), rows_inserted = 0;
 
-      delta.header.parent_checksum = parent.file().header().header_checksum;
-      delta.header.parent_file_size = parent.file().header().file_size;
       delta.header.forest_seed = parent_build.options.seed;
       delta.header.forest_leaf_size = parent_build.options.forest.max_leaf_size;
       delta.header.flags = report.forest_rebuilt ? kDeltaForestRebuilt : 0;
-      delta.cameras = child.cameras;
-      delta.images = child.images;
-      delta.strings = child.strings;
       const AppliedDelta applied(parent, delta, "the update", threads);
       report.seconds_apply = stage.Seconds();
       stage.Restart();

@@ -1,0 +1,102 @@
+#include "delta/make_delta.h"
+
+#include <cstring>
+#include <vector>
+
+namespace cwloc {
+namespace {
+
+// Appends child row `child` taken from parent row `parent` to `runs`, joining a run that ends
+// where this one starts.
+void AddRun(std::vector<RowRun>* runs, uint32_t child, uint32_t parent) {
+  if (!runs->empty()) {
+    RowRun& last = runs->back();
+    if (last.child_first + last.count == child && last.parent_first + last.count == parent) {
+      ++last.count;
+      return;
+    }
+  }
+  runs->push_back({child, parent, 1});
+}
+
+bool SameBits(float a, float b) { return std::memcmp(&a, &b, sizeof(float)) == 0; }
+
+}  // namespace
+
+std::array<float, 3> OffsetFrom(const IndexPointOrigin& origin, const IndexPoint& point) {
+  return {float(point.xyz[0] - origin.xyz[0]), float(point.xyz[1] - origin.xyz[1]),
+          float(point.xyz[2] - origin.xyz[2])};
+}
+
+bool PointMoved(const Index& parent, uint32_t parent_point, const IndexPoint& child_point) {
+  if (parent.coded()) {
+    return std::memcmp(OffsetFrom(parent.point_origin(), child_point).data(),
+                       parent.point_offsets()[parent_point].offset, sizeof(float) * 3) != 0;
+  }
+  return std::memcmp(parent.PointXyz(parent_point).data(), child_point.xyz,
+                     sizeof(child_point.xyz)) != 0;
+}
+
+IndexDelta MakeDelta(const Index& parent, const DeltaChild& child) {
+  IndexDelta delta;
+  delta.header.parent_checksum = parent.file().header().header_checksum;
+  delta.header.parent_file_size = parent.file().header().file_size;
+  delta.cameras.assign(child.cameras.begin(), child.cameras.end());
+  delta.images.assign(child.images.begin(), child.images.end());
+  delta.strings = child.strings;
+  const bool coded = parent.coded();
+  const uint32_t code_bytes = parent.codes().code_bytes;
+  delta.code_bytes = code_bytes;
+  const bool keypoints = !parent.view_keypoints().empty();
+  const bool colors = !parent.point_colors().empty();
+  const bool ids = !parent.point_ids().empty();
+
+  std::vector<uint32_t> child_of_parent_point(parent.num_points(), kRemovedRow);
+  for (uint32_t q = 0; q < child.points.size(); ++q) {
+    const uint32_t from = child.parent_of_point[q];
+    if (from == kRemovedRow) {
+      const IndexPoint& point = child.points[q];
+      delta.new_points.push_back(IndexPoint{{point.xyz[0], point.xyz[1], point.xyz[2]}, 0, 0});
+      if (ids) delta.new_point_ids.push_back(child.point_ids[q]);
+      if (colors) delta.new_point_colors.push_back(child.point_colors[q]);
+      if (coded) {
+        const uint8_t* code = &child.codes[size_t(q) * code_bytes];
+        delta.new_point_codes.insert(delta.new_point_codes.end(), code, code + code_bytes);
+        delta.new_view_neighbors.push_back(child.neighbor_distances[q]);
+      }
+      continue;
+    }
+    child_of_parent_point[from] = q;
+    AddRun(&delta.point_runs, q, from);
+    if (PointMoved(parent, from, child.points[q])) {
+      const IndexPoint& point = child.points[q];
+      delta.point_moves.push_back({q, 0, {point.xyz[0], point.xyz[1], point.xyz[2]}});
+    }
+    if (colors && std::memcmp(&parent.point_colors()[from], &child.point_colors[q], 3) != 0)
+      delta.point_color_changes.push_back({q, child.point_colors[q], 0});
+    if (coded && !SameBits(child.neighbor_distances[q], parent.point_neighbor_distances()[from]))
+      delta.view_neighbor_changes.push_back({q, child.neighbor_distances[q]});
+  }
+
+  for (uint32_t w = 0; w < child.view_points.size(); ++w) {
+    const uint32_t v = child.parent_of_view[w];
+    if (v == kRemovedRow) {
+      if (!coded) {
+        const uint8_t* row = &child.descriptors[size_t(w) * kDescriptorBytes];
+        delta.new_descriptors.insert(delta.new_descriptors.end(), row, row + kDescriptorBytes);
+        delta.new_view_neighbors.push_back(child.neighbor_distances[w]);
+      }
+      delta.new_view_points.push_back(child.view_points[w]);
+      if (keypoints) delta.new_view_keypoints.push_back(child.view_keypoints[w]);
+      continue;
+    }
+    AddRun(&delta.view_runs, w, v);
+    if (child_of_parent_point[parent.view_points()[v]] != child.view_points[w])
+      delta.view_point_changes.push_back({w, child.view_points[w]});
+    if (!coded && !SameBits(child.neighbor_distances[w], parent.view_neighbor_distances()[v]))
+      delta.view_neighbor_changes.push_back({w, child.neighbor_distances[w]});
+  }
+  return delta;
+}
+
+}  // namespace cwloc

@@ -1,0 +1,45 @@
+#pragma once
+
+// The delta between an index and a child made of it (`cwloc-index update` from a grown model,
+// `extract --parent-tile` from an updated index): the child's arrays, and which parent row each
+// child view and point is. AppliedDelta (apply_delta.h) composes the child back from the parent
+// and the delta; the caller sets the header's child checksum and forest fields.
+
+#include <cstdint>
+#include <span>
+#include <string_view>
+
+#include "delta/delta_file.h"
+#include "format/index.h"
+
+namespace cwloc {
+
+// Borrowed. Child rows whose parent row is kRemovedRow are new; a compact parent's child (codes
+// per point) has no descriptors, and its neighbor_distances are per point.
+struct DeltaChild {
+  std::span<const IndexCamera> cameras;
+  std::span<const IndexImage> images;
+  std::string_view strings;
+  std::span<const uint32_t> parent_of_view;
+  std::span<const uint8_t> descriptors;  // full: views x 128 (new rows are read)
+  std::span<const uint32_t> view_points;
+  std::span<const ViewKeypoint> view_keypoints;  // when the parent stores them
+  std::span<const float> neighbor_distances;     // per view, or per point (compact)
+  std::span<const uint32_t> parent_of_point;
+  std::span<const IndexPoint> points;  // positions (tracks unused)
+  std::span<const uint64_t> point_ids;
+  std::span<const PointColor> point_colors;  // when the parent stores them
+  std::span<const uint8_t> codes;            // compact: points x code bytes (new rows are read)
+};
+
+// A kept point moved when its position differs: a compact index compares the float offsets
+// from its origin it stores, so a point moves when its offset's bits change.
+bool PointMoved(const Index& parent, uint32_t parent_point, const IndexPoint& child_point);
+
+// A compact child point's offset from the parent's origin, as apply stores it.
+std::array<float, 3> OffsetFrom(const IndexPointOrigin& origin, const IndexPoint& point);
+
+// The delta's rows and small sections; its header names the parent.
+IndexDelta MakeDelta(const Index& parent, const DeltaChild& child);
+
+}  // namespace cwloc
