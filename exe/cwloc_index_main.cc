@@ -140,6 +140,12 @@ int RunExtract(const IndexExtractOptions& options, bool json) {
           {"covisibility_edges", report.num_covisibility_edges}}},
         {"parent", {{"images", report.parent_images}, {"views", report.parent_views}}},
         {"seconds", report.seconds_total}};
+    if (!options.delta_path.empty()) {
+      out["delta"] = {{"path", options.delta_path.string()},
+                      {"bytes", report.delta_bytes},
+                      {"parent_tile", options.parent_tile_path.string()},
+                      {"forest_rebuilt", report.forest_rebuilt}};
+    }
     std::cout << out.dump(2) << "\n";
     return kExitOk;
   }
@@ -148,6 +154,13 @@ int RunExtract(const IndexExtractOptions& options, bool json) {
               report.num_clusters, report.num_points, report.num_views, report.parent_views);
   std::printf("%.1f MB, %.1f bytes per view; %.2f s\n", report.file_bytes / 1e6,
               double(report.file_bytes) / double(report.num_views), report.seconds_total);
+  if (!options.delta_path.empty()) {
+    std::printf("delta %s: %.3f MB (%.2f %% of the tile) from %s (%zu views); kd-forest %s\n",
+                options.delta_path.c_str(), report.delta_bytes / 1e6,
+                100.0 * double(report.delta_bytes) / double(report.file_bytes),
+                options.parent_tile_path.c_str(), report.parent_tile_views,
+                report.forest_rebuilt ? "rebuilt (balance bound)" : "updated by insertion");
+  }
   return kExitOk;
 }
 
@@ -374,6 +387,12 @@ int main(int argc, char** argv) {
       ->required();
   extract->add_option("--threads", extract_options.threads, "Worker threads (0 = all cores)")
       ->capture_default_str();
+  extract->add_option("--parent-tile", extract_options.parent_tile_path,
+                      "The same region's tile of the index this one was updated from: write the "
+                      "tile as it changed by a delta (--delta), which devices apply to it; "
+                      "without --near or --images, the parent tile's region");
+  extract->add_option("--delta", extract_options.delta_path,
+                      "With --parent-tile: the delta file to write (cwloc-index apply)");
   extract->add_flag("--json", json, "Print the report as JSON");
 
   cwloc::IndexUpdateOptions update_options;

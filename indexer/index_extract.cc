@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <cstring>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -12,9 +14,14 @@
 #include "base/parallel_for.h"
 #include "base/stopwatch.h"
 #include "cwloc/version.h"
+#include "delta/apply_delta.h"
+#include "delta/make_delta.h"
 #include "format/index.h"
+#include "format/xxhash64.h"
 #include "geo/index_georeference.h"
+#include "indexer/index_update.h"
 #include "indexer/index_writer.h"
+#include "kdtree/kd_forest_update.h"
 
 namespace cwloc {
 namespace {
@@ -181,10 +188,160 @@ nlohmann::ordered_json RegionJson(const IndexExtractOptions& options) {
   return {{"near", near}};
 }
 
+// The parent tile's region, when the extract names none.
+void RegionOfParentTile(const nlohmann::ordered_json& manifest, const std::string& name,
+                        IndexExtractOptions* options) {
+  if (!manifest.contains("extracted"))
+    throw InputError(name + ": not a tile (cwloc-index extract); --parent-tile takes one");
+  const auto& region = manifest["extracted"]["region"];
+  if (region.contains("images")) {
+    options->images_file = region["images"].get<std::string>();
+    return;
+  }
+  const auto& near = region.at("near");
+  GeoRegion geo;
+  geo.latitude_deg = near.at("latitude_deg").get<double>();
+  geo.longitude_deg = near.at("longitude_deg").get<double>();
+  if (near.contains("height_m")) geo.height_m = near["height_m"].get<double>();
+  geo.radius_m = near.at("radius_m").get<double>();
+  options->near = geo;
+}
+
+// The new tile as the parent tile and a delta: views matched within each image by point id (and
+// descriptor, and keypoint), points by id (and, compact, code). Writes both; returns the
+// child's kd-forest node count.
+size_t WriteTileByDelta(const IndexExtractOptions& options, const Index& old_tile, const Tile& tile,
+                        const IndexPointOrigin& origin, nlohmann::ordered_json manifest,
+                        IndexExtractReport* report) {
+  const std::string old_name = options.parent_tile_path.string();
+  const bool coded = old_tile.coded();
+  if (old_tile.point_ids().empty() || tile.point_ids.empty()) {
+    throw InputError(old_name +
+                     ": a tile without point ids (PIDS, since format 1.5) takes no "
+                     "delta; send the tile whole");
+  }
+  if (coded != !tile.codes.empty() ||
+      (coded && (tile.codes.size() / tile.point_ids.size() != old_tile.codes().code_bytes))) {
+    throw InputError(old_name +
+                     ": cut from an index that stores descriptors otherwise (full or "
+                     "compact, code size); send the tile whole");
+  }
+  const auto old_manifest = nlohmann::ordered_json::parse(old_tile.manifest_json());
+  std::unordered_map<uint32_t, uint32_t> old_row_of_id;
+  for (uint32_t i = 0; i < old_tile.images().size(); ++i)
+    old_row_of_id[old_tile.images()[i].image_id] = i;
+
+  std::vector<uint32_t> parent_of_point(tile.point_ids.size(), kRemovedRow);
+  const std::span<const uint64_t> old_ids = old_tile.point_ids();
+  const uint32_t code_bytes = old_tile.codes().code_bytes;
+  for (uint32_t p = 0, q = 0; p < old_ids.size() && q < tile.point_ids.size();) {
+    if (old_ids[p] != tile.point_ids[q]) {
+      old_ids[p] < tile.point_ids[q] ? ++p : ++q;
+      continue;
+    }
+    // A compact point whose code changed is new: apply takes kept points' codes from the tile.
+    if (!coded ||
+        std::memcmp(old_tile.codes().Code(p), &tile.codes[size_t(q) * code_bytes], code_bytes) == 0)
+      parent_of_point[q] = p;
+    ++p, ++q;
+  }
+  const bool keypoints = !old_tile.view_keypoints().empty();
+  const auto same_view = [&](uint32_t v, uint32_t w) {
+    if (old_ids[old_tile.view_points()[v]] != tile.point_ids[tile.view_points[w]]) return false;
+    if (keypoints && std::memcmp(&old_tile.view_keypoints()[v], &tile.view_keypoints[w],
+                                 sizeof(ViewKeypoint)) != 0)
+      return false;
+    return coded ||
+           std::memcmp(&old_tile.descriptors()[size_t(v) * kDescriptorBytes],
+                       &tile.descriptors[size_t(w) * kDescriptorBytes], kDescriptorBytes) == 0;
+  };
+  std::vector<uint32_t> parent_of_view(tile.view_points.size(), kRemovedRow);
+  size_t images_added = 0, kept_images = 0;
+  for (const IndexImage& image : tile.images) {
+    const auto found = old_row_of_id.find(image.image_id);
+    if (found == old_row_of_id.end()) {
+      ++images_added;
+      continue;
+    }
+    ++kept_images;
+    const IndexImage& old_image = old_tile.images()[found->second];
+    for (uint32_t a = 0, b = 0; a < old_image.num_views && b < image.num_views; ++a) {
+      uint32_t w = b;
+      while (w < image.num_views && !same_view(old_image.first_view + a, image.first_view + w)) ++w;
+      if (w == image.num_views) continue;
+      parent_of_view[image.first_view + w] = old_image.first_view + a;
+      b = w + 1;
+    }
+  }
+
+  std::vector<IndexPoint> points = tile.points;  // a compact tile's from its offsets
+  if (coded) {
+    for (const IndexPointOffset& offset : tile.point_offsets) {
+      points.push_back({{origin.xyz[0] + offset.offset[0], origin.xyz[1] + offset.offset[1],
+                         origin.xyz[2] + offset.offset[2]},
+                        0,
+                        0});
+    }
+  }
+  DeltaChild child;
+  child.cameras = tile.cameras;
+  child.images = tile.images;
+  child.strings = tile.strings;
+  child.parent_of_view = parent_of_view;
+  child.descriptors = tile.descriptors;
+  child.view_points = tile.view_points;
+  child.view_keypoints = tile.view_keypoints;
+  child.neighbor_distances = tile.neighbor_distances;
+  child.parent_of_point = parent_of_point;
+  child.points = points;
+  child.point_ids = tile.point_ids;
+  child.point_colors = tile.point_colors;
+  child.codes = tile.codes;
+  IndexDelta delta = MakeDelta(old_tile, child);
+
+  // The tile's kd-forest: updated until past the balance bound, as an index's.
+  const auto& row_map = coded ? parent_of_point : parent_of_view;
+  const ChildUpdate next =
+      NextUpdate(old_manifest, old_tile, row_map.size(),
+                 size_t(std::count(row_map.begin(), row_map.end(), kRemovedRow)), images_added,
+                 old_tile.images().size() - kept_images, &delta.header);
+  report->forest_rebuilt = next.forest_rebuilt;
+  const AppliedDelta applied(old_tile, delta, "the tile's delta", ResolveThreads(options.threads));
+
+  manifest["counts"]["kd_nodes"] = applied.num_kd_nodes();
+  manifest["update"] = next.record;
+  delta.manifest = manifest.dump(2) + "\n";
+  delta.header.child_checksum = applied.Write(options.output_path, delta.manifest, std::nullopt);
+  delta.header.child_file_size = std::filesystem::file_size(options.output_path);
+  WriteDelta(options.delta_path, delta);
+  report->delta_bytes = std::filesystem::file_size(options.delta_path);
+  report->parent_tile_views = old_tile.num_views();
+  return applied.num_kd_nodes();
+}
+
 }  // namespace
 
-IndexExtractReport ExtractIndex(const IndexExtractOptions& options) {
+IndexExtractReport ExtractIndex(const IndexExtractOptions& given) {
   const Stopwatch total;
+  IndexExtractOptions options = given;
+  std::optional<Index> old_tile;
+  if (!options.parent_tile_path.empty()) {
+    if (options.delta_path.empty())
+      throw InputError("extract: --parent-tile needs --delta (the file devices apply)");
+    old_tile.emplace(Index::Open(options.parent_tile_path));
+    old_tile->file().VerifyChecksums();
+    old_tile->Validate();
+    const auto old_manifest =
+        nlohmann::ordered_json::parse(old_tile->manifest_json(), nullptr, false);
+    if (old_manifest.is_discarded())
+      throw InputError(options.parent_tile_path.string() + ": section 'MANI' is not valid JSON");
+    if (!options.near && options.images_file.empty())
+      RegionOfParentTile(old_manifest, options.parent_tile_path.string(), &options);
+    else if (!old_manifest.contains("extracted"))
+      RegionOfParentTile(old_manifest, options.parent_tile_path.string(), &options);  // refuses
+  } else if (!options.delta_path.empty()) {
+    throw InputError("extract: --delta needs --parent-tile (the tile the delta changes)");
+  }
   if (options.near.has_value() == !options.images_file.empty())
     throw InputError("extract: give one of --near or --images");
   std::error_code same_error;
@@ -211,13 +368,16 @@ IndexExtractReport ExtractIndex(const IndexExtractOptions& options) {
   }
   const Tile tile = CutTile(parent, keep);
 
-  const auto& parameters = manifest["build_parameters"];
-  KdForestBuildOptions forest_options;
-  forest_options.num_trees = parameters["kd_trees"].get<uint32_t>();
-  forest_options.max_leaf_size = parameters["kd_leaf_size"].get<uint32_t>();
-  const KdForest forest =
-      BuildIndexForest(parent.coded() ? tile.rows : tile.descriptors, forest_options,
-                       parameters["seed"].get<uint64_t>(), ResolveThreads(options.threads));
+  // Built anew, unless the tile is its parent tile changed by a delta.
+  KdForest forest;
+  if (!old_tile) {
+    const auto& parameters = manifest["build_parameters"];
+    KdForestBuildOptions forest_options;
+    forest_options.num_trees = parameters["kd_trees"].get<uint32_t>();
+    forest_options.max_leaf_size = parameters["kd_leaf_size"].get<uint32_t>();
+    forest = BuildIndexForest(parent.coded() ? tile.rows : tile.descriptors, forest_options,
+                              parameters["seed"].get<uint64_t>(), ResolveThreads(options.threads));
+  }
 
   IndexExtractReport report;
   report.num_cameras = tile.cameras.size();
@@ -242,6 +402,14 @@ IndexExtractReport ExtractIndex(const IndexExtractOptions& options) {
                              {"file_bytes", parent.file().header().file_size},
                              {"counts", parent_counts}}},
                            {"region", RegionJson(options)}};
+  manifest.erase("update");  // the index's own; a tile's record its own updates
+  if (old_tile) {
+    IndexPointOrigin origin = parent.point_origin();
+    WriteTileByDelta(options, *old_tile, tile, origin, std::move(manifest), &report);
+    report.file_bytes = std::filesystem::file_size(options.output_path);
+    report.seconds_total = total.Seconds();
+    return report;
+  }
 
   IndexContents contents;
   contents.cameras = tile.cameras;

@@ -22,6 +22,11 @@ struct IndexExtractOptions {
   std::optional<GeoRegion> near;      // --near: clusters with a camera in this region
   std::filesystem::path images_file;  // --images: clusters holding these images (one per line)
   int threads = 0;                    // kd-forest build; 0 = all cores
+  // --parent-tile: a tile of the index this one was updated from. The tile is then written as
+  // that tile changed by a delta (`delta_path`, for devices that hold it: `cwloc-index apply`),
+  // its kd-forest updated as `update` updates an index's; without a region, the parent tile's.
+  std::filesystem::path parent_tile_path;
+  std::filesystem::path delta_path;
 };
 
 struct IndexExtractReport {
@@ -29,6 +34,9 @@ struct IndexExtractReport {
   size_t num_clusters = 0, num_covisibility_edges = 0;
   size_t parent_images = 0, parent_views = 0;
   uint64_t file_bytes = 0;
+  uint64_t delta_bytes = 0;  // with a parent tile
+  size_t parent_tile_views = 0;
+  bool forest_rebuilt = false;  // with a parent tile: the balance bound was passed
   double seconds_total = 0;
 };
 

@@ -197,7 +197,7 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
   if (parent_manifest.contains("extracted")) {
     throw InputError(parent_name +
                      ": a tile (cwloc-index extract) is not updated: update the index it was "
-                     "cut from, then extract the tile again or cut the delta");
+                     "cut from, then extract the tile with --parent-tile and --delta");
   }
   const ParentBuild parent_build = ParentBuildOf(parent_manifest);
   if (!options.delta_path.empty() && options.delta_path == options.output_path)
@@ -392,23 +392,13 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
       std::vector<uint8_t>().swap(child.descriptors);
       report.seconds_neighbor_distances = stage.Seconds();
 
-      // The kd-forest's balance bound, counted since its last full build.
+      // The kd-forest's rows: views, or a compact index's points (new and re-coded ones).
       stage.Restart();
-      nlohmann::ordered_json update_record =
-          parent_manifest.value("update", nlohmann::ordered_json::object());
-      // Its rows: views, or a compact index's points (new and re-coded ones inserted).
-      uint64_t rows_at_build =
-          update_record.value("forest_rows_at_build", uint64_t(parent.num_rows()));
-      uint64_t rows_inserted = update_record.value("forest_rows_inserted", uint64_t{0}) +
-                               (coded ? new_point_rows.size() : report.views_added);
-      report.forest_rebuilt =
-          double(rows_inserted) > kForestRebuildFraction * double(rows_at_build);
-      if (report.forest_rebuilt)
-        rows_at_build = coded ? child.points.size() : child.num_views(), rows_inserted = 0;
-
-      delta.header.forest_seed = parent_build.options.seed;
-      delta.header.forest_leaf_size = parent_build.options.forest.max_leaf_size;
-      delta.header.flags = report.forest_rebuilt ? kDeltaForestRebuilt : 0;
+      const ChildUpdate next =
+          NextUpdate(parent_manifest, parent, coded ? child.points.size() : child.num_views(),
+                     coded ? new_point_rows.size() : report.views_added, report.images_added,
+                     report.images_removed, &delta.header);
+      report.forest_rebuilt = next.forest_rebuilt;
       const AppliedDelta applied(parent, delta, "the update", threads);
       report.seconds_apply = stage.Seconds();
       stage.Restart();
@@ -433,17 +423,7 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
       manifest["source"]["model"]["layout"] = grown.layout;
       manifest["source"]["model"]["fingerprint"] = FingerprintModel(options.model_dir);
       manifest["source"]["database"]["path"] = options.database_path.string();
-      const uint64_t updates = update_record.value("updates", uint64_t{0}) + 1;
-      manifest["update"] = {
-          {"updates", updates},
-          {"images_added", update_record.value("images_added", uint64_t{0}) + report.images_added},
-          {"images_removed",
-           update_record.value("images_removed", uint64_t{0}) + report.images_removed},
-          {"forest_rows_at_build", rows_at_build},
-          {"forest_rows_inserted", rows_inserted},
-          {"parent",
-           {{"checksum", "xxh64:" + HashHex(delta.header.parent_checksum)},
-            {"file_bytes", delta.header.parent_file_size}}}};
+      manifest["update"] = next.record;
       delta.manifest = manifest.dump(2) + "\n";
       delta.header.child_checksum =
           applied.Write(options.output_path, delta.manifest, std::nullopt);
@@ -461,6 +441,31 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
   }
   report.seconds_total = total.Seconds();
   return report;
+}
+
+ChildUpdate NextUpdate(const nlohmann::ordered_json& parent_manifest, const Index& parent,
+                       size_t child_rows, size_t rows_inserted, size_t images_added,
+                       size_t images_removed, DeltaHeader* header) {
+  const nlohmann::ordered_json before =
+      parent_manifest.value("update", nlohmann::ordered_json::object());
+  uint64_t rows_at_build = before.value("forest_rows_at_build", uint64_t(parent.num_rows()));
+  uint64_t inserted = before.value("forest_rows_inserted", uint64_t{0}) + rows_inserted;
+  ChildUpdate next;
+  next.forest_rebuilt = double(inserted) > kForestRebuildFraction * double(rows_at_build);
+  if (next.forest_rebuilt) rows_at_build = child_rows, inserted = 0;
+  const auto& parameters = parent_manifest.at("build_parameters");
+  header->forest_seed = parameters.at("seed").get<uint64_t>();
+  header->forest_leaf_size = parameters.at("kd_leaf_size").get<uint32_t>();
+  header->flags = next.forest_rebuilt ? kDeltaForestRebuilt : 0;
+  next.record = {{"updates", before.value("updates", uint64_t{0}) + 1},
+                 {"images_added", before.value("images_added", uint64_t{0}) + images_added},
+                 {"images_removed", before.value("images_removed", uint64_t{0}) + images_removed},
+                 {"forest_rows_at_build", rows_at_build},
+                 {"forest_rows_inserted", inserted},
+                 {"parent",
+                  {{"checksum", "xxh64:" + HashHex(header->parent_checksum)},
+                   {"file_bytes", header->parent_file_size}}}};
+  return next;
 }
 
 nlohmann::ordered_json UpdateReportJson(const IndexUpdateOptions& options,

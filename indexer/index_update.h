@@ -9,6 +9,8 @@
 
 #include "base/error.h"
 #include "base/option_value.h"
+#include "delta/delta_file.h"
+#include "format/index.h"
 
 namespace cwloc {
 
@@ -71,6 +73,18 @@ struct IndexUpdateReport {
 // Throws UpdateRefused (unless rebuild_if_needed) when the model was not grown from the one the
 // index was built from, InputError on bad input; writes nothing then.
 IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options);
+
+// What a child's manifest says of its updates (`update`: counted on from the parent's record)
+// and the kd-forest's balance bound: the rows inserted since the forest was built, past
+// kForestRebuildFraction of the rows it was built over, rebuild it. Sets `header`'s forest
+// fields from the parent's build parameters; its parent fields must be set.
+struct ChildUpdate {
+  nlohmann::ordered_json record;
+  bool forest_rebuilt = false;
+};
+ChildUpdate NextUpdate(const nlohmann::ordered_json& parent_manifest, const Index& parent,
+                       size_t child_rows, size_t rows_inserted, size_t images_added,
+                       size_t images_removed, DeltaHeader* header);
 
 nlohmann::ordered_json UpdateReportJson(const IndexUpdateOptions& options,
                                         const IndexUpdateReport& report);

@@ -16,6 +16,7 @@
 #include "delta/apply_delta.h"
 #include "format/index.h"
 #include "format/xxhash64.h"
+#include "indexer/index_extract.h"
 #include "indexer/point_codes.h"
 #include "kdtree/kd_forest.h"
 #include "tests/colmap/model_without_images.h"
@@ -319,6 +320,86 @@ TEST_F(IndexUpdateTest, ACompactUpdateTouchingTwoPointsComputesTheirNeighboursCl
   EXPECT_EQ(report.points_recoded, 2u);
   EXPECT_EQ(report.points_added, 0u);
   ExpectCompactAndExact(options.output_path, old_index, grown_dir, database_path_);
+}
+
+// A tile of an updated index written as the old index's tile changed by a delta (`extract
+// --parent-tile`): apply rebuilds it bit for bit, it holds what a fresh extract of the updated
+// index holds (every section but the manifest and the kd-forest), and every row finds itself.
+TEST_F(IndexUpdateTest, ATileOfAnUpdatedIndexIsItsParentTileChangedByADelta) {
+  for (const uint32_t code_bytes : {0u, 8u}) {
+    SCOPED_TRACE("code bytes " + std::to_string(code_bytes));
+    const std::string kind = code_bytes == 0 ? "full" : "compact";
+    const image_t added = *LastImages(1).begin();
+    const auto old_index =
+        Build(WriteModel(Without({added}), "old_" + kind), "old_" + kind + ".cwl", code_bytes);
+    const IndexUpdateOptions update = Update(old_index, model_dir_, "grown_" + kind);
+    UpdateIndex(update);
+    std::ofstream old_list(dir_ / "old_tile.txt"), new_list(dir_ / "new_tile.txt");
+    for (auto it = model_.images.begin(); it != std::next(model_.images.begin(), 4); ++it)
+      old_list << it->second.name << "\n", new_list << it->second.name << "\n";
+    new_list << model_.images.at(added).name << "\n";
+    old_list.close(), new_list.close();
+
+    IndexExtractOptions old_tile;
+    old_tile.index_path = old_index;
+    old_tile.images_file = dir_ / "old_tile.txt";
+    old_tile.output_path = dir_ / ("old_tile_" + kind + ".cwl");
+    ExtractIndex(old_tile);
+    IndexExtractOptions by_delta = old_tile;
+    by_delta.index_path = update.output_path;
+    by_delta.images_file = dir_ / "new_tile.txt";
+    by_delta.output_path = dir_ / ("new_tile_" + kind + ".cwl");
+    by_delta.parent_tile_path = old_tile.output_path;
+    by_delta.delta_path = dir_ / ("tile_" + kind + ".cwld");
+    const IndexExtractReport report = ExtractIndex(by_delta);
+    EXPECT_EQ(report.num_images, 5u);
+    EXPECT_GT(report.delta_bytes, 0u);
+    EXPECT_LT(report.delta_bytes, report.file_bytes);
+    IndexExtractOptions fresh = by_delta;
+    fresh.parent_tile_path.clear(), fresh.delta_path.clear();
+    fresh.output_path = dir_ / ("fresh_tile_" + kind + ".cwl");
+    ExtractIndex(fresh);
+    std::map<std::string, uint64_t> a = Checksums(by_delta.output_path);
+    std::map<std::string, uint64_t> b = Checksums(fresh.output_path);
+    for (const char* tag : {"MANI", "KDND", "KDRT", "KDLF"}) a.erase(tag), b.erase(tag);
+    EXPECT_EQ(a, b);
+    ExpectEveryRowFindsItself(by_delta.output_path);
+    const auto manifest = nlohmann::json::parse(Index::Open(by_delta.output_path).manifest_json());
+    EXPECT_EQ(manifest["update"]["updates"], 1);
+    EXPECT_EQ(manifest["update"]["images_added"], 1);
+    EXPECT_TRUE(manifest.contains("extracted"));
+
+    const std::filesystem::path applied = dir_ / ("applied_tile_" + kind + ".cwl");
+    ApplyDelta(old_tile.output_path, by_delta.delta_path, applied, 1);
+    EXPECT_EQ(test::ReadBytes(applied), test::ReadBytes(by_delta.output_path));
+    // The tile's own delta does not apply to the index it was cut from.
+    EXPECT_THROW(ApplyDelta(old_index, by_delta.delta_path, dir_ / "wrong.cwl", 1), InputError);
+    EXPECT_FALSE(std::filesystem::exists(dir_ / "wrong.cwl"));
+  }
+
+  // Refusals, each writing nothing.
+  IndexExtractOptions options;
+  options.index_path = dir_ / "grown_full.cwl";
+  options.output_path = dir_ / "refused.cwl";
+  options.delta_path = dir_ / "refused.cwld";
+  const auto message = [&] {
+    try {
+      ExtractIndex(options);
+    } catch (const InputError& error) {
+      return std::string(error.what());
+    }
+    return std::string("(no error)");
+  };
+  EXPECT_EQ(message(), "extract: --delta needs --parent-tile (the tile the delta changes)");
+  options.parent_tile_path = dir_ / "old_full.cwl";
+  EXPECT_EQ(message(), options.parent_tile_path.string() +
+                           ": not a tile (cwloc-index extract); --parent-tile takes one");
+  options.parent_tile_path = dir_ / "old_tile_compact.cwl";
+  EXPECT_EQ(message(), options.parent_tile_path.string() +
+                           ": cut from an index that stores descriptors otherwise (full or "
+                           "compact, code size); send the tile whole");
+  EXPECT_FALSE(std::filesystem::exists(options.output_path));
+  EXPECT_FALSE(std::filesystem::exists(options.delta_path));
 }
 
 TEST_F(IndexUpdateTest, RefusesAModelWhoseOldPosesMovedUnlessAskedToRebuild) {
