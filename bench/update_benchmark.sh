@@ -3,7 +3,7 @@
 # time, memory and delta size on a generated city grown by 1 % and 10 %.
 #
 #   bench/update_benchmark.sh WORKDIR [--sets herz_jesu_p25,sceaux_castle,fox_video]
-#                             [--held 0.25] [--seeds 5] [--city DIR]
+#                             [--held 0.25] [--seeds 5] [--city DIR [--compact]]
 #
 # Real sets (../shared/data/NAME): the database without the queries; the mapping model without
 # its last --held share of images (colmap image_deleter) is the old model, from which `colmap
@@ -14,7 +14,8 @@
 # indexes and --seed 1..--seeds: localized queries and median position error per index.
 # --city DIR (a cwloc-synth output, e.g. --views 10000000): the model without its last 1 % and
 # 10 % of images (by id: whole blocks, like a new district) indexed, updated to the whole city
-# and the whole city indexed, each under /usr/bin/time, in one run.
+# and the whole city indexed, each under /usr/bin/time, in one run; --compact: compact indexes
+# (cwloc-index build --compact), in WORKDIR/city_compact.
 # Binaries come from $CWLOC_BIN (default: build/bin of this checkout); colmap from PATH.
 set -euo pipefail
 top="$(cd "$(dirname "$0")/.." && pwd)"
@@ -22,7 +23,7 @@ bin="${CWLOC_BIN:-$top/build/bin}"
 me="update_benchmark.sh"
 die() { echo "$me: error: $*" >&2; exit 1; }
 usage() {
-  echo "usage: $me WORKDIR [--sets A,B] [--held 0.25] [--seeds 5] [--city DIR]" >&2
+  echo "usage: $me WORKDIR [--sets A,B] [--held 0.25] [--seeds 5] [--city DIR [--compact]]" >&2
   exit 2
 }
 [ $# -ge 1 ] || usage
@@ -32,12 +33,14 @@ sets="herz_jesu_p25,sceaux_castle,fox_video"
 held=0.25
 seeds=5
 city=""
+compact=()
 while [ $# -gt 0 ]; do
   case "$1" in
     --sets) [ $# -ge 2 ] || usage; sets="$2"; shift 2 ;;
     --held) [ $# -ge 2 ] || usage; held="$2"; shift 2 ;;
     --seeds) [ $# -ge 2 ] || usage; seeds="$2"; shift 2 ;;
     --city) [ $# -ge 2 ] || usage; city="$2"; shift 2 ;;
+    --compact) compact=(--compact); shift ;;
     *) usage ;;
   esac
 done
@@ -115,8 +118,9 @@ for name in "${set_names[@]}"; do
   done
 done
 
+city_out="$work/city${compact:+_compact}"
 if [ -n "$city" ]; then
-  out="$work/city"
+  out="$city_out"
   mkdir -p "$out"
   model="$city/mapping_model/bin"
   colmap model_analyzer --path "$model" >"$out/model.txt" 2>&1
@@ -146,9 +150,11 @@ PY
         --image_ids_path "$out/held_$percent.txt" >"$out/image_deleter_$percent.log" 2>&1
     fi
     [ -f "$out/old_$percent.cwl" ] || timed "build_old_$percent" "$bin/cwloc-index" build \
-      --model "$out/old_$percent" --database "$city/database.db" -o "$out/old_$percent.cwl"
+      "${compact[@]}" --model "$out/old_$percent" --database "$city/database.db" \
+      -o "$out/old_$percent.cwl"
   done
-  timed build_full "$bin/cwloc-index" build --model "$model" --database "$city/database.db" -o "$out/full.cwl"
+  timed build_full "$bin/cwloc-index" build "${compact[@]}" --model "$model" \
+    --database "$city/database.db" -o "$out/full.cwl"
   for percent in 1 10; do
     timed "update_$percent" "$bin/cwloc-index" update --index "$out/old_$percent.cwl" --model "$model" \
       --database "$city/database.db" -o "$out/updated_$percent.cwl" --delta "$out/grown_$percent.cwld" --json
@@ -160,9 +166,9 @@ PY
   done
 fi
 
-python3 - "$work" "$sets" "$seeds" "$city" <<'PY'
+python3 - "$work" "$sets" "$seeds" "$city" "$city_out" <<'PY'
 import json, os, statistics, sys
-work, seeds, city = sys.argv[1], int(sys.argv[3]), sys.argv[4]
+work, seeds, city, city_out = sys.argv[1], int(sys.argv[3]), sys.argv[4], sys.argv[5]
 sets = [name for name in sys.argv[2].split(",") if name]
 def time_of(path):
     seconds, kb = open(path).read().split()
@@ -194,7 +200,7 @@ for name in sets:
           f"{'yes' if a.get('VNND') == b.get('VNND') else 'NO'} | {localized['updated']} / {localized['full']} | "
           f"{medians['updated']:.4g} / {medians['full']:.4g} | {medians['updated'] / medians['full']:.3f} |")
 if city:
-    out = os.path.join(work, "city")
+    out = city_out
     full_s, full_mb = time_of(f"{out}/build_full.time")
     print()
     print(f"Full build of the city: {full_s:.1f} s, {full_mb:.0f} MB peak")

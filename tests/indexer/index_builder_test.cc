@@ -7,7 +7,6 @@
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
-#include <ranges>
 #include <set>
 
 #include "format/index.h"
@@ -177,9 +176,10 @@ TEST_F(IndexBuilderTest, CompactIndexCodesEachPointsMeanDescriptorAndKeepsPointI
   EXPECT_NO_THROW(index.file().VerifyChecksums());
   EXPECT_EQ(index.file().header().format_minor, 5);
   EXPECT_EQ(nlohmann::json::parse(index.manifest_json()).at("format_version"), "1.5");
-  ASSERT_EQ(index.point_ids().size(), model_.points3D.size());
-  EXPECT_TRUE(std::equal(index.point_ids().begin(), index.point_ids().end(),
-                         std::views::keys(model_.points3D).begin()));
+  std::vector<uint64_t> ids;
+  for (const auto& [id, point] : model_.points3D) ids.push_back(id);
+  EXPECT_THAT(std::vector<uint64_t>(index.point_ids().begin(), index.point_ids().end()),
+              testing::ElementsAreArray(ids));
   EXPECT_EQ(nlohmann::json::parse(index.manifest_json())
                 .at("build_parameters")
                 .at("descriptors")
