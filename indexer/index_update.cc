@@ -387,6 +387,7 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
       delta_child.point_colors = child.point_colors;
       delta_child.codes = codes;
       IndexDelta delta = MakeDelta(parent, delta_child);
+      report.neighbor_distances_changed = delta.view_neighbor_changes.size();
       report.points_moved = delta.point_moves.size();
       // The delta holds the new rows; the child's come from it and the parent, as on a device.
       std::vector<uint8_t>().swap(child.descriptors);

@@ -157,6 +157,11 @@ TEST_F(IndexUpdateTest, HoldsWhatAFullBuildOfTheGrownModelHoldsAndApplyRebuildsI
   EXPECT_GT(report.views_added, 0u);
   ExpectSameAsFullBuild(options.output_path, full_index);
   ExpectEveryRowFindsItself(options.output_path);
+  // The report counts what the delta carries.
+  const IndexDelta delta = ReadDelta(options.delta_path);
+  EXPECT_EQ(report.neighbor_distances_changed, delta.view_neighbor_changes.size());
+  EXPECT_EQ(report.points_moved, delta.point_moves.size());
+  EXPECT_EQ(report.views_added, delta.new_view_points.size());
 
   const Index updated = Index::Open(options.output_path);
   const auto manifest = nlohmann::json::parse(updated.manifest_json());
@@ -274,6 +279,10 @@ TEST_F(IndexUpdateTest, ACompactIndexCodesNewPointsWithItsCodebookAndKeepsPvnnEx
   EXPECT_EQ(report.images_added, 3u);
   EXPECT_GT(report.points_added, 0u);
   EXPECT_GT(report.points_recoded, 0u);  // old points the new images see
+  const IndexDelta delta = ReadDelta(options.delta_path);
+  EXPECT_EQ(report.neighbor_distances_changed, delta.view_neighbor_changes.size());
+  EXPECT_GT(report.neighbor_distances_changed, 0u);
+  EXPECT_EQ(report.points_added + report.points_recoded, delta.new_points.size());
   ExpectCompactAndExact(options.output_path, old_index, model_dir_, database_path_);
   ExpectEveryRowFindsItself(options.output_path);
   ApplyDelta(old_index, options.delta_path, dir_ / "applied.cwl", 1);
