@@ -7,6 +7,7 @@
 #include "base/error.h"
 #include "base/stopwatch.h"
 #include "delta/covisibility.h"
+#include "delta/make_delta.h"
 #include "delta/tracks.h"
 #include "format/index_contents.h"
 #include "format/xxhash64.h"
@@ -316,29 +317,22 @@ void AppliedDelta::ComposeCodes(const Index& parent, const IndexDelta& delta,
   Child& child = *child_;
   const IndexPointOrigin origin = parent.point_origin();
   const DescriptorCodes& parent_codes = parent.codes();
-  const uint32_t code_bytes = parent_codes.code_bytes;
   std::vector<bool> moved(child.points.size(), false);
   for (const PointMove& move : delta.point_moves) moved[move.row] = true;
   child.point_offsets.resize(child.points.size());
-  child.codes.resize(child.points.size() * code_bytes);
-  size_t next_new = 0;
   for (uint32_t p = 0; p < child.points.size(); ++p) {
     const uint32_t from = parent_of_point[p];
     IndexPointOffset& offset = child.point_offsets[p];
     offset.first_track = child.points[p].first_track;
-    if (from != kRemovedRow && !moved[p]) {
-      std::memcpy(offset.offset, parent.point_offsets()[from].offset, sizeof(offset.offset));
-    } else {
-      for (int i = 0; i < 3; ++i) offset.offset[i] = float(child.points[p].xyz[i] - origin.xyz[i]);
-    }
-    const uint8_t* code = from != kRemovedRow ? parent_codes.Code(from)
-                                              : &delta.new_point_codes[next_new++ * code_bytes];
-    std::memcpy(&child.codes[size_t(p) * code_bytes], code, code_bytes);
+    const std::array<float, 3> moved_to = OffsetFrom(origin, child.points[p]);
+    std::memcpy(
+        offset.offset,
+        from != kRemovedRow && !moved[p] ? parent.point_offsets()[from].offset : moved_to.data(),
+        sizeof(offset.offset));
   }
-  const DescriptorCodes codes{parent_codes.codebook, child.codes, code_bytes};
-  child.decoded.resize(child.points.size() * kDescriptorBytes);
-  for (size_t p = 0; p < child.points.size(); ++p)
-    codes.Decode(p, &child.decoded[p * kDescriptorBytes]);
+  child.codes = ChildCodes(parent_codes, parent_of_point, delta.new_point_codes);
+  child.decoded =
+      DescriptorCodes{parent_codes.codebook, child.codes, parent_codes.code_bytes}.DecodeAll();
 }
 
 AppliedDelta::~AppliedDelta() = default;

@@ -37,6 +37,21 @@ bool PointMoved(const Index& parent, uint32_t parent_point, const IndexPoint& ch
                      sizeof(child_point.xyz)) != 0;
 }
 
+std::vector<uint8_t> ChildCodes(const DescriptorCodes& parent,
+                                std::span<const uint32_t> parent_of_point,
+                                std::span<const uint8_t> new_codes) {
+  const uint32_t code_bytes = parent.code_bytes;
+  std::vector<uint8_t> codes(parent_of_point.size() * code_bytes);
+  size_t next_new = 0;
+  for (size_t p = 0; p < parent_of_point.size(); ++p) {
+    const uint32_t from = parent_of_point[p];
+    const uint8_t* code =
+        from != kRemovedRow ? parent.Code(from) : &new_codes[next_new++ * code_bytes];
+    std::memcpy(&codes[p * code_bytes], code, code_bytes);
+  }
+  return codes;
+}
+
 IndexDelta MakeDelta(const Index& parent, const DeltaChild& child) {
   IndexDelta delta;
   delta.header.parent_checksum = parent.file().header().header_checksum;

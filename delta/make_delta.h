@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <span>
 #include <string_view>
+#include <vector>
 
 #include "delta/delta_file.h"
 #include "format/index.h"
@@ -38,6 +39,12 @@ bool PointMoved(const Index& parent, uint32_t parent_point, const IndexPoint& ch
 
 // A compact child point's offset from the parent's origin, as apply stores it.
 std::array<float, 3> OffsetFrom(const IndexPointOrigin& origin, const IndexPoint& point);
+
+// A compact child's codes (points x code bytes): the parent's for a kept point, the next of
+// `new_codes` for a new one (kRemovedRow in `parent_of_point`), in row order.
+std::vector<uint8_t> ChildCodes(const DescriptorCodes& parent,
+                                std::span<const uint32_t> parent_of_point,
+                                std::span<const uint8_t> new_codes);
 
 // The delta's rows and small sections; its header names the parent.
 IndexDelta MakeDelta(const Index& parent, const DeltaChild& child);

@@ -170,9 +170,8 @@ std::vector<float> CompactNeighborDistances(const Index& parent, ModelViews& chi
     if (affected[child.view_points[w]]) computed[cluster_of_view(w)] = true;
   *clusters_computed = size_t(std::count(computed.begin(), computed.end(), true));
 
-  const DescriptorCodes child_codes{parent.codes().codebook, codes, parent.codes().code_bytes};
-  std::vector<uint8_t> decoded(num_points * kDescriptorBytes);
-  for (size_t q = 0; q < num_points; ++q) child_codes.Decode(q, &decoded[q * kDescriptorBytes]);
+  const std::vector<uint8_t> decoded =
+      DescriptorCodes{parent.codes().codebook, codes, parent.codes().code_bytes}.DecodeAll();
   std::vector<float> distances =
       ComputePointNeighborDistances(&child, decoded, clustering, threads, &computed);
   for (uint32_t q = 0; q < num_points; ++q) {
@@ -273,17 +272,9 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
       std::vector<uint8_t> codes;
       if (coded) {
         const DescriptorCodes& parent_codes = parent.codes();
-        const uint32_t code_bytes = parent_codes.code_bytes;
-        const std::vector<uint8_t> new_codes = CodePointsWithCodebook(
-            child, new_point_rows, parent_codes.codebook, code_bytes, threads);
-        codes.resize(child.points.size() * code_bytes);
-        size_t next_new = 0;
-        for (uint32_t p = 0; p < child.points.size(); ++p) {
-          const uint32_t from = parent_of_child_point[p];
-          const uint8_t* code =
-              from != kRemovedRow ? parent_codes.Code(from) : &new_codes[next_new++ * code_bytes];
-          std::memcpy(&codes[size_t(p) * code_bytes], code, code_bytes);
-        }
+        codes = ChildCodes(parent_codes, parent_of_child_point,
+                           CodePointsWithCodebook(child, new_point_rows, parent_codes.codebook,
+                                                  parent_codes.code_bytes, threads));
       }
 
       // Images whose views changed their points change their clusters' v_NN.

@@ -61,9 +61,7 @@ PointCodes CodePointDescriptors(const ModelViews& views, uint32_t code_bytes, ui
   out.codes.resize(num_points * code_bytes);
   ParallelFor(num_points, num_threads,
               [&](size_t p) { quantizer.Encode(&means[p * kDims], &out.codes[p * code_bytes]); });
-  const DescriptorCodes codes{out.codebook, out.codes, code_bytes};
-  out.decoded.resize(num_points * kDims);
-  for (size_t p = 0; p < num_points; ++p) codes.Decode(p, &out.decoded[p * kDims]);
+  out.decoded = DescriptorCodes{out.codebook, out.codes, code_bytes}.DecodeAll();
   return out;
 }
 

@@ -3,6 +3,7 @@
 #include <cstdint>
 #include <cstring>
 #include <span>
+#include <vector>
 
 namespace cwloc {
 
@@ -40,6 +41,13 @@ struct DescriptorCodes {
       default:
         return DecodeParts<32>(Code(row), out);  // 4, the only other valid size
     }
+  }
+
+  // Every row decoded: NumRows() x 128 bytes (a kd-forest's rows over the codes).
+  std::vector<uint8_t> DecodeAll() const {
+    std::vector<uint8_t> out(NumRows() * kDims);
+    for (size_t row = 0; row < NumRows(); ++row) Decode(row, &out[row * kDims]);
+    return out;
   }
 
  private:
