@@ -188,11 +188,8 @@ nlohmann::ordered_json RegionJson(const IndexExtractOptions& options) {
   return {{"near", near}};
 }
 
-// The parent tile's region, when the extract names none.
-void RegionOfParentTile(const nlohmann::ordered_json& manifest, const std::string& name,
-                        IndexExtractOptions* options) {
-  if (!manifest.contains("extracted"))
-    throw InputError(name + ": not a tile (cwloc-index extract); --parent-tile takes one");
+// The parent tile's region (its manifest's `extracted`), when the extract names none.
+void RegionOfParentTile(const nlohmann::ordered_json& manifest, IndexExtractOptions* options) {
   const auto& region = manifest["extracted"]["region"];
   if (region.contains("images")) {
     options->images_file = region["images"].get<std::string>();
@@ -208,11 +205,10 @@ void RegionOfParentTile(const nlohmann::ordered_json& manifest, const std::strin
 }
 
 // The new tile as the parent tile and a delta: views matched within each image by point id (and
-// descriptor, and keypoint), points by id (and, compact, code). Writes both; returns the
-// child's kd-forest node count.
-size_t WriteTileByDelta(const IndexExtractOptions& options, const Index& old_tile, const Tile& tile,
-                        const IndexPointOrigin& origin, nlohmann::ordered_json manifest,
-                        IndexExtractReport* report) {
+// descriptor, and keypoint), points by id (and, compact, code). Writes both.
+void WriteTileByDelta(const IndexExtractOptions& options, const Index& old_tile, const Tile& tile,
+                      const IndexPointOrigin& origin, nlohmann::ordered_json manifest,
+                      IndexExtractReport* report) {
   const std::string old_name = options.parent_tile_path.string();
   const bool coded = old_tile.coded();
   if (old_tile.point_ids().empty() || tile.point_ids.empty()) {
@@ -316,7 +312,6 @@ size_t WriteTileByDelta(const IndexExtractOptions& options, const Index& old_til
   WriteDelta(options.delta_path, delta);
   report->delta_bytes = std::filesystem::file_size(options.delta_path);
   report->parent_tile_views = old_tile.num_views();
-  return applied.num_kd_nodes();
 }
 
 }  // namespace
@@ -335,10 +330,11 @@ IndexExtractReport ExtractIndex(const IndexExtractOptions& given) {
         nlohmann::ordered_json::parse(old_tile->manifest_json(), nullptr, false);
     if (old_manifest.is_discarded())
       throw InputError(options.parent_tile_path.string() + ": section 'MANI' is not valid JSON");
-    if (!options.near && options.images_file.empty())
-      RegionOfParentTile(old_manifest, options.parent_tile_path.string(), &options);
-    else if (!old_manifest.contains("extracted"))
-      RegionOfParentTile(old_manifest, options.parent_tile_path.string(), &options);  // refuses
+    if (!old_manifest.contains("extracted")) {
+      throw InputError(options.parent_tile_path.string() +
+                       ": not a tile (cwloc-index extract); --parent-tile takes one");
+    }
+    if (!options.near && options.images_file.empty()) RegionOfParentTile(old_manifest, &options);
   } else if (!options.delta_path.empty()) {
     throw InputError("extract: --delta needs --parent-tile (the tile the delta changes)");
   }
