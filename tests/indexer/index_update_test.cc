@@ -288,6 +288,22 @@ TEST_F(IndexUpdateTest, ACompactIndexCodesNewPointsWithItsCodebookAndKeepsPvnnEx
   ApplyDelta(old_index, options.delta_path, dir_ / "applied.cwl", 1);
   EXPECT_EQ(test::ReadBytes(dir_ / "applied.cwl"), test::ReadBytes(options.output_path));
 
+  // A delta without the compact parent's codes (as a full index's would be) is refused.
+  IndexDelta without_codes = delta;
+  without_codes.code_bytes = 0;
+  without_codes.new_point_codes.clear();
+  WriteDelta(dir_ / "without_codes.cwld", without_codes);
+  try {
+    ApplyDelta(old_index, dir_ / "without_codes.cwld", dir_ / "refused.cwl", 1);
+    FAIL() << "applied a delta without codes to a compact index";
+  } catch (const InputError& error) {
+    EXPECT_EQ(std::string(error.what()), (dir_ / "without_codes.cwld").string() +
+                                             ": the delta's point codes are of 0 bytes, " +
+                                             old_index.string() +
+                                             "'s of 8 (0: a full index, which stores descriptors)");
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "refused.cwl"));
+
   const std::set<image_t> removed = {std::next(model_.images.begin(), 2)->first};
   std::ofstream(dir_ / "remove.txt") << model_.images.at(*removed.begin()).name << "\n";
   IndexUpdateOptions removal = Update(options.output_path, model_dir_, "removed");
