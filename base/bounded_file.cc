@@ -70,41 +70,46 @@ std::optional<uint64_t> CheckInputFile(const std::filesystem::path& path, const 
   return static_cast<uint64_t>(st.st_size);
 }
 
-std::vector<uint8_t> ReadFileBounded(const std::filesystem::path& path, const InputKind& kind) {
+void ReadFileInChunks(const std::filesystem::path& path, const InputKind& kind,
+                      const std::function<void(std::span<const uint8_t>)>& consume) {
   CheckInputFile(path, kind);
   // O_NONBLOCK: a path replaced by a pipe since the check must not block the open.
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NOCTTY | O_NONBLOCK);
   if (fd < 0) throw InputError(path.string() + ": cannot open the file");
-  std::vector<uint8_t> bytes;
   try {
     struct stat st {};
     if (::fstat(fd, &st) != 0) throw InputError(path.string() + ": cannot read the file");
     CheckStatus(path, st, kind);
-    // Room for one byte more than the size, to see the end without growing.
-    const uint64_t cap = kind.max_bytes == kNoSizeLimit ? kNoSizeLimit : kind.max_bytes + 1;
-    bytes.resize(static_cast<size_t>(std::min<uint64_t>(st.st_size, cap - 1)) + 1);
-    size_t used = 0;
+    constexpr uint64_t kChunkBytes = uint64_t{4} << 20;
+    std::vector<uint8_t> chunk(
+        size_t(std::clamp<uint64_t>(uint64_t(st.st_size) + 1, 4096, kChunkBytes)));
+    uint64_t total = 0;
     for (;;) {
-      if (used == bytes.size()) {
-        if (used > kind.max_bytes) {
-          throw InputError(path.string() + ": more than the " + FormatFileSize(kind.max_bytes) +
-                           " limit for " + kind.what + " (it grew while being read)");
-        }
-        bytes.resize(
-            static_cast<size_t>(std::min<uint64_t>(cap, std::max<size_t>(used * 2, 4096))));
-      }
-      const ssize_t got = ::read(fd, bytes.data() + used, bytes.size() - used);
+      const ssize_t got = ::read(fd, chunk.data(), chunk.size());
       if (got < 0 && errno == EINTR) continue;
       if (got < 0) throw InputError(path.string() + ": cannot read the file");
       if (got == 0) break;
-      used += static_cast<size_t>(got);
+      total += uint64_t(got);
+      if (total > kind.max_bytes) {
+        throw InputError(path.string() + ": more than the " + FormatFileSize(kind.max_bytes) +
+                         " limit for " + kind.what + " (it grew while being read)");
+      }
+      consume({chunk.data(), size_t(got)});
     }
-    bytes.resize(used);
   } catch (...) {
     ::close(fd);
     throw;
   }
   ::close(fd);
+}
+
+std::vector<uint8_t> ReadFileBounded(const std::filesystem::path& path, const InputKind& kind) {
+  std::vector<uint8_t> bytes;
+  if (const std::optional<uint64_t> size = CheckInputFile(path, kind))
+    bytes.reserve(size_t(std::min(*size, kind.max_bytes)));
+  ReadFileInChunks(path, kind, [&](std::span<const uint8_t> chunk) {
+    bytes.insert(bytes.end(), chunk.begin(), chunk.end());
+  });
   return bytes;
 }
 

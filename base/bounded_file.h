@@ -8,8 +8,10 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <limits>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -69,6 +71,11 @@ std::optional<uint64_t> CheckInputFile(const std::filesystem::path& path, const 
 // otherwise. Never more than kind.max_bytes: a file that grows past it while being read (or a
 // /proc file, whose size is 0) is refused as well.
 std::vector<uint8_t> ReadFileBounded(const std::filesystem::path& path, const InputKind& kind);
+
+// The same file read in chunks of at most 4 MiB, each given to `consume` in order: for readers
+// that need the bytes once (hashing a model of gigabytes), never the whole file in memory.
+void ReadFileInChunks(const std::filesystem::path& path, const InputKind& kind,
+                      const std::function<void(std::span<const uint8_t>)>& consume);
 
 // "3.2 GB", "512 MB", "100 B": decimal units, the digits `bytes` needs to show it exceeds
 // `below` (so 1,000,000,001 bytes against 1 GB reads "1.000000001 GB").

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "base/error.h"
+#include "base/huge_pages.h"
 #include "base/stopwatch.h"
 #include "delta/covisibility.h"
 #include "delta/make_delta.h"
@@ -80,7 +81,7 @@ void CheckChangedRows(const std::vector<Change>& changes, size_t rows, const cha
 struct AppliedDelta::Child {
   // Every byte is written: no zero-filling of a gigabyte first.
   std::unique_ptr<uint8_t[]> descriptor_bytes;
-  std::span<uint8_t> descriptors;
+  std::span<const uint8_t> descriptors;  // descriptor_bytes, or the caller's
   std::vector<uint32_t> view_points;
   std::vector<ViewKeypoint> view_keypoints;
   std::vector<float> neighbor_distances;
@@ -119,7 +120,8 @@ void CheckImages(const IndexDelta& delta, size_t* num_views, const std::string& 
 }  // namespace
 
 AppliedDelta::AppliedDelta(const Index& parent, const IndexDelta& delta,
-                           const std::string& delta_name, int threads)
+                           const std::string& delta_name, int threads,
+                           std::span<const uint8_t> child_descriptors)
     : parent_(parent), delta_(delta), child_(std::make_unique<Child>()) {
   const std::string& name = delta_name;
   const FileHeader& parent_header = parent.file().header();
@@ -203,12 +205,27 @@ AppliedDelta::AppliedDelta(const Index& parent, const IndexDelta& delta,
 
   Child& child = *child_;
   const size_t descriptor_rows = coded ? 0 : child_views;
-  child.descriptor_bytes =
-      std::make_unique_for_overwrite<uint8_t[]>(descriptor_rows * kDescriptorBytes);
-  child.descriptors = {child.descriptor_bytes.get(), descriptor_rows * kDescriptorBytes};
+  // The rows composed here, unless the caller has them.
+  uint8_t* composed = nullptr;
+  if (child_descriptors.empty()) {
+    child.descriptor_bytes =
+        std::make_unique_for_overwrite<uint8_t[]>(descriptor_rows * kDescriptorBytes);
+    composed = child.descriptor_bytes.get();
+    AdviseHugePages(composed, descriptor_rows * kDescriptorBytes);
+    child.descriptors = {composed, descriptor_rows * kDescriptorBytes};
+  } else if (child_descriptors.size() != descriptor_rows * kDescriptorBytes) {
+    throw std::logic_error("AppliedDelta: the descriptors given are not the child's rows");
+  } else {
+    child.descriptors = child_descriptors;
+  }
+  ReserveOnHugePages(&child.view_points, child_views);
   child.view_points.resize(child_views);
+  ReserveOnHugePages(&child.neighbor_distances, neighbor_rows);
   child.neighbor_distances.resize(neighbor_rows);
-  if (keypoints) child.view_keypoints.resize(child_views);
+  if (keypoints) {
+    ReserveOnHugePages(&child.view_keypoints, child_views);
+    child.view_keypoints.resize(child_views);
+  }
   const std::span<const uint8_t> parent_descriptors = parent.descriptors();
   size_t next_new = 0;
   size_t next_change = 0;
@@ -217,8 +234,10 @@ AppliedDelta::AppliedDelta(const Index& parent, const IndexDelta& delta,
     uint32_t point;
     if (from == kRemovedRow) {
       if (!coded) {
-        std::memcpy(&child.descriptors[size_t(v) * kDescriptorBytes],
-                    &delta.new_descriptors[next_new * kDescriptorBytes], kDescriptorBytes);
+        if (composed) {
+          std::memcpy(composed + size_t(v) * kDescriptorBytes,
+                      &delta.new_descriptors[next_new * kDescriptorBytes], kDescriptorBytes);
+        }
         child.neighbor_distances[v] = delta.new_view_neighbors[next_new];
       }
       point = delta.new_view_points[next_new];
@@ -226,8 +245,10 @@ AppliedDelta::AppliedDelta(const Index& parent, const IndexDelta& delta,
       ++next_new;
     } else {
       if (!coded) {
-        std::memcpy(&child.descriptors[size_t(v) * kDescriptorBytes],
-                    &parent_descriptors[size_t(from) * kDescriptorBytes], kDescriptorBytes);
+        if (composed) {
+          std::memcpy(composed + size_t(v) * kDescriptorBytes,
+                      &parent_descriptors[size_t(from) * kDescriptorBytes], kDescriptorBytes);
+        }
         child.neighbor_distances[v] = parent.view_neighbor_distances()[from];
       }
       const uint32_t parent_point = parent.view_points()[from];

@@ -1,5 +1,7 @@
 #include "delta/tracks.h"
 
+#include "base/huge_pages.h"
+
 namespace cwloc {
 
 std::vector<uint32_t> TracksOfViews(std::span<const uint32_t> view_points,
@@ -12,7 +14,9 @@ std::vector<uint32_t> TracksOfViews(std::span<const uint32_t> view_points,
     points[p].track_length = first[p + 1];
     first[p + 1] += first[p];
   }
-  std::vector<uint32_t> tracks(view_points.size());
+  std::vector<uint32_t> tracks;
+  ReserveOnHugePages(&tracks, view_points.size());
+  tracks.resize(view_points.size());
   for (uint32_t v = 0; v < view_points.size(); ++v) tracks[first[view_points[v]]++] = v;
   return tracks;
 }

@@ -1,5 +1,6 @@
 #include "format/xxhash64.h"
 
+#include <algorithm>
 #include <bit>
 #include <cstring>
 
@@ -49,29 +50,58 @@ std::string HashHex(uint64_t hash) {
   return hex;
 }
 
-uint64_t XxHash64(std::span<const uint8_t> bytes, uint64_t seed) {
-  // Lengths are compared as remaining bytes, never as p + n <= end: an empty span may have a
+XxHash64Stream::XxHash64Stream(uint64_t seed)
+    : seed_(seed), lanes_{seed + kPrime1 + kPrime2, seed + kPrime2, seed, seed - kPrime1} {}
+
+void XxHash64Stream::Update(std::span<const uint8_t> bytes) {
+  // Sizes are compared as remaining bytes, never as p + n <= end: an empty span may have a
   // null data pointer, and null + n is undefined.
   const uint8_t* p = bytes.data();
-  const uint8_t* const end = p + bytes.size();
+  size_t left = bytes.size();
+  length_ += left;
+  if (left == 0) return;
+  if (buffered_ > 0) {
+    const size_t take = std::min(left, sizeof(buffer_) - buffered_);
+    std::memcpy(buffer_ + buffered_, p, take);
+    buffered_ += take;
+    p += take;
+    left -= take;
+    if (buffered_ < sizeof(buffer_)) return;
+    Stripes(buffer_, sizeof(buffer_));
+    buffered_ = 0;
+  }
+  const size_t whole = left / 32 * 32;
+  if (whole > 0) Stripes(p, whole);
+  if (left > whole) std::memcpy(buffer_, p + whole, left - whole);
+  buffered_ = left - whole;
+}
+
+void XxHash64Stream::Stripes(const uint8_t* p, size_t size) {
+  uint64_t v1 = lanes_[0], v2 = lanes_[1], v3 = lanes_[2], v4 = lanes_[3];
+  for (const uint8_t* end = p + size; p != end; p += 32) {
+    v1 = Round(v1, Load64(p));
+    v2 = Round(v2, Load64(p + 8));
+    v3 = Round(v3, Load64(p + 16));
+    v4 = Round(v4, Load64(p + 24));
+  }
+  lanes_[0] = v1, lanes_[1] = v2, lanes_[2] = v3, lanes_[3] = v4;
+}
+
+uint64_t XxHash64Stream::Digest() const {
   uint64_t h;
-  if (bytes.size() >= 32) {
-    uint64_t v1 = seed + kPrime1 + kPrime2, v2 = seed + kPrime2, v3 = seed, v4 = seed - kPrime1;
-    for (; end - p >= 32; p += 32) {
-      v1 = Round(v1, Load64(p));
-      v2 = Round(v2, Load64(p + 8));
-      v3 = Round(v3, Load64(p + 16));
-      v4 = Round(v4, Load64(p + 24));
-    }
+  if (length_ >= 32) {
+    const uint64_t v1 = lanes_[0], v2 = lanes_[1], v3 = lanes_[2], v4 = lanes_[3];
     h = RotateLeft(v1, 1) + RotateLeft(v2, 7) + RotateLeft(v3, 12) + RotateLeft(v4, 18);
     h = MergeRound(h, v1);
     h = MergeRound(h, v2);
     h = MergeRound(h, v3);
     h = MergeRound(h, v4);
   } else {
-    h = seed + kPrime5;
+    h = seed_ + kPrime5;
   }
-  h += bytes.size();
+  h += length_;
+  const uint8_t* p = buffer_;
+  const uint8_t* const end = buffer_ + buffered_;
   for (; end - p >= 8; p += 8) h = RotateLeft(h ^ Round(0, Load64(p)), 27) * kPrime1 + kPrime4;
   if (end - p >= 4) {
     h = RotateLeft(h ^ (uint64_t{Load32(p)} * kPrime1), 23) * kPrime2 + kPrime3;
@@ -84,6 +114,12 @@ uint64_t XxHash64(std::span<const uint8_t> bytes, uint64_t seed) {
   h *= kPrime3;
   h ^= h >> 32;
   return h;
+}
+
+uint64_t XxHash64(std::span<const uint8_t> bytes, uint64_t seed) {
+  XxHash64Stream stream(seed);
+  stream.Update(bytes);
+  return stream.Digest();
 }
 
 }  // namespace cwloc

@@ -380,8 +380,6 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
       IndexDelta delta = MakeDelta(parent, delta_child);
       report.neighbor_distances_changed = delta.view_neighbor_changes.size();
       report.points_moved = delta.point_moves.size();
-      // The delta holds the new rows; the child's come from it and the parent, as on a device.
-      std::vector<uint8_t>().swap(child.descriptors);
       report.seconds_neighbor_distances = stage.Seconds();
 
       // The kd-forest's rows: views, or a compact index's points (new and re-coded ones).
@@ -391,7 +389,10 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
                      coded ? new_point_rows.size() : report.views_added, report.images_added,
                      report.images_removed, &delta.header);
       report.forest_rebuilt = next.forest_rebuilt;
-      const AppliedDelta applied(parent, delta, "the update", threads);
+      // The child's other rows come from the delta and the parent, as on a device; a compact
+      // child stores no view descriptors.
+      if (coded) std::vector<uint8_t>().swap(child.descriptors);
+      const AppliedDelta applied(parent, delta, "the update", threads, child.descriptors);
       report.seconds_apply = stage.Seconds();
       stage.Restart();
 

@@ -7,6 +7,7 @@
 
 #include "base/bounded_file.h"
 #include "base/error.h"
+#include "base/huge_pages.h"
 #include "base/progress.h"
 #include "camera/camera_models.h"
 #include "delta/tracks.h"
@@ -30,6 +31,34 @@ IndexCamera ToIndexCamera(const colmap::Camera& camera) {
   return out;
 }
 
+constexpr uint32_t kNoPoint = UINT32_MAX;
+
+// A model point's row from its COLMAP id (`ids` ascending): a table indexed by id where the ids
+// are dense, as COLMAP numbers them; a hash map where they are not. A city's 10.8M views looked
+// up in a hash map took 2 s.
+class PointIndexOfId {
+ public:
+  explicit PointIndexOfId(std::span<const point3D_t> ids) {
+    const point3D_t largest = ids.empty() ? 0 : ids.back();
+    if (largest < 4 * uint64_t(ids.size()) + 1024) {
+      table_.assign(size_t(largest) + 1, kNoPoint);
+      for (uint32_t p = 0; p < ids.size(); ++p) table_[ids[p]] = p;
+    } else {
+      map_.reserve(ids.size());
+      for (uint32_t p = 0; p < ids.size(); ++p) map_[ids[p]] = p;
+    }
+  }
+  uint32_t operator()(point3D_t id) const {
+    if (!table_.empty() || map_.empty()) return id < table_.size() ? table_[id] : kNoPoint;
+    const auto found = map_.find(id);
+    return found == map_.end() ? kNoPoint : found->second;
+  }
+
+ private:
+  std::vector<uint32_t> table_;
+  std::unordered_map<point3D_t, uint32_t> map_;
+};
+
 }  // namespace
 
 ModelViews GatherModelViews(const colmap::Reconstruction& model,
@@ -45,21 +74,23 @@ ModelViews GatherModelViews(const colmap::Reconstruction& model,
   }
 
   // Point index of every observed point, in id order; tracks are filled after the views.
-  std::unordered_map<point3D_t, uint32_t> point_index;
-  point_index.reserve(model.points3D.size());
+  const size_t num_points = model.points3D.size();
+  ReserveOnHugePages(&views.points, num_points);
+  ReserveOnHugePages(&views.point_ids, num_points);
+  ReserveOnHugePages(&views.point_colors, num_points);
   for (const auto& [point_id, point] : model.points3D) {
-    point_index[point_id] = static_cast<uint32_t>(views.points.size());
     IndexPoint p{};
     std::copy(point.xyz.begin(), point.xyz.end(), p.xyz);
     views.points.push_back(p);
     views.point_ids.push_back(point_id);
     views.point_colors.push_back({{point.color[0], point.color[1], point.color[2]}});
   }
+  const PointIndexOfId point_index(views.point_ids);
 
   const size_t total_views = model.NumObservations();
-  views.descriptors.reserve(total_views * kDescriptorBytes);
-  views.view_points.reserve(total_views);
-  views.view_keypoints.reserve(total_views);
+  ReserveOnHugePages(&views.descriptors, total_views * kDescriptorBytes);
+  ReserveOnHugePages(&views.view_points, total_views);
+  ReserveOnHugePages(&views.view_keypoints, total_views);
 
   Progress progress("reading descriptors", model.images.size());
   for (const auto& [image_id, image] : model.images) {
@@ -108,13 +139,13 @@ ModelViews GatherModelViews(const colmap::Reconstruction& model,
     for (size_t i = 0; i < image.points2D.size(); ++i) {
       const colmap::Point2D& point2D = image.points2D[i];
       if (point2D.point3D_id == kInvalidPoint3DId) continue;
-      const auto point = point_index.find(point2D.point3D_id);
-      if (point == point_index.end()) {
+      const uint32_t point = point_index(point2D.point3D_id);
+      if (point == kNoPoint) {
         throw InputError("model image " + std::to_string(image_id) + " point2D " +
                          std::to_string(i) + " refers to missing 3D point " +
                          std::to_string(point2D.point3D_id));
       }
-      views.view_points.push_back(point->second);
+      views.view_points.push_back(point);
       views.view_keypoints.push_back(
           {static_cast<float>(point2D.x), static_cast<float>(point2D.y)});
       const uint8_t* row_bytes =
@@ -132,6 +163,10 @@ ModelViews GatherModelViews(const colmap::Reconstruction& model,
   // Drop points without views (none in a consistent model) and renumber.
   std::vector<uint32_t> num_views(views.points.size(), 0);
   for (uint32_t point : views.view_points) ++num_views[point];
+  if (std::find(num_views.begin(), num_views.end(), 0) == num_views.end()) {
+    views.tracks = TracksOfViews(views.view_points, views.points);
+    return views;
+  }
   std::vector<uint32_t> new_index(views.points.size(), UINT32_MAX);
   std::vector<IndexPoint> kept_points;
   std::vector<point3D_t> kept_ids;
