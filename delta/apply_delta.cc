@@ -267,9 +267,13 @@ AppliedDelta::AppliedDelta(const Index& parent, const IndexDelta& delta,
     child.view_points[v] = point;
   }
 
+  ReserveOnHugePages(&child.points, child_points);
   child.points.resize(child_points);
   if (colors) child.point_colors.resize(child_points);
-  if (ids) child.point_ids.resize(child_points);
+  if (ids) {
+    ReserveOnHugePages(&child.point_ids, child_points);
+    child.point_ids.resize(child_points);
+  }
   next_new = 0;
   for (uint32_t p = 0; p < child_points; ++p) {
     const uint32_t from = points.child_to_parent[p];

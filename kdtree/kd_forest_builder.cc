@@ -9,6 +9,7 @@
 #include <string>
 #include <thread>
 
+#include "base/huge_pages.h"
 #include "base/prefetch.h"
 #include "base/split_mix64.h"
 
@@ -399,6 +400,7 @@ KdForest BuildKdForest(std::span<const uint8_t> descriptors, const KdForestBuild
   if (num_threads == 0) num_threads = std::max(1u, std::thread::hardware_concurrency());
 
   KdForest forest;
+  ReserveOnHugePages(&forest.leaves, n * num_trees);
   forest.leaves.resize(n * num_trees);
   for (uint32_t t = 0; t < num_trees; ++t) {
     for (uint64_t i = 0; i < n; ++i) forest.leaves[t * n + i] = uint32_t(i);
@@ -490,7 +492,7 @@ KdForest BuildKdForest(std::span<const uint8_t> descriptors, const KdForestBuild
     if (cursor > std::numeric_limits<uint32_t>::max()) {
       throw std::length_error("BuildKdForest: more than 2^32 nodes");
     }
-    forest.nodes.reserve(cursor);
+    ReserveOnHugePages(&forest.nodes, cursor);
     for (size_t e = 0; e < top.size(); ++e) {
       if (top[e].job < 0) {
         KdNode node = top[e].node;

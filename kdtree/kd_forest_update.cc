@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "base/huge_pages.h"
 #include "base/parallel_for.h"
 #include "base/split_mix64.h"
 
@@ -122,6 +123,7 @@ KdForest UpdateKdForest(const KdForestView& parent, const KdForestChange& change
   }
   KdForest out;
   const size_t num_trees = parent.roots.size();
+  ReserveOnHugePages(&out.leaves, num_trees * n);
   out.leaves.resize(num_trees * n);
   std::vector<std::vector<KdNode>> trees(num_trees);
   ParallelFor(num_trees, num_threads, [&](size_t t, int) {
@@ -131,6 +133,9 @@ KdForest UpdateKdForest(const KdForestView& parent, const KdForestChange& change
                         t * n);
     updater.Emit(parent.roots[t], inserted.data(), inserted.data() + inserted.size());
   });
+  size_t num_nodes = 0;
+  for (const std::vector<KdNode>& tree : trees) num_nodes += tree.size();
+  ReserveOnHugePages(&out.nodes, num_nodes);
   for (std::vector<KdNode>& tree : trees) {
     const auto base = uint32_t(out.nodes.size());
     out.roots.push_back(base);
