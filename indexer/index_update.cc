@@ -268,9 +268,20 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
           throw UpdateRefused(options.model_dir.string() + text + kFullBuildNeeded);
         }
       }
+      std::vector<uint32_t> image_of_view(child.num_views());
+      for (uint32_t i = 0; i < child.images.size(); ++i)
+        std::fill_n(image_of_view.begin() + child.images[i].first_view, child.images[i].num_views,
+                    i);
       // A compact index's codes: the parent's, and its codebook's for new and re-coded points.
       std::vector<uint8_t> codes;
       if (coded) {
+        for (uint32_t q : new_point_rows) {
+          const IndexPoint& point = child.points[q];
+          for (uint32_t t = point.first_track; t < point.first_track + point.track_length; ++t) {
+            if (grown.unread_images.count(child.images[image_of_view[child.tracks[t]]].image_id))
+              throw std::logic_error("update: a point coded anew is seen by an image not read");
+          }
+        }
         const DescriptorCodes& parent_codes = parent.codes();
         codes = ChildCodes(parent_codes, parent_of_child_point,
                            CodePointsWithCodebook(child, new_point_rows, parent_codes.codebook,
@@ -278,10 +289,6 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
       }
 
       // Images whose views changed their points change their clusters' v_NN.
-      std::vector<uint32_t> image_of_view(child.num_views());
-      for (uint32_t i = 0; i < child.images.size(); ++i)
-        std::fill_n(image_of_view.begin() + child.images[i].first_view, child.images[i].num_views,
-                    i);
       for (uint32_t w = 0; w < child.num_views(); ++w) {
         const uint32_t v = parent_of_child_view[w];
         if (v != kRemovedRow &&

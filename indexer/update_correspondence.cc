@@ -6,6 +6,7 @@
 #include <cstring>
 #include <memory>
 #include <unordered_map>
+#include <unordered_set>
 
 #include "base/bounded_file.h"
 #include "colmap/reconstruction_io.h"
@@ -35,6 +36,59 @@ const uint8_t* Row(std::span<const uint8_t> descriptors, size_t row) {
   return descriptors.data() + row * kDescriptorBytes;
 }
 
+// A compact index codes a point by its views' mean descriptor, so its update reads the
+// descriptors of the images that see a point it may code anew: a new point, an old one whose
+// track length changes, or one seen by a new image or an old image whose observations changed
+// (a superset of the points RecodeChangedPoints re-codes: an old point seen only by unchanged
+// images, as often as before, keeps every view). Returns the other images' ids, `removed`
+// (--remove-images) aside, whose views are counted out of the tracks.
+std::unordered_set<image_t> ImagesWithoutCodedPoints(const colmap::Reconstruction& model,
+                                                     const Index& parent,
+                                                     const std::unordered_set<image_t>& removed) {
+  std::unordered_map<uint32_t, uint32_t> parent_row_of_id;
+  for (uint32_t i = 0; i < parent.images().size(); ++i)
+    parent_row_of_id[parent.images()[i].image_id] = i;
+  std::unordered_set<image_t> changed;  // new, or observing other points than in the index
+  for (const auto& [image_id, image] : model.images) {
+    const auto found = parent_row_of_id.find(uint32_t(image_id));
+    bool same = found != parent_row_of_id.end();
+    if (same) {
+      const IndexImage& old_image = parent.images()[found->second];
+      uint32_t k = 0;
+      for (const colmap::Point2D& point2D : image.points2D) {
+        if (point2D.point3D_id == kInvalidPoint3DId) continue;
+        same = same && k < old_image.num_views &&
+               parent.point_ids()[parent.view_points()[old_image.first_view + k]] ==
+                   point2D.point3D_id;
+        ++k;
+      }
+      same = same && k == old_image.num_views;
+    }
+    if (!same) changed.insert(image_id);
+  }
+  const std::span<const uint64_t> parent_ids = parent.point_ids();
+  std::unordered_set<image_t> read;
+  uint32_t p = 0;  // both ascend by id
+  for (const auto& [point_id, point] : model.points3D) {
+    while (p < parent_ids.size() && parent_ids[p] < point_id) ++p;
+    const bool old = p < parent_ids.size() && parent_ids[p] == point_id;
+    size_t live = 0;
+    bool seen_by_changed = false;
+    for (const colmap::TrackElement& element : point.track) {
+      if (removed.count(element.image_id)) continue;
+      ++live;
+      seen_by_changed = seen_by_changed || changed.count(element.image_id);
+    }
+    if (old && !seen_by_changed && live == parent.TrackOf(p).size()) continue;
+    for (const colmap::TrackElement& element : point.track) read.insert(element.image_id);
+  }
+  std::unordered_set<image_t> unread;
+  for (const auto& [image_id, image] : model.images) {
+    if (!read.count(image_id) && !removed.count(image_id)) unread.insert(image_id);
+  }
+  return unread;
+}
+
 }  // namespace
 
 GrownModel ReadGrownModel(const IndexUpdateOptions& options, const Index& parent,
@@ -52,10 +106,35 @@ GrownModel ReadGrownModel(const IndexUpdateOptions& options, const Index& parent
   for (uint32_t i = 0; i < parent.images().size(); ++i)
     parent_row_of_id[parent.images()[i].image_id] = i;
   grown.rows_reused.assign(parent.images().size(), false);
+  // The images that --remove-images takes out, by id.
+  std::vector<ListedImage> removed_names;
+  if (!options.remove_images_file.empty())
+    removed_names = ReadImageNameList(options.remove_images_file);
+  std::unordered_set<image_t> removed;
+  {
+    std::unordered_map<std::string_view, image_t> id_of_name;
+    for (const auto& [image_id, image] : model->images) id_of_name[image.name] = image_id;
+    for (const ListedImage& image : removed_names) {
+      const auto found = id_of_name.find(image.name);
+      if (found == id_of_name.end()) {
+        throw InputError(options.remove_images_file.string() + ":" + std::to_string(image.line) +
+                         ": image '" + image.name + "' is not in the model " +
+                         options.model_dir.string());
+      }
+      removed.insert(found->second);
+    }
+  }
+  // A compact index stores no view descriptors: they come from the database, for the images
+  // that see a point coded anew; the others' rows are zeros, never read (their points keep
+  // their codes, and PVNN is computed on decoded codes).
+  if (parent.coded()) grown.unread_images = ImagesWithoutCodedPoints(*model, parent, removed);
+  size_t most_views = 0;
+  for (const auto& [image_id, image] : model->images)
+    most_views = std::max(most_views, image.points2D.size());
+  const std::vector<uint8_t> unread_rows(parent.coded() ? most_views * kDescriptorBytes : 0, 0);
   const KnownViewRows known_rows = [&](image_t image_id,
                                        std::span<const point3D_t> point_ids) -> const uint8_t* {
-    // A compact index stores no view descriptors: every image's come from the database.
-    if (parent.coded()) return nullptr;
+    if (parent.coded()) return grown.unread_images.count(image_id) ? unread_rows.data() : nullptr;
     const auto found = parent_row_of_id.find(uint32_t(image_id));
     if (found == parent_row_of_id.end()) return nullptr;
     const IndexImage& image = parent.images()[found->second];
@@ -85,21 +164,11 @@ GrownModel ReadGrownModel(const IndexUpdateOptions& options, const Index& parent
   };
   grown.views = GatherModelViews(*model, database, known_rows);
   model.reset();
-  if (!options.remove_images_file.empty()) {
+  if (!removed.empty()) {
     ModelViews& child = grown.views;
-    std::unordered_map<std::string_view, uint32_t> row_of_name;
-    for (uint32_t i = 0; i < child.images.size(); ++i)
-      row_of_name[child.ImageName(child.images[i])] = i;
     std::vector<bool> left_out(child.images.size(), false);
-    for (const ListedImage& image : ReadImageNameList(options.remove_images_file)) {
-      const auto found = row_of_name.find(image.name);
-      if (found == row_of_name.end()) {
-        throw InputError(options.remove_images_file.string() + ":" + std::to_string(image.line) +
-                         ": image '" + image.name + "' is not in the model " +
-                         options.model_dir.string());
-      }
-      left_out[found->second] = true;
-    }
+    for (uint32_t i = 0; i < child.images.size(); ++i)
+      left_out[i] = removed.count(child.images[i].image_id) != 0;
     child = WithoutImages(child, left_out);
   }
   return grown;

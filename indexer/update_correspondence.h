@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <string>
+#include <unordered_set>
 #include <vector>
 
 #include "colmap/database.h"
@@ -19,11 +20,15 @@ struct GrownModel {
   ModelViews views;
   std::string layout;             // "classic" or "rigs", as the manifest's source says
   std::vector<bool> rows_reused;  // per parent image: its view rows came from the index
+  // A compact parent's: model images whose descriptors were not read (their rows are zeros):
+  // they see no point the update may code anew.
+  std::unordered_set<image_t> unread_images;
 };
 
 // The grown model gathered as a build gathers it, but an old image whose observations are of
 // the same points in the same order keeps its view rows from the index (one in 64 is compared
-// with the database: UpdateRefused when they differ); without the images of
+// with the database: UpdateRefused when they differ); a compact parent's reads only the
+// descriptors of images that see a point it may code anew; without the images of
 // options.remove_images_file, as `colmap image_deleter` takes them out.
 GrownModel ReadGrownModel(const IndexUpdateOptions& options, const Index& parent,
                           const colmap::DatabaseReader& database);

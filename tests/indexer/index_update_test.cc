@@ -44,6 +44,31 @@ void ExpectCompactAndExact(const std::filesystem::path& path, const std::filesys
   ASSERT_EQ(views.images.size(), index.images().size());
   ASSERT_EQ(views.num_views(), index.num_views());
   ASSERT_EQ(views.points.size(), index.num_points());
+  // Each point's code is its parent's, or the codebook's of its views' mean descriptor as the
+  // database holds them (the update reads them only for the points it may code anew).
+  std::vector<uint32_t> all_points(views.points.size());
+  for (uint32_t p = 0; p < all_points.size(); ++p) all_points[p] = p;
+  const uint32_t code_bytes = index.codes().code_bytes;
+  const std::vector<uint8_t> coded_anew =
+      CodePointsWithCodebook(views, all_points, codebook, code_bytes, 2);
+  std::map<uint64_t, uint32_t> parent_row;
+  for (uint32_t p = 0; p < parent_index.num_points(); ++p)
+    parent_row[parent_index.point_ids()[p]] = p;
+  size_t anew = 0;
+  for (uint32_t p = 0; p < index.num_points(); ++p) {
+    const auto code = [&](std::span<const uint8_t> codes, uint32_t row) {
+      return codes.subspan(size_t(row) * code_bytes, code_bytes);
+    };
+    const std::span<const uint8_t> stored_code = code(index.codes().codes, p);
+    const auto same = [&](std::span<const uint8_t> other) {
+      return std::equal(stored_code.begin(), stored_code.end(), other.begin(), other.end());
+    };
+    const auto from = parent_row.find(index.point_ids()[p]);
+    if (from != parent_row.end() && same(code(parent_index.codes().codes, from->second))) continue;
+    ASSERT_TRUE(same(code(coded_anew, p))) << "point " << p;
+    ++anew;
+  }
+  EXPECT_GT(anew, 0u);
   Clustering clustering;
   for (const IndexImage& image : index.images()) {
     clustering.cluster_of_image.push_back(image.cluster);
