@@ -88,6 +88,10 @@ int RunUpdate(const IndexUpdateOptions& options, bool json) {
       report.images_changed, report.num_points, report.points_added, report.points_removed,
       report.points_moved, report.points_recoded, report.num_views, report.views_added,
       report.views_removed);
+  std::printf("descriptors read from the database for %zu of %zu images (%s)\n", report.images_read,
+              report.num_images,
+              report.coded ? "those that see a point coded anew"
+                           : "new and changed ones; the others' come from the index");
   std::printf("%.1f MB; v_NN of %zu clusters recomputed (%zu old %s changed); kd-forest %s\n",
               report.file_bytes / 1e6, report.clusters_recomputed,
               report.neighbor_distances_changed, report.coded ? "points" : "views",

@@ -222,6 +222,7 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
     ModelViews& child = grown.views;
     if (child.num_views() == 0)
       throw InputError(options.model_dir.string() + ": the model has no 3D points with views");
+    report.images_read = grown.images_read;
     report.seconds_read = stage.Seconds();
 
     stage.Restart();
@@ -493,6 +494,7 @@ nlohmann::ordered_json UpdateReportJson(const IndexUpdateOptions& options,
                     {"clusters_recomputed", report.clusters_recomputed},
                     {"neighbor_distances_changed", report.neighbor_distances_changed},
                     {"forest_rebuilt", report.forest_rebuilt}};
+  out["database"] = {{"images_read", report.images_read}};
   out["seconds"] = {{"read", report.seconds_read},
                     {"compare", report.seconds_compare},
                     {"neighbor_distances", report.seconds_neighbor_distances},

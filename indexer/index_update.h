@@ -60,6 +60,7 @@ struct IndexUpdateReport {
   size_t views_added = 0, views_removed = 0, points_added = 0, points_removed = 0;
   size_t points_moved = 0, clusters_recomputed = 0, neighbor_distances_changed = 0;
   size_t points_recoded = 0;  // a compact index's old points whose views changed: coded anew
+  size_t images_read = 0;     // model images whose descriptors were read from the database
   size_t num_images = 0, num_points = 0, num_views = 0, num_clusters = 0;
   bool forest_rebuilt = false;
   bool coded = false;  // a compact index: v_NN (and the kd-forest's rows) per point

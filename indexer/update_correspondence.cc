@@ -132,8 +132,8 @@ GrownModel ReadGrownModel(const IndexUpdateOptions& options, const Index& parent
   for (const auto& [image_id, image] : model->images)
     most_views = std::max(most_views, image.points2D.size());
   const std::vector<uint8_t> unread_rows(parent.coded() ? most_views * kDescriptorBytes : 0, 0);
-  const KnownViewRows known_rows = [&](image_t image_id,
-                                       std::span<const point3D_t> point_ids) -> const uint8_t* {
+  const auto rows_not_read = [&](image_t image_id,
+                                 std::span<const point3D_t> point_ids) -> const uint8_t* {
     if (parent.coded()) return grown.unread_images.count(image_id) ? unread_rows.data() : nullptr;
     const auto found = parent_row_of_id.find(uint32_t(image_id));
     if (found == parent_row_of_id.end()) return nullptr;
@@ -160,6 +160,11 @@ GrownModel ReadGrownModel(const IndexUpdateOptions& options, const Index& parent
       }
     }
     grown.rows_reused[found->second] = true;
+    return rows;
+  };
+  const KnownViewRows known_rows = [&](image_t image_id, std::span<const point3D_t> point_ids) {
+    const uint8_t* rows = rows_not_read(image_id, point_ids);
+    grown.images_read += rows == nullptr;
     return rows;
   };
   grown.views = GatherModelViews(*model, database, known_rows);

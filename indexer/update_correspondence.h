@@ -23,6 +23,7 @@ struct GrownModel {
   // A compact parent's: model images whose descriptors were not read (their rows are zeros):
   // they see no point the update may code anew.
   std::unordered_set<image_t> unread_images;
+  size_t images_read = 0;  // model images whose descriptors came from the database
 };
 
 // The grown model gathered as a build gathers it, but an old image whose observations are of

@@ -180,6 +180,9 @@ TEST_F(IndexUpdateTest, HoldsWhatAFullBuildOfTheGrownModelHoldsAndApplyRebuildsI
   EXPECT_EQ(report.num_views,
             Index::Open(old_index).num_views() + report.views_added - report.views_removed);
   EXPECT_GT(report.views_added, 0u);
+  // The new images' and the changed ones' descriptors come from the database, the rest from
+  // the index.
+  EXPECT_EQ(report.images_read, report.images_added + report.images_changed);
   ExpectSameAsFullBuild(options.output_path, full_index);
   ExpectEveryRowFindsItself(options.output_path);
   // The report counts what the delta carries.
@@ -304,6 +307,7 @@ TEST_F(IndexUpdateTest, ACompactIndexCodesNewPointsWithItsCodebookAndKeepsPvnnEx
   EXPECT_EQ(report.images_added, 3u);
   EXPECT_GT(report.points_added, 0u);
   EXPECT_GT(report.points_recoded, 0u);  // old points the new images see
+  EXPECT_GE(report.images_read, 3u);     // the new ones, and the old ones that see their points
   const IndexDelta delta = ReadDelta(options.delta_path);
   EXPECT_EQ(report.neighbor_distances_changed, delta.view_neighbor_changes.size());
   EXPECT_GT(report.neighbor_distances_changed, 0u);
@@ -369,6 +373,16 @@ TEST_F(IndexUpdateTest, ACompactUpdateTouchingTwoPointsComputesTheirNeighboursCl
   const IndexUpdateReport report = UpdateIndex(options);
   EXPECT_EQ(report.points_recoded, 2u);
   EXPECT_EQ(report.points_added, 0u);
+  // Only the images that see those two points are read from the database (a compact index
+  // holds no descriptors; the others' points keep their codes).
+  std::set<image_t> seeing;
+  for (const colmap::Point2D& point : grown.images.at(added).points2D) {
+    if (point.point3D_id == kInvalidPoint3DId) continue;
+    for (const colmap::TrackElement& element : grown.points3D.at(point.point3D_id).track)
+      seeing.insert(element.image_id);
+  }
+  EXPECT_EQ(report.images_read, seeing.size());
+  EXPECT_LT(report.images_read, report.num_images);
   ExpectCompactAndExact(options.output_path, old_index, grown_dir, database_path_);
 }
 
