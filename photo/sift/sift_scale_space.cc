@@ -4,10 +4,7 @@
 #include <cmath>
 #include <cstring>
 
-#if defined(__unix__)
-#include <sys/mman.h>
-#endif
-
+#include "base/huge_pages.h"
 #include "photo/sift/sift_kernels.h"
 
 namespace cwloc::sift_internal {
@@ -22,9 +19,7 @@ std::unique_ptr<float[], Plane::Free> Plane::Allocate(size_t n) {
   const size_t rounded = (bytes + alignment - 1) / alignment * alignment;
   void* p = std::aligned_alloc(alignment, rounded);
   if (!p) throw std::bad_alloc();
-#if defined(MADV_HUGEPAGE)
-  if (alignment == kHugePage) madvise(p, rounded, MADV_HUGEPAGE);  // a hint; failure is harmless
-#endif
+  if (alignment == kHugePage) AdviseHugePages(p, rounded);
   return std::unique_ptr<float[], Free>(static_cast<float*>(p));
 }
 
