@@ -36,35 +36,39 @@ const uint8_t* Row(std::span<const uint8_t> descriptors, size_t row) {
   return descriptors.data() + row * kDescriptorBytes;
 }
 
+// Whether `image` of the index observes the points `point_ids` (COLMAP ids, in point2D order),
+// one view each, as the model's image does now.
+bool ObservesAsInIndex(const Index& parent, const IndexImage& image,
+                       std::span<const point3D_t> point_ids) {
+  if (image.num_views != point_ids.size()) return false;
+  for (uint32_t k = 0; k < image.num_views; ++k) {
+    if (parent.point_ids()[parent.view_points()[image.first_view + k]] != point_ids[k])
+      return false;
+  }
+  return true;
+}
+
 // A compact index codes a point by its views' mean descriptor, so its update reads the
 // descriptors of the images that see a point it may code anew: a new point, an old one whose
 // track length changes, or one seen by a new image or an old image whose observations changed
 // (a superset of the points RecodeChangedPoints re-codes: an old point seen only by unchanged
 // images, as often as before, keeps every view). Returns the other images' ids, `removed`
 // (--remove-images) aside, whose views are counted out of the tracks.
-std::unordered_set<image_t> ImagesWithoutCodedPoints(const colmap::Reconstruction& model,
-                                                     const Index& parent,
-                                                     const std::unordered_set<image_t>& removed) {
-  std::unordered_map<uint32_t, uint32_t> parent_row_of_id;
-  for (uint32_t i = 0; i < parent.images().size(); ++i)
-    parent_row_of_id[parent.images()[i].image_id] = i;
+std::unordered_set<image_t> ImagesWithoutCodedPoints(
+    const colmap::Reconstruction& model, const Index& parent,
+    const std::unordered_map<uint32_t, uint32_t>& parent_row_of_id,
+    const std::unordered_set<image_t>& removed) {
   std::unordered_set<image_t> changed;  // new, or observing other points than in the index
+  std::vector<point3D_t> observed;
   for (const auto& [image_id, image] : model.images) {
     const auto found = parent_row_of_id.find(uint32_t(image_id));
-    bool same = found != parent_row_of_id.end();
-    if (same) {
-      const IndexImage& old_image = parent.images()[found->second];
-      uint32_t k = 0;
-      for (const colmap::Point2D& point2D : image.points2D) {
-        if (point2D.point3D_id == kInvalidPoint3DId) continue;
-        same = same && k < old_image.num_views &&
-               parent.point_ids()[parent.view_points()[old_image.first_view + k]] ==
-                   point2D.point3D_id;
-        ++k;
-      }
-      same = same && k == old_image.num_views;
+    observed.clear();
+    for (const colmap::Point2D& point2D : image.points2D) {
+      if (point2D.point3D_id != kInvalidPoint3DId) observed.push_back(point2D.point3D_id);
     }
-    if (!same) changed.insert(image_id);
+    if (found == parent_row_of_id.end() ||
+        !ObservesAsInIndex(parent, parent.images()[found->second], observed))
+      changed.insert(image_id);
   }
   const std::span<const uint64_t> parent_ids = parent.point_ids();
   std::unordered_set<image_t> read;
@@ -127,22 +131,20 @@ GrownModel ReadGrownModel(const IndexUpdateOptions& options, const Index& parent
   // A compact index stores no view descriptors: they come from the database, for the images
   // that see a point coded anew; the others' rows are zeros, never read (their points keep
   // their codes, and PVNN is computed on decoded codes).
-  if (parent.coded()) grown.unread_images = ImagesWithoutCodedPoints(*model, parent, removed);
+  if (parent.coded())
+    grown.unread_images = ImagesWithoutCodedPoints(*model, parent, parent_row_of_id, removed);
   size_t most_views = 0;
   for (const auto& [image_id, image] : model->images)
     most_views = std::max(most_views, image.points2D.size());
   const std::vector<uint8_t> unread_rows(parent.coded() ? most_views * kDescriptorBytes : 0, 0);
-  const auto rows_not_read = [&](image_t image_id,
-                                 std::span<const point3D_t> point_ids) -> const uint8_t* {
+  // An image's view rows when the database need not be read for them, else nullptr.
+  const auto rows_without_database = [&](image_t image_id,
+                                         std::span<const point3D_t> point_ids) -> const uint8_t* {
     if (parent.coded()) return grown.unread_images.count(image_id) ? unread_rows.data() : nullptr;
     const auto found = parent_row_of_id.find(uint32_t(image_id));
     if (found == parent_row_of_id.end()) return nullptr;
     const IndexImage& image = parent.images()[found->second];
-    if (image.num_views != point_ids.size()) return nullptr;
-    for (uint32_t k = 0; k < image.num_views; ++k) {
-      if (parent.point_ids()[parent.view_points()[image.first_view + k]] != point_ids[k])
-        return nullptr;
-    }
+    if (!ObservesAsInIndex(parent, image, point_ids)) return nullptr;
     const uint8_t* rows = Row(parent_descriptors, image.first_view);
     if (found->second % kVerifiedImageStride == 0) {
       const colmap::Descriptors stored = database.ReadDescriptors(image_id);
@@ -163,7 +165,7 @@ GrownModel ReadGrownModel(const IndexUpdateOptions& options, const Index& parent
     return rows;
   };
   const KnownViewRows known_rows = [&](image_t image_id, std::span<const point3D_t> point_ids) {
-    const uint8_t* rows = rows_not_read(image_id, point_ids);
+    const uint8_t* rows = rows_without_database(image_id, point_ids);
     grown.images_read += rows == nullptr;
     return rows;
   };
