@@ -106,10 +106,11 @@ void AtomicFile::Write(const void* data, size_t size) {
   }
 }
 
-void AtomicFile::CopyFrom(int source_fd, uint64_t size) {
-  loff_t offset = 0;
-  while (static_cast<uint64_t>(offset) < size) {
-    const size_t chunk = static_cast<size_t>(std::min<uint64_t>(size - offset, size_t{1} << 30));
+void AtomicFile::CopyFrom(int source_fd, uint64_t source_offset, uint64_t size) {
+  auto offset = static_cast<loff_t>(source_offset);
+  const uint64_t end = source_offset + size;
+  while (static_cast<uint64_t>(offset) < end) {
+    const size_t chunk = static_cast<size_t>(std::min<uint64_t>(end - offset, size_t{1} << 30));
     const ssize_t n = ::copy_file_range(source_fd, &offset, fd_, nullptr, chunk, 0);
     if (n > 0) continue;
     if (n < 0 && errno == EINTR) continue;
@@ -118,9 +119,9 @@ void AtomicFile::CopyFrom(int source_fd, uint64_t size) {
     break;
   }
   std::vector<char> buffer;
-  while (static_cast<uint64_t>(offset) < size) {
+  while (static_cast<uint64_t>(offset) < end) {
     if (buffer.empty()) buffer.resize(size_t{1} << 20);
-    const size_t chunk = static_cast<size_t>(std::min<uint64_t>(size - offset, buffer.size()));
+    const size_t chunk = static_cast<size_t>(std::min<uint64_t>(end - offset, buffer.size()));
     const ssize_t n = ::pread(source_fd, buffer.data(), chunk, offset);
     if (n < 0 && errno == EINTR) continue;
     if (n < 0) Fail("cannot read the content to copy", errno);

@@ -1,5 +1,7 @@
 #include "delta/apply_delta.h"
 
+#include <unistd.h>
+
 #include <cstring>
 #include <string>
 #include <vector>
@@ -79,9 +81,10 @@ void CheckChangedRows(const std::vector<Change>& changes, size_t rows, const cha
 }  // namespace
 
 struct AppliedDelta::Child {
-  // Every byte is written: no zero-filling of a gigabyte first.
+  // A full child's descriptors are the parent's kept rows and the delta's new ones, read where
+  // they are and written as runs of each. Only a forest rebuilt from scratch needs them in one
+  // array (every byte written: no zero-filling of a gigabyte first).
   std::unique_ptr<uint8_t[]> descriptor_bytes;
-  std::span<const uint8_t> descriptors;  // descriptor_bytes, or the caller's
   std::vector<uint32_t> view_points;
   std::vector<ViewKeypoint> view_keypoints;
   std::vector<float> neighbor_distances;
@@ -120,8 +123,7 @@ void CheckImages(const IndexDelta& delta, size_t* num_views, const std::string& 
 }  // namespace
 
 AppliedDelta::AppliedDelta(const Index& parent, const IndexDelta& delta,
-                           const std::string& delta_name, int threads,
-                           std::span<const uint8_t> child_descriptors)
+                           const std::string& delta_name, int threads)
     : parent_(parent), delta_(delta), child_(std::make_unique<Child>()) {
   const std::string& name = delta_name;
   const FileHeader& parent_header = parent.file().header();
@@ -204,19 +206,13 @@ AppliedDelta::AppliedDelta(const Index& parent, const IndexDelta& delta,
   }
 
   Child& child = *child_;
-  const size_t descriptor_rows = coded ? 0 : child_views;
-  // The rows composed here, unless the caller has them.
+  const bool forest_rebuilt = (header.flags & kDeltaForestRebuilt) != 0;
   uint8_t* composed = nullptr;
-  if (child_descriptors.empty()) {
+  if (!coded && forest_rebuilt) {
     child.descriptor_bytes =
-        std::make_unique_for_overwrite<uint8_t[]>(descriptor_rows * kDescriptorBytes);
+        std::make_unique_for_overwrite<uint8_t[]>(child_views * kDescriptorBytes);
     composed = child.descriptor_bytes.get();
-    AdviseHugePages(composed, descriptor_rows * kDescriptorBytes);
-    child.descriptors = {composed, descriptor_rows * kDescriptorBytes};
-  } else if (child_descriptors.size() != descriptor_rows * kDescriptorBytes) {
-    throw std::logic_error("AppliedDelta: the descriptors given are not the child's rows");
-  } else {
-    child.descriptors = child_descriptors;
+    AdviseHugePages(composed, child_views * kDescriptorBytes);
   }
   ReserveOnHugePages(&child.view_points, child_views);
   child.view_points.resize(child_views);
@@ -312,15 +308,16 @@ AppliedDelta::AppliedDelta(const Index& parent, const IndexDelta& delta,
       BuildCovisibilityGraph(images, child.points, child.tracks, child.view_points, threads);
   // The kd-forest's rows: views, or a compact index's points decoded.
   const RowMaps& rows = coded ? points : views;
-  const std::span<const uint8_t> row_descriptors =
-      coded ? std::span<const uint8_t>(child.decoded) : child.descriptors;
-  if ((header.flags & kDeltaForestRebuilt) != 0) {
+  if (forest_rebuilt) {
     KdForestBuildOptions options;
     options.num_trees = uint32_t(parent.kd_forest().NumTrees());
     options.max_leaf_size = header.forest_leaf_size;
     options.seed = header.forest_seed;
     options.num_threads = uint32_t(threads);
-    child.forest = BuildKdForest(row_descriptors, options);
+    child.forest =
+        BuildKdForest(coded ? std::span<const uint8_t>(child.decoded)
+                            : std::span<const uint8_t>(composed, child_views * kDescriptorBytes),
+                      options);
   } else {
     std::string error;
     if (!ValidateKdForest(parent.kd_forest(), &error))
@@ -329,9 +326,13 @@ AppliedDelta::AppliedDelta(const Index& parent, const IndexDelta& delta,
     for (uint32_t row = 0; row < rows.child_to_parent.size(); ++row) {
       if (rows.child_to_parent[row] == kRemovedRow) inserted.push_back(row);
     }
-    child.forest =
-        UpdateKdForest(parent.kd_forest(), {rows.parent_to_child, inserted}, row_descriptors,
-                       header.forest_leaf_size, header.forest_seed, threads);
+    const KdForestChange change{rows.parent_to_child, inserted};
+    // A full child's kept rows are read in the parent, its new ones in the delta.
+    child.forest = coded ? UpdateKdForest(parent.kd_forest(), change, child.decoded,
+                                          header.forest_leaf_size, header.forest_seed, threads)
+                         : UpdateKdForest(parent.kd_forest(), change, parent.descriptors(),
+                                          delta.new_descriptors, header.forest_leaf_size,
+                                          header.forest_seed, threads);
   }
 }
 
@@ -383,7 +384,6 @@ uint64_t AppliedDelta::Write(const std::filesystem::path& output, std::string_vi
     contents.codes = child.codes;
   } else {
     contents.points = child.points;
-    contents.descriptors = child.descriptors;
   }
   contents.tracks = child.tracks;
   contents.view_points = child.view_points;
@@ -396,6 +396,37 @@ uint64_t AppliedDelta::Write(const std::filesystem::path& output, std::string_vi
   contents.point_ids = child.point_ids;
   contents.georeference = parent.georeference();
   contents.covariance_calibration = parent.covariance_calibration();
+  // A full child's descriptors: runs of the parent's rows, copied from its file where it is
+  // still the file mapped, and the delta's new rows between them.
+  struct ClosedOnReturn {
+    int fd;
+    ~ClosedOnReturn() {
+      if (fd >= 0) ::close(fd);
+    }
+  } const parent_file{parent.coded() ? -1 : parent.file().ReopenSameFile()};
+  const int parent_fd = parent_file.fd;
+  std::vector<SectionPiece> descriptor_pieces;
+  if (!parent.coded()) {
+    const uint64_t parent_offset = parent.file().FindSection(section::kDescriptors)->offset;
+    const std::span<const uint8_t> kept = parent.descriptors();
+    const std::span<const uint8_t> added = delta.new_descriptors;
+    size_t next_added = 0;  // bytes
+    const auto add_new_rows = [&](size_t rows) {
+      if (rows == 0) return;
+      descriptor_pieces.push_back({added.subspan(next_added, rows * kDescriptorBytes)});
+      next_added += rows * kDescriptorBytes;
+    };
+    uint64_t child_row = 0;
+    for (const RowRun& run : delta.view_runs) {
+      add_new_rows(run.child_first - child_row);
+      const size_t offset = size_t(run.parent_first) * kDescriptorBytes;
+      descriptor_pieces.push_back({kept.subspan(offset, size_t(run.count) * kDescriptorBytes),
+                                   parent_fd, parent_offset + offset});
+      child_row = uint64_t(run.child_first) + run.count;
+    }
+    add_new_rows((added.size() - next_added) / kDescriptorBytes);
+    contents.descriptor_pieces = descriptor_pieces;
+  }
   const std::vector<SectionData> sections = IndexSectionsOf(contents, manifest);
   return WriteIndexFile(output, sections, kIndexContainer, 0, expected_checksum);
 }

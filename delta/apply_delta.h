@@ -20,11 +20,9 @@ namespace cwloc {
 class AppliedDelta {
  public:
   // Refuses (InputError naming `delta_name`) a delta made for another parent (a chain applied
-  // out of order) and one whose rows do not fit the parent. `child_descriptors`: the child's
-  // view descriptors when the caller holds them (the update gathered them; they are what the
-  // delta composes), borrowed instead of composed again: 1.4 GB less to fill on a city.
+  // out of order) and one whose rows do not fit the parent.
   AppliedDelta(const Index& parent, const IndexDelta& delta, const std::string& delta_name,
-               int threads, std::span<const uint8_t> child_descriptors = {});
+               int threads);
   ~AppliedDelta();
   AppliedDelta(const AppliedDelta&) = delete;
   AppliedDelta& operator=(const AppliedDelta&) = delete;

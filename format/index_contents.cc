@@ -32,8 +32,13 @@ std::vector<SectionData> IndexSectionsOf(const IndexContents& contents, std::str
     sections.push_back(SectionData{section::kPointCodes, kSectionRequired, contents.code_bytes,
                                    contents.codes.size() / contents.code_bytes, contents.codes});
   } else {
-    sections.push_back(SectionData{section::kDescriptors, kSectionRequired, kDescriptorBytes,
-                                   contents.view_points.size(), contents.descriptors});
+    sections.push_back(
+        SectionData{section::kDescriptors,
+                    kSectionRequired,
+                    kDescriptorBytes,
+                    contents.view_points.size(),
+                    contents.descriptors,
+                    {contents.descriptor_pieces.begin(), contents.descriptor_pieces.end()}});
   }
   sections.push_back(MakeSection(section::kViewPoint, contents.view_points));
   sections.push_back(MakeSection(coded ? section::kPointNeighbor : section::kViewNeighbor,

@@ -13,6 +13,13 @@ uint64_t AlignUp(uint64_t value) {
   return (value + kSectionAlignment - 1) / kSectionAlignment * kSectionAlignment;
 }
 
+// A section's bytes in order: its pieces, or its one span.
+std::span<const SectionPiece> PiecesOf(const SectionData& section, SectionPiece* whole) {
+  if (!section.pieces.empty()) return section.pieces;
+  whole->bytes = section.bytes;
+  return {whole, 1};
+}
+
 }  // namespace
 
 uint16_t FormatMinorOf(std::span<const SectionData> sections) {
@@ -36,7 +43,14 @@ uint64_t WriteIndexFile(const std::filesystem::path& path, std::span<const Secti
   uint64_t offset = sizeof(FileHeader);
   for (size_t i = 0; i < sections.size(); ++i) {
     const SectionData& section = sections[i];
-    if (section.bytes.size() != section.count * section.element_size || section.element_size == 0) {
+    SectionPiece whole;
+    XxHash64Stream hash;
+    uint64_t size = 0;
+    for (const SectionPiece& piece : PiecesOf(section, &whole)) {
+      hash.Update(piece.bytes);
+      size += piece.bytes.size();
+    }
+    if (size != section.count * section.element_size || section.element_size == 0) {
       throw std::logic_error("WriteIndexFile: section '" + SectionTagName(section.tag) +
                              "' bytes do not match count * element_size");
     }
@@ -45,10 +59,10 @@ uint64_t WriteIndexFile(const std::filesystem::path& path, std::span<const Secti
     entry.tag = section.tag;
     entry.flags = section.flags;
     entry.offset = AlignUp(offset);
-    entry.size = section.bytes.size();
+    entry.size = size;
     entry.count = section.count;
     entry.element_size = section.element_size;
-    entry.checksum = XxHash64(section.bytes);
+    entry.checksum = hash.Digest();
     offset = entry.offset + entry.size;
   }
   const uint64_t table_offset = AlignUp(offset);
@@ -81,7 +95,14 @@ uint64_t WriteIndexFile(const std::filesystem::path& path, std::span<const Secti
   uint64_t written = sizeof(header);
   for (size_t i = 0; i < sections.size(); ++i) {
     file.Write(kZeros, table[i].offset - written);
-    file.Write(sections[i].bytes.data(), sections[i].bytes.size());
+    SectionPiece whole;
+    for (const SectionPiece& piece : PiecesOf(sections[i], &whole)) {
+      if (piece.source_fd >= 0) {
+        file.CopyFrom(piece.source_fd, piece.source_offset, piece.bytes.size());
+      } else {
+        file.Write(piece.bytes.data(), piece.bytes.size());
+      }
+    }
     written = table[i].offset + table[i].size;
   }
   file.Write(kZeros, table_offset - written);

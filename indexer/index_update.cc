@@ -397,10 +397,9 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
                      coded ? new_point_rows.size() : report.views_added, report.images_added,
                      report.images_removed, &delta.header);
       report.forest_rebuilt = next.forest_rebuilt;
-      // The child's other rows come from the delta and the parent, as on a device; a compact
-      // child stores no view descriptors.
-      if (coded) std::vector<uint8_t>().swap(child.descriptors);
-      const AppliedDelta applied(parent, delta, "the update", threads, child.descriptors);
+      // The child's other rows come from the delta and the parent, as on a device.
+      std::vector<uint8_t>().swap(child.descriptors);
+      const AppliedDelta applied(parent, delta, "the update", threads);
       report.seconds_apply = stage.Seconds();
       stage.Restart();
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "base/huge_pages.h"
@@ -12,24 +13,44 @@
 namespace cwloc {
 namespace {
 
+// Where the updated rows' descriptors are: one array of the updated rows (`updated`), or the
+// parent's rows and the inserted ones apart.
+struct RowDescriptors {
+  const KdForestChange& change;
+  std::span<const uint8_t> updated;
+  std::span<const uint8_t> parent;
+  std::span<const uint8_t> inserted;
+
+  // Parent row `row`, which the change keeps.
+  const uint8_t* Kept(uint32_t row) const {
+    return updated.empty() ? &parent[size_t(row) * kDescriptorDim]
+                           : &updated[size_t(change.parent_to_child[row]) * kDescriptorDim];
+  }
+  // The `rank`-th inserted row.
+  const uint8_t* Inserted(size_t rank) const {
+    return updated.empty() ? &inserted[rank * kDescriptorDim]
+                           : &updated[size_t(change.inserted[rank]) * kDescriptorDim];
+  }
+};
+
 // Emits one tree of the updated forest, its inner nodes' right children relative to the tree's
 // first node (UpdateKdForest adds the tree's offset).
 class TreeUpdater {
  public:
-  TreeUpdater(const KdForestView& parent, const KdForestChange& change,
-              std::span<const uint8_t> descriptors, uint32_t max_leaf_size, uint64_t seed,
-              std::vector<KdNode>* nodes, uint32_t* leaves, uint64_t slot_base)
+  TreeUpdater(const KdForestView& parent, const KdForestChange& change, const RowDescriptors& rows,
+              uint32_t max_leaf_size, uint64_t seed, std::vector<KdNode>* nodes, uint32_t* leaves,
+              uint64_t slot_base)
       : parent_(parent),
         change_(change),
-        descriptors_(descriptors),
+        rows_(rows),
         max_leaf_(max_leaf_size),
         seed_(seed),
         nodes_(nodes),
         leaves_(leaves),
         slot_base_(slot_base) {}
 
-  // Emits the updated subtree of parent node `node`, with the rows [begin, end) (reordered
-  // here) inserted below it.
+  // Emits the updated subtree of parent node `node`, with the inserted rows whose ranks (in
+  // change.inserted) are [begin, end) (reordered here) inserted below it.
   void Emit(uint32_t node, uint32_t* begin, uint32_t* end) {
     const KdNode parent_node = parent_.nodes[node];
     if (parent_node.dim == kKdLeaf) {
@@ -37,14 +58,14 @@ class TreeUpdater {
       return;
     }
     KdNode updated = parent_node;
-    uint32_t* middle = std::partition(begin, end, [&](uint32_t row) {
-      const uint8_t value = descriptors_[size_t(row) * kDescriptorDim + parent_node.dim];
+    uint32_t* middle = std::partition(begin, end, [&](uint32_t rank) {
+      const uint8_t value = rows_.Inserted(rank)[parent_node.dim];
       return value <= parent_node.low ||
              (value < parent_node.high && value - parent_node.low <= parent_node.high - value);
     });
-    for (const uint32_t* row = begin; row != end; ++row) {
-      const uint8_t value = descriptors_[size_t(*row) * kDescriptorDim + parent_node.dim];
-      if (row < middle) {
+    for (const uint32_t* rank = begin; rank != end; ++rank) {
+      const uint8_t value = rows_.Inserted(*rank)[parent_node.dim];
+      if (rank < middle) {
         updated.low = std::max(updated.low, value);
       } else {
         updated.high = std::min(updated.high, value);
@@ -59,47 +80,87 @@ class TreeUpdater {
 
  private:
   void EmitLeaf(const KdNode& leaf, uint32_t* begin, uint32_t* end) {
+    // The bucket: (updated row, its descriptor).
     bucket_.clear();
     for (uint32_t s = leaf.index; s < leaf.index + leaf.low; ++s) {
-      const uint32_t row = change_.parent_to_child[parent_.leaves[s]];
-      if (row != kRemovedRow) bucket_.push_back(row);
+      const uint32_t parent_row = parent_.leaves[s];
+      const uint32_t row = change_.parent_to_child[parent_row];
+      if (row != kRemovedRow) bucket_.push_back({row, rows_.Kept(parent_row)});
     }
-    // Kept rows ascend; with the new ones sorted in, the bucket is in row order, as a build
-    // leaves it (and independent of the order the partitions left them in).
+    // Kept rows ascend, and so do the ranks of inserted ones: with the new ones sorted in, the
+    // bucket is in row order, as a build leaves it (whatever order the partitions left).
     const size_t kept = bucket_.size();
-    bucket_.insert(bucket_.end(), begin, end);
-    std::sort(bucket_.begin() + kept, bucket_.end());
+    std::sort(begin, end);
+    for (const uint32_t* rank = begin; rank != end; ++rank)
+      bucket_.push_back({change_.inserted[*rank], rows_.Inserted(*rank)});
     std::inplace_merge(bucket_.begin(), bucket_.begin() + kept, bucket_.end());
     const uint64_t slot = slot_base_ + filled_;
+    uint32_t* leaves = leaves_ + filled_;
     if (bucket_.size() <= max_leaf_) {
       nodes_->push_back(KdNode{uint32_t(slot), kKdLeaf, uint8_t(bucket_.size()), 0, 0});
+      for (size_t i = 0; i < bucket_.size(); ++i) leaves[i] = bucket_[i].first;
     } else {
-      // Seeded by the bucket's place, so update and apply split it alike.
-      AppendKdSubtree(descriptors_, bucket_, max_leaf_, SplitMix64(seed_ ^ slot).Next(), slot,
-                      nodes_);
+      // Seeded by the bucket's place, so update and apply split it alike. The split sees the
+      // bucket as rows 0..n-1 (in row order, as it sees a build's), which it reorders.
+      split_descriptors_.resize(bucket_.size() * kDescriptorDim);
+      for (size_t i = 0; i < bucket_.size(); ++i) {
+        std::copy_n(bucket_[i].second, kDescriptorDim, &split_descriptors_[i * kDescriptorDim]);
+        leaves[i] = uint32_t(i);
+      }
+      AppendKdSubtree(split_descriptors_, {leaves, bucket_.size()}, max_leaf_,
+                      SplitMix64(seed_ ^ slot).Next(), slot, nodes_);
+      for (size_t i = 0; i < bucket_.size(); ++i) leaves[i] = bucket_[leaves[i]].first;
     }
-    std::copy(bucket_.begin(), bucket_.end(), leaves_ + filled_);
     filled_ += bucket_.size();
   }
 
   const KdForestView& parent_;
   const KdForestChange& change_;
-  std::span<const uint8_t> descriptors_;
+  const RowDescriptors& rows_;
   uint32_t max_leaf_;
   uint64_t seed_;
   std::vector<KdNode>* nodes_;
   uint32_t* leaves_;
   uint64_t slot_base_;
   uint64_t filled_ = 0;
-  std::vector<uint32_t> bucket_;
+  std::vector<std::pair<uint32_t, const uint8_t*>> bucket_;
+  std::vector<uint8_t> split_descriptors_;
 };
+
+KdForest Update(const KdForestView& parent, const KdForestChange& change, size_t n,
+                const RowDescriptors& rows, uint32_t max_leaf_size, uint64_t seed, int num_threads);
 
 }  // namespace
 
 KdForest UpdateKdForest(const KdForestView& parent, const KdForestChange& change,
                         std::span<const uint8_t> descriptors, uint32_t max_leaf_size, uint64_t seed,
                         int num_threads) {
-  const size_t n = descriptors.size() / kDescriptorDim;
+  return Update(parent, change, descriptors.size() / kDescriptorDim, {change, descriptors, {}, {}},
+                max_leaf_size, seed, num_threads);
+}
+
+KdForest UpdateKdForest(const KdForestView& parent, const KdForestChange& change,
+                        std::span<const uint8_t> parent_descriptors,
+                        std::span<const uint8_t> inserted_descriptors, uint32_t max_leaf_size,
+                        uint64_t seed, int num_threads) {
+  if (parent_descriptors.size() != change.parent_to_child.size() * kDescriptorDim ||
+      inserted_descriptors.size() != change.inserted.size() * kDescriptorDim) {
+    throw std::invalid_argument(
+        "UpdateKdForest: the descriptors are not the parent's and the "
+        "inserted rows'");
+  }
+  size_t kept = 0;
+  for (uint32_t row : change.parent_to_child) kept += row != kRemovedRow;
+  return Update(parent, change, kept + change.inserted.size(),
+                {change, {}, parent_descriptors, inserted_descriptors}, max_leaf_size, seed,
+                num_threads);
+}
+
+namespace {
+
+KdForest Update(const KdForestView& parent, const KdForestChange& change, size_t n,
+                const RowDescriptors& rows, uint32_t max_leaf_size, uint64_t seed,
+                int num_threads) {
   const size_t parent_rows = parent.leaves.size() / std::max<size_t>(parent.roots.size(), 1);
   if (change.parent_to_child.size() != parent_rows) {
     throw std::invalid_argument("UpdateKdForest: " + std::to_string(change.parent_to_child.size()) +
@@ -127,11 +188,11 @@ KdForest UpdateKdForest(const KdForestView& parent, const KdForestChange& change
   out.leaves.resize(num_trees * n);
   std::vector<std::vector<KdNode>> trees(num_trees);
   ParallelFor(num_trees, num_threads, [&](size_t t, int) {
-    std::vector<uint32_t> inserted(change.inserted.begin(), change.inserted.end());
-    TreeUpdater updater(parent, change, descriptors, max_leaf_size,
-                        SplitMix64(seed ^ (t + 1)).Next(), &trees[t], out.leaves.data() + t * n,
-                        t * n);
-    updater.Emit(parent.roots[t], inserted.data(), inserted.data() + inserted.size());
+    std::vector<uint32_t> ranks(change.inserted.size());
+    for (uint32_t r = 0; r < ranks.size(); ++r) ranks[r] = r;
+    TreeUpdater updater(parent, change, rows, max_leaf_size, SplitMix64(seed ^ (t + 1)).Next(),
+                        &trees[t], out.leaves.data() + t * n, t * n);
+    updater.Emit(parent.roots[t], ranks.data(), ranks.data() + ranks.size());
   });
   size_t num_nodes = 0;
   for (const std::vector<KdNode>& tree : trees) num_nodes += tree.size();
@@ -148,4 +209,5 @@ KdForest UpdateKdForest(const KdForestView& parent, const KdForestChange& change
   return out;
 }
 
+}  // namespace
 }  // namespace cwloc

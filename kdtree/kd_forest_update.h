@@ -34,4 +34,13 @@ KdForest UpdateKdForest(const KdForestView& parent, const KdForestChange& change
                         std::span<const uint8_t> descriptors, uint32_t max_leaf_size, uint64_t seed,
                         int num_threads);
 
+// The same forest when the updated rows are not in one array: `parent_descriptors` are the
+// parent forest's rows (N x 128; kept rows are read there), `inserted_descriptors` the inserted
+// rows', in the order of `change.inserted`. An update reads the parent index's rows where the
+// file maps them, and only those of a leaf it splits.
+KdForest UpdateKdForest(const KdForestView& parent, const KdForestChange& change,
+                        std::span<const uint8_t> parent_descriptors,
+                        std::span<const uint8_t> inserted_descriptors, uint32_t max_leaf_size,
+                        uint64_t seed, int num_threads);
+
 }  // namespace cwloc

@@ -103,6 +103,25 @@ TEST(KdForestUpdateTest, EveryRowIsWhereTheSearchLooksAndExhaustiveSearchStaysEx
   ASSERT_EQ(again.nodes.size(), child.nodes.size());
   EXPECT_EQ(
       std::memcmp(again.nodes.data(), child.nodes.data(), child.nodes.size() * sizeof(KdNode)), 0);
+
+  // The same forest from the parent's rows and the inserted ones apart, as apply reads them.
+  std::vector<uint8_t> inserted_rows;
+  for (uint32_t row : change.inserted) {
+    const uint8_t* descriptor = &change.child_rows[size_t(row) * kDescriptorDim];
+    inserted_rows.insert(inserted_rows.end(), descriptor, descriptor + kDescriptorDim);
+  }
+  const KdForest apart =
+      UpdateKdForest(parent.View(parent_rows), {change.parent_to_child, change.inserted},
+                     parent_rows, inserted_rows, kLeafSize, 11, 2);
+  EXPECT_EQ(apart.leaves, child.leaves);
+  EXPECT_EQ(apart.roots, child.roots);
+  ASSERT_EQ(apart.nodes.size(), child.nodes.size());
+  EXPECT_EQ(
+      std::memcmp(apart.nodes.data(), child.nodes.data(), child.nodes.size() * sizeof(KdNode)), 0);
+  EXPECT_THROW(
+      UpdateKdForest(parent.View(parent_rows), {change.parent_to_child, change.inserted},
+                     parent_rows, std::span(inserted_rows).first(kDescriptorDim), kLeafSize, 11, 2),
+      std::invalid_argument);
 }
 
 TEST(KdForestUpdateTest, RefusesAChangeThatDoesNotFitTheForest) {
