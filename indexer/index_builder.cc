@@ -109,7 +109,8 @@ void WriteIndexOfViews(ModelViews views, const Clustering& clustering,
 
   stage.Restart();
   // The forest's rows: views, or the compact index's points (as the localizer decodes them).
-  const KdForest forest = BuildIndexForest(coded ? point_codes.decoded : views.descriptors,
+  const KdForest forest = BuildIndexForest(coded ? std::span<const uint8_t>(point_codes.decoded)
+                                                 : std::span<const uint8_t>(views.descriptors),
                                            options.forest, options.seed, threads);
   report->seconds_kd_forest = stage.Seconds();
 

@@ -364,6 +364,18 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
                                                       parent_of_child_point, codes, dirty, threads,
                                                       &report.clusters_recomputed);
       } else {
+        // The clusters recomputed read their old images' rows, which the gather left to the index.
+        const std::span<const uint8_t> parent_descriptors = parent.descriptors();
+        for (uint32_t i = 0; i < child.images.size(); ++i) {
+          const uint32_t from = parent_of_child_image[i];
+          if (from == kRemovedRow || !grown.rows_reused[from] ||
+              !dirty[clustering.cluster_of_image[i]])
+            continue;
+          const IndexImage& old_image = parent_images[from];
+          std::memcpy(&child.descriptors[size_t(child.images[i].first_view) * kDescriptorBytes],
+                      &parent_descriptors[size_t(old_image.first_view) * kDescriptorBytes],
+                      size_t(old_image.num_views) * kDescriptorBytes);
+        }
         neighbor_distances = ComputeViewNeighborDistances(child, clustering, threads, &dirty);
         for (uint32_t w = 0; w < child.num_views(); ++w) {
           const uint32_t v = parent_of_child_view[w];
@@ -398,7 +410,7 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
                      report.images_removed, &delta.header);
       report.forest_rebuilt = next.forest_rebuilt;
       // The child's other rows come from the delta and the parent, as on a device.
-      std::vector<uint8_t>().swap(child.descriptors);
+      decltype(child.descriptors)().swap(child.descriptors);
       const AppliedDelta applied(parent, delta, "the update", threads);
       report.seconds_apply = stage.Seconds();
       stage.Restart();

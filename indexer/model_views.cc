@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstring>
 #include <fstream>
+#include <stdexcept>
 #include <unordered_map>
 
 #include "base/bounded_file.h"
@@ -89,6 +90,7 @@ ModelViews GatherModelViews(const colmap::Reconstruction& model,
 
   const size_t total_views = model.NumObservations();
   ReserveOnHugePages(&views.descriptors, total_views * kDescriptorBytes);
+  views.descriptors.resize(total_views * kDescriptorBytes);  // untouched until written
   ReserveOnHugePages(&views.view_points, total_views);
   ReserveOnHugePages(&views.view_keypoints, total_views);
 
@@ -107,11 +109,10 @@ ModelViews GatherModelViews(const colmap::Reconstruction& model,
     for (const colmap::Point2D& point2D : image.points2D) {
       if (point2D.point3D_id != kInvalidPoint3DId) observed.push_back(point2D.point3D_id);
     }
-    const uint8_t* known = known_rows ? known_rows(image_id, observed) : nullptr;
+    const bool known = known_rows && known_rows(image_id, observed);
     const colmap::Descriptors descriptors =
-        known != nullptr ? colmap::Descriptors{} : database.ReadDescriptors(image_id);
-    const uint32_t num_descriptors =
-        known != nullptr ? database.NumDescriptors(image_id) : descriptors.rows;
+        known ? colmap::Descriptors{} : database.ReadDescriptors(image_id);
+    const uint32_t num_descriptors = known ? database.NumDescriptors(image_id) : descriptors.rows;
     if (num_descriptors != image.points2D.size()) {
       throw InputError(
           db_name + ": image " + std::to_string(image_id) + " '" + image.name + "' has " +
@@ -148,17 +149,18 @@ ModelViews GatherModelViews(const colmap::Reconstruction& model,
       views.view_points.push_back(point);
       views.view_keypoints.push_back(
           {static_cast<float>(point2D.x), static_cast<float>(point2D.y)});
-      const uint8_t* row_bytes =
-          known != nullptr
-              ? known + (views.view_points.size() - 1 - row.first_view) * kDescriptorBytes
-              : descriptors.Row(static_cast<uint32_t>(i));
-      views.descriptors.insert(views.descriptors.end(), row_bytes, row_bytes + kDescriptorBytes);
+      if (!known) {
+        std::memcpy(&views.descriptors[(views.view_points.size() - 1) * kDescriptorBytes],
+                    descriptors.Row(static_cast<uint32_t>(i)), kDescriptorBytes);
+      }
     }
     row.num_views = static_cast<uint32_t>(views.view_points.size()) - row.first_view;
     views.images.push_back(row);
     progress.Advance();
   }
   progress.Finish();
+  if (views.view_points.size() != total_views)
+    throw std::logic_error("GatherModelViews: the model's observations are not its tracks'");
 
   // Drop points without views (none in a consistent model) and renumber.
   std::vector<uint32_t> num_views(views.points.size(), 0);
@@ -209,6 +211,7 @@ ModelViews WithoutImages(const ModelViews& views, const std::vector<bool>& left_
     if (!views.point_colors.empty()) out.point_colors.push_back(views.point_colors[p]);
   }
   const bool keypoints = !views.view_keypoints.empty();
+  out.descriptors.resize(views.descriptors.size());
   for (uint32_t i = 0; i < views.images.size(); ++i) {
     if (left_out[i]) continue;
     IndexImage row = views.images[i];
@@ -221,8 +224,8 @@ ModelViews WithoutImages(const ModelViews& views, const std::vector<bool>& left_
       if (point == UINT32_MAX) continue;
       out.view_points.push_back(point);
       if (keypoints) out.view_keypoints.push_back(views.view_keypoints[v]);
-      const uint8_t* descriptor = views.descriptors.data() + size_t{v} * kDescriptorBytes;
-      out.descriptors.insert(out.descriptors.end(), descriptor, descriptor + kDescriptorBytes);
+      std::memcpy(&out.descriptors[(out.view_points.size() - 1) * kDescriptorBytes],
+                  &views.descriptors[size_t{v} * kDescriptorBytes], kDescriptorBytes);
     }
     row.num_views = static_cast<uint32_t>(out.view_points.size()) - row.first_view;
     out.images.push_back(row);
@@ -234,6 +237,7 @@ ModelViews WithoutImages(const ModelViews& views, const std::vector<bool>& left_
     if (new_cluster[image.cluster] == UINT32_MAX) new_cluster[image.cluster] = num_clusters++;
     image.cluster = new_cluster[image.cluster];
   }
+  out.descriptors.resize(out.view_points.size() * kDescriptorBytes);
   out.tracks = TracksOfViews(out.view_points, out.points);
   return out;
 }

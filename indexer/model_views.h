@@ -8,6 +8,7 @@
 #include <string_view>
 #include <vector>
 
+#include "base/huge_pages.h"
 #include "colmap/database.h"
 #include "colmap/reconstruction.h"
 #include "format/index_sections.h"
@@ -25,8 +26,9 @@ struct ModelViews {
   std::vector<point3D_t> point_ids;      // COLMAP id of each point
   std::vector<PointColor> point_colors;  // each point's colour in the model
   std::vector<uint32_t> tracks;          // view indices, grouped by point
-  std::vector<uint8_t> descriptors;      // views x 128
-  std::vector<uint32_t> view_points;     // point index of each view
+  // views x 128; rows GatherModelViews leaves unwritten are the caller's to fill or not read.
+  std::vector<uint8_t, UnwrittenAllocator<uint8_t>> descriptors;
+  std::vector<uint32_t> view_points;  // point index of each view
   std::vector<ViewKeypoint> view_keypoints;
 
   size_t num_views() const { return view_points.size(); }
@@ -41,11 +43,11 @@ struct ModelViews {
 // number of 2D points.
 //
 // `known_rows`, when given, spares reading descriptors the caller already has (`cwloc-index
-// update`: an old image's, from the index): it returns the image's view rows (one 128-byte row
-// per observation, in point2D order) when its observations are of the points `point_ids` in this
-// order, else nullptr; the database then only confirms the image's descriptor count.
-using KnownViewRows =
-    std::function<const uint8_t*(image_t image_id, std::span<const point3D_t> point_ids)>;
+// update`: an old image's, in the index): it returns true when it has the image's view rows
+// (one 128-byte row per observation, in point2D order) for observations of the points
+// `point_ids` in this order. Those rows are left unwritten (never touched, so a city's 1.4 GB
+// of them costs nothing), and the database only confirms the image's descriptor count.
+using KnownViewRows = std::function<bool(image_t image_id, std::span<const point3D_t> point_ids)>;
 ModelViews GatherModelViews(const colmap::Reconstruction& model,
                             const colmap::DatabaseReader& database,
                             const KnownViewRows& known_rows = {});

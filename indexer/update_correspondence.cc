@@ -129,22 +129,18 @@ GrownModel ReadGrownModel(const IndexUpdateOptions& options, const Index& parent
     }
   }
   // A compact index stores no view descriptors: they come from the database, for the images
-  // that see a point coded anew; the others' rows are zeros, never read (their points keep
+  // that see a point coded anew; the others' rows stay unwritten, never read (their points keep
   // their codes, and PVNN is computed on decoded codes).
   if (parent.coded())
     grown.unread_images = ImagesWithoutCodedPoints(*model, parent, parent_row_of_id, removed);
-  size_t most_views = 0;
-  for (const auto& [image_id, image] : model->images)
-    most_views = std::max(most_views, image.points2D.size());
-  const std::vector<uint8_t> unread_rows(parent.coded() ? most_views * kDescriptorBytes : 0, 0);
-  // An image's view rows when the database need not be read for them, else nullptr.
-  const auto rows_without_database = [&](image_t image_id,
-                                         std::span<const point3D_t> point_ids) -> const uint8_t* {
-    if (parent.coded()) return grown.unread_images.count(image_id) ? unread_rows.data() : nullptr;
+  // Whether an image's view rows need not be read in the database: the gather leaves them
+  // unwritten, and the update reads a full index's in the index where it needs them.
+  const auto rows_without_database = [&](image_t image_id, std::span<const point3D_t> point_ids) {
+    if (parent.coded()) return grown.unread_images.count(image_id) != 0;
     const auto found = parent_row_of_id.find(uint32_t(image_id));
-    if (found == parent_row_of_id.end()) return nullptr;
+    if (found == parent_row_of_id.end()) return false;
     const IndexImage& image = parent.images()[found->second];
-    if (!ObservesAsInIndex(parent, image, point_ids)) return nullptr;
+    if (!ObservesAsInIndex(parent, image, point_ids)) return false;
     const uint8_t* rows = Row(parent_descriptors, image.first_view);
     if (found->second % kVerifiedImageStride == 0) {
       const colmap::Descriptors stored = database.ReadDescriptors(image_id);
@@ -162,21 +158,39 @@ GrownModel ReadGrownModel(const IndexUpdateOptions& options, const Index& parent
       }
     }
     grown.rows_reused[found->second] = true;
-    return rows;
+    return true;
   };
   const KnownViewRows known_rows = [&](image_t image_id, std::span<const point3D_t> point_ids) {
-    const uint8_t* rows = rows_without_database(image_id, point_ids);
-    grown.images_read += rows == nullptr;
-    return rows;
+    const bool known = rows_without_database(image_id, point_ids);
+    grown.images_read += !known;
+    return known;
   };
   grown.views = GatherModelViews(*model, database, known_rows);
   model.reset();
   if (!removed.empty()) {
     ModelViews& child = grown.views;
+    // The points dropped with the removed images take views from images whose rows the index
+    // has, which are then matched view by view: their rows are written first.
+    const auto reused_parent_image = [&](const IndexImage& image) -> const IndexImage* {
+      const auto found = parent_row_of_id.find(image.image_id);
+      if (found == parent_row_of_id.end() || !grown.rows_reused[found->second]) return nullptr;
+      return &parent.images()[found->second];
+    };
     std::vector<bool> left_out(child.images.size(), false);
-    for (uint32_t i = 0; i < child.images.size(); ++i)
+    for (uint32_t i = 0; i < child.images.size(); ++i) {
       left_out[i] = removed.count(child.images[i].image_id) != 0;
+      if (const IndexImage* old_image = reused_parent_image(child.images[i])) {
+        std::memcpy(&child.descriptors[size_t(child.images[i].first_view) * kDescriptorBytes],
+                    Row(parent_descriptors, old_image->first_view),
+                    size_t(old_image->num_views) * kDescriptorBytes);
+      }
+    }
     child = WithoutImages(child, left_out);
+    for (const IndexImage& image : child.images) {
+      const IndexImage* old_image = reused_parent_image(image);
+      if (old_image != nullptr && old_image->num_views != image.num_views)
+        grown.rows_reused[parent_row_of_id.at(image.image_id)] = false;
+    }
   }
   return grown;
 }
@@ -249,8 +263,10 @@ Correspondence MatchToParent(const IndexUpdateOptions& options, const Index& par
     const IndexImage& old_image = parent_images[i];
     const IndexImage& image = child.images[child_of_parent_image[i]];
     std::vector<uint32_t> unmatched;
-    // Rows copied from the parent, none dropped since (--remove-images): row for row.
-    const bool copied = grown.rows_reused[i] && old_image.num_views == image.num_views;
+    // Rows the parent has (the gather left them unwritten): row for row.
+    const bool copied = grown.rows_reused[i];
+    if (copied && old_image.num_views != image.num_views)
+      throw std::logic_error("update: an image whose rows the index has changed its views");
     for (uint32_t a = 0; copied && a < old_image.num_views; ++a) {
       child_of_parent_view[old_image.first_view + a] = image.first_view + a;
       parent_of_child_view[image.first_view + a] = old_image.first_view + a;

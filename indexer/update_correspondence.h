@@ -18,10 +18,11 @@ namespace cwloc {
 
 struct GrownModel {
   ModelViews views;
-  std::string layout;             // "classic" or "rigs", as the manifest's source says
-  std::vector<bool> rows_reused;  // per parent image: its view rows came from the index
-  // A compact parent's: model images whose descriptors were not read (their rows are zeros):
-  // they see no point the update may code anew.
+  std::string layout;  // "classic" or "rigs", as the manifest's source says
+  // Per parent image: its view rows are the index's, left unwritten in views.descriptors.
+  std::vector<bool> rows_reused;
+  // A compact parent's: model images whose descriptors were not read (their rows are left
+  // unwritten): they see no point the update may code anew.
   std::unordered_set<image_t> unread_images;
   size_t images_read = 0;  // model images whose descriptors came from the database
 };
