@@ -46,10 +46,13 @@ class AtomicFile {
 
  private:
   [[noreturn]] void Fail(std::string_view what, int error_number) const;
+  void WriteBack();
 
   std::filesystem::path path_;
   std::filesystem::path temp_path_;  // empty when unnamed or once renamed into place
   int fd_ = -1;
+  uint64_t written_ = 0;       // bytes written so far
+  uint64_t written_back_ = 0;  // of which writeback was started
 };
 
 // Removes `<destination name>.tmp-<pid>-...` files and folders next to `destination` whose
