@@ -17,8 +17,9 @@
 
 namespace cwloc::test {
 
-// True in a build with AddressSanitizer or ThreadSanitizer (CWLOC_SANITIZE).
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+// True in a build with AddressSanitizer or ThreadSanitizer (CWLOC_SANITIZE), whose tests'
+// own code is compiled without them (CWLOC_SANITIZED, cmake/CwlocHelpers.cmake).
+#if defined(CWLOC_SANITIZED) || defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
 inline constexpr bool kSanitized = true;
 #elif defined(__has_feature)
 inline constexpr bool kSanitized =
