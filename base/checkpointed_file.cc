@@ -105,7 +105,7 @@ void CheckpointedFile::Commit(bool last) {
   if (last) return;
   // The next file starts as a copy of the committed one; the records that follow go after it.
   file = std::make_unique<AtomicFile>(path_);
-  file->CopyFrom(committed_fd_, 0, size_);
+  file->CopyFrom(committed_fd_, size_);
   file_ = std::move(file);
   const Clock::time_point end = Clock::now();
   next_checkpoint_ = end + std::max<Clock::duration>(min_interval_, kCostFactor * (end - start));

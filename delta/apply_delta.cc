@@ -1,7 +1,5 @@
 #include "delta/apply_delta.h"
 
-#include <unistd.h>
-
 #include <cstring>
 #include <string>
 #include <vector>
@@ -396,32 +394,23 @@ uint64_t AppliedDelta::Write(const std::filesystem::path& output, std::string_vi
   contents.point_ids = child.point_ids;
   contents.georeference = parent.georeference();
   contents.covariance_calibration = parent.covariance_calibration();
-  // A full child's descriptors: runs of the parent's rows, copied from its file where it is
-  // still the file mapped, and the delta's new rows between them.
-  struct ClosedOnReturn {
-    int fd;
-    ~ClosedOnReturn() {
-      if (fd >= 0) ::close(fd);
-    }
-  } const parent_file{parent.coded() ? -1 : parent.file().ReopenSameFile()};
-  const int parent_fd = parent_file.fd;
-  std::vector<SectionPiece> descriptor_pieces;
+  // A full child's descriptors, written from where they are: runs of the parent's rows and the
+  // delta's new rows between them.
+  std::vector<std::span<const uint8_t>> descriptor_pieces;
   if (!parent.coded()) {
-    const uint64_t parent_offset = parent.file().FindSection(section::kDescriptors)->offset;
     const std::span<const uint8_t> kept = parent.descriptors();
     const std::span<const uint8_t> added = delta.new_descriptors;
     size_t next_added = 0;  // bytes
     const auto add_new_rows = [&](size_t rows) {
       if (rows == 0) return;
-      descriptor_pieces.push_back({added.subspan(next_added, rows * kDescriptorBytes)});
+      descriptor_pieces.push_back(added.subspan(next_added, rows * kDescriptorBytes));
       next_added += rows * kDescriptorBytes;
     };
     uint64_t child_row = 0;
     for (const RowRun& run : delta.view_runs) {
       add_new_rows(run.child_first - child_row);
       const size_t offset = size_t(run.parent_first) * kDescriptorBytes;
-      descriptor_pieces.push_back({kept.subspan(offset, size_t(run.count) * kDescriptorBytes),
-                                   parent_fd, parent_offset + offset});
+      descriptor_pieces.push_back(kept.subspan(offset, size_t(run.count) * kDescriptorBytes));
       child_row = uint64_t(run.child_first) + run.count;
     }
     add_new_rows((added.size() - next_added) / kDescriptorBytes);

@@ -23,7 +23,7 @@ struct IndexContents {
   std::span<const IndexPointOffset> point_offsets;
   std::span<const uint32_t> tracks;
   std::span<const uint8_t> descriptors;
-  std::span<const SectionPiece> descriptor_pieces;  // instead of `descriptors`: runs of rows
+  std::span<const std::span<const uint8_t>> descriptor_pieces;  // instead of `descriptors`
   std::span<const uint8_t> codebook;
   std::span<const uint8_t> codes;
   uint32_t code_bytes = 0;

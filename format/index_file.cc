@@ -66,8 +66,6 @@ IndexFile IndexFile::Open(const std::filesystem::path& path, const ContainerKind
   file.path_ = path;
   file.data_ = static_cast<const uint8_t*>(mapping);
   file.size_ = file_size;
-  file.device_ = st.st_dev;
-  file.inode_ = st.st_ino;
   const FileHeader& header = file.header();
 
   if (std::memcmp(header.magic, kind.magic, sizeof(header.magic)) != 0) {
@@ -164,8 +162,6 @@ IndexFile& IndexFile::operator=(IndexFile&& other) noexcept {
     path_ = std::move(other.path_);
     data_ = std::exchange(other.data_, nullptr);
     size_ = std::exchange(other.size_, 0);
-    device_ = std::exchange(other.device_, 0);
-    inode_ = std::exchange(other.inode_, 0);
     sections_ = std::exchange(other.sections_, {});
   }
   return *this;
@@ -176,18 +172,6 @@ IndexFile::~IndexFile() { Unmap(); }
 void IndexFile::Unmap() {
   if (data_ != nullptr) ::munmap(const_cast<uint8_t*>(data_), size_);
   data_ = nullptr;
-}
-
-int IndexFile::ReopenSameFile() const {
-  const int fd = ::open(path_.c_str(), O_RDONLY | O_CLOEXEC | O_NOCTTY | O_NONBLOCK);
-  if (fd < 0) return -1;
-  struct stat st {};
-  if (::fstat(fd, &st) != 0 || st.st_dev != device_ || st.st_ino != inode_ ||
-      static_cast<uint64_t>(st.st_size) != size_) {
-    ::close(fd);
-    return -1;
-  }
-  return fd;
 }
 
 const SectionEntry* IndexFile::FindSection(uint32_t tag) const {

@@ -41,10 +41,6 @@ class IndexFile {
   ~IndexFile();
 
   const std::filesystem::path& path() const { return path_; }
-  // A new read-only descriptor of the file mapped, or -1 when its path names another file now
-  // (replaced since Open) or cannot be opened: what a writer copies unchanged bytes from,
-  // kernel-side. The caller closes it.
-  int ReopenSameFile() const;
   const FileHeader& header() const { return *reinterpret_cast<const FileHeader*>(data_); }
   std::span<const SectionEntry> sections() const { return sections_; }
   std::span<const uint8_t> bytes() const { return {data_, size_}; }
@@ -71,17 +67,7 @@ class IndexFile {
   std::filesystem::path path_;
   const uint8_t* data_ = nullptr;
   size_t size_ = 0;
-  uint64_t device_ = 0, inode_ = 0;  // the file mapped, which ReopenSameFile checks
   std::span<const SectionEntry> sections_;
-};
-
-// A run of a section's bytes. With `source_fd` >= 0 the same bytes are in that file at
-// `source_offset` (a parent index a child keeps them from), and the writer copies them
-// kernel-side; `bytes` are what it hashes (and writes when the copy cannot be made).
-struct SectionPiece {
-  std::span<const uint8_t> bytes;
-  int source_fd = -1;
-  uint64_t source_offset = 0;
 };
 
 // One section to write: its bytes are copied into the file at a 64-byte aligned offset.
@@ -90,8 +76,10 @@ struct SectionData {
   uint32_t flags = 0;
   uint32_t element_size = 1;
   uint64_t count = 0;
-  std::span<const uint8_t> bytes{};    // count * element_size bytes, unless `pieces` has them
-  std::vector<SectionPiece> pieces{};  // the bytes in order, when they are not one span
+  std::span<const uint8_t> bytes{};  // count * element_size bytes, unless `pieces` has them
+  // The bytes in order, when they are not one span (a child's descriptors: the parent's kept
+  // runs and the new rows between them, written from where they are).
+  std::vector<std::span<const uint8_t>> pieces{};
 };
 
 // The format minor a file with these sections declares: the oldest 1.x that knows them all

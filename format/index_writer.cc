@@ -14,10 +14,9 @@ uint64_t AlignUp(uint64_t value) {
 }
 
 // A section's bytes in order: its pieces, or its one span.
-std::span<const SectionPiece> PiecesOf(const SectionData& section, SectionPiece* whole) {
+std::span<const std::span<const uint8_t>> PiecesOf(const SectionData& section) {
   if (!section.pieces.empty()) return section.pieces;
-  whole->bytes = section.bytes;
-  return {whole, 1};
+  return {&section.bytes, 1};
 }
 
 }  // namespace
@@ -43,12 +42,11 @@ uint64_t WriteIndexFile(const std::filesystem::path& path, std::span<const Secti
   uint64_t offset = sizeof(FileHeader);
   for (size_t i = 0; i < sections.size(); ++i) {
     const SectionData& section = sections[i];
-    SectionPiece whole;
     XxHash64Stream hash;
     uint64_t size = 0;
-    for (const SectionPiece& piece : PiecesOf(section, &whole)) {
-      hash.Update(piece.bytes);
-      size += piece.bytes.size();
+    for (const std::span<const uint8_t> piece : PiecesOf(section)) {
+      hash.Update(piece);
+      size += piece.size();
     }
     if (size != section.count * section.element_size || section.element_size == 0) {
       throw std::logic_error("WriteIndexFile: section '" + SectionTagName(section.tag) +
@@ -95,14 +93,8 @@ uint64_t WriteIndexFile(const std::filesystem::path& path, std::span<const Secti
   uint64_t written = sizeof(header);
   for (size_t i = 0; i < sections.size(); ++i) {
     file.Write(kZeros, table[i].offset - written);
-    SectionPiece whole;
-    for (const SectionPiece& piece : PiecesOf(sections[i], &whole)) {
-      if (piece.source_fd >= 0) {
-        file.CopyFrom(piece.source_fd, piece.source_offset, piece.bytes.size());
-      } else {
-        file.Write(piece.bytes.data(), piece.bytes.size());
-      }
-    }
+    for (const std::span<const uint8_t> piece : PiecesOf(sections[i]))
+      file.Write(piece.data(), piece.size());
     written = table[i].offset + table[i].size;
   }
   file.Write(kZeros, table_offset - written);
