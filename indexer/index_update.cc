@@ -365,16 +365,11 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
                                                       &report.clusters_recomputed);
       } else {
         // The clusters recomputed read their old images' rows, which the gather left to the index.
-        const std::span<const uint8_t> parent_descriptors = parent.descriptors();
         for (uint32_t i = 0; i < child.images.size(); ++i) {
           const uint32_t from = parent_of_child_image[i];
-          if (from == kRemovedRow || !grown.rows_reused[from] ||
-              !dirty[clustering.cluster_of_image[i]])
-            continue;
-          const IndexImage& old_image = parent_images[from];
-          std::memcpy(&child.descriptors[size_t(child.images[i].first_view) * kDescriptorBytes],
-                      &parent_descriptors[size_t(old_image.first_view) * kDescriptorBytes],
-                      size_t(old_image.num_views) * kDescriptorBytes);
+          if (from != kRemovedRow && grown.rows_reused[from] &&
+              dirty[clustering.cluster_of_image[i]])
+            WriteRowsFromIndex(parent, parent_images[from], child.images[i], &child);
         }
         neighbor_distances = ComputeViewNeighborDistances(child, clustering, threads, &dirty);
         for (uint32_t w = 0; w < child.num_views(); ++w) {

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 #include <memory>
+#include <stdexcept>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -179,11 +180,8 @@ GrownModel ReadGrownModel(const IndexUpdateOptions& options, const Index& parent
     std::vector<bool> left_out(child.images.size(), false);
     for (uint32_t i = 0; i < child.images.size(); ++i) {
       left_out[i] = removed.count(child.images[i].image_id) != 0;
-      if (const IndexImage* old_image = reused_parent_image(child.images[i])) {
-        std::memcpy(&child.descriptors[size_t(child.images[i].first_view) * kDescriptorBytes],
-                    Row(parent_descriptors, old_image->first_view),
-                    size_t(old_image->num_views) * kDescriptorBytes);
-      }
+      if (const IndexImage* old_image = reused_parent_image(child.images[i]))
+        WriteRowsFromIndex(parent, *old_image, child.images[i], &child);
     }
     child = WithoutImages(child, left_out);
     for (const IndexImage& image : child.images) {
@@ -193,6 +191,15 @@ GrownModel ReadGrownModel(const IndexUpdateOptions& options, const Index& parent
     }
   }
   return grown;
+}
+
+void WriteRowsFromIndex(const Index& parent, const IndexImage& old_image, const IndexImage& image,
+                        ModelViews* child) {
+  if (old_image.num_views != image.num_views)
+    throw std::logic_error("update: an image whose rows the index has changed its views");
+  std::memcpy(&child->descriptors[size_t(image.first_view) * kDescriptorBytes],
+              Row(parent.descriptors(), old_image.first_view),
+              size_t(image.num_views) * kDescriptorBytes);
 }
 
 Correspondence MatchToParent(const IndexUpdateOptions& options, const Index& parent,

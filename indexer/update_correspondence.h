@@ -35,6 +35,11 @@ struct GrownModel {
 GrownModel ReadGrownModel(const IndexUpdateOptions& options, const Index& parent,
                           const colmap::DatabaseReader& database);
 
+// Writes the view rows of `image` (the child's) that the gather left to the index: those of its
+// parent image `old_image`, row for row (rows_reused).
+void WriteRowsFromIndex(const Index& parent, const IndexImage& old_image, const IndexImage& image,
+                        ModelViews* child);
+
 // Parent row -> child row and back (kRemovedRow: none) of images, views and points.
 struct Correspondence {
   std::vector<uint32_t> child_of_parent_image, parent_of_child_image;
