@@ -35,9 +35,9 @@ function(cwloc_add_library name)
   target_link_libraries(${name} PUBLIC ${ARG_PUBLIC_LINK} PRIVATE ${ARG_PRIVATE_LINK})
 endfunction()
 
-# Code that runs little (the tests' own code, the tools' mains, the Python bindings) compiles at
-# -O1 in optimised builds: in less than half the time of -O3 (34 s -> 14 s for a typical test
-# file; cwloc-localize's main 22 -> 14 s with GCC), while the libraries it calls keep the build
+# Code that runs little (the tools' mains, the Python bindings; the tests' own code below)
+# compiles at -O1 in optimised builds: in less than half the time of -O3 (34 s -> 14 s for a
+# typical test file; cwloc-localize's main 22 -> 14 s with GCC), while the libraries it calls keep the build
 # type's optimisation. After CMake's -O3 on the command line, so it wins. Under a sanitizer at
 # -O0: clang instruments and compiles it in less than half the time of -O1 (66 s -> 29 s for
 # localizer_tests; cwloc-index's main 13 s at -O0 against 37 s at -O3, 35 s at -O1).

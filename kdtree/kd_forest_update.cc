@@ -146,8 +146,7 @@ KdForest UpdateKdForest(const KdForestView& parent, const KdForestChange& change
   if (parent_descriptors.size() != change.parent_to_child.size() * kDescriptorDim ||
       inserted_descriptors.size() != change.inserted.size() * kDescriptorDim) {
     throw std::invalid_argument(
-        "UpdateKdForest: the descriptors are not the parent's and the "
-        "inserted rows'");
+        "UpdateKdForest: the descriptors are not the parent's and the inserted rows'");
   }
   size_t kept = 0;
   for (uint32_t row : change.parent_to_child) kept += row != kRemovedRow;
