@@ -34,6 +34,11 @@ class AtomicFile {
   // while the temporary file has no name.
   const std::filesystem::path& temp_path() const { return temp_path_; }
 
+  // From here on (before the first Write), the content goes to the disk directly (O_DIRECT)
+  // through an aligned buffer instead of through the page cache: for a big file written once
+  // and not read back soon (an index of GBs), whose pages would only be copied, written back
+  // and dropped. Where the file system refuses, writes stay buffered.
+  void BypassPageCache();
   void Write(const void* data, size_t size);
   // Appends the first `size` bytes of the open file `source_fd` (read from offset 0, its own
   // offset untouched), kernel-side where the file systems allow (copy_file_range).
@@ -46,12 +51,17 @@ class AtomicFile {
  private:
   [[noreturn]] void Fail(std::string_view what, int error_number) const;
   void WriteBack();
+  void WriteThrough(const char* bytes, size_t size);
+  void FlushDirect(bool last);
 
   std::filesystem::path path_;
   std::filesystem::path temp_path_;  // empty when unnamed or once renamed into place
   int fd_ = -1;
   uint64_t written_ = 0;       // bytes written so far
   uint64_t written_back_ = 0;  // of which writeback was started
+  // BypassPageCache(): content not yet written, in a block-aligned buffer (empty otherwise).
+  std::unique_ptr<char, void (*)(void*)> direct_{nullptr, nullptr};
+  size_t direct_used_ = 0;
 };
 
 // Removes `<destination name>.tmp-<pid>-...` files and folders next to `destination` whose

@@ -427,6 +427,7 @@ ApplyDeltaReport ApplyDelta(const std::filesystem::path& index_path,
   const IndexDelta delta = ReadDelta(delta_path);
   const Index parent = Index::Open(index_path);
   parent.file().VerifyChecksums();
+  parent.file().MapAllPages();
   AppliedDelta(parent, delta, delta_path.string(), threads)
       .Write(output, delta.manifest, delta.header.child_checksum);
   ApplyDeltaReport report;

@@ -9,6 +9,7 @@
 #include <cerrno>
 #include <cstring>
 #include <utility>
+#include <vector>
 
 #include "format/xxhash64.h"
 
@@ -59,10 +60,14 @@ IndexFile IndexFile::Open(const std::filesystem::path& path, const ContainerKind
                      "-byte header");
   }
   void* mapping = ::mmap(nullptr, file_size, PROT_READ, MAP_SHARED, fd, 0);
-  ::close(fd);
-  if (mapping == MAP_FAILED) throw InputError(name + ": cannot map: " + std::strerror(errno));
+  if (mapping == MAP_FAILED) {
+    const int error = errno;
+    ::close(fd);
+    throw InputError(name + ": cannot map: " + std::strerror(error));
+  }
 
   IndexFile file;
+  file.fd_ = fd;
   file.path_ = path;
   file.data_ = static_cast<const uint8_t*>(mapping);
   file.size_ = file_size;
@@ -163,6 +168,7 @@ IndexFile& IndexFile::operator=(IndexFile&& other) noexcept {
     data_ = std::exchange(other.data_, nullptr);
     size_ = std::exchange(other.size_, 0);
     sections_ = std::exchange(other.sections_, {});
+    fd_ = std::exchange(other.fd_, -1);
   }
   return *this;
 }
@@ -172,6 +178,8 @@ IndexFile::~IndexFile() { Unmap(); }
 void IndexFile::Unmap() {
   if (data_ != nullptr) ::munmap(const_cast<uint8_t*>(data_), size_);
   data_ = nullptr;
+  if (fd_ >= 0) ::close(fd_);
+  fd_ = -1;
 }
 
 const SectionEntry* IndexFile::FindSection(uint32_t tag) const {
@@ -194,10 +202,36 @@ const SectionEntry& IndexFile::RequireSection(uint32_t tag, size_t element_size)
   return *entry;
 }
 
+void IndexFile::MapAllPages() const {
+#ifdef MADV_POPULATE_READ
+  ::madvise(const_cast<uint8_t*>(data_), size_, MADV_POPULATE_READ);
+#endif
+}
+
 void IndexFile::VerifyChecksums() const {
+  VerifyChecksums([](uint32_t) { return true; });
+}
+
+void IndexFile::VerifyChecksums(const std::function<bool(uint32_t tag)>& which) const {
+  // Read, not hashed through the mapping: the kernel copies page-cache pages through its own
+  // large mappings, where 4 KiB user pages cost a TLB miss each (3.5x slower on a VM).
+  std::vector<uint8_t> chunk(size_t{4} << 20);
   for (size_t i = 0; i < sections_.size(); ++i) {
     const SectionEntry& entry = sections_[i];
-    const uint64_t checksum = XxHash64({data_ + entry.offset, static_cast<size_t>(entry.size)});
+    if (!which(entry.tag)) continue;
+    XxHash64Stream hash;
+    for (uint64_t done = 0; done < entry.size;) {
+      const size_t want = size_t(std::min<uint64_t>(chunk.size(), entry.size - done));
+      const ssize_t got = ::pread(fd_, chunk.data(), want, off_t(entry.offset + done));
+      if (got < 0 && errno == EINTR) continue;
+      if (got <= 0) {
+        throw InputError(path_.string() + ": " + Describe(entry, i) + ": cannot read: " +
+                         (got < 0 ? std::strerror(errno) : "the file was truncated"));
+      }
+      hash.Update({chunk.data(), size_t(got)});
+      done += uint64_t(got);
+    }
+    const uint64_t checksum = hash.Digest();
     if (checksum != entry.checksum) {
       throw InputError(path_.string() + ": " + Describe(entry, i) + ": checksum mismatch (stored " +
                        HashHex(entry.checksum) + ", computed " + HashHex(checksum) +

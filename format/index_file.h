@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <span>
 #include <string>
@@ -58,6 +59,13 @@ class IndexFile {
 
   // Recomputes every section checksum; throws InputError naming the first corrupt section.
   void VerifyChecksums() const;
+  // The same for the sections whose tag `which` accepts.
+  void VerifyChecksums(const std::function<bool(uint32_t tag)>& which) const;
+
+  // Maps every page of the file in one call, for a reader about to touch most of it (update,
+  // apply): one page fault at a time costs seconds on a multi-GB index. Reads what the page cache
+  // lacks. A no-op where the kernel cannot (before Linux 5.14).
+  void MapAllPages() const;
 
  private:
   IndexFile() = default;
@@ -68,6 +76,7 @@ class IndexFile {
   const uint8_t* data_ = nullptr;
   size_t size_ = 0;
   std::span<const SectionEntry> sections_;
+  int fd_ = -1;  // kept for VerifyChecksums' reads
 };
 
 // One section to write: its bytes are copied into the file at a 64-byte aligned offset.

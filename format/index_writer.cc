@@ -35,6 +35,9 @@ uint16_t FormatMinorOf(std::span<const SectionData> sections) {
   return minor;
 }
 
+// From this size on, an index is written past the page cache.
+constexpr uint64_t kBypassPageCacheBytes = uint64_t{64} << 20;
+
 uint64_t WriteIndexFile(const std::filesystem::path& path, std::span<const SectionData> sections,
                         const ContainerKind& kind, uint16_t minor,
                         std::optional<uint64_t> expected_checksum) {
@@ -88,6 +91,9 @@ uint64_t WriteIndexFile(const std::filesystem::path& path, std::span<const Secti
   }
 
   AtomicFile file(path);
+  // A big index is not read back by its writer: its pages need not pass the page cache (the
+  // city's 1.9 GB updated index wrote and synced in 2.2-2.7 s instead of 3.3-3.8 s).
+  if (header.file_size >= kBypassPageCacheBytes) file.BypassPageCache();
   static constexpr uint8_t kZeros[kSectionAlignment] = {};
   file.Write(reinterpret_cast<const uint8_t*>(&header), sizeof(header));
   uint64_t written = sizeof(header);

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <future>
 #include <map>
 
 #include "base/parallel_for.h"
@@ -188,7 +189,22 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
   IndexUpdateReport report;
   const std::string parent_name = options.index_path.string();
   const Index parent = Index::Open(options.index_path);
-  parent.file().VerifyChecksums();
+  // The sections the read stage indexes by are checked before it; the bulk ones, which it reads
+  // as bytes (descriptors) or not at all (the kd-forest), meanwhile on a second thread, where a
+  // parent read from disk costs seconds.
+  const auto bulk = [](uint32_t tag) {
+    return tag == section::kDescriptors || tag == section::kKdNodes || tag == section::kKdLeaves;
+  };
+  parent.file().VerifyChecksums([&](uint32_t tag) { return !bulk(tag); });
+  std::future<void> bulk_verified;
+  if (ResolveThreads(options.threads) > 1) {
+    bulk_verified = std::async(std::launch::async, [&] { parent.file().VerifyChecksums(bulk); });
+  } else {
+    parent.file().VerifyChecksums(bulk);
+  }
+  const auto wait_bulk_verified = [&] {
+    if (bulk_verified.valid()) bulk_verified.get();
+  };
   const nlohmann::ordered_json parent_manifest =
       nlohmann::ordered_json::parse(parent.manifest_json(), nullptr, false);
   if (parent_manifest.is_discarded())
@@ -218,7 +234,16 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
   Stopwatch stage;
   try {
     const colmap::DatabaseReader database(options.database_path);
-    GrownModel grown = ReadGrownModel(options, parent, database);
+    GrownModel grown = [&] {
+      try {
+        return ReadGrownModel(options, parent, database);
+      } catch (...) {
+        wait_bulk_verified();  // a corrupt parent is the error to report
+        throw;
+      }
+    }();
+    wait_bulk_verified();
+    parent.file().MapAllPages();
     ModelViews& child = grown.views;
     if (child.num_views() == 0)
       throw InputError(options.model_dir.string() + ": the model has no 3D points with views");

@@ -79,13 +79,33 @@ class TreeUpdater {
   }
 
  private:
+  // The updated row of the parent's leaf slot `slot`. Slots are read in order and rows at
+  // random: the row of a slot further on is fetched meanwhile, so the random reads overlap.
+  uint32_t KeptRow(uint32_t slot) const {
+    constexpr uint32_t kAhead = 32;
+    if (slot + kAhead < parent_.leaves.size())
+      __builtin_prefetch(&change_.parent_to_child[parent_.leaves[slot + kAhead]]);
+    return change_.parent_to_child[parent_.leaves[slot]];
+  }
+
   void EmitLeaf(const KdNode& leaf, uint32_t* begin, uint32_t* end) {
+    const uint64_t slot = slot_base_ + filled_;
+    uint32_t* leaves = leaves_ + filled_;
+    if (begin == end) {  // nothing inserted: the kept rows, still in row order
+      size_t kept = 0;
+      for (uint32_t s = leaf.index; s < leaf.index + leaf.low; ++s) {
+        const uint32_t row = KeptRow(s);
+        if (row != kRemovedRow) leaves[kept++] = row;
+      }
+      nodes_->push_back(KdNode{uint32_t(slot), kKdLeaf, uint8_t(kept), 0, 0});
+      filled_ += kept;
+      return;
+    }
     // The bucket: (updated row, its descriptor).
     bucket_.clear();
     for (uint32_t s = leaf.index; s < leaf.index + leaf.low; ++s) {
-      const uint32_t parent_row = parent_.leaves[s];
-      const uint32_t row = change_.parent_to_child[parent_row];
-      if (row != kRemovedRow) bucket_.push_back({row, rows_.Kept(parent_row)});
+      const uint32_t row = KeptRow(s);
+      if (row != kRemovedRow) bucket_.push_back({row, rows_.Kept(parent_.leaves[s])});
     }
     // Kept rows ascend, and so do the ranks of inserted ones: with the new ones sorted in, the
     // bucket is in row order, as a build leaves it (whatever order the partitions left).
@@ -94,8 +114,6 @@ class TreeUpdater {
     for (const uint32_t* rank = begin; rank != end; ++rank)
       bucket_.push_back({change_.inserted[*rank], rows_.Inserted(*rank)});
     std::inplace_merge(bucket_.begin(), bucket_.begin() + kept, bucket_.end());
-    const uint64_t slot = slot_base_ + filled_;
-    uint32_t* leaves = leaves_ + filled_;
     if (bucket_.size() <= max_leaf_) {
       nodes_->push_back(KdNode{uint32_t(slot), kKdLeaf, uint8_t(bucket_.size()), 0, 0});
       for (size_t i = 0; i < bucket_.size(); ++i) leaves[i] = bucket_[i].first;
@@ -189,6 +207,9 @@ KdForest Update(const KdForestView& parent, const KdForestChange& change, size_t
   ParallelFor(num_trees, num_threads, [&](size_t t, int) {
     std::vector<uint32_t> ranks(change.inserted.size());
     for (uint32_t r = 0; r < ranks.size(); ++r) ranks[r] = r;
+    // The parent tree's nodes and at most one split per inserted row: no regrowth copies.
+    const size_t tree_end = t + 1 < num_trees ? parent.roots[t + 1] : parent.nodes.size();
+    if (tree_end > parent.roots[t]) trees[t].reserve(tree_end - parent.roots[t] + 2 * ranks.size());
     TreeUpdater updater(parent, change, rows, max_leaf_size, SplitMix64(seed ^ (t + 1)).Next(),
                         &trees[t], out.leaves.data() + t * n, t * n);
     updater.Emit(parent.roots[t], ranks.data(), ranks.data() + ranks.size());

@@ -585,6 +585,42 @@ TEST_F(IndexUpdateTest, ATruncatedOrCorruptDeltaIsNamedAndWritesNothing) {
   EXPECT_FALSE(std::filesystem::exists(output));
 }
 
+// The parent's bulk sections are checked on a second thread while the model is read. A corrupt
+// parent is the error reported, also when the model cannot be read (here: a folder without one)
+// and the check is not done yet, and so is a flip in a section checked before the read. One
+// thread or two, nothing is written.
+TEST_F(IndexUpdateTest, ACorruptParentIsNamedWhicheverThreadFindsIt) {
+  const auto index = Build(WriteModel(Without(LastImages(2)), "old"), "old.cwl");
+  const std::vector<uint8_t> bytes = test::ReadBytes(index);
+  for (const uint32_t tag : {section::kDescriptors, section::kViewPoint}) {
+    for (int threads : {1, 2}) {
+      SCOPED_TRACE(SectionTagName(tag) + ", threads " + std::to_string(threads));
+      std::vector<uint8_t> flipped = bytes;
+      {
+        const IndexFile file = IndexFile::Open(index);
+        const SectionEntry* entry = file.FindSection(tag);
+        ASSERT_NE(entry, nullptr);
+        flipped[entry->offset + 1] ^= 0x40;
+      }
+      const std::filesystem::path damaged = dir_ / "damaged.cwl";
+      test::WriteBytes(damaged, flipped);
+      IndexUpdateOptions options = Update(damaged, dir_ / "no_model", "grown");
+      std::filesystem::create_directories(options.model_dir);
+      options.threads = threads;
+      try {
+        UpdateIndex(options);
+        FAIL();
+      } catch (const InputError& error) {
+        EXPECT_THAT(error.what(), HasSubstr(damaged.string() + ": section "));
+        EXPECT_THAT(error.what(),
+                    HasSubstr(" '" + SectionTagName(tag) + "': checksum mismatch (stored "));
+      }
+      EXPECT_FALSE(std::filesystem::exists(options.output_path));
+      EXPECT_FALSE(std::filesystem::exists(options.delta_path));
+    }
+  }
+}
+
 // The delta's corruption sweep: a flipped byte in its header, its section table and the first
 // bytes of every section (all of DHDR and the runs) is refused naming the delta with the stored
 // checksums; with the checksums recomputed over the flip, apply refuses it (InputError) or
