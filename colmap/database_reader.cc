@@ -243,6 +243,9 @@ DatabaseReader::DatabaseReader(const std::filesystem::path& path) : path_(path) 
   try {
     CheckSqlite<InputError>(
         db_, sqlite3_exec(db_, "PRAGMA query_only = 1", nullptr, nullptr, nullptr), file);
+    // One read transaction for the reader's life: every query sees the same snapshot, and takes
+    // no shared lock of its own (gathering a city's 13,734 images ran 27,000 queries).
+    CheckSqlite<InputError>(db_, sqlite3_exec(db_, "BEGIN", nullptr, nullptr, nullptr), file);
     {
       StmtPtr stmt = Prepare<InputError>(db_, "PRAGMA user_version", file);
       if (CheckSqlite<InputError>(db_, sqlite3_step(stmt.get()), file) == SQLITE_ROW) {

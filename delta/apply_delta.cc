@@ -120,8 +120,14 @@ void CheckImages(const IndexDelta& delta, size_t* num_views, const std::string& 
 
 }  // namespace
 
+void CheckParentKdForest(const Index& parent) {
+  std::string error;
+  if (!ValidateKdForest(parent.kd_forest(), &error))
+    throw InputError(FileName(parent) + ": " + error);
+}
+
 AppliedDelta::AppliedDelta(const Index& parent, const IndexDelta& delta,
-                           const std::string& delta_name, int threads)
+                           const std::string& delta_name, int threads, ParentForest parent_forest)
     : parent_(parent), delta_(delta), child_(std::make_unique<Child>()) {
   const std::string& name = delta_name;
   const FileHeader& parent_header = parent.file().header();
@@ -317,9 +323,7 @@ AppliedDelta::AppliedDelta(const Index& parent, const IndexDelta& delta,
                             : std::span<const uint8_t>(composed, child_views * kDescriptorBytes),
                       options);
   } else {
-    std::string error;
-    if (!ValidateKdForest(parent.kd_forest(), &error))
-      throw InputError(FileName(parent) + ": " + error);
+    if (parent_forest == ParentForest::kUnchecked) CheckParentKdForest(parent);
     std::vector<uint32_t> inserted;
     for (uint32_t row = 0; row < rows.child_to_parent.size(); ++row) {
       if (rows.child_to_parent[row] == kRemovedRow) inserted.push_back(row);

@@ -17,12 +17,18 @@ namespace cwloc {
 // small sections, the parent's kept rows, and what both determine (tracks, co-visibility
 // graph, kd-forest, the parent's GEOR and PCAL). `cwloc-index update` writes its output with it
 // too, so that apply repeats it bit for bit. Borrows both.
+// Throws InputError naming the parent when its kd-forest is not a valid one (ValidateKdForest),
+// as the forest's update trusts it to be.
+void CheckParentKdForest(const Index& parent);
+
 class AppliedDelta {
  public:
+  // kChecked: the caller ran CheckParentKdForest (`cwloc-index update`, while it read the model).
+  enum class ParentForest { kUnchecked, kChecked };
   // Refuses (InputError naming `delta_name`) a delta made for another parent (a chain applied
   // out of order) and one whose rows do not fit the parent.
   AppliedDelta(const Index& parent, const IndexDelta& delta, const std::string& delta_name,
-               int threads);
+               int threads, ParentForest parent_forest = ParentForest::kUnchecked);
   ~AppliedDelta();
   AppliedDelta(const AppliedDelta&) = delete;
   AppliedDelta& operator=(const AppliedDelta&) = delete;

@@ -191,16 +191,20 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
   const Index parent = Index::Open(options.index_path);
   // The sections the read stage indexes by are checked before it; the bulk ones, which it reads
   // as bytes (descriptors) or not at all (the kd-forest), meanwhile on a second thread, where a
-  // parent read from disk costs seconds.
+  // parent read from disk costs seconds, and the forest's structure after them.
   const auto bulk = [](uint32_t tag) {
     return tag == section::kDescriptors || tag == section::kKdNodes || tag == section::kKdLeaves;
   };
   parent.file().VerifyChecksums([&](uint32_t tag) { return !bulk(tag); });
+  const auto verify_bulk = [&] {
+    parent.file().VerifyChecksums(bulk);
+    CheckParentKdForest(parent);
+  };
   std::future<void> bulk_verified;
   if (ResolveThreads(options.threads) > 1) {
-    bulk_verified = std::async(std::launch::async, [&] { parent.file().VerifyChecksums(bulk); });
+    bulk_verified = std::async(std::launch::async, verify_bulk);
   } else {
-    parent.file().VerifyChecksums(bulk);
+    verify_bulk();
   }
   const auto wait_bulk_verified = [&] {
     if (bulk_verified.valid()) bulk_verified.get();
@@ -431,7 +435,8 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
       report.forest_rebuilt = next.forest_rebuilt;
       // The child's other rows come from the delta and the parent, as on a device.
       decltype(child.descriptors)().swap(child.descriptors);
-      const AppliedDelta applied(parent, delta, "the update", threads);
+      const AppliedDelta applied(parent, delta, "the update", threads,
+                                 AppliedDelta::ParentForest::kChecked);
       report.seconds_apply = stage.Seconds();
       stage.Restart();
 

@@ -167,7 +167,8 @@ GrownModel ReadGrownModel(const IndexUpdateOptions& options, const Index& parent
     return known;
   };
   grown.views = GatherModelViews(*model, database, known_rows);
-  model.reset();
+  grown.model_freed =
+      std::async(std::launch::async, [freed = std::move(model)]() mutable { freed.reset(); });
   if (!removed.empty()) {
     ModelViews& child = grown.views;
     // The points dropped with the removed images take views from images whose rows the index

@@ -11,6 +11,8 @@ packages=(
   # OpenGV: the generalized pose solvers' reference in tests only.
   libopengv-dev
   libjpeg62-turbo-dev libpng-dev libexif-dev
+  # jemalloc: cwloc-index's allocator, on transparent huge pages (exe/jemalloc_conf.cc).
+  libjemalloc-dev
   # Video files (cwloc-localize --video; never in the device build), and ffmpeg to make the
   # tests' videos.
   libavformat-dev libavcodec-dev libavutil-dev libswscale-dev ffmpeg
