@@ -13,10 +13,10 @@
 
 namespace cwloc {
 
-// A read-only memory mapping of an index file. Open() costs O(number of sections): it checks
-// the header, its checksum, the section table and every section's bounds, alignment and size,
-// never touching the big arrays. Section contents are checked where they are used, and fully
-// by VerifyChecksums() (and the indexer's verify command).
+// A read-only memory mapping of an index file (and its descriptor, open while it lives). Open()
+// costs O(number of sections): it checks the header, its checksum, the section table and every
+// section's bounds, alignment and size, never touching the big arrays. Section contents are
+// checked where they are used, and fully by VerifyChecksums() (and the indexer's verify command).
 // What a container file holds: a cwloc index, or a delta between two (delta/delta_file.h).
 // Both share the header, the section table and their checksums; the magic tells them apart.
 struct ContainerKind {
