@@ -91,7 +91,8 @@ class TreeUpdater {
   void EmitLeaf(const KdNode& leaf, uint32_t* begin, uint32_t* end) {
     const uint64_t slot = slot_base_ + filled_;
     uint32_t* leaves = leaves_ + filled_;
-    if (begin == end) {  // nothing inserted: the kept rows, still in row order
+    // Nothing inserted and nothing to split: the kept rows, still in row order.
+    if (begin == end && leaf.low <= max_leaf_) {
       size_t kept = 0;
       for (uint32_t s = leaf.index; s < leaf.index + leaf.low; ++s) {
         const uint32_t row = KeptRow(s);
