@@ -193,6 +193,35 @@ void AtomicFile::WriteThrough(const char* bytes, size_t size) {
   }
 }
 
+void AtomicFile::Overwrite(uint64_t offset, const void* data, size_t size) {
+  const uint64_t end = offset + size;
+  if (end < offset || end > written_ + direct_used_)
+    throw std::logic_error("AtomicFile::Overwrite past what was written");
+  const char* bytes = static_cast<const char*>(data);
+  if (end > written_) {  // the part still in the direct buffer
+    const uint64_t from = std::max(offset, written_);
+    std::memcpy(direct_.get() + (from - written_), bytes + (from - offset), end - from);
+    size = static_cast<size_t>(from - offset);
+  }
+  if (size == 0) return;
+  std::unique_ptr<char, void (*)(void*)> aligned{nullptr, std::free};
+  if (direct_) {
+    if (offset % kDirectAlignment != 0 || size % kDirectAlignment != 0)
+      throw std::logic_error("AtomicFile::Overwrite of a part of a block on the disk");
+    void* buffer = nullptr;
+    if (::posix_memalign(&buffer, kDirectAlignment, size) != 0) Fail("cannot write", ENOMEM);
+    aligned.reset(static_cast<char*>(buffer));
+    std::memcpy(aligned.get(), bytes, size);
+    bytes = aligned.get();
+  }
+  for (size_t done = 0; done < size;) {
+    const ssize_t n = ::pwrite(fd_, bytes + done, size - done, static_cast<off_t>(offset + done));
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) Fail("cannot write", n < 0 ? errno : ENOSPC);
+    done += static_cast<size_t>(n);
+  }
+}
+
 void AtomicFile::CopyFrom(int source_fd, uint64_t size) {
   if (direct_) throw std::logic_error("AtomicFile::CopyFrom after BypassPageCache()");
   loff_t offset = 0;
@@ -230,6 +259,10 @@ int AtomicFile::OpenForReading() const {
   const int fd = ::open(name.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) Fail("cannot open the temporary file again", errno);
   return fd;
+}
+
+void AtomicFile::Sync() {
+  if (::fdatasync(fd_) != 0) Fail("cannot sync to disk", errno);
 }
 
 void AtomicFile::Commit() {

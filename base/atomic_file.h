@@ -40,12 +40,19 @@ class AtomicFile {
   // and dropped. Where the file system refuses, writes stay buffered.
   void BypassPageCache();
   void Write(const void* data, size_t size);
+  // Replaces `size` bytes at `offset` among those written so far (a header whose checksums are
+  // known last). Past the page cache, bytes already on the disk are replaced in whole blocks of
+  // 4 KiB: `offset` and `size` must then be multiples of it (std::logic_error otherwise).
+  void Overwrite(uint64_t offset, const void* data, size_t size);
   // Appends the first `size` bytes of the open file `source_fd` (read from offset 0, its own
   // offset untouched), kernel-side where the file systems allow (copy_file_range).
   void CopyFrom(int source_fd, uint64_t size);
   // A new read-only descriptor of the content written so far, which stays valid after Commit()
   // (CheckpointedFile copies the committed content on from it); the caller closes it.
   int OpenForReading() const;
+  // Makes what was written so far durable (fdatasync), so that Commit() has less left to sync:
+  // a writer's second thread calls it while the first composes the rest.
+  void Sync();
   void Commit();
 
  private:

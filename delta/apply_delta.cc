@@ -83,6 +83,8 @@ struct AppliedDelta::Child {
   // they are and written as runs of each. Only a forest rebuilt from scratch needs them in one
   // array (every byte written: no zero-filling of a gigabyte first).
   std::unique_ptr<uint8_t[]> descriptor_bytes;
+  std::vector<std::span<const uint8_t>> descriptor_pieces;
+  std::unique_ptr<IndexFileWriter> writer;  // writing the descriptors while the rest is composed
   std::vector<uint32_t> view_points;
   std::vector<ViewKeypoint> view_keypoints;
   std::vector<float> neighbor_distances;
@@ -118,6 +120,30 @@ void CheckImages(const IndexDelta& delta, size_t* num_views, const std::string& 
   *num_views = next_view;
 }
 
+// A full child's descriptors where they are: runs of the parent's rows and the delta's new rows
+// between them.
+std::vector<std::span<const uint8_t>> DescriptorPieces(const Index& parent,
+                                                       const IndexDelta& delta) {
+  std::vector<std::span<const uint8_t>> pieces;
+  const std::span<const uint8_t> kept = parent.descriptors();
+  const std::span<const uint8_t> added = delta.new_descriptors;
+  size_t next_added = 0;  // bytes
+  const auto add_new_rows = [&](size_t rows) {
+    if (rows == 0) return;
+    pieces.push_back(added.subspan(next_added, rows * kDescriptorBytes));
+    next_added += rows * kDescriptorBytes;
+  };
+  uint64_t child_row = 0;
+  for (const RowRun& run : delta.view_runs) {
+    add_new_rows(run.child_first - child_row);
+    const size_t offset = size_t(run.parent_first) * kDescriptorBytes;
+    pieces.push_back(kept.subspan(offset, size_t(run.count) * kDescriptorBytes));
+    child_row = uint64_t(run.child_first) + run.count;
+  }
+  add_new_rows((added.size() - next_added) / kDescriptorBytes);
+  return pieces;
+}
+
 }  // namespace
 
 void CheckParentKdForest(const Index& parent) {
@@ -127,7 +153,8 @@ void CheckParentKdForest(const Index& parent) {
 }
 
 AppliedDelta::AppliedDelta(const Index& parent, const IndexDelta& delta,
-                           const std::string& delta_name, int threads, ParentForest parent_forest)
+                           const std::string& delta_name, const std::filesystem::path& output,
+                           int threads, ParentForest parent_forest)
     : parent_(parent), delta_(delta), child_(std::make_unique<Child>()) {
   const std::string& name = delta_name;
   const FileHeader& parent_header = parent.file().header();
@@ -220,6 +247,17 @@ AppliedDelta::AppliedDelta(const Index& parent, const IndexDelta& delta,
   }
   ReserveOnHugePages(&child.view_points, child_views);
   child.view_points.resize(child_views);
+  // The rows checked, a full child's descriptors are known: on their way to the disk while the
+  // rest is composed (the city's 1 % update: its write stage overlapped with the kd-forest's).
+  std::vector<SectionData> leading;
+  if (!coded) {
+    child.descriptor_pieces = DescriptorPieces(parent, delta);
+    IndexContents contents;
+    contents.descriptor_pieces = child.descriptor_pieces;
+    contents.view_points = child.view_points;
+    leading.push_back(DescriptorSection(contents));
+  }
+  child.writer = std::make_unique<IndexFileWriter>(output, std::move(leading), threads > 1);
   ReserveOnHugePages(&child.neighbor_distances, neighbor_rows);
   child.neighbor_distances.resize(neighbor_rows);
   if (keypoints) {
@@ -369,7 +407,7 @@ size_t AppliedDelta::num_kd_nodes() const { return child_->forest.nodes.size(); 
 
 size_t AppliedDelta::num_covisibility_edges() const { return child_->graph.edges.size(); }
 
-uint64_t AppliedDelta::Write(const std::filesystem::path& output, std::string_view manifest,
+uint64_t AppliedDelta::Write(std::string_view manifest,
                              std::optional<uint64_t> expected_checksum) const {
   const Child& child = *child_;
   const IndexDelta& delta = delta_;
@@ -398,30 +436,9 @@ uint64_t AppliedDelta::Write(const std::filesystem::path& output, std::string_vi
   contents.point_ids = child.point_ids;
   contents.georeference = parent.georeference();
   contents.covariance_calibration = parent.covariance_calibration();
-  // A full child's descriptors, written from where they are: runs of the parent's rows and the
-  // delta's new rows between them.
-  std::vector<std::span<const uint8_t>> descriptor_pieces;
-  if (!parent.coded()) {
-    const std::span<const uint8_t> kept = parent.descriptors();
-    const std::span<const uint8_t> added = delta.new_descriptors;
-    size_t next_added = 0;  // bytes
-    const auto add_new_rows = [&](size_t rows) {
-      if (rows == 0) return;
-      descriptor_pieces.push_back(added.subspan(next_added, rows * kDescriptorBytes));
-      next_added += rows * kDescriptorBytes;
-    };
-    uint64_t child_row = 0;
-    for (const RowRun& run : delta.view_runs) {
-      add_new_rows(run.child_first - child_row);
-      const size_t offset = size_t(run.parent_first) * kDescriptorBytes;
-      descriptor_pieces.push_back(kept.subspan(offset, size_t(run.count) * kDescriptorBytes));
-      child_row = uint64_t(run.child_first) + run.count;
-    }
-    add_new_rows((added.size() - next_added) / kDescriptorBytes);
-    contents.descriptor_pieces = descriptor_pieces;
-  }
+  contents.descriptor_pieces = child.descriptor_pieces;
   const std::vector<SectionData> sections = IndexSectionsOf(contents, manifest);
-  return WriteIndexFile(output, sections, kIndexContainer, 0, expected_checksum);
+  return child.writer->Finish(sections, kIndexContainer, 0, expected_checksum);
 }
 
 ApplyDeltaReport ApplyDelta(const std::filesystem::path& index_path,
@@ -432,8 +449,8 @@ ApplyDeltaReport ApplyDelta(const std::filesystem::path& index_path,
   const Index parent = Index::Open(index_path);
   parent.file().VerifyChecksums();
   parent.file().MapAllPages();
-  AppliedDelta(parent, delta, delta_path.string(), threads)
-      .Write(output, delta.manifest, delta.header.child_checksum);
+  AppliedDelta(parent, delta, delta_path.string(), output, threads)
+      .Write(delta.manifest, delta.header.child_checksum);
   ApplyDeltaReport report;
   report.parent_views = parent.num_views();
   report.child_images = delta.images.size();

@@ -27,18 +27,21 @@ class AppliedDelta {
   enum class ParentForest { kUnchecked, kChecked };
   // Refuses (InputError naming `delta_name`) a delta made for another parent (a chain applied
   // out of order) and one whose rows do not fit the parent.
+  // Starts writing the child to `output` (IndexFileWriter: a full child's descriptors, on a
+  // second thread when `threads` > 1) while it composes the rest; Write finishes it.
   AppliedDelta(const Index& parent, const IndexDelta& delta, const std::string& delta_name,
-               int threads, ParentForest parent_forest = ParentForest::kUnchecked);
+               const std::filesystem::path& output, int threads,
+               ParentForest parent_forest = ParentForest::kUnchecked);
   ~AppliedDelta();
   AppliedDelta(const AppliedDelta&) = delete;
   AppliedDelta& operator=(const AppliedDelta&) = delete;
 
   size_t num_kd_nodes() const;
   size_t num_covisibility_edges() const;
-  // Writes the child atomically with `manifest` as its MANI and returns its header checksum;
-  // refuses (InputError, nothing written) a child whose checksum is not `expected_checksum`.
-  uint64_t Write(const std::filesystem::path& output, std::string_view manifest,
-                 std::optional<uint64_t> expected_checksum) const;
+  // Finishes the child's file with `manifest` as its MANI, puts it in place atomically and
+  // returns its header checksum; refuses (InputError, nothing put in place) a child whose
+  // checksum is not `expected_checksum`. Once.
+  uint64_t Write(std::string_view manifest, std::optional<uint64_t> expected_checksum) const;
 
  private:
   struct Child;

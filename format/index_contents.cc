@@ -11,14 +11,29 @@ void KeepParentCoding(const Index& parent, IndexPointOrigin* origin, IndexConten
   contents->code_bytes = parent.codes().code_bytes;
 }
 
+SectionData DescriptorSection(const IndexContents& contents) {
+  return {section::kDescriptors,
+          kSectionRequired,
+          kDescriptorBytes,
+          contents.view_points.size(),
+          contents.descriptors,
+          {contents.descriptor_pieces.begin(), contents.descriptor_pieces.end()}};
+}
+
 std::vector<SectionData> IndexSectionsOf(const IndexContents& contents, std::string_view manifest) {
   const bool coded = contents.code_bytes != 0;
-  std::vector<SectionData> sections = {
-      MakeSection<char>(section::kManifest, {manifest.data(), manifest.size()}),
-      MakeSection(section::kCameras, contents.cameras),
-      MakeSection(section::kImages, contents.images),
-      MakeSection<char>(section::kStrings, {contents.strings.data(), contents.strings.size()}),
-  };
+  std::vector<SectionData> sections;
+  // A full index's descriptors first: known before the rest, they are written while the rest
+  // is composed (IndexFileWriter).
+  if (!coded) sections.push_back(DescriptorSection(contents));
+  sections.insert(
+      sections.end(),
+      {
+          MakeSection<char>(section::kManifest, {manifest.data(), manifest.size()}),
+          MakeSection(section::kCameras, contents.cameras),
+          MakeSection(section::kImages, contents.images),
+          MakeSection<char>(section::kStrings, {contents.strings.data(), contents.strings.size()}),
+      });
   if (coded) {
     sections.push_back(MakeSection(section::kPointOrigin,
                                    std::span<const IndexPointOrigin>(contents.point_origin, 1)));
@@ -31,14 +46,6 @@ std::vector<SectionData> IndexSectionsOf(const IndexContents& contents, std::str
     sections.push_back(MakeSection(section::kCodebook, contents.codebook));
     sections.push_back(SectionData{section::kPointCodes, kSectionRequired, contents.code_bytes,
                                    contents.codes.size() / contents.code_bytes, contents.codes});
-  } else {
-    sections.push_back(
-        SectionData{section::kDescriptors,
-                    kSectionRequired,
-                    kDescriptorBytes,
-                    contents.view_points.size(),
-                    contents.descriptors,
-                    {contents.descriptor_pieces.begin(), contents.descriptor_pieces.end()}});
   }
   sections.push_back(MakeSection(section::kViewPoint, contents.view_points));
   sections.push_back(MakeSection(coded ? section::kPointNeighbor : section::kViewNeighbor,

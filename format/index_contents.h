@@ -44,8 +44,11 @@ class Index;
 // code size and point origin, copied into `origin`, which `contents` then points to.
 void KeepParentCoding(const Index& parent, IndexPointOrigin* origin, IndexContents* contents);
 
-// The sections of an index file with these contents, in the file's order, `manifest` (JSON
-// text, borrowed) first. Its format version is FormatMinorOf the result.
+// The sections of an index file with these contents, in the file's order: a full index's
+// descriptors (DescriptorSection, which an IndexFileWriter can write ahead), then `manifest`
+// (JSON text, borrowed) and the rest. Its format version is FormatMinorOf the result.
 std::vector<SectionData> IndexSectionsOf(const IndexContents& contents, std::string_view manifest);
+// A full index's DESC section: `descriptor_pieces` (or `descriptors`), a row per view_points.
+SectionData DescriptorSection(const IndexContents& contents);
 
 }  // namespace cwloc

@@ -3,6 +3,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <span>
 #include <string>
@@ -95,12 +96,35 @@ struct SectionData {
 // (1.1 without the compact index's sections, 1.2 with them, 1.3 with PCAL, 1.4 with PRGB).
 uint16_t FormatMinorOf(std::span<const SectionData> sections);
 
-// Writes an index atomically through an AtomicFile (base/atomic_file.h: an unnamed
-// temporary file in the target directory, fsync, put in place). The output depends only on the
-// sections given (padding is zero), so equal input gives equal bytes.
-// `kind` and `minor` set the header (an index's minor is FormatMinorOf its sections). Returns the
-// header checksum written; with `expected_checksum`, a different one is refused (InputError)
-// before anything is written.
+// Writes an index (or a delta) atomically through an AtomicFile (base/atomic_file.h: an unnamed
+// temporary file in the target directory, fsync, put in place), in two steps so that its
+// leading sections (a full index's descriptors, three quarters of its bytes) go to the disk
+// while the caller still composes the rest: the constructor starts writing them, on a second
+// thread when `background`; Finish writes the rest, the section table and the header, and puts
+// the file in place. Destroyed unfinished (an exception), it leaves nothing. The leading
+// sections' bytes must stay alive until Finish. The output depends only on the sections
+// (padding is zero), so equal input gives equal bytes.
+class IndexFileWriter {
+ public:
+  IndexFileWriter(const std::filesystem::path& path, std::vector<SectionData> leading,
+                  bool background);
+  ~IndexFileWriter();
+  IndexFileWriter(const IndexFileWriter&) = delete;
+  IndexFileWriter& operator=(const IndexFileWriter&) = delete;
+
+  // `sections`: the whole file's, the leading ones first (std::logic_error when they are not).
+  // `kind` and `minor` set the header (an index's minor is FormatMinorOf its sections). Returns
+  // the header checksum; with `expected_checksum`, a different one is refused (InputError) and
+  // nothing is put in place.
+  uint64_t Finish(std::span<const SectionData> sections, const ContainerKind& kind, uint16_t minor,
+                  std::optional<uint64_t> expected_checksum);
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
+};
+
+// The one-step write: every section given to IndexFileWriter at once, then finished.
 uint64_t WriteIndexFile(const std::filesystem::path& path, std::span<const SectionData> sections,
                         const ContainerKind& kind = kIndexContainer, uint16_t minor = 0,
                         std::optional<uint64_t> expected_checksum = std::nullopt);

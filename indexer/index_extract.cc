@@ -302,12 +302,13 @@ void WriteTileByDelta(const IndexExtractOptions& options, const Index& old_tile,
                  size_t(std::count(row_map.begin(), row_map.end(), kRemovedRow)), images_added,
                  old_tile.images().size() - kept_images, &delta.header);
   report->forest_rebuilt = next.forest_rebuilt;
-  const AppliedDelta applied(old_tile, delta, "the tile's delta", ResolveThreads(options.threads));
+  const AppliedDelta applied(old_tile, delta, "the tile's delta", options.output_path,
+                             ResolveThreads(options.threads));
 
   manifest["counts"]["kd_nodes"] = applied.num_kd_nodes();
   manifest["update"] = next.record;
   delta.manifest = manifest.dump(2) + "\n";
-  delta.header.child_checksum = applied.Write(options.output_path, delta.manifest, std::nullopt);
+  delta.header.child_checksum = applied.Write(delta.manifest, std::nullopt);
   delta.header.child_file_size = std::filesystem::file_size(options.output_path);
   WriteDelta(options.delta_path, delta);
   report->delta_bytes = std::filesystem::file_size(options.delta_path);

@@ -435,7 +435,7 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
       report.forest_rebuilt = next.forest_rebuilt;
       // The child's other rows come from the delta and the parent, as on a device.
       decltype(child.descriptors)().swap(child.descriptors);
-      const AppliedDelta applied(parent, delta, "the update", threads,
+      const AppliedDelta applied(parent, delta, "the update", options.output_path, threads,
                                  AppliedDelta::ParentForest::kChecked);
       report.seconds_apply = stage.Seconds();
       stage.Restart();
@@ -462,8 +462,7 @@ IndexUpdateReport UpdateIndex(const IndexUpdateOptions& options) {
       manifest["source"]["database"]["path"] = options.database_path.string();
       manifest["update"] = next.record;
       delta.manifest = manifest.dump(2) + "\n";
-      delta.header.child_checksum =
-          applied.Write(options.output_path, delta.manifest, std::nullopt);
+      delta.header.child_checksum = applied.Write(delta.manifest, std::nullopt);
       report.file_bytes = std::filesystem::file_size(options.output_path);
       delta.header.child_file_size = report.file_bytes;
       if (!options.delta_path.empty()) {

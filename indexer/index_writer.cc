@@ -13,7 +13,10 @@ void WriteIndex(const std::filesystem::path& path, const IndexContents& contents
   manifest["format_version"] =
       std::to_string(kFormatMajor) + "." + std::to_string(FormatMinorOf(sections));
   const std::string manifest_text = manifest.dump(2) + "\n";
-  sections[0] = MakeSection<char>(section::kManifest, {manifest_text.data(), manifest_text.size()});
+  for (SectionData& section : sections) {
+    if (section.tag == section::kManifest)
+      section = MakeSection<char>(section::kManifest, {manifest_text.data(), manifest_text.size()});
+  }
   WriteIndexFile(path, sections);
 }
 

@@ -147,6 +147,39 @@ TEST(AtomicFileTest, BypassingThePageCacheWritesTheSameBytes) {
   }
 }
 
+// A header written last: bytes still in the buffer and bytes on the disk are replaced, in both
+// modes; past the page cache, a part of a block already on the disk is refused.
+TEST(AtomicFileTest, OverwriteReplacesBytesWrittenBefore) {
+  test::TempDir dir;
+  for (const bool bypass_page_cache : {false, true}) {
+    for (const size_t total : {size_t{5000}, (size_t{17} << 20) + 10}) {
+      SCOPED_TRACE(std::to_string(total) + (bypass_page_cache ? " bytes past the page cache"
+                                                              : " bytes through the page cache"));
+      std::string expected(total, 'x');
+      const fs::path path = dir / "a.bin";
+      AtomicFile file(path);
+      if (bypass_page_cache) file.BypassPageCache();
+      file.Write(expected.data(), total);
+      const std::string first_block(4096, 'h');
+      file.Overwrite(0, first_block.data(), first_block.size());
+      expected.replace(0, 4096, first_block);
+      file.Overwrite(total - 3, "end", 3);  // in the buffer, whichever mode
+      expected.replace(total - 3, 3, "end");
+      EXPECT_THROW(file.Overwrite(total - 2, "end", 3), std::logic_error);
+      file.Commit();
+      EXPECT_TRUE(ReadFile(path) == expected);
+    }
+  }
+  const int probe = ::open((dir / "probe").c_str(), O_WRONLY | O_CREAT | O_DIRECT, 0644);
+  if (probe < 0) GTEST_SKIP() << "no O_DIRECT in " << dir.path();
+  ::close(probe);
+  AtomicFile file(dir / "b.bin");
+  file.BypassPageCache();
+  const std::string content((size_t{17} << 20) + 10, 'y');
+  file.Write(content.data(), content.size());
+  EXPECT_THROW(file.Overwrite(100, "part", 4), std::logic_error);
+}
+
 TEST(AtomicFileTest, WriterBuffersSmallPiecesAndPassesLargeOnes) {
   test::TempDir dir;
   std::string expected;

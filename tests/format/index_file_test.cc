@@ -88,6 +88,27 @@ TEST_F(IndexFileTest, OutputIsByteIdenticalForTheSameInput) {
   EXPECT_EQ(ReadBytes(path_), ReadBytes(second));
 }
 
+// The two-step write (leading sections on a second thread, the rest after) gives the one-step
+// write's bytes; the rest must follow the leading sections, and an unfinished writer leaves
+// nothing.
+TEST_F(IndexFileTest, WritingLeadingSectionsAheadGivesTheSameBytes) {
+  const std::vector<SectionData> sections = Sections();
+  for (const bool background : {false, true}) {
+    const auto path = dir_ / (background ? "ahead_background.cwl" : "ahead.cwl");
+    IndexFileWriter writer(path, {sections[0], sections[1]}, background);
+    EXPECT_FALSE(std::filesystem::exists(path));
+    writer.Finish(sections, kIndexContainer, 0, std::nullopt);
+    EXPECT_EQ(ReadBytes(path), ReadBytes(path_));
+  }
+  {
+    IndexFileWriter writer(dir_ / "other.cwl", {sections[1]}, true);
+    EXPECT_THROW(writer.Finish(sections, kIndexContainer, 0, std::nullopt), std::logic_error);
+  }
+  { IndexFileWriter writer(dir_ / "unfinished.cwl", {sections[0]}, true); }
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "other.cwl"));
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "unfinished.cwl"));
+}
+
 TEST_F(IndexFileTest, WritingReplacesAtomicallyAndLeavesNoTemporaryFile) {
   Write(path_);
   size_t files = 0;
