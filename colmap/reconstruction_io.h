@@ -26,10 +26,11 @@ enum class ModelLayout {
 // Throws InputError naming the file, the record and the field on any malformed input,
 // including broken cross-references (see the invariants listed on Reconstruction). A model file
 // that is not a regular file or is over kColmapModelFile's limit (base/bounded_file.h)
-// is refused before it is opened.
-Reconstruction ReadReconstruction(const std::filesystem::path& dir);
-Reconstruction ReadReconstructionBinary(const std::filesystem::path& dir);
-Reconstruction ReadReconstructionText(const std::filesystem::path& dir);
+// is refused before it is opened. With `threads` > 1, points3D.* is read on a second thread
+// while images.* is (an images.* error is the one reported when both have one).
+Reconstruction ReadReconstruction(const std::filesystem::path& dir, int threads = 1);
+Reconstruction ReadReconstructionBinary(const std::filesystem::path& dir, int threads = 1);
+Reconstruction ReadReconstructionText(const std::filesystem::path& dir, int threads = 1);
 
 // Writes a model COLMAP reads back. With kRigs, a model without rigs and frames gets one
 // trivial rig per camera and one frame per image, as COLMAP does when it upgrades a model.
@@ -69,7 +70,7 @@ struct ModelFileCodec {
 const ModelFileCodec& BinaryCodec();
 const ModelFileCodec& TextCodec();
 
-Reconstruction ReadModel(const std::filesystem::path& dir, ModelFormat format);
+Reconstruction ReadModel(const std::filesystem::path& dir, ModelFormat format, int threads);
 // `dir` exists.
 void WriteModel(const Reconstruction& reconstruction, const std::filesystem::path& dir,
                 ModelFormat format, ModelLayout layout);

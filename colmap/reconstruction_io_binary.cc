@@ -484,8 +484,8 @@ void WriteFrames(const std::map<frame_t, Frame>& frames, const fs::path& path) {
 
 }  // namespace
 
-Reconstruction ReadReconstructionBinary(const fs::path& dir) {
-  return detail::ReadModel(dir, ModelFormat::kBinary);
+Reconstruction ReadReconstructionBinary(const fs::path& dir, int threads) {
+  return detail::ReadModel(dir, ModelFormat::kBinary, threads);
 }
 
 namespace detail {

@@ -509,8 +509,8 @@ void WriteFrames(const std::map<frame_t, Frame>& frames, const fs::path& path) {
 
 }  // namespace
 
-Reconstruction ReadReconstructionText(const fs::path& dir) {
-  return detail::ReadModel(dir, ModelFormat::kText);
+Reconstruction ReadReconstructionText(const fs::path& dir, int threads) {
+  return detail::ReadModel(dir, ModelFormat::kText, threads);
 }
 
 namespace detail {

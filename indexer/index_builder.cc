@@ -32,7 +32,8 @@ IndexBuildReport BuildIndex(const IndexBuildOptions& options) {
     CheckInputFile(options.clustering.file, kClusterFile);
 
   Stopwatch stage;
-  const colmap::Reconstruction model = colmap::ReadReconstruction(options.model_dir);
+  const colmap::Reconstruction model =
+      colmap::ReadReconstruction(options.model_dir, ResolveThreads(options.threads));
   const colmap::DatabaseReader database(options.database_path);
   ModelViews views = GatherModelViews(model, database);
   if (views.num_views() == 0) {

@@ -10,6 +10,7 @@
 #include <unordered_set>
 
 #include "base/bounded_file.h"
+#include "base/parallel_for.h"
 #include "colmap/reconstruction_io.h"
 #include "geo/index_georeference.h"
 #include "kdtree/kd_forest_update.h"
@@ -99,8 +100,8 @@ std::unordered_set<image_t> ImagesWithoutCodedPoints(
 GrownModel ReadGrownModel(const IndexUpdateOptions& options, const Index& parent,
                           const colmap::DatabaseReader& database) {
   // Freed once gathered: the index's arrays hold what the rest needs.
-  auto model =
-      std::make_unique<colmap::Reconstruction>(colmap::ReadReconstruction(options.model_dir));
+  auto model = std::make_unique<colmap::Reconstruction>(
+      colmap::ReadReconstruction(options.model_dir, ResolveThreads(options.threads)));
   GrownModel grown;
   grown.layout = model->rigs.empty() ? "classic" : "rigs";
   // An old image whose observations are of the same points in the same order keeps its view

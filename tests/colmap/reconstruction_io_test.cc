@@ -98,6 +98,7 @@ TEST_P(RoundTripTest, WriteThenReadGivesTheSameModel) {
   test::TempDir dir;
   WriteReconstruction(model, dir.path(), c.format, c.layout);
   const Reconstruction read = ReadReconstruction(dir.path());
+  EXPECT_EQ(ReadReconstruction(dir.path(), /*threads=*/2), read);
 
   ExpectSameContent(read, model);
   if (c.layout == ModelLayout::kClassic) {
@@ -437,6 +438,24 @@ TEST_F(BrokenModelTest, HugeCountsInTinyFiles) {
   SetUp();
   Patch("images.bin", 0, Bytes({0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff}));
   EXPECT_THAT(Error(), HasSubstr("header: num_reg_images = 18446744073709551615 does not fit"));
+}
+
+// Read on two threads, a model broken in images.bin and points3D.bin reports images.bin's
+// error, as the one-thread read does; points3D.bin's alone is reported too.
+TEST_F(BrokenModelTest, TwoThreadsReportTheErrorOneThreadDoes) {
+  const auto error_on = [&](int threads) {
+    return InputErrorOf([&] { ReadReconstruction(dir_.path(), threads); });
+  };
+  Patch("points3D.bin", 51, Bytes({0xff, 0xff, 0xff, 0xff, 0, 0, 0, 0}));
+  EXPECT_EQ(error_on(2), Path("points3D.bin") +
+                             ": point3D 5: track_length = 4294967295 does not fit in the 8 bytes "
+                             "left at byte 59 (each needs at least 8)");
+  Patch("images.bin", 78, Bytes({0, 0, 0, 0, 0, 0, 0, 0x01}));
+  const std::string images_error = Path("images.bin") +
+                                   ": image 7: num_points2D = 72057594037927936 does not fit in "
+                                   "the 48 bytes left at byte 86 (each needs at least 24)";
+  EXPECT_EQ(error_on(1), images_error);
+  EXPECT_EQ(error_on(2), images_error);
 }
 
 TEST_F(BrokenModelTest, TruncatedFiles) {
