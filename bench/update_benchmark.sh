@@ -53,10 +53,17 @@ mkdir -p "$work"
 work="$(cd "$work" && pwd)"
 data_root="$top/../shared/data"
 
-# timed NAME COMMAND...: runs COMMAND with its wall time and peak RSS in $out/NAME.time.
+# timed NAME COMMAND...: runs COMMAND with its wall time and peak RSS in $out/NAME.time. The
+# output (the argument after -o) is removed first: replacing a GB file frees its blocks, half a
+# second on this VM's disk, which is not the command's work.
 timed() {
   local name="$1"
   shift
+  local previous=""
+  for arg in "$@"; do
+    [ "$previous" = "-o" ] && rm -f "$arg"
+    previous="$arg"
+  done
   /usr/bin/time -f "%e %M" -o "$out/$name.time" "$@" >"$out/$name.log" 2>&1 ||
     { tail -n 5 "$out/$name.log" >&2; die "$name failed: $*"; }
 }

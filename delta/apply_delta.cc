@@ -84,6 +84,7 @@ struct AppliedDelta::Child {
   // array (every byte written: no zero-filling of a gigabyte first).
   std::unique_ptr<uint8_t[]> descriptor_bytes;
   std::vector<std::span<const uint8_t>> descriptor_pieces;
+  IndexPointOrigin origin{};  // a compact child's, which the rows written ahead point to
   std::unique_ptr<IndexFileWriter> writer;  // writing the descriptors while the rest is composed
   std::vector<uint32_t> view_points;
   std::vector<ViewKeypoint> view_keypoints;
@@ -249,15 +250,14 @@ AppliedDelta::AppliedDelta(const Index& parent, const IndexDelta& delta,
   child.view_points.resize(child_views);
   // The rows checked, a full child's descriptors are known: on their way to the disk while the
   // rest is composed (the city's 1 % update: its write stage overlapped with the kd-forest's).
+  // The other rows follow once composed, while the kd-forest and the graph are made.
+  const bool background = threads > 1;
   std::vector<SectionData> leading;
   if (!coded) {
     child.descriptor_pieces = DescriptorPieces(parent, delta);
-    IndexContents contents;
-    contents.descriptor_pieces = child.descriptor_pieces;
-    contents.view_points = child.view_points;
-    leading.push_back(DescriptorSection(contents));
+    leading.push_back(DescriptorSection(Contents(&child.origin)));
   }
-  child.writer = std::make_unique<IndexFileWriter>(output, std::move(leading), threads > 1);
+  child.writer = std::make_unique<IndexFileWriter>(output, std::move(leading), background);
   ReserveOnHugePages(&child.neighbor_distances, neighbor_rows);
   child.neighbor_distances.resize(neighbor_rows);
   if (keypoints) {
@@ -344,6 +344,9 @@ AppliedDelta::AppliedDelta(const Index& parent, const IndexDelta& delta,
   }
 
   if (coded) ComposeCodes(parent, delta, points.child_to_parent);
+  std::vector<SectionData> rows_written_ahead = RowSections(Contents(&child.origin));
+  if (!coded) rows_written_ahead.erase(rows_written_ahead.begin());  // the descriptors, begun
+  child.writer->WriteAhead(std::move(rows_written_ahead), background);
 
   const std::vector<IndexImage> images = delta.images;
   child.graph =
@@ -407,19 +410,14 @@ size_t AppliedDelta::num_kd_nodes() const { return child_->forest.nodes.size(); 
 
 size_t AppliedDelta::num_covisibility_edges() const { return child_->graph.edges.size(); }
 
-uint64_t AppliedDelta::Write(std::string_view manifest,
-                             std::optional<uint64_t> expected_checksum) const {
+IndexContents AppliedDelta::Contents(IndexPointOrigin* origin) const {
   const Child& child = *child_;
-  const IndexDelta& delta = delta_;
-  const Index& parent = parent_;
-
   IndexContents contents;
-  contents.cameras = delta.cameras;
-  contents.images = delta.images;
-  contents.strings = delta.strings;
-  IndexPointOrigin origin{};
-  if (parent.coded()) {
-    KeepParentCoding(parent, &origin, &contents);
+  contents.cameras = delta_.cameras;
+  contents.images = delta_.images;
+  contents.strings = delta_.strings;
+  if (parent_.coded()) {
+    KeepParentCoding(parent_, origin, &contents);
     contents.point_offsets = child.point_offsets;
     contents.codes = child.codes;
   } else {
@@ -434,9 +432,17 @@ uint64_t AppliedDelta::Write(std::string_view manifest,
   contents.view_keypoints = child.view_keypoints;
   contents.point_colors = child.point_colors;
   contents.point_ids = child.point_ids;
-  contents.georeference = parent.georeference();
-  contents.covariance_calibration = parent.covariance_calibration();
+  contents.georeference = parent_.georeference();
+  contents.covariance_calibration = parent_.covariance_calibration();
   contents.descriptor_pieces = child.descriptor_pieces;
+  return contents;
+}
+
+uint64_t AppliedDelta::Write(std::string_view manifest,
+                             std::optional<uint64_t> expected_checksum) const {
+  const Child& child = *child_;
+  IndexPointOrigin origin{};
+  const IndexContents contents = Contents(&origin);
   const std::vector<SectionData> sections = IndexSectionsOf(contents, manifest);
   return child.writer->Finish(sections, kIndexContainer, 0, expected_checksum);
 }

@@ -10,6 +10,7 @@
 
 #include "delta/delta_file.h"
 #include "format/index.h"
+#include "format/index_contents.h"
 
 namespace cwloc {
 
@@ -45,6 +46,8 @@ class AppliedDelta {
 
  private:
   struct Child;
+  // What the child's sections are made of, so far; `origin` holds a compact child's.
+  IndexContents Contents(IndexPointOrigin* origin) const;
   void ComposeCodes(const Index& parent, const IndexDelta& delta,
                     const std::vector<uint32_t>& parent_of_point);
   const Index& parent_;

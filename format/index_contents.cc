@@ -20,25 +20,15 @@ SectionData DescriptorSection(const IndexContents& contents) {
           {contents.descriptor_pieces.begin(), contents.descriptor_pieces.end()}};
 }
 
-std::vector<SectionData> IndexSectionsOf(const IndexContents& contents, std::string_view manifest) {
+std::vector<SectionData> RowSections(const IndexContents& contents) {
   const bool coded = contents.code_bytes != 0;
   std::vector<SectionData> sections;
-  // A full index's descriptors first: known before the rest, they are written while the rest
-  // is composed (IndexFileWriter).
-  if (!coded) sections.push_back(DescriptorSection(contents));
-  sections.insert(
-      sections.end(),
-      {
-          MakeSection<char>(section::kManifest, {manifest.data(), manifest.size()}),
-          MakeSection(section::kCameras, contents.cameras),
-          MakeSection(section::kImages, contents.images),
-          MakeSection<char>(section::kStrings, {contents.strings.data(), contents.strings.size()}),
-      });
   if (coded) {
     sections.push_back(MakeSection(section::kPointOrigin,
                                    std::span<const IndexPointOrigin>(contents.point_origin, 1)));
     sections.push_back(MakeSection(section::kPointOffsets, contents.point_offsets));
   } else {
+    sections.push_back(DescriptorSection(contents));
     sections.push_back(MakeSection(section::kPoints, contents.points));
   }
   sections.push_back(MakeSection(section::kTracks, contents.tracks));
@@ -50,13 +40,6 @@ std::vector<SectionData> IndexSectionsOf(const IndexContents& contents, std::str
   sections.push_back(MakeSection(section::kViewPoint, contents.view_points));
   sections.push_back(MakeSection(coded ? section::kPointNeighbor : section::kViewNeighbor,
                                  contents.neighbor_distances));
-  const KdForest& forest = *contents.forest;
-  sections.insert(sections.end(),
-                  {MakeSection(section::kKdNodes, std::span<const KdNode>(forest.nodes)),
-                   MakeSection(section::kKdRoots, std::span<const uint32_t>(forest.roots)),
-                   MakeSection(section::kKdLeaves, std::span<const uint32_t>(forest.leaves)),
-                   MakeSection(section::kCovisOffsets, contents.covisibility_offsets),
-                   MakeSection(section::kCovisEdges, contents.covisibility_edges)});
   if (!contents.view_keypoints.empty()) {
     // Optional: the localizer does not read model keypoints; tools that draw matches do.
     sections.push_back(MakeSection(section::kViewKeypoints, contents.view_keypoints, /*flags=*/0));
@@ -69,6 +52,23 @@ std::vector<SectionData> IndexSectionsOf(const IndexContents& contents, std::str
     // Optional: what `cwloc-index update` recognizes the model's points by.
     sections.push_back(MakeSection(section::kPointIds, contents.point_ids, /*flags=*/0));
   }
+  return sections;
+}
+
+std::vector<SectionData> IndexSectionsOf(const IndexContents& contents, std::string_view manifest) {
+  std::vector<SectionData> sections = RowSections(contents);
+  const KdForest& forest = *contents.forest;
+  sections.insert(
+      sections.end(),
+      {MakeSection<char>(section::kManifest, {manifest.data(), manifest.size()}),
+       MakeSection(section::kCameras, contents.cameras),
+       MakeSection(section::kImages, contents.images),
+       MakeSection<char>(section::kStrings, {contents.strings.data(), contents.strings.size()}),
+       MakeSection(section::kKdNodes, std::span<const KdNode>(forest.nodes)),
+       MakeSection(section::kKdRoots, std::span<const uint32_t>(forest.roots)),
+       MakeSection(section::kKdLeaves, std::span<const uint32_t>(forest.leaves)),
+       MakeSection(section::kCovisOffsets, contents.covisibility_offsets),
+       MakeSection(section::kCovisEdges, contents.covisibility_edges)});
   if (contents.georeference != nullptr) {
     sections.push_back(MakeSection(section::kGeoreference,
                                    std::span<const IndexGeoreference>(contents.georeference, 1),

@@ -109,10 +109,12 @@ class IndexFileWriter {
   IndexFileWriter(const std::filesystem::path& path, std::vector<SectionData> leading,
                   bool background);
   ~IndexFileWriter();
+  // More leading sections, written after those given before (a batch known later).
+  void WriteAhead(std::vector<SectionData> sections, bool background);
   IndexFileWriter(const IndexFileWriter&) = delete;
   IndexFileWriter& operator=(const IndexFileWriter&) = delete;
 
-  // `sections`: the whole file's, the leading ones first (std::logic_error when they are not).
+  // `sections`: the whole file's, those written ahead first (std::logic_error when not).
   // `kind` and `minor` set the header (an index's minor is FormatMinorOf its sections). Returns
   // the header checksum; with `expected_checksum`, a different one is refused (InputError) and
   // nothing is put in place.

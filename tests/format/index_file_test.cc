@@ -88,14 +88,15 @@ TEST_F(IndexFileTest, OutputIsByteIdenticalForTheSameInput) {
   EXPECT_EQ(ReadBytes(path_), ReadBytes(second));
 }
 
-// The two-step write (leading sections on a second thread, the rest after) gives the one-step
-// write's bytes; the rest must follow the leading sections, and an unfinished writer leaves
-// nothing.
+// The write in steps (leading sections in two batches, on a second thread or not, the rest
+// after) gives the one-step write's bytes; the rest must follow the leading sections, and an
+// unfinished writer leaves nothing.
 TEST_F(IndexFileTest, WritingLeadingSectionsAheadGivesTheSameBytes) {
   const std::vector<SectionData> sections = Sections();
   for (const bool background : {false, true}) {
     const auto path = dir_ / (background ? "ahead_background.cwl" : "ahead.cwl");
-    IndexFileWriter writer(path, {sections[0], sections[1]}, background);
+    IndexFileWriter writer(path, {sections[0]}, background);
+    writer.WriteAhead({sections[1]}, background);
     EXPECT_FALSE(std::filesystem::exists(path));
     writer.Finish(sections, kIndexContainer, 0, std::nullopt);
     EXPECT_EQ(ReadBytes(path), ReadBytes(path_));
