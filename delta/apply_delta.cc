@@ -145,6 +145,79 @@ std::vector<std::span<const uint8_t>> DescriptorPieces(const Index& parent,
   return pieces;
 }
 
+// The rows of the parent's co-visibility graph the child keeps: an image's whose views are the
+// parent image's, each on a point whose track is the parent point's, view for view (every
+// view in the image it had). A parent row with an edge to an image the child lacks (an
+// invalid parent) is counted afresh instead.
+KeptCovisibilityRows KeptGraphRows(const Index& parent, std::span<const IndexImage> images,
+                                   const RowMaps& views, const RowMaps& points,
+                                   const std::vector<uint32_t>& tracks,
+                                   const std::vector<IndexPoint>& child_points,
+                                   const std::vector<uint32_t>& view_points,
+                                   std::vector<uint32_t>* child_of_parent_image) {
+  constexpr uint32_t kNotKept = KeptCovisibilityRows::kNotKept;
+  const std::span<const IndexImage> parent_images = parent.images();
+  // Images by id, both in id order.
+  std::vector<uint32_t> parent_of_image(images.size(), kNotKept);
+  child_of_parent_image->assign(parent_images.size(), kNotKept);
+  for (uint32_t i = 0, p = 0; i < images.size() && p < parent_images.size();) {
+    if (images[i].image_id < parent_images[p].image_id) {
+      ++i;
+    } else if (parent_images[p].image_id < images[i].image_id) {
+      ++p;
+    } else {
+      parent_of_image[i] = p;
+      (*child_of_parent_image)[p] = i;
+      ++i, ++p;
+    }
+  }
+  // Views that are the parent's, in the parent image of their image.
+  std::vector<bool> view_kept(view_points.size(), false);
+  for (uint32_t i = 0; i < images.size(); ++i) {
+    if (parent_of_image[i] == kNotKept) continue;
+    const IndexImage& old_image = parent_images[parent_of_image[i]];
+    for (uint32_t v = images[i].first_view; v < images[i].first_view + images[i].num_views; ++v) {
+      const uint32_t from = views.child_to_parent[v];
+      view_kept[v] = from != kRemovedRow && from >= old_image.first_view &&
+                     from - old_image.first_view < old_image.num_views;
+    }
+  }
+  std::vector<bool> track_kept(child_points.size(), false);
+  for (uint32_t q = 0; q < child_points.size(); ++q) {
+    const uint32_t from = points.child_to_parent[q];
+    const IndexPoint& point = child_points[q];
+    if (from == kRemovedRow || parent.TrackOf(from).size() != point.track_length) continue;
+    bool kept = true;
+    for (uint32_t t = point.first_track; kept && t < point.first_track + point.track_length; ++t) {
+      const uint32_t v = tracks[t];
+      kept = view_kept[v] && parent.view_points()[views.child_to_parent[v]] == from;
+    }
+    track_kept[q] = kept;
+  }
+  KeptCovisibilityRows kept;
+  kept.offsets = parent.covisibility_offsets();
+  kept.edges = parent.covisibility_edges();
+  kept.child_of_parent_image = *child_of_parent_image;
+  kept.kept_from.assign(images.size(), kNotKept);
+  for (uint32_t i = 0; i < images.size(); ++i) {
+    const uint32_t from = parent_of_image[i];
+    if (from == kNotKept || parent_images[from].num_views != images[i].num_views) continue;
+    bool same = true;
+    for (uint32_t v = images[i].first_view; same && v < images[i].first_view + images[i].num_views;
+         ++v)
+      same = view_kept[v] && track_kept[view_points[v]];
+    if (!same || from + size_t{1} >= kept.offsets.size() ||
+        kept.offsets[from] > kept.offsets[from + 1] || kept.offsets[from + 1] > kept.edges.size())
+      continue;
+    for (const CovisibilityEdge& edge : parent.CovisibleImages(from)) {
+      same = same && edge.image_index < parent_images.size() &&
+             (*child_of_parent_image)[edge.image_index] != kNotKept;
+    }
+    if (same) kept.kept_from[i] = from;
+  }
+  return kept;
+}
+
 }  // namespace
 
 void CheckParentKdForest(const Index& parent) {
@@ -349,8 +422,12 @@ AppliedDelta::AppliedDelta(const Index& parent, const IndexDelta& delta,
   child.writer->WriteAhead(std::move(rows_written_ahead), background);
 
   const std::vector<IndexImage> images = delta.images;
-  child.graph =
-      BuildCovisibilityGraph(images, child.points, child.tracks, child.view_points, threads);
+  std::vector<uint32_t> child_of_parent_image;
+  const KeptCovisibilityRows kept_rows =
+      KeptGraphRows(parent, images, views, points, child.tracks, child.points, child.view_points,
+                    &child_of_parent_image);
+  child.graph = BuildCovisibilityGraph(images, child.points, child.tracks, child.view_points,
+                                       threads, &kept_rows);
   // The kd-forest's rows: views, or a compact index's points decoded.
   const RowMaps& rows = coded ? points : views;
   if (forest_rebuilt) {

@@ -9,8 +9,8 @@ namespace cwloc {
 CovisibilityGraph BuildCovisibilityGraph(const std::vector<IndexImage>& images,
                                          const std::vector<IndexPoint>& points,
                                          const std::vector<uint32_t>& tracks,
-                                         const std::vector<uint32_t>& view_points,
-                                         int num_threads) {
+                                         const std::vector<uint32_t>& view_points, int num_threads,
+                                         const KeptCovisibilityRows* kept) {
   // Image row of every view, from the contiguous view ranges.
   std::vector<uint32_t> image_of_view(view_points.size());
   for (uint32_t i = 0; i < images.size(); ++i) {
@@ -23,6 +23,15 @@ CovisibilityGraph BuildCovisibilityGraph(const std::vector<IndexImage>& images,
   const int threads = ResolveThreads(num_threads);
   std::vector<std::vector<uint32_t>> counters(threads, std::vector<uint32_t>(images.size(), 0));
   ParallelFor(images.size(), threads, [&](size_t i, int worker) {
+    const uint32_t from = kept ? kept->kept_from[i] : KeptCovisibilityRows::kNotKept;
+    if (from != KeptCovisibilityRows::kNotKept) {
+      const auto parent_row =
+          kept->edges.subspan(kept->offsets[from], kept->offsets[from + 1] - kept->offsets[from]);
+      rows[i].reserve(parent_row.size());
+      for (const CovisibilityEdge& edge : parent_row)
+        rows[i].push_back({kept->child_of_parent_image[edge.image_index], edge.shared_points});
+      return;
+    }
     std::vector<uint32_t>& count = counters[worker];
     std::vector<uint32_t> touched;
     const IndexImage& image = images[i];

@@ -7,13 +7,16 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstring>
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <numeric>
 #include <set>
 
 #include "colmap/reconstruction_io.h"
 #include "delta/apply_delta.h"
+#include "delta/covisibility.h"
 #include "format/index.h"
 #include "format/xxhash64.h"
 #include "indexer/index_extract.h"
@@ -200,6 +203,52 @@ TEST_F(IndexUpdateTest, HoldsWhatAFullBuildOfTheGrownModelHoldsAndApplyRebuildsI
   const std::filesystem::path applied = dir_ / "applied.cwl";
   ApplyDelta(old_index, options.delta_path, applied, 1);
   EXPECT_EQ(test::ReadBytes(applied), test::ReadBytes(options.output_path));
+}
+
+// The graph an update composes keeps the parent rows it is told to keep (renumbered) and counts
+// the others: on an index's own arrays, keeping every row or none gives the index's graph, and
+// a kept row is copied as given, not counted.
+TEST_F(IndexUpdateTest, TheCovisibilityGraphKeepsTheRowsItIsGivenAndCountsTheRest) {
+  const Index index = Index::Open(Build(model_dir_, "all.cwl"));
+  const std::vector<IndexImage> images(index.images().begin(), index.images().end());
+  const std::vector<IndexPoint> points(index.points().begin(), index.points().end());
+  const std::vector<uint32_t> tracks(index.tracks().begin(), index.tracks().end());
+  const std::vector<uint32_t> view_points(index.view_points().begin(), index.view_points().end());
+  const auto same_as_index = [&](const CovisibilityGraph& graph) {
+    return std::equal(graph.offsets.begin(), graph.offsets.end(),
+                      index.covisibility_offsets().begin(), index.covisibility_offsets().end()) &&
+           graph.edges.size() == index.covisibility_edges().size() &&
+           std::memcmp(graph.edges.data(), index.covisibility_edges().data(),
+                       graph.edges.size() * sizeof(CovisibilityEdge)) == 0;
+  };
+  ASSERT_GE(images.size(), 3u);
+  std::vector<uint32_t> identity(images.size());
+  std::iota(identity.begin(), identity.end(), 0u);
+  KeptCovisibilityRows kept;
+  kept.offsets = index.covisibility_offsets();
+  kept.edges = index.covisibility_edges();
+  kept.child_of_parent_image = identity;
+  kept.kept_from.assign(images.size(), KeptCovisibilityRows::kNotKept);
+  EXPECT_TRUE(same_as_index(BuildCovisibilityGraph(images, points, tracks, view_points, 2, &kept)));
+  kept.kept_from = identity;
+  EXPECT_TRUE(same_as_index(BuildCovisibilityGraph(images, points, tracks, view_points, 2, &kept)));
+
+  // Image 0 keeps a made-up parent row: one edge to parent image 0, renumbered to image 2.
+  const std::vector<uint32_t> offsets = {0, 1};
+  const std::vector<CovisibilityEdge> edges = {{0, 77}};
+  std::vector<uint32_t> renumbered = {2};
+  kept.offsets = offsets;
+  kept.edges = edges;
+  kept.child_of_parent_image = renumbered;
+  kept.kept_from.assign(images.size(), KeptCovisibilityRows::kNotKept);
+  kept.kept_from[0] = 0;
+  const CovisibilityGraph graph =
+      BuildCovisibilityGraph(images, points, tracks, view_points, 1, &kept);
+  ASSERT_EQ(graph.offsets[1], 1u);
+  EXPECT_EQ(graph.edges[0].image_index, 2u);
+  EXPECT_EQ(graph.edges[0].shared_points, 77u);
+  EXPECT_EQ(graph.offsets.back() - 1,
+            index.covisibility_offsets().back() - index.covisibility_offsets()[1]);
 }
 
 // The balance bound: rows inserted since the forest's build up to a quarter of its rows are
