@@ -153,13 +153,14 @@ KeptCovisibilityRows KeptGraphRows(const Index& parent, std::span<const IndexIma
                                    const RowMaps& views, const RowMaps& points,
                                    const std::vector<uint32_t>& tracks,
                                    const std::vector<IndexPoint>& child_points,
-                                   const std::vector<uint32_t>& view_points,
-                                   std::vector<uint32_t>* child_of_parent_image) {
+                                   const std::vector<uint32_t>& view_points) {
   constexpr uint32_t kNotKept = KeptCovisibilityRows::kNotKept;
   const std::span<const IndexImage> parent_images = parent.images();
+  KeptCovisibilityRows kept;
   // Images by id, both in id order.
   std::vector<uint32_t> parent_of_image(images.size(), kNotKept);
-  child_of_parent_image->assign(parent_images.size(), kNotKept);
+  std::vector<uint32_t>& child_of_parent_image = kept.child_of_parent_image;
+  child_of_parent_image.assign(parent_images.size(), kNotKept);
   for (uint32_t i = 0, p = 0; i < images.size() && p < parent_images.size();) {
     if (images[i].image_id < parent_images[p].image_id) {
       ++i;
@@ -167,7 +168,7 @@ KeptCovisibilityRows KeptGraphRows(const Index& parent, std::span<const IndexIma
       ++p;
     } else {
       parent_of_image[i] = p;
-      (*child_of_parent_image)[p] = i;
+      child_of_parent_image[p] = i;
       ++i, ++p;
     }
   }
@@ -187,17 +188,15 @@ KeptCovisibilityRows KeptGraphRows(const Index& parent, std::span<const IndexIma
     const uint32_t from = points.child_to_parent[q];
     const IndexPoint& point = child_points[q];
     if (from == kRemovedRow || parent.TrackOf(from).size() != point.track_length) continue;
-    bool kept = true;
-    for (uint32_t t = point.first_track; kept && t < point.first_track + point.track_length; ++t) {
+    bool same = true;
+    for (uint32_t t = point.first_track; same && t < point.first_track + point.track_length; ++t) {
       const uint32_t v = tracks[t];
-      kept = view_kept[v] && parent.view_points()[views.child_to_parent[v]] == from;
+      same = view_kept[v] && parent.view_points()[views.child_to_parent[v]] == from;
     }
-    track_kept[q] = kept;
+    track_kept[q] = same;
   }
-  KeptCovisibilityRows kept;
   kept.offsets = parent.covisibility_offsets();
   kept.edges = parent.covisibility_edges();
-  kept.child_of_parent_image = *child_of_parent_image;
   kept.kept_from.assign(images.size(), kNotKept);
   for (uint32_t i = 0; i < images.size(); ++i) {
     const uint32_t from = parent_of_image[i];
@@ -211,7 +210,7 @@ KeptCovisibilityRows KeptGraphRows(const Index& parent, std::span<const IndexIma
       continue;
     for (const CovisibilityEdge& edge : parent.CovisibleImages(from)) {
       same = same && edge.image_index < parent_images.size() &&
-             (*child_of_parent_image)[edge.image_index] != kNotKept;
+             child_of_parent_image[edge.image_index] != kNotKept;
     }
     if (same) kept.kept_from[i] = from;
   }
@@ -417,15 +416,11 @@ AppliedDelta::AppliedDelta(const Index& parent, const IndexDelta& delta,
   }
 
   if (coded) ComposeCodes(parent, delta, points.child_to_parent);
-  std::vector<SectionData> rows_written_ahead = RowSections(Contents(&child.origin));
-  if (!coded) rows_written_ahead.erase(rows_written_ahead.begin());  // the descriptors, begun
-  child.writer->WriteAhead(std::move(rows_written_ahead), background);
+  child.writer->WriteAhead(RowSections(Contents(&child.origin)), background);
 
   const std::vector<IndexImage> images = delta.images;
-  std::vector<uint32_t> child_of_parent_image;
   const KeptCovisibilityRows kept_rows =
-      KeptGraphRows(parent, images, views, points, child.tracks, child.points, child.view_points,
-                    &child_of_parent_image);
+      KeptGraphRows(parent, images, views, points, child.tracks, child.points, child.view_points);
   child.graph = BuildCovisibilityGraph(images, child.points, child.tracks, child.view_points,
                                        threads, &kept_rows);
   // The kd-forest's rows: views, or a compact index's points decoded.

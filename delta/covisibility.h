@@ -25,7 +25,7 @@ struct KeptCovisibilityRows {
   std::span<const uint32_t> offsets;
   std::span<const CovisibilityEdge> edges;
   std::vector<uint32_t> kept_from;
-  std::span<const uint32_t> child_of_parent_image;
+  std::vector<uint32_t> child_of_parent_image;
 };
 
 // Tracks are CSR over points; images' views are contiguous rows of `view_points`. With `kept`,

@@ -28,7 +28,6 @@ std::vector<SectionData> RowSections(const IndexContents& contents) {
                                    std::span<const IndexPointOrigin>(contents.point_origin, 1)));
     sections.push_back(MakeSection(section::kPointOffsets, contents.point_offsets));
   } else {
-    sections.push_back(DescriptorSection(contents));
     sections.push_back(MakeSection(section::kPoints, contents.points));
   }
   sections.push_back(MakeSection(section::kTracks, contents.tracks));
@@ -56,7 +55,10 @@ std::vector<SectionData> RowSections(const IndexContents& contents) {
 }
 
 std::vector<SectionData> IndexSectionsOf(const IndexContents& contents, std::string_view manifest) {
-  std::vector<SectionData> sections = RowSections(contents);
+  std::vector<SectionData> sections;
+  if (contents.code_bytes == 0) sections.push_back(DescriptorSection(contents));
+  const std::vector<SectionData> rows = RowSections(contents);
+  sections.insert(sections.end(), rows.begin(), rows.end());
   const KdForest& forest = *contents.forest;
   sections.insert(
       sections.end(),

@@ -44,13 +44,13 @@ class Index;
 // code size and point origin, copied into `origin`, which `contents` then points to.
 void KeepParentCoding(const Index& parent, IndexPointOrigin* origin, IndexContents* contents);
 
-// The sections of an index file with these contents, in the file's order: first RowSections,
-// which an IndexFileWriter can write ahead, then `manifest` (JSON text, borrowed) and the
-// sections made last (kd-forest, co-visibility graph). Its format version is FormatMinorOf the
-// result.
+// The sections of an index file with these contents, in the file's order: first a full index's
+// DescriptorSection and the RowSections, which an IndexFileWriter can write ahead, then
+// `manifest` (JSON text, borrowed) and the sections made last (kd-forest, co-visibility graph).
+// Its format version is FormatMinorOf the result.
 std::vector<SectionData> IndexSectionsOf(const IndexContents& contents, std::string_view manifest);
-// The sections of rows of points and views, which need neither the manifest nor the kd-forest
-// nor the co-visibility graph: a full index's descriptors (DescriptorSection) first.
+// The sections of rows of points and views but the descriptors, which need neither the
+// manifest nor the kd-forest nor the co-visibility graph.
 std::vector<SectionData> RowSections(const IndexContents& contents);
 // A full index's DESC section: `descriptor_pieces` (or `descriptors`), a row per view_points.
 SectionData DescriptorSection(const IndexContents& contents);

@@ -97,12 +97,12 @@ struct SectionData {
 uint16_t FormatMinorOf(std::span<const SectionData> sections);
 
 // Writes an index (or a delta) atomically through an AtomicFile (base/atomic_file.h: an unnamed
-// temporary file in the target directory, fsync, put in place), in two steps so that its
-// leading sections (a full index's descriptors, three quarters of its bytes) go to the disk
-// while the caller still composes the rest: the constructor starts writing them, on a second
-// thread when `background`; Finish writes the rest, the section table and the header, and puts
-// the file in place. Destroyed unfinished (an exception), it leaves nothing. The leading
-// sections' bytes must stay alive until Finish. The output depends only on the sections
+// temporary file in the target directory, fsync, put in place), in steps so that its leading
+// sections (a full index's descriptors, three quarters of its bytes, then the other rows) go to
+// the disk while the caller still composes the rest: the constructor and WriteAhead write them,
+// on a second thread when `background`; Finish writes the rest, the section table and the
+// header, and puts the file in place. Destroyed unfinished (an exception), it leaves nothing. The
+// leading sections' bytes must stay alive until Finish. The output depends only on the sections
 // (padding is zero), so equal input gives equal bytes.
 class IndexFileWriter {
  public:
