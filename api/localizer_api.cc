@@ -112,111 +112,14 @@ QueryCamera ToQueryCamera(const Camera& camera) {
   return query_camera;
 }
 
-Camera ToCamera(const QueryCamera& query_camera) {
-  Camera camera;
-  camera.model = std::string(CameraModelName(query_camera.model_id));
-  camera.width = query_camera.width;
-  camera.height = query_camera.height;
-  camera.params = query_camera.params;
-  camera.calibration = static_cast<Calibration>(query_camera.calibration);
-  return camera;
-}
-
 PriorInputs ToPriorInputs(const Options& options) {
   PriorInputs priors;
-  if (const auto& p = options.position_prior) {
-    priors.position =
-        cwloc::PositionPrior{{p->latitude_deg, p->longitude_deg, p->height_m, p->radius_m}};
+  if (const auto& prior = options.position_prior) {
+    priors.position = *prior;
+    priors.position->source = PriorSource::kOption;
   }
   priors.gravity = options.gravity;
   return priors;
-}
-
-PoseCovariance ToPoseCovariance(const cwloc::PoseCovariance& c,
-                                const std::optional<CovarianceScales>& calibration) {
-  PoseCovariance covariance;
-  Eigen::Map<Eigen::Matrix<double, 6, 6, Eigen::RowMajor>>(covariance.pose.data()) = c.pose;
-  covariance.position_radius95 = Radius95(c.Position());
-  covariance.focal_std_px = c.focal_std_px;
-  covariance.calibration = calibration;
-  return covariance;
-}
-
-// A pose's (w, x, y, z), t and centre.
-void SplitPose(const CameraPose& pose, std::array<double, 4>* rotation,
-               std::array<double, 3>* translation, std::array<double, 3>* center) {
-  const Eigen::Quaterniond& q = pose.rotation;
-  *rotation = {q.w(), q.x(), q.y(), q.z()};
-  *translation = {pose.translation.x(), pose.translation.y(), pose.translation.z()};
-  const Eigen::Vector3d c = pose.Center();
-  *center = {c.x(), c.y(), c.z()};
-}
-
-RigResult ToRigResult(const RigLocalizationResult& r, const QueryOptions& options) {
-  RigResult result;
-  result.json = RigResultToJson(r, options).dump();
-  result.success = r.success;
-  result.failure_reason = r.failure_reason;
-  if (r.success) SplitPose(r.rig_from_world, &result.rotation, &result.translation, &result.center);
-  result.scale = r.scale;
-  result.scale_std = r.scale_std;
-  result.num_inliers = r.num_inliers;
-  result.correspondences = r.correspondences;
-  if (r.covariance) result.covariance = ToPoseCovariance(*r.covariance, r.covariance_calibration);
-  result.geo = r.geo;
-  for (const cwloc::RigImageResult& image : r.images) {
-    RigImageResult& out = result.images.emplace_back();
-    out.name = image.matched.name;
-    out.posed = image.cam_from_world.has_value();
-    if (out.posed) SplitPose(*image.cam_from_world, &out.rotation, &out.translation, &out.center);
-    out.num_inliers = image.num_inliers;
-    out.camera = ToCamera(image.camera);
-  }
-  return result;
-}
-
-Result ToResult(const LocalizationResult& r, const Query& query, const Index& index,
-                const QueryOptions& options) {
-  Result result;
-  result.json = ResultToJson(r, options).dump();
-  result.success = r.success;
-  result.failure_reason = r.failure_reason;
-  result.rotation = r.rotation;
-  result.translation = r.translation;
-  result.center = r.center;
-  result.camera = ToCamera(r.camera);
-  result.focal_estimated = r.focal_estimated;
-#define CWLOC_RESULT_FIELD(name, type, group, key, help) result.name = r.name;
-#include "localizer/result_fields.inc"
-#undef CWLOC_RESULT_FIELD
-  result.inliers.reserve(r.inliers.size());
-  for (const InlierMatch& match : r.inliers) {
-    result.inliers.push_back(
-        {match.feature,
-         {query.keypoints[2 * match.feature], query.keypoints[2 * match.feature + 1]},
-         match.point,
-         index.PointXyz(match.point)});
-  }
-  result.ranked_images = r.ranked_images;
-  result.times = r.times;
-  result.geo = r.geo;
-  if (const auto& p = r.priors.position)
-    result.position_prior =
-        PositionPrior{p->latitude_deg, p->longitude_deg, p->height_m, p->radius_m};
-  result.clusters_in_radius = r.priors.clusters_in_radius;
-  if (const auto& c = r.covariance) {
-    PoseCovariance& covariance =
-        result.covariance.emplace(ToPoseCovariance(*c, r.covariance_calibration));
-    if (const auto& enu = r.enu_position_covariance) {
-      Eigen::Map<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(
-          covariance.enu_position.emplace().data()) = *enu;
-      covariance.position_radius95_m = Radius95(*enu);
-    }
-  }
-  result.gravity = r.priors.gravity;
-  result.gravity_error_deg = r.priors.gravity_error_deg;
-  result.tracking = r.tracking;
-  return result;
 }
 
 // One call's options, made internal once, and the assembly of its query (camera and priors)
@@ -304,10 +207,8 @@ struct Localizer::Impl {
   // A complete query: localized alone, or as the next frame of a tracker.
   Result Localize(const Query& query, const CallOptions& call, const TrackedFrame* frame) const {
     ValidateOrThrowInvalidArgument([&] { localizer.ValidatePriors(query); });
-    const LocalizationResult result =
-        frame != nullptr ? frame->tracker->Track(query, frame->seconds, frame->motion)
-                         : localizer.Localize(query, call.options.localizer);
-    return ToResult(result, query, index, call.options);
+    return frame != nullptr ? frame->tracker->Track(query, frame->seconds, frame->motion)
+                            : localizer.Localize(query, call.options.localizer);
   }
 
   Result FromFeatures(const Features& features, const Camera& camera, const Options& options,
@@ -467,13 +368,11 @@ RigResult Localizer::LocalizeRig(const std::vector<RigImage>& images, bool unkno
       query.images.push_back({std::move(query_image), std::get<CameraPose>(pose)});
     }
     if (images.empty()) throw InvalidArgument("rig frame '" + name + "': no images");
-    RigLocalizationResult result;
     ValidateOrThrowInvalidArgument([&] {
       for (const cwloc::RigImage& image : query.images)
         impl_->localizer.ValidatePriors(image.query);
     });
-    result = cwloc::LocalizeRig(impl_->localizer, query, query_options.localizer);
-    return ToRigResult(result, query_options);
+    return cwloc::LocalizeRig(impl_->localizer, query, query_options.localizer);
   });
 }
 
@@ -535,6 +434,14 @@ Features ReadFeatureFile(const std::string& path) {
 void ApplyIndexDelta(const std::string& index_path, const std::string& delta_path,
                      const std::string& output_path, int threads) {
   Translated([&] { cwloc::ApplyDelta(index_path, delta_path, output_path, threads); });
+}
+
+std::string ToJson(const Result& result, const Options& options) {
+  return Translated([&] { return ResultToJson(result, ToQueryOptions(options)).dump(); });
+}
+
+std::string ToJson(const RigResult& result, const Options& options) {
+  return Translated([&] { return RigResultToJson(result, ToQueryOptions(options)).dump(); });
 }
 
 const char* Version() { return kToolVersion; }

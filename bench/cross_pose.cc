@@ -2,7 +2,7 @@
 // (issue #41; bench/cross_estimation.sh runs it). For each query it fits cwloc's pose stage
 // (RANSAC, P3P or P4Pf, refinement: EstimateQueryPose, as Localize runs it) to two sets of
 // 2D-3D correspondences:
-//   cwloc:  those cwloc's matcher gave the pose (Localize with keep_correspondences), and
+//   cwloc:  those cwloc's matcher gave the pose (Localize's correspondences), and
 //   colmap: those COLMAP's image_registrator used, read from its registered model (the query's
 //           2D points with a point3D id), each 3D point taken as one of the index's views of it
 //           (found through its track in the mapping model and the view's keypoint);
@@ -89,7 +89,6 @@ int Run(const std::string& index_path, const std::string& database, const std::s
   };
 
   LocalizerOptions options;
-  options.keep_correspondences = true;
   const Localizer localizer(index);
   std::ofstream poses(out), pairs(pairs_path);
   std::ifstream names(list);
@@ -102,8 +101,8 @@ int Run(const std::string& index_path, const std::string& database, const std::s
 
     // cwloc's correspondences, fit again alone (the same pose as Localize's, a check), and
     // written as COLMAP's pairs.
-    const LocalizationResult localized = localizer.Localize(query, options);
-    const std::vector<FeatureMatch>& mine = localized.kept_correspondences;
+    std::vector<FeatureMatch> mine;
+    const LocalizationResult localized = localizer.Localize(query, options, nullptr, &mine);
     record["cwloc"] = FitJson(EstimateQueryPose(index, query, mine, options), mine.size());
     record["cwloc"]["localize_success"] = localized.success;
     for (const FeatureMatch& match : mine) {

@@ -63,8 +63,8 @@ int Run(const std::string& index_path, const std::string& database, const std::s
   for (size_t mode = 0; mode < 3; ++mode) {
     if (count[mode] == 0) continue;
     const double t = Median(tracked[mode]) * 1e3, a = Median(alone[mode]) * 1e3;
-    std::printf("%-12s %7d %10.2f %10.2f %7.2f\n", kTrackingModeNames[mode].data(), count[mode], t,
-                a, t / a);
+    std::printf("%-12s %7d %10.2f %10.2f %7.2f\n", EnumNames<TrackingMode>::names[mode].data(),
+                count[mode], t, a, t / a);
   }
   return 0;
 }

@@ -5,11 +5,11 @@ include(CMakePackageConfigHelpers)
 install(TARGETS cwloc_api EXPORT cwlocTargets
   LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
   RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+# The result types' headers (results/) next to the API's, as the build tree has them.
+list(TRANSFORM CWLOC_RESULT_HEADERS REPLACE "^.*/" "${PROJECT_BINARY_DIR}/generated/cwloc/"
+  OUTPUT_VARIABLE CWLOC_INSTALLED_RESULT_HEADERS)
 install(FILES api/include/cwloc/cwloc.hpp api/include/cwloc/cwloc.h
-  ${PROJECT_BINARY_DIR}/generated/cwloc/options.inc
-  ${PROJECT_BINARY_DIR}/generated/cwloc/result_fields.inc
-  ${PROJECT_BINARY_DIR}/generated/cwloc/result_types.h
-  ${PROJECT_BINARY_DIR}/generated/cwloc/stage_times.inc
+  ${PROJECT_BINARY_DIR}/generated/cwloc/options.inc ${CWLOC_INSTALLED_RESULT_HEADERS}
   DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/cwloc)
 
 foreach(tool cwloc_localize_exe cwloc_index_exe cwloc_synth_exe cwloc_eval_exe)

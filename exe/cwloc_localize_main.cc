@@ -310,7 +310,7 @@ int Run(const CliOptions& cli) {
   const Localizer localizer(index);
   std::optional<Tracker> tracker;
   if (sequence) tracker.emplace(localizer, options, cli.options.tracker);
-  std::atomic<int> modes[kTrackingModeNames.size()] = {};
+  std::atomic<int> modes[EnumNames<TrackingMode>::names.size()] = {};
 
   std::atomic<int> localized{0}, failed{0}, errors{0}, internal_errors{0};
   // One query: read, localized or tracked, written; its seconds, or -1 when it was an error.

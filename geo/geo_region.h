@@ -9,16 +9,9 @@
 #include <vector>
 
 #include "geo/georeference.h"
+#include "results/priors.h"  // GeoRegion
 
 namespace cwloc {
-
-// Within radius_m of a WGS84 position, horizontally when the height is unknown.
-struct GeoRegion {
-  double latitude_deg = 0;
-  double longitude_deg = 0;
-  std::optional<double> height_m;  // ellipsoidal
-  double radius_m = 0;
-};
 
 // "LAT LON [HEIGHT] RADIUS_M"; throws InputError naming `what` and the problem.
 GeoRegion ParseGeoRegion(const std::string& text, const std::string& what);

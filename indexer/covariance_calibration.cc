@@ -19,6 +19,7 @@
 #include "format/index.h"
 #include "geo/index_georeference.h"
 #include "localizer/localizer.h"
+#include "localizer/pose/refine_pose.h"
 
 namespace cwloc {
 namespace {
@@ -103,7 +104,7 @@ std::optional<SampleError> NormalisedError(const LocalizationResult& result,
   const Eigen::Vector3d theta = turn.angle() * turn.axis();
   if (turn.angle() > kCalibrationWrongPoseDeg * M_PI / 180.0) return SampleError{0, 0, true};
   const Eigen::Vector3d offset = Eigen::Vector3d(result.center.data()) - CameraCenterOf(truth);
-  const auto& pose = result.covariance->pose;
+  const Eigen::Matrix<double, 6, 6> pose = PoseBlock(*result.covariance);
   const Eigen::LDLT<Eigen::Matrix3d> rotation_block(pose.topLeftCorner<3, 3>());
   const Eigen::LDLT<Eigen::Matrix3d> position_block(pose.bottomRightCorner<3, 3>());
   if (rotation_block.info() != Eigen::Success || position_block.info() != Eigen::Success)
@@ -220,7 +221,7 @@ CovarianceCalibration CalibrateCovariance(const ModelViews& views,
       entry["median_rotation_d2"] = Median(rotation);
       entry["median_position_d2"] = Median(position);
     }
-    modes[std::string(CalibrationName(kModes[mode]))] = std::move(entry);
+    modes[std::string(NameOf(kModes[mode]))] = std::move(entry);
   }
   calibration.manifest = {{"method", "leave-one-out"},
                           {"sampled_images", samples.size()},

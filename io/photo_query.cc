@@ -12,7 +12,7 @@ Query LoadPhotoQuery(const std::filesystem::path& path, const std::string& name,
                      const PhotoOptions& options) {
   const Stopwatch time;
   Query query = PhotoQueryFromBytes(ReadPhotoFile(path), path.string(), name, options);
-  query.photo->extraction_seconds = time.Seconds();
+  query.extraction_seconds = time.Seconds();
   return query;
 }
 
@@ -33,8 +33,8 @@ Query PhotoQueryFromBytes(std::span<const uint8_t> bytes, const std::string& sou
   }
   ExtractPhotoFeatures(std::move(image), options, &query);
   if (const auto gps = ReadExifGps(bytes))
-    query.photo->exif_gps = GpsFix{gps->latitude_deg, gps->longitude_deg};
-  query.photo->extraction_seconds = time.Seconds();
+    query.exif_gps = GpsFix{gps->latitude_deg, gps->longitude_deg};
+  query.extraction_seconds = time.Seconds();
   return query;
 }
 
@@ -58,12 +58,9 @@ void ExtractPhotoFeatures(GreyImage image, const PhotoOptions& options, Query* q
   query->descriptors = features.descriptors;
   if (query->NumFeatures() == 0)
     throw InputError(query->Source() + ": no SIFT features found in the photo");
-  query->photo = PhotoInfo{size.width,
-                           size.height,
-                           options.sift.first_octave,
-                           uint32_t(options.sift.max_num_features),
-                           time.Seconds(),
-                           std::nullopt};
+  query->photo = PhotoInfo{size.width, size.height, options.sift.first_octave,
+                           uint32_t(options.sift.max_num_features)};
+  query->extraction_seconds = time.Seconds();
 }
 
 }  // namespace cwloc

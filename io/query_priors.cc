@@ -74,8 +74,8 @@ std::unordered_map<std::string, QueryPriors> ReadPriorsFile(const std::filesyste
 }
 
 std::optional<PositionPrior> ExifPositionPrior(const Query& query, double radius_m) {
-  if (!query.photo || !query.photo->exif_gps) return std::nullopt;
-  const GpsFix& fix = *query.photo->exif_gps;
+  if (!query.exif_gps) return std::nullopt;
+  const GpsFix& fix = *query.exif_gps;
   return PositionPrior{{fix.latitude_deg, fix.longitude_deg, std::nullopt, radius_m},
                        PriorSource::kExif};
 }

@@ -4,26 +4,25 @@
 #include <string>
 
 #include "io/option_table.h"
-#include "localizer/localization_result.h"
-#include "localizer/rig_localizer.h"
+#include "localizer/pose/camera_pose.h"
+#include "results/localization_result.h"
+#include "results/rig_result.h"
 
 namespace cwloc {
 
-// One result as described by schemas/localization-result.schema.json, with the options it was
-// made with.
+// One result as described by schemas/localization-result.schema.json: its fields
+// (results/localization_result.h) and the options it was made with.
 nlohmann::ordered_json ResultToJson(const LocalizationResult& result, const QueryOptions& options);
 
 // The record of a query that could not be processed (bad input): name and error only.
 nlohmann::ordered_json ErrorToJson(const std::string& name, const std::string& error);
 
-// A rig frame's record (schemas/localization-result.schema.json's rig_frame): the frame's pose
-// (its reference camera's), the rig's, and every image's.
-nlohmann::ordered_json RigResultToJson(const RigLocalizationResult& result,
-                                       const QueryOptions& options);
+// A rig frame's record (the schema's rig_frame): its fields (results/rig_result.h) and options.
+nlohmann::ordered_json RigResultToJson(const RigResult& result, const QueryOptions& options);
 
 // "NAME QW QX QY QZ TX TY TZ" (the visuallocalization.net submission format).
 std::string PoseLine(const LocalizationResult& result);
-std::string PoseLine(const std::string& name, const CameraPose& cam_from_world);
+std::string PoseLine(const std::string& name, const Transform& cam_from_world);
 
 // Every option of the table by its name (OptionSpec::name), as a result records them.
 nlohmann::ordered_json OptionsToJson(const QueryOptions& options);

@@ -26,7 +26,10 @@ Eigen::Matrix<double, 6, 6> LamarCovariance(const LocalizationResult& result) {
   Eigen::Matrix<double, 6, 6> turn = Eigen::Matrix<double, 6, 6>::Zero();
   turn.topLeftCorner<3, 3>() = camera_from_world;
   turn.bottomRightCorner<3, 3>() = camera_from_world;
-  return turn * result.covariance->pose * turn.transpose();
+  const Eigen::Matrix<double, 6, 6> pose =
+      Eigen::Map<const Eigen::Matrix<double, 6, 6, Eigen::RowMajor>>(
+          result.covariance->pose.data());
+  return turn * pose * turn.transpose();
 }
 
 }  // namespace

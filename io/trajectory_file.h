@@ -4,7 +4,7 @@
 #include <string>
 #include <string_view>
 
-#include "localizer/localization_result.h"
+#include "results/localization_result.h"
 
 namespace cwloc {
 

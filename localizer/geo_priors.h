@@ -10,9 +10,9 @@
 
 #include "format/index.h"
 #include "geo/georeference.h"
-#include "localizer/localization_result.h"
 #include "localizer/matching.h"
 #include "localizer/query.h"
+#include "results/localization_result.h"
 
 namespace cwloc {
 

@@ -325,6 +325,38 @@ void ReportMatching(const Index& index, const Query& query, const MatcherOutput&
   result->times.back_matching = matched.seconds_back_matching;
 }
 
+// Which distortion model a localized query was fitted with, and why.
+Distortion DistortionOf(const LocalizationResult& result, const AbsolutePoseResult& pose) {
+  Distortion out;
+  out.model = result.camera.model;
+  if (!result.camera.focal_estimated) {
+    out.fit = DistortionFit::kGiven;
+    out.why = "the camera was known: its own model and parameters, held fixed";
+    return out;
+  }
+  if (!pose.refined) {
+    out.fit = DistortionFit::kHeldAtZero;
+    out.k = 0.0;
+    out.why =
+        "the focal length was estimated without the final refinement (--no-refine, a latency "
+        "budget, or a refined camera that was not sane), so k stayed 0";
+    return out;
+  }
+  out.fit = DistortionFit::kEstimated;
+  out.k = result.camera.params.back();
+  out.why =
+      "the camera was not known: one radial term k was refined with the focal length, as "
+      "COLMAP's registrator refines a camera that no registered image has refined";
+  if (result.covariance && pose.distortion_std) {
+    out.k_std = *pose.distortion_std;
+    out.k_significant = std::abs(*out.k) >= 2.0 * *out.k_std;
+    out.why += *out.k_significant
+                   ? "; the data constrain it (|k| is at least 2 standard deviations)"
+                   : "; the data hardly constrain it (|k| is under 2 standard deviations)";
+  }
+  return out;
+}
+
 // The pose stage's answer, into the result: the pose, its inliers, the camera as estimated, the
 // covariance and, on a georeferenced index, the pose on the globe; or why there is none.
 void ReportPose(const Index& index, const std::optional<IndexGeo>& geo, const Query& query,
@@ -339,34 +371,33 @@ void ReportPose(const Index& index, const std::optional<IndexGeo>& geo, const Qu
     result->failure_reason = pose.failure_reason;
     return;
   }
-  const CameraPose& p = pose.pose;
-  result->rotation = {p.rotation.w(), p.rotation.x(), p.rotation.y(), p.rotation.z()};
-  result->translation = {p.translation.x(), p.translation.y(), p.translation.z()};
-  const Eigen::Vector3d center = p.Center();
-  result->center = {center.x(), center.y(), center.z()};
-  if (geo) result->geo = geo->PoseOnGlobe(p.rotation, center);
+  const Pose p = PoseOf(pose.pose);
+  result->rotation = p.rotation;
+  result->translation = p.translation;
+  result->center = p.center;
+  const Eigen::Vector3d center = pose.pose.Center();
+  if (geo) result->geo = geo->PoseOnGlobe(pose.pose.rotation, center);
   result->covariance = pose.covariance;
-  if (result->covariance) {
-    result->covariance_calibration = ApplyCovarianceCalibration(
-        index.covariance_calibration(), query.camera.calibration, &*result->covariance);
-  }
-  if (geo && result->covariance) {
-    result->enu_position_covariance =
-        geo->LocalEnuCovariance(center, result->covariance->Position());
-  }
+  if (result->covariance)
+    ReportCovariance(index, geo, query.camera.calibration, center, &*result->covariance);
   for (size_t i = 0; i < pose.inliers.size(); ++i) {
     if (!pose.inliers[i]) continue;
     const FeatureMatch& match = matched.correspondences[fit.used[i]];
-    result->inliers.push_back({match.feature, index.view_points()[match.view], match.view});
+    const uint32_t point = index.view_points()[match.view];
+    result->inliers.push_back(
+        {match.feature,
+         {query.keypoints[2 * match.feature], query.keypoints[2 * match.feature + 1]},
+         point,
+         index.PointXyz(point),
+         match.view});
   }
   if (!query.camera.FocalKnown()) {
-    result->focal_estimated = true;
-    // The pose stage refines k with f whenever it refines (absolute_pose.h).
-    result->distortion_fit = pose.refined ? DistortionFit::kEstimated : DistortionFit::kHeldAtZero;
-    result->camera.model_id = CameraModelId::kSimpleRadial;
+    result->camera.focal_estimated = true;
+    result->camera.model = std::string(CameraModelName(CameraModelId::kSimpleRadial));
     result->camera.params = EstimatedCameraParams(query.camera, pose);
     result->focal_depth = pose.focal_depth;
   }
+  result->camera.distortion = DistortionOf(*result, pose);
 }
 
 void ValidateQuery(const Query& query) {
@@ -397,18 +428,38 @@ void ValidateQuery(const Query& query) {
 
 }  // namespace
 
-std::optional<CovarianceScales> ApplyCovarianceCalibration(
-    const IndexCovarianceCalibration* calibration, Calibration mode, PoseCovariance* covariance) {
+void ReportCovariance(const Index& index, const std::optional<IndexGeo>& geo, Calibration mode,
+                      const Eigen::Vector3d& center, PoseCovariance* covariance) {
+  const IndexCovarianceCalibration* calibration = index.covariance_calibration();
   const auto m = static_cast<size_t>(mode);
-  if (calibration == nullptr || calibration->position_scale[m] <= 0 ||
-      calibration->rotation_scale[m] <= 0)
-    return std::nullopt;
-  const CovarianceScales scales{calibration->rotation_scale[m], calibration->position_scale[m]};
-  Eigen::Matrix<double, 6, 1> root;
-  root << Eigen::Vector3d::Constant(std::sqrt(scales.rotation)),
-      Eigen::Vector3d::Constant(std::sqrt(scales.position));
-  covariance->pose = root.asDiagonal() * covariance->pose * root.asDiagonal();
-  return scales;
+  if (calibration != nullptr && calibration->position_scale[m] > 0 &&
+      calibration->rotation_scale[m] > 0) {
+    const CovarianceScales& scales = covariance->calibration.emplace(
+        CovarianceScales{calibration->rotation_scale[m], calibration->position_scale[m]});
+    Eigen::Matrix<double, 6, 1> root;
+    root << Eigen::Vector3d::Constant(std::sqrt(scales.rotation)),
+        Eigen::Vector3d::Constant(std::sqrt(scales.position));
+    const Eigen::Matrix<double, 6, 6> block = PoseBlock(*covariance);
+    PoseBlock(*covariance) = root.asDiagonal() * block * root.asDiagonal();
+  }
+  covariance->position_radius95 = Radius95(PositionBlock(*covariance));
+  if (geo) {
+    const Eigen::Matrix3d enu = geo->LocalEnuCovariance(center, PositionBlock(*covariance));
+    Eigen::Map<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(
+        covariance->enu_position.emplace().data()) = enu;
+    covariance->position_radius95_m = Radius95(enu);
+  }
+}
+
+Pose PoseOf(const CameraPose& pose) {
+  const Eigen::Quaterniond& q = pose.rotation;
+  const Eigen::Vector3d& t = pose.translation;
+  const Eigen::Vector3d c = pose.Center();
+  Pose out;
+  out.rotation = {q.w(), q.x(), q.y(), q.z()};
+  out.translation = {t.x(), t.y(), t.z()};
+  out.center = {c.x(), c.y(), c.z()};
+  return out;
 }
 
 Localizer::Localizer(const Index& index)
@@ -438,20 +489,22 @@ void Localizer::ValidatePriors(const Query& query) const {
 }
 
 LocalizationResult Localizer::Localize(const Query& query, const LocalizerOptions& options,
-                                       const FramePrediction* prediction) const {
+                                       const FramePrediction* prediction,
+                                       std::vector<FeatureMatch>* correspondences) const {
   const Stopwatch total;
   const StageDeadlines deadlines = StageDeadlines::For(Deadline::Clock::now(), options.budget_ms);
   ValidateQuery(query);
   ValidatePriors(query);
 
   // The position prior's region: only clusters with a camera within its radius.
-  PriorUse priors;
+  PriorsUsed priors;
   std::vector<char> allowed;
   std::string prior_region;
   if (query.position_prior) {
     allowed = geo_->ClustersNear(*query.position_prior, clusters_);
-    priors.position = query.position_prior;
-    priors.clusters_in_radius =
+    PositionPriorUse& used = priors.position.emplace();
+    static_cast<PositionPrior&>(used) = *query.position_prior;
+    used.clusters_in_radius =
         static_cast<uint32_t>(std::count(allowed.begin(), allowed.end(), char{1}));
     char radius[32];
     std::snprintf(radius, sizeof(radius), "%g", query.position_prior->radius_m);
@@ -459,7 +512,7 @@ LocalizationResult Localizer::Localize(const Query& query, const LocalizerOption
   }
 
   MatcherOutput matched;
-  if (query.position_prior && priors.clusters_in_radius == 0) {
+  if (priors.position && priors.position->clusters_in_radius == 0) {
     matched.failure_reason = "no model camera within " + prior_region;
   } else {
     matched =
@@ -480,7 +533,7 @@ LocalizationResult Localizer::Localize(const Query& query, const LocalizerOption
     prior.in_world = geo_->GravityInModel(query.position_prior);
     prior.sigma_deg = options.prior_gravity_sigma_deg;
     pose_context.gravity = prior;
-    priors.gravity = query.gravity;
+    priors.gravity.emplace().direction = *query.gravity;
   }
 
   const Stopwatch pose_time;
@@ -496,16 +549,18 @@ LocalizationResult Localizer::Localize(const Query& query, const LocalizerOption
 
   LocalizationResult result;
   result.name = query.name;
-  result.camera = query.camera;
+  static_cast<CameraUsed&>(result.camera) = CameraUsedOf(query.camera);
   result.photo = query.photo;
   ReportMatching(index_, query, matched, options, &result);
   ReportPose(index_, geo_, query, matched, fit, &result);
-  if (options.keep_correspondences) result.kept_correspondences = matched.correspondences;
-  if (query.gravity && fit.pose.success) priors.gravity_error_deg = fit.pose.gravity_angle_deg;
-  result.priors = priors;
+  if (correspondences != nullptr) *correspondences = matched.correspondences;
+  if (priors.gravity && fit.pose.success) priors.gravity->error_deg = fit.pose.gravity_angle_deg;
+  result.priors = std::move(priors);
   if (options.budget_ms > 0) {
+    Budget& budget = result.budget.emplace();
+    budget.ms = options.budget_ms;
     const auto cut = [&](bool was_cut, const char* stage) {
-      if (was_cut) result.budget_cut.push_back(stage);
+      if (was_cut) budget.cut.push_back(stage);
     };
     cut(matched.forward_stats.stopped_by_deadline, "forward");
     cut(matched.back_stopped_by_deadline, "back_matching");
@@ -513,7 +568,7 @@ LocalizationResult Localizer::Localize(const Query& query, const LocalizerOption
     cut(fit.pose.refinement_skipped, "refinement");
   }
   result.times.pose = matched.seconds_pose + pose_time.Seconds();
-  result.times.extraction = query.photo ? query.photo->extraction_seconds : 0.0;
+  result.times.extraction = query.extraction_seconds;
   result.times.total = total.Seconds() + result.times.extraction;
   return result;
 }

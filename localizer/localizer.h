@@ -4,11 +4,11 @@
 
 #include "format/index.h"
 #include "localizer/geo_priors.h"
-#include "localizer/localization_result.h"
 #include "localizer/localizer_options.h"
 #include "localizer/matching.h"
 #include "localizer/pose_guide.h"
 #include "localizer/query.h"
+#include "results/localization_result.h"
 
 namespace cwloc {
 
@@ -40,9 +40,13 @@ class Localizer {
   // stage fits them. Throws InputError naming the query for one that cannot be processed at
   // all (no features, an unusable camera); a query that simply fails to localize returns
   // success = false with the reason.
-  // With a prediction, the frame is matched near it instead (FramePrediction).
+  // With a prediction, the frame is matched near it instead (FramePrediction). With
+  // `correspondences`, what the pose stage was given goes there too: for a rig, which fits one
+  // pose to its images', and for tools that fit them with another estimator
+  // (bench/cross_estimation.sh).
   LocalizationResult Localize(const Query& query, const LocalizerOptions& options,
-                              const FramePrediction* prediction = nullptr) const;
+                              const FramePrediction* prediction = nullptr,
+                              std::vector<FeatureMatch>* correspondences = nullptr) const;
 
   // The part of Localize's check that concerns the query's priors: a latitude in [-90, 90], a
   // finite longitude and height, a positive radius, a non-zero gravity, and a georeferenced
@@ -60,10 +64,15 @@ class Localizer {
   std::optional<IndexGeo> geo_;
 };
 
-// Widens a covariance by the index's calibration for a calibration mode (PCAL): the rotation
-// block by its rotation scale, the centre block by its position scale, the cross terms by the
-// root of both. Empty when the index has none for the mode.
-std::optional<CovarianceScales> ApplyCovarianceCalibration(
-    const IndexCovarianceCalibration* calibration, Calibration mode, PoseCovariance* covariance);
+// A pose stage's covariance as a result reports it: widened by the index's calibration for the
+// query's calibration mode (PCAL: the rotation block by its rotation scale, the centre block by
+// its position scale, the cross terms by the root of both; `calibration` says by how much, or is
+// empty when the index has none for the mode), its 95 % radius, and on a georeferenced index the
+// centre's block in metres east-north-up at the camera.
+void ReportCovariance(const Index& index, const std::optional<IndexGeo>& geo, Calibration mode,
+                      const Eigen::Vector3d& center, PoseCovariance* covariance);
+
+// A pose's parts as results report them.
+Pose PoseOf(const CameraPose& pose);
 
 }  // namespace cwloc

@@ -92,9 +92,6 @@ struct LocalizerOptions {
   // Output.
   uint32_t ranked_images = 10;  // model images listed for location recognition
   uint64_t seed = 0;            // query feature order, the query's kd-forest, RANSAC
-  // The correspondences the pose was fit to, in the result (kept_correspondences): for tools
-  // that fit them with another estimator (bench/cross_estimation.sh). Not an option-table knob.
-  bool keep_correspondences = false;
   // Run the pose stage; off, Localize stops after matching (a rig's images, rig_localizer.h:
   // the rig fits one pose to them all). Not an option-table knob.
   bool estimate_pose = true;

@@ -3,47 +3,17 @@
 #include <array>
 #include <cstdint>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include "camera/camera_models.h"
-#include "geo/geo_region.h"
+#include "results/camera.h"
+#include "results/localization_result.h"
+#include "results/priors.h"
 
 namespace cwloc {
-
-// What the pose stage may trust about the query camera; COLMAP's registrator draws the same
-// line with prior_focal_length.
-enum class Calibration {
-  kKnown,       // every parameter is trusted and held fixed
-  kFocalPrior,  // params hold a focal guess (EXIF, --focal): it seeds the estimate
-  kUnknown,     // only the image size: P4Pf estimates the focal
-};
-
-inline constexpr std::array<std::string_view, 3> kCalibrationNames = {"known", "focal-prior",
-                                                                      "unknown"};
-
-inline std::string_view CalibrationName(Calibration calibration) {
-  return kCalibrationNames[static_cast<size_t>(calibration)];
-}
-
-// Where the query camera came from, reported in the JSON.
-enum class IntrinsicsSource {
-  kCameraOption,     // --camera
-  kQueryList,        // a query-list line's "MODEL W H PARAMS"
-  kImageSizeOption,  // --image-size
-  kFocalOption,      // --focal
-  kExif,             // the photo's EXIF focal length
-  kDatabase,         // the COLMAP database's camera
-  kNone,             // nothing but the photo's size
-};
-
-inline constexpr std::array<std::string_view, 7> kIntrinsicsSourceNames = {
-    "camera-option", "query-list", "image-size-option", "focal-option", "exif", "database", "none"};
-
-inline std::string_view IntrinsicsSourceName(IntrinsicsSource source) {
-  return kIntrinsicsSourceNames[static_cast<size_t>(source)];
-}
 
 // The query's camera. Unless the calibration is known, the principal point is taken at the
 // image centre and the focal length (with a radial distortion term) is estimated.
@@ -78,31 +48,29 @@ inline QueryCamera UnknownFocalCamera(uint32_t width, uint32_t height, Intrinsic
           Calibration::kUnknown,         source};
 }
 
+// A camera as a result reports it: the model by its COLMAP name.
+inline CameraUsed CameraUsedOf(const QueryCamera& camera) {
+  CameraUsed used;
+  used.model = std::string(CameraModelName(camera.model_id));
+  used.width = camera.width;
+  used.height = camera.height;
+  used.params = camera.params;
+  used.calibration = camera.calibration;
+  used.intrinsics_source = camera.source;
+  return used;
+}
+
+// The model of a camera a result reports (CameraUsedOf's name).
+inline CameraModelId ModelIdOf(const Camera& camera) {
+  const std::optional<CameraModelInfo> model = FindCameraModel(camera.model);
+  if (!model) throw std::logic_error("a result's camera model '" + camera.model + "' is unknown");
+  return model->id;
+}
+
 // A photo's EXIF GPS position (its altitude, above mean sea level, is not kept).
 struct GpsFix {
   double latitude_deg = 0;
   double longitude_deg = 0;
-};
-
-// How a photo query became features (absent for feature files and database queries).
-struct PhotoInfo {
-  uint32_t extraction_width = 0;  // the image SIFT ran on, after --max-image-size
-  uint32_t extraction_height = 0;
-  int first_octave = -1;          // SIFT's, as --first-octave set it
-  uint32_t max_features = 0;      // SIFT's cap, as --max-features set it
-  double extraction_seconds = 0;  // decoding, EXIF, resizing and SIFT
-  std::optional<GpsFix> exif_gps;
-};
-
-// Where a query's prior came from, reported in the JSON.
-enum class PriorSource { kOption, kFile, kExif };
-inline constexpr std::array<std::string_view, 3> kPriorSourceNames = {"option", "priors-file",
-                                                                      "exif"};
-
-// A GPS fix: the query was taken in this region. Localization then considers only clusters
-// with a camera in it.
-struct PositionPrior : GeoRegion {
-  PriorSource source = PriorSource::kOption;
 };
 
 // A query image's own features: keypoints in COLMAP's pixel convention and N x 128 uint8
@@ -114,7 +82,10 @@ struct Query {
   QueryCamera camera;
   std::vector<float> keypoints;      // x0, y0, x1, y1, ...
   std::vector<uint8_t> descriptors;  // N x 128
+  // A photo query: how it became features, in what time, and where its EXIF GPS put it.
   std::optional<PhotoInfo> photo;
+  double extraction_seconds = 0;  // decoding, EXIF, resizing and SIFT
+  std::optional<GpsFix> exif_gps;
   // Priors; both need a georeferenced index (docs/geo.md).
   std::optional<PositionPrior> position_prior;
   // The direction gravity pulls in the camera frame (x right, y down, z forward), as a phone's

@@ -48,20 +48,21 @@ RigCamera CameraOf(const RigImage& image) {
 
 }  // namespace
 
-RigLocalizationResult LocalizeRig(const Localizer& localizer, const RigQuery& query,
-                                  const LocalizerOptions& options) {
+RigResult LocalizeRig(const Localizer& localizer, const RigQuery& query,
+                      const LocalizerOptions& options) {
   const Stopwatch total;
   ValidateRigQuery(query);
   const Index& index = localizer.index();
-  RigLocalizationResult result;
+  RigResult result;
   result.name = query.name;
-  result.unknown_scale = query.unknown_scale;
+  result.rig.reference_image = query.images.front().query.name;
+  result.rig.unknown_scale = query.unknown_scale;
 
   // Each image's correspondences: the paper's matching on it (forward matching, voting,
   // back-matching), without its own pose stage.
   LocalizerOptions image_options = options;
-  image_options.keep_correspondences = true;
   image_options.estimate_pose = false;
+  std::vector<std::vector<FeatureMatch>> pairs_of(query.images.size());
   std::vector<RigCamera> cameras;
   std::vector<RigObservation> observations;
   std::vector<std::pair<uint32_t, uint32_t>> origin;  // (image, correspondence) per observation
@@ -70,19 +71,22 @@ RigLocalizationResult LocalizeRig(const Localizer& localizer, const RigQuery& qu
   for (uint32_t c = 0; c < query.images.size(); ++c) {
     const RigImage& image = query.images[c];
     RigImageResult& out = result.images.emplace_back();
-    if (image.query.NumFeatures() == 0) {
-      // A camera that sees nothing (the sky, a blank wall) adds nothing; the others may.
-      out.matched.name = image.query.name;
-      out.matched.failure_reason = "the image has no features";
-    } else {
-      out.matched = localizer.Localize(image.query, image_options);
+    out.name = image.query.name;
+    // A camera that sees nothing (the sky, a blank wall) adds nothing; the others may.
+    if (image.query.NumFeatures() > 0) {
+      const LocalizationResult matched =
+          localizer.Localize(image.query, image_options, nullptr, &pairs_of[c]);
+      out.num_features = matched.num_features;
+      out.forward_matches = matched.forward_matches;
+      out.back_matches = matched.back_matches;
+      out.correspondences = matched.correspondences;
+      extraction += matched.times.extraction;
     }
-    out.cam_from_rig = image.cam_from_rig;
-    extraction += out.matched.times.extraction;
+    out.cam_from_rig = Transform{PoseOf(image.cam_from_rig)};
     cameras.push_back(CameraOf(image));
     const QueryCamera& camera = image.query.camera;
     const std::array<double, 2> center = camera.ImageCenter();
-    const std::vector<FeatureMatch>& pairs = out.matched.kept_correspondences;
+    const std::vector<FeatureMatch>& pairs = pairs_of[c];
     for (uint32_t k = 0; k < pairs.size(); ++k) {
       const std::array<double, 2> pixel = {image.query.keypoints[2 * pairs[k].feature],
                                            image.query.keypoints[2 * pairs[k].feature + 1]};
@@ -102,66 +106,67 @@ RigLocalizationResult LocalizeRig(const Localizer& localizer, const RigQuery& qu
       origin.push_back({c, k});
     }
   }
-  result.seconds_images = images_time.Seconds() - extraction;
-  result.correspondences = static_cast<uint32_t>(observations.size());
+  result.times.images = images_time.Seconds() - extraction;
+  result.rig.correspondences = static_cast<uint32_t>(observations.size());
 
   const Stopwatch pose_time;
   PoseContext context;
   context.ransac.seed = options.seed;
   const RigPoseResult pose =
       EstimateRigPose(cameras, observations, query.unknown_scale, options.pose, context);
-  result.num_inliers = static_cast<uint32_t>(pose.num_inliers);
-  result.ransac_iterations = pose.stats.iterations;
+  result.rig.num_inliers = static_cast<uint32_t>(pose.num_inliers);
+  result.rig.ransac_iterations = pose.stats.iterations;
   result.success = pose.success;
   result.failure_reason = pose.failure_reason;
   if (observations.empty()) {
     result.failure_reason = "no image matched the model";
   }
   for (uint32_t c = 0; c < result.images.size(); ++c) {
-    RigImageResult& image = result.images[c];
-    image.camera = query.images[c].query.camera;
+    QueryCamera camera = query.images[c].query.camera;
     if (cameras[c].refine_intrinsics) {
       // A focal prior's camera as refined: SIMPLE_RADIAL (f, cx, cy, k).
-      const std::array<double, 2> center = image.camera.ImageCenter();
-      image.camera.model_id = CameraModelId::kSimpleRadial;
-      image.camera.params = {pose.cameras[c].focal_length_px, center[0], center[1],
-                             pose.cameras[c].k};
+      const std::array<double, 2> center = camera.ImageCenter();
+      camera.model_id = CameraModelId::kSimpleRadial;
+      camera.params = {pose.cameras[c].focal_length_px, center[0], center[1], pose.cameras[c].k};
     }
+    result.images[c].camera = CameraUsedOf(camera);
   }
   if (pose.success) {
-    result.rig_from_world = pose.pose.rig_from_world;
-    result.scale = pose.pose.scale;
-    result.scale_std = pose.scale_std;
-    result.refined = pose.refined;
-    result.mean_reprojection_error_px = pose.mean_reprojection_error_px;
+    result.rig.rig_from_world = PoseOf(pose.pose.rig_from_world);
+    result.rig.scale = pose.pose.scale;
+    result.rig.scale_std = pose.scale_std;
+    result.rig.refined = pose.refined;
+    result.rig.mean_reprojection_error_px = pose.mean_reprojection_error_px;
     for (uint32_t c = 0; c < result.images.size(); ++c) {
-      result.images[c].cam_from_world = pose.pose.CameraFromWorld(result.images[c].cam_from_rig);
+      result.images[c].pose = PoseOf(pose.pose.CameraFromWorld(query.images[c].cam_from_rig));
       result.images[c].num_inliers = pose.inliers_per_camera[c];
     }
+    result.pose = result.images.front().pose;
     for (size_t i = 0; i < observations.size(); ++i) {
       if (!pose.inliers[i]) continue;
       const auto [c, k] = origin[i];
-      const FeatureMatch& match = result.images[c].matched.kept_correspondences[k];
+      const FeatureMatch& match = pairs_of[c][k];
+      const uint32_t point = index.view_points()[match.view];
+      const std::vector<float>& keypoints = query.images[c].query.keypoints;
       result.images[c].inliers.push_back(
-          {match.feature, index.view_points()[match.view], match.view});
+          {match.feature,
+           {keypoints[2 * match.feature], keypoints[2 * match.feature + 1]},
+           point,
+           index.PointXyz(point),
+           match.view});
     }
+    const CameraPose reference = pose.pose.CameraFromWorld(query.images.front().cam_from_rig);
     result.covariance = pose.covariance;
     if (result.covariance) {
-      result.covariance_calibration = ApplyCovarianceCalibration(
-          index.covariance_calibration(), query.images.front().query.camera.calibration,
-          &*result.covariance);
+      // The rig's covariance is the origin's, not a georeferenced camera's: no ENU block.
+      ReportCovariance(index, std::nullopt, query.images.front().query.camera.calibration,
+                       reference.Center(), &*result.covariance);
     }
-    if (const std::optional<IndexGeo>& geo = localizer.geo()) {
-      const CameraPose& reference = *result.images.front().cam_from_world;
+    if (const std::optional<IndexGeo>& geo = localizer.geo())
       result.geo = geo->PoseOnGlobe(reference.rotation, reference.Center());
-    }
   }
-  // The correspondences were the rig's input; the images' records need not carry them.
-  if (!options.keep_correspondences) {
-    for (RigImageResult& image : result.images) image.matched.kept_correspondences.clear();
-  }
-  result.seconds_rig_pose = pose_time.Seconds();
-  result.seconds_total = total.Seconds();
+  result.times.rig_pose = pose_time.Seconds();
+  result.times.total = total.Seconds();
   return result;
 }
 

@@ -4,11 +4,11 @@
 #include <string>
 #include <vector>
 
-#include "localizer/localization_result.h"
 #include "localizer/localizer.h"
 #include "localizer/pose/camera_pose.h"
 #include "localizer/pose/refine_pose.h"
 #include "localizer/query.h"
+#include "results/rig_result.h"
 
 namespace cwloc {
 
@@ -35,48 +35,11 @@ struct RigQuery {
   bool unknown_scale = false;
 };
 
-struct RigImageResult {
-  // The paper's matching on the image (forward matching, voting, back-matching; no pose
-  // stage): its counts, and its correspondences (kept_correspondences), which the rig pools.
-  LocalizationResult matched;
-  CameraPose cam_from_rig;
-  QueryCamera camera;  // as the rig's refinement left it (a focal prior's f and k refined)
-  // On the rig's success: cam_from_rig * rig_from_world, and the rig's inliers in this image.
-  std::optional<CameraPose> cam_from_world;
-  uint32_t num_inliers = 0;
-  std::vector<InlierMatch> inliers;
-};
-
-struct RigLocalizationResult {
-  std::string name;
-  bool success = false;
-  std::string failure_reason;  // empty on success
-  CameraPose rig_from_world;
-  bool unknown_scale = false;
-  double scale = 1.0;               // estimated when unknown_scale
-  std::optional<double> scale_std;  // with the covariance
-  uint32_t num_inliers = 0;         // over all images
-  uint32_t correspondences = 0;     // pooled 2D-3D pairs given to RANSAC
-  uint32_t ransac_iterations = 0;
-  bool refined = false;
-  double mean_reprojection_error_px = 0.0;
-  // The rig pose's covariance (rig_pose.h), widened by the index's calibration for the
-  // reference image's calibration mode when the index has one.
-  std::optional<PoseCovariance> covariance;
-  std::optional<CovarianceScales> covariance_calibration;
-  // On a georeferenced index: the reference camera on the globe.
-  std::optional<GeoPose> geo;
-  std::vector<RigImageResult> images;
-  double seconds_images = 0;    // the images' matching
-  double seconds_rig_pose = 0;  // the rig's RANSAC, refinement and covariance
-  double seconds_total = 0;     // with the images' photo extraction
-};
-
 // Matches each image (its correspondences), then fits the rig's pose to all of them. Throws
 // InputError naming the frame for a frame that cannot be processed: no images, an image
 // without a known camera or focal prior, a cam_from_rig that is not finite or whose quaternion
 // is not of unit length, an unknown scale with one image.
-RigLocalizationResult LocalizeRig(const Localizer& localizer, const RigQuery& query,
-                                  const LocalizerOptions& options);
+RigResult LocalizeRig(const Localizer& localizer, const RigQuery& query,
+                      const LocalizerOptions& options);
 
 }  // namespace cwloc

@@ -32,7 +32,7 @@ constexpr double kWiderWindow = 2.0;
 // half the inliers and 12x the error it has alone, bench/sequence_benchmark.sh).
 constexpr double kMinShareOfLastInliers = 0.5;
 
-CameraPose PoseOf(const LocalizationResult& result) {
+CameraPose CameraPoseOf(const LocalizationResult& result) {
   const auto& q = result.rotation;
   const auto& t = result.translation;
   return {Eigen::Quaterniond(q[0], q[1], q[2], q[3]), Eigen::Vector3d(t[0], t[1], t[2])};
@@ -45,7 +45,7 @@ double RotationAngleDeg(const CameraPose& a, const CameraPose& b) {
 std::vector<uint32_t> InlierPoints(const LocalizationResult& result) {
   std::vector<uint32_t> points;
   points.reserve(result.inliers.size());
-  for (const InlierMatch& inlier : result.inliers) points.push_back(inlier.point);
+  for (const Inlier& inlier : result.inliers) points.push_back(inlier.point);
   return points;
 }
 
@@ -54,15 +54,16 @@ std::vector<uint32_t> InlierPoints(const LocalizationResult& result) {
 double PredictionErrorPx(const Index& index, const Query& frame, const LocalizationResult& result,
                          const CameraPose& predicted) {
   constexpr size_t kSampledInliers = 200;
-  const std::vector<InlierMatch>& inliers = result.inliers;
+  const std::vector<Inlier>& inliers = result.inliers;
   const size_t step = std::max<size_t>(1, inliers.size() / kSampledInliers);
+  const CameraModelId model = ModelIdOf(result.camera);
   std::vector<double> errors;
   for (size_t i = 0; i < inliers.size(); i += step) {
     const std::array<double, 3> xyz = index.PointXyz(inliers[i].point);
     const Eigen::Vector3d in_camera = predicted.Apply(Eigen::Vector3d(xyz[0], xyz[1], xyz[2]));
     std::array<double, 2> pixel;
-    if (!ProjectToPixel(result.camera.model_id, result.camera.params,
-                        {in_camera.x(), in_camera.y(), in_camera.z()}, &pixel)) {
+    if (!ProjectToPixel(model, result.camera.params, {in_camera.x(), in_camera.y(), in_camera.z()},
+                        &pixel)) {
       errors.push_back(std::numeric_limits<double>::infinity());  // behind the predicted camera
       continue;
     }
@@ -192,7 +193,7 @@ std::optional<Tracker::MatchedFrame> Tracker::MatchNear(const Query& frame,
   prediction.nearest_images_first = true;
   prediction.radius_px = options_.guide_radius_px;
   prediction.min_back_matches = uint32_t(kMinShareOfLastInliers * double(seen.size()));
-  CameraPose around = PoseOf(rough);
+  CameraPose around = CameraPoseOf(rough);
   const LocalizationResult* before = &rough;
   prediction.seen_points = InlierPoints(rough);
   std::optional<LocalizationResult> result;
@@ -202,7 +203,7 @@ std::optional<Tracker::MatchedFrame> Tracker::MatchNear(const Query& frame,
     if (!frame.camera.FocalKnown()) prediction.hypothesis.params = before->camera.params;
     result = localizer_.Localize(frame, tracking_options_, &prediction);
     if (!result->success) return std::nullopt;
-    const CameraPose pose = PoseOf(*result);
+    const CameraPose pose = CameraPoseOf(*result);
     // The next round's points; a successful pose has inliers, whose rows the localizer checked.
     prediction.seen_points = InlierPoints(*result);
     depth = *MedianPointDepth(localizer_.index(), prediction.seen_points, pose);
@@ -219,7 +220,7 @@ std::optional<Tracker::MatchedFrame> Tracker::MatchNear(const Query& frame,
 bool Tracker::Trusted(const MatchedFrame& matched, const CameraPose& predicted,
                       const std::optional<MotionUncertainty>& uncertainty,
                       TrackingInfo* info) const {
-  const CameraPose pose = PoseOf(matched.result);
+  const CameraPose pose = CameraPoseOf(matched.result);
   const double rotation_deg = RotationAngleDeg(pose, predicted);
   const double distance = (pose.Center() - predicted.Center()).norm();
   info->prediction_error = distance;
@@ -231,8 +232,8 @@ bool Tracker::Trusted(const MatchedFrame& matched, const CameraPose& predicted,
     // for the last pose's, which the prediction started from.
     double rotation_var = 0.0, position_var = 0.0;
     if (const auto& covariance = matched.result.covariance) {
-      rotation_var = covariance->pose.topLeftCorner<3, 3>().trace();
-      position_var = covariance->Position().trace();
+      rotation_var = PoseBlock(*covariance).topLeftCorner<3, 3>().trace();
+      position_var = PositionBlock(*covariance).trace();
     }
     const double rotation_sigma =
         std::sqrt(uncertainty->rotation_rad * uncertainty->rotation_rad + 2.0 * rotation_var);
@@ -254,10 +255,10 @@ LocalizationResult Tracker::Track(const Query& frame, std::optional<double> seco
     // A black or blurred frame is part of a stream, not bad input: it is lost.
     LocalizationResult lost;
     lost.name = frame.name;
-    lost.camera = frame.camera;
+    static_cast<CameraUsed&>(lost.camera) = CameraUsedOf(frame.camera);
     lost.photo = frame.photo;
     lost.failure_reason = "the frame has no features";
-    lost.times.extraction = frame.photo ? frame.photo->extraction_seconds : 0.0;
+    lost.times.extraction = frame.extraction_seconds;
     if (last_) info.predicted_from = last_->name;
     before_last_.reset();
     info.seconds = time.Seconds();
@@ -320,7 +321,7 @@ LocalizationResult Tracker::Track(const Query& frame, std::optional<double> seco
     info.prediction_error.reset();
     info.prediction_error_deg.reset();
     if (result->success && first_prediction) {
-      const CameraPose pose = PoseOf(*result);
+      const CameraPose pose = CameraPoseOf(*result);
       info.prediction_error = (pose.Center() - first_prediction->Center()).norm();
       info.prediction_error_deg = RotationAngleDeg(pose, *first_prediction);
     }
@@ -329,13 +330,13 @@ LocalizationResult Tracker::Track(const Query& frame, std::optional<double> seco
   if (result->success) {
     PosedFrame posed;
     posed.name = frame.name;
-    posed.pose = PoseOf(*result);
+    posed.pose = CameraPoseOf(*result);
     posed.seconds = seconds;
     posed.camera_and_pose.pose = posed.pose;
-    posed.camera_and_pose.model_id = result->camera.model_id;
+    posed.camera_and_pose.model_id = ModelIdOf(result->camera);
     posed.camera_and_pose.params = result->camera.params;
     posed.inlier_views.reserve(result->inliers.size());
-    for (const InlierMatch& inlier : result->inliers) posed.inlier_views.push_back(inlier.view);
+    for (const Inlier& inlier : result->inliers) posed.inlier_views.push_back(inlier.view);
     if (tracked_from)
       posed.prediction_error_px =
           PredictionErrorPx(localizer_.index(), frame, *result, *tracked_from);

@@ -6,9 +6,9 @@
 #include <variant>
 #include <vector>
 
-#include "localizer/localization_result.h"
 #include "localizer/localizer.h"
 #include "localizer/pose/camera_pose.h"
+#include "results/localization_result.h"
 
 namespace cwloc {
 

@@ -9,6 +9,7 @@
 #include "base/error.h"
 #include "io/camera_spec.h"
 #include "io/query_priors.h"
+#include "localizer/pose/refine_pose.h"
 
 namespace cwloc {
 namespace {
@@ -162,10 +163,12 @@ nlohmann::ordered_json GeoPoseResponse(const std::string& id, const Localization
   response["timestamp"] = std::chrono::duration_cast<std::chrono::milliseconds>(
                               std::chrono::system_clock::now().time_since_epoch())
                               .count();
-  if (result.covariance && result.enu_position_covariance) {
-    const double position = std::sqrt(result.enu_position_covariance->trace() / 3);
+  if (result.covariance && result.covariance->enu_position) {
+    const std::array<double, 9>& enu = *result.covariance->enu_position;
+    const double position = std::sqrt((enu[0] + enu[4] + enu[8]) / 3);
     const double orientation =
-        std::sqrt(result.covariance->pose.topLeftCorner<3, 3>().trace() / 3) * kDegreesPerRadian;
+        std::sqrt(PoseBlock(*result.covariance).topLeftCorner<3, 3>().trace() / 3) *
+        kDegreesPerRadian;
     response["accuracy"] = {{"position", position}, {"orientation", orientation}};
   }
   response["type"] = "geopose";

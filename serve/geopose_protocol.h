@@ -10,7 +10,7 @@
 #include <string_view>
 
 #include "geo/georeference.h"
-#include "localizer/localization_result.h"
+#include "results/localization_result.h"
 #include "serve/request_inputs.h"
 
 namespace cwloc {

@@ -36,9 +36,9 @@ void Metrics::CountError(const std::string& kind) {
 void Metrics::CountResult(bool localized, const StageTimes& times) {
   std::lock_guard<std::mutex> lock(mutex_);
   ++(localized ? localized_ : not_localized_);
-#define CWLOC_STAGE_TIME(name, help) stage_seconds_[#name].Add(times.name);
-#include "localizer/stage_times.inc"
-#undef CWLOC_STAGE_TIME
+  ForEachField<StageTimes>([&](const auto& stage) {
+    stage_seconds_[std::string(stage.info.name)].Add(times.*stage.member);
+  });
 }
 
 void Metrics::WriteHistogram(const std::string& name, const std::string& labels,

@@ -12,7 +12,7 @@
 #include <utility>
 #include <vector>
 
-#include "localizer/result_types.h"
+#include "results/localization_result.h"
 
 namespace cwloc {
 

@@ -82,10 +82,10 @@ RigRunCounts RunRigFrames(const CliOptions& cli, const std::vector<RigFrameInput
         query.unknown_scale = unknown_scale;
         for (const RigFrameImage& image : frame.images)
           query.images.push_back({load(image), image.cam_from_rig});
-        const RigLocalizationResult result = LocalizeRig(localizer, query, cli.options.localizer);
+        const RigResult result = LocalizeRig(localizer, query, cli.options.localizer);
         sink.WriteRig(result, cli.options);
         outcome = result.success ? &counts.localized : &counts.failed;
-        seconds = result.seconds_total;
+        seconds = result.times.total;
       } catch (const InputError& e) {
         outcome = &counts.errors;
         sink.WriteError(frame.name, e.what());

@@ -11,10 +11,10 @@ namespace {
 // " f 1380.2 +- 9.7 px," for an estimated focal length, and what a weak constraint leaves.
 std::string EstimatedFocalText(const LocalizationResult& result) {
   if (!result.focal_depth || result.camera.params.empty()) return "";
-  const FocalDepthUncertainty& uncertainty = *result.focal_depth;
+  const FocalDepth& uncertainty = *result.focal_depth;
   const double focal = result.camera.params[0];
   char text[160];
-  if (WeaklyConstrained(uncertainty, focal)) {
+  if (uncertainty.weakly_constrained) {
     std::snprintf(text, sizeof(text), " f %.1f +- %.1f px, weakly constrained (depth +- %.3g),",
                   focal, uncertainty.focal_std_px, uncertainty.depth_std);
   } else {
@@ -27,12 +27,11 @@ std::string EstimatedFocalText(const LocalizationResult& result) {
 std::string PositionRadiusText(const LocalizationResult& result) {
   if (!result.covariance) return "";
   char text[96];
-  if (result.enu_position_covariance) {
-    std::snprintf(text, sizeof(text), " position +- %.3g m (95 %%),",
-                  Radius95(*result.enu_position_covariance));
+  if (const auto& metres = result.covariance->position_radius95_m) {
+    std::snprintf(text, sizeof(text), " position +- %.3g m (95 %%),", *metres);
   } else {
     std::snprintf(text, sizeof(text), " position +- %.3g model units (95 %%),",
-                  Radius95(result.covariance->Position()));
+                  result.covariance->position_radius95);
   }
   return text;
 }
@@ -47,8 +46,7 @@ void ResultSink::Write(const LocalizationResult& result, const QueryOptions& opt
   // With the JSON in a file, stdout gets a readable line per query.
   if (json_file_ && !cli_.quiet) {
     // A frame of a sequence says how it got its pose.
-    const char* how =
-        result.tracking ? kTrackingModeNames[size_t(result.tracking->mode)].data() : "localized";
+    const char* how = result.tracking ? NameOf(result.tracking->mode).data() : "localized";
     if (result.success) {
       std::printf("%s: %s, %u inliers / %u correspondences,%s%s %.1f ms\n", result.name.c_str(),
                   how, result.num_inliers, result.correspondences,
@@ -64,7 +62,7 @@ void ResultSink::Write(const LocalizationResult& result, const QueryOptions& opt
     Append(*trajectory_file_, TrajectoryLine(result, stamp, trajectory_format_));
 }
 
-void ResultSink::WriteRig(const RigLocalizationResult& result, const QueryOptions& options) {
+void ResultSink::WriteRig(const RigResult& result, const QueryOptions& options) {
   std::lock_guard lock(mutex_);
   if (closed_) return;
   EmitJsonLine(RigResultToJson(result, options).dump());
@@ -73,10 +71,10 @@ void ResultSink::WriteRig(const RigLocalizationResult& result, const QueryOption
       char position[96] = "";
       if (result.covariance) {
         std::snprintf(position, sizeof(position), " position +- %.3g model units (95 %%),",
-                      Radius95(result.covariance->Position()));
+                      result.covariance->position_radius95);
       }
       std::printf("%s: rig localized, %u inliers over %zu images,%s %.1f ms\n", result.name.c_str(),
-                  result.num_inliers, result.images.size(), position, result.seconds_total * 1e3);
+                  result.rig.num_inliers, result.images.size(), position, result.times.total * 1e3);
     } else {
       std::printf("%s: not localized: %s\n", result.name.c_str(), result.failure_reason.c_str());
     }
@@ -84,7 +82,7 @@ void ResultSink::WriteRig(const RigLocalizationResult& result, const QueryOption
   }
   if (poses_file_ && result.success) {
     for (const RigImageResult& image : result.images)
-      Append(*poses_file_, PoseLine(image.matched.name, *image.cam_from_world));
+      Append(*poses_file_, PoseLine(image.name, *image.pose));
   }
 }
 

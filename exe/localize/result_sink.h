@@ -11,8 +11,8 @@
 #include "exe/localize/localize_cli.h"
 #include "io/result_json.h"
 #include "io/trajectory_file.h"
-#include "localizer/localization_result.h"
 #include "localizer/rig_localizer.h"
+#include "results/localization_result.h"
 
 namespace cwloc {
 
@@ -37,7 +37,7 @@ class ResultSink {
   // `stamp`: a sequence frame's, for --trajectory.
   void Write(const LocalizationResult& result, const QueryOptions& options, FrameStamp stamp);
   // A rig frame: its record, each posed image's line to --poses, a readable line.
-  void WriteRig(const RigLocalizationResult& result, const QueryOptions& options);
+  void WriteRig(const RigResult& result, const QueryOptions& options);
 
   void WriteError(const std::string& name, const std::string& error) {
     std::lock_guard lock(mutex_);

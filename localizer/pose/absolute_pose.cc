@@ -246,12 +246,10 @@ void ReportUncertainty(std::span<const Eigen::Vector2d> pixels,
     if (result->inliers[i]) inliers.push_back(i);
   }
   const RadialCamera camera{result->focal_length_px, result->radial_distortion};
-  result->covariance =
-      PoseCovarianceAt(pixels, points3D, inliers, refinement, result->pose, camera, uncalibrated);
-  if (uncalibrated && result->refined) {
-    result->focal_depth =
-        FocalDepthUncertaintyAt(pixels, points3D, inliers, refinement, result->pose, camera);
-  }
+  result->covariance = PoseCovarianceAt(pixels, points3D, inliers, refinement, result->pose, camera,
+                                        uncalibrated, &result->distortion_std);
+  if (uncalibrated && result->refined)
+    result->focal_depth = FocalDepthAt(pixels, points3D, inliers, refinement, result->pose, camera);
 }
 
 }  // namespace

@@ -131,10 +131,12 @@ struct AbsolutePoseResult {
   double mean_reprojection_error_px = 0.0;  // over the inliers
   // Uncalibrated, refined and successful: how well the focal length and the depth are told
   // apart on the final inliers (refine_pose.h).
-  std::optional<FocalDepthUncertainty> focal_depth;
+  std::optional<FocalDepth> focal_depth;
   // On success: the pose's covariance on the final inliers under the final refinement's
-  // problem (refine_pose.h), at the reported pose, refined or not.
+  // problem (refine_pose.h), at the reported pose, refined or not; and k's standard deviation
+  // when k was refined.
   std::optional<PoseCovariance> covariance;
+  std::optional<double> distortion_std;
   // With a gravity prior: the angle between the reported pose's R * in_world and in_camera.
   double gravity_angle_deg = 0.0;
   // Known focal length with a gravity prior: GravityP2P's best pose had fewer than min_inliers

@@ -182,7 +182,7 @@ std::optional<PoseCovariance> PoseCovarianceAt(std::span<const Eigen::Vector2d> 
                                                std::span<const uint32_t> indices,
                                                const PoseRefinementOptions& options,
                                                const CameraPose& pose, const RadialCamera& camera,
-                                               bool radial) {
+                                               bool radial, std::optional<double>* distortion_std) {
   const RefinementProblem problem =
       radial ? MakeCameraProblem(centered_pixels, points3D, indices, options)
              : MakeProblem(centered_pixels, points3D, indices, options);
@@ -202,22 +202,28 @@ std::optional<PoseCovariance> PoseCovarianceAt(std::span<const Eigen::Vector2d> 
   to_pose.block<3, 3>(0, 0) = -2.0 * rt;
   to_pose.block<3, 3>(3, 0) = -2.0 * rt * t_cross;
   to_pose.block<3, 3>(3, 3) = -rt;
+  // Assigned, not constructed: Eigen then evaluates the product into a dynamic temporary, whose
+  // GEMM blocking (and so its rounding) differs from a fixed-size destination's.
+  Eigen::Matrix<double, 6, 6> block;
+  block = to_pose * *covariance * to_pose.transpose();
+  block = 0.5 * (block + block.transpose()).eval();
+  if (!block.allFinite() || !(block.diagonal().array() > 0.0).all()) return std::nullopt;
   PoseCovariance out;
-  out.pose = to_pose * *covariance * to_pose.transpose();
-  out.pose = 0.5 * (out.pose + out.pose.transpose()).eval();
-  if (!out.pose.allFinite() || !(out.pose.diagonal().array() > 0.0).all()) return std::nullopt;
+  PoseBlock(out) = block;
+  out.position_radius95 = Radius95(PositionBlock(out));
   if (problem.refine_focal_length) out.focal_std_px = std::sqrt((*covariance)(6, 6));
-  if (problem.radial && problem.refine_radial_distortion) {
+  if (distortion_std != nullptr && problem.radial && problem.refine_radial_distortion) {
     const Eigen::Index k = 6 + Eigen::Index{problem.refine_focal_length};
-    out.distortion_std = std::sqrt((*covariance)(k, k));
+    *distortion_std = std::sqrt((*covariance)(k, k));
   }
   return out;
 }
 
-std::optional<FocalDepthUncertainty> FocalDepthUncertaintyAt(
-    std::span<const Eigen::Vector2d> centered_pixels, std::span<const Eigen::Vector3d> points3D,
-    std::span<const uint32_t> indices, const PoseRefinementOptions& options, const CameraPose& pose,
-    const RadialCamera& camera) {
+std::optional<FocalDepth> FocalDepthAt(std::span<const Eigen::Vector2d> centered_pixels,
+                                       std::span<const Eigen::Vector3d> points3D,
+                                       std::span<const uint32_t> indices,
+                                       const PoseRefinementOptions& options, const CameraPose& pose,
+                                       const RadialCamera& camera) {
   RefinementProblem problem = MakeCameraProblem(centered_pixels, points3D, indices, options);
   problem.refine_focal_length = true;
   const std::optional<Eigen::MatrixXd> parameters =
@@ -237,11 +243,12 @@ std::optional<FocalDepthUncertainty> FocalDepthUncertaintyAt(
   const double var_depth = depth.dot(covariance * depth);
   const double var_focal = covariance(focal, focal);
   if (!(var_depth > 0.0) || !(var_focal > 0.0)) return std::nullopt;
-  FocalDepthUncertainty out;
+  FocalDepth out;
   out.focal_std_px = std::sqrt(var_focal);
   out.depth_std = std::sqrt(var_depth);
   out.correlation =
       std::clamp(depth.dot(covariance.col(focal)) / (out.focal_std_px * out.depth_std), -1.0, 1.0);
+  out.weakly_constrained = WeaklyConstrained(out, camera.focal_length_px);
   return out;
 }
 

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -12,6 +13,8 @@
 #include "base/enum_names.h"
 #include "localizer/pose/camera_pose.h"
 #include "localizer/pose/gravity_prior.h"
+#include "results/camera.h"
+#include "results/pose.h"
 
 namespace cwloc {
 
@@ -107,12 +110,7 @@ bool RefinePoseAndCamera(std::span<const Eigen::Vector2d> centered_pixels,
 // cost's Hessian and S the sum of the points' gradient outer products (Huber's empirical
 // sandwich: each point's noise its own, which on real photos gives f a larger spread than
 // PoseCovariance's; the weak-constraint rule below was measured with it).
-struct FocalDepthUncertainty {
-  double focal_std_px = 0.0;
-  double depth_std = 0.0;    // of the camera centre along its optical axis, model units
-  double correlation = 0.0;  // between the focal length and that depth, in [-1, 1]
-};
-
+// (FocalDepth in results/camera.h.)
 // A pose is reported as weakly constrained when its focal length is uncertain by more than
 // kWeakRelativeFocalStd (1 sigma, relative) and that uncertainty moves the camera along its axis
 // (|correlation| >= kWeakFocalDepthCorrelation): the depth is then uncertain by about as much,
@@ -121,46 +119,51 @@ struct FocalDepthUncertainty {
 inline constexpr double kWeakRelativeFocalStd = 0.005;
 inline constexpr double kWeakFocalDepthCorrelation = 0.95;
 
-inline bool WeaklyConstrained(const FocalDepthUncertainty& uncertainty, double focal_length_px) {
+inline bool WeaklyConstrained(const FocalDepth& uncertainty, double focal_length_px) {
   return uncertainty.focal_std_px > kWeakRelativeFocalStd * focal_length_px &&
          std::abs(uncertainty.correlation) >= kWeakFocalDepthCorrelation;
 }
 
-// How well a refined pose is known: the covariance of the refinement's parameters (Huber's
-// for an M-estimator with one pixel noise variance estimated from the residuals, calibrated on
-// synthetic problems; refine_pose.cc) with the focal length and k marginalised out, over (theta,
-// C): theta the rotation vector, radians in the model frame, of the camera orientation's error
-// (world_from_cam_estimate = exp([theta]x) world_from_cam_true) and C the camera centre, model
-// units.
-struct PoseCovariance {
-  Eigen::Matrix<double, 6, 6> pose = Eigen::Matrix<double, 6, 6>::Zero();
-  std::optional<double> focal_std_px;    // when the focal length was refined
-  std::optional<double> distortion_std;  // of SIMPLE_RADIAL's k, when it was refined
-
-  Eigen::Matrix3d Position() const { return pose.bottomRightCorner<3, 3>(); }
-};
+// How well a refined pose is known (PoseCovariance in results/pose.h): the covariance of the
+// refinement's parameters (Huber's for an M-estimator with one pixel noise variance estimated
+// from the residuals, calibrated on synthetic problems; refine_pose.cc) with the focal length and
+// k marginalised out, over (theta, C): theta the rotation vector, radians in the model frame, of
+// the camera orientation's error (world_from_cam_estimate = exp([theta]x) world_from_cam_true)
+// and C the camera centre, model units. Its 6 x 6 block as a matrix:
+inline Eigen::Map<const Eigen::Matrix<double, 6, 6, Eigen::RowMajor>> PoseBlock(
+    const PoseCovariance& covariance) {
+  return Eigen::Map<const Eigen::Matrix<double, 6, 6, Eigen::RowMajor>>(covariance.pose.data());
+}
+inline Eigen::Map<Eigen::Matrix<double, 6, 6, Eigen::RowMajor>> PoseBlock(
+    PoseCovariance& covariance) {
+  return Eigen::Map<Eigen::Matrix<double, 6, 6, Eigen::RowMajor>>(covariance.pose.data());
+}
+inline Eigen::Matrix3d PositionBlock(const PoseCovariance& covariance) {
+  return PoseBlock(covariance).bottomRightCorner<3, 3>();
+}
 
 // The radius of the smallest sphere around the estimate that holds the 95 % ellipsoid of a
 // position covariance: sqrt(kChiSquare3Dof95 * its largest eigenvalue).
 double Radius95(const Eigen::Matrix3d& covariance);
 
 // The pose covariance of the problem RefinePose (radial false; camera.k is then unused) or
-// RefinePoseAndCamera (radial) solves with these options, at `pose` and `camera`; empty when
-// the problem cannot be evaluated there, has no more residuals than parameters, or its Hessian
-// is singular.
-std::optional<PoseCovariance> PoseCovarianceAt(std::span<const Eigen::Vector2d> centered_pixels,
-                                               std::span<const Eigen::Vector3d> points3D,
-                                               std::span<const uint32_t> indices,
-                                               const PoseRefinementOptions& options,
-                                               const CameraPose& pose, const RadialCamera& camera,
-                                               bool radial);
-
-// The focal length and depth above for the problem RefinePoseAndCamera solves (options as
-// given to it, with refine_focal_length), at `pose` and `camera`; empty when the problem cannot
-// be evaluated there or its Hessian is singular.
-std::optional<FocalDepthUncertainty> FocalDepthUncertaintyAt(
+// RefinePoseAndCamera (radial) solves with these options, at `pose` and `camera`, with its
+// position radius and, when the focal length is refined, its standard deviation; and in
+// *distortion_std the standard deviation of k when k is refined. Empty when the problem cannot
+// be evaluated there, has no more residuals than parameters, or its Hessian is singular.
+std::optional<PoseCovariance> PoseCovarianceAt(
     std::span<const Eigen::Vector2d> centered_pixels, std::span<const Eigen::Vector3d> points3D,
     std::span<const uint32_t> indices, const PoseRefinementOptions& options, const CameraPose& pose,
-    const RadialCamera& camera);
+    const RadialCamera& camera, bool radial, std::optional<double>* distortion_std = nullptr);
+
+// The focal length and depth above for the problem RefinePoseAndCamera solves (options as
+// given to it, with refine_focal_length), at `pose` and `camera`, and whether they leave the pose
+// weakly constrained; empty when the problem cannot be evaluated there or its Hessian is
+// singular.
+std::optional<FocalDepth> FocalDepthAt(std::span<const Eigen::Vector2d> centered_pixels,
+                                       std::span<const Eigen::Vector3d> points3D,
+                                       std::span<const uint32_t> indices,
+                                       const PoseRefinementOptions& options, const CameraPose& pose,
+                                       const RadialCamera& camera);
 
 }  // namespace cwloc

@@ -540,12 +540,12 @@ RigPoseResult EstimateRigPose(std::span<const RigCamera> cameras,
   if (problem.Evaluate(RigState::Of(result.pose, result.cameras), true, &at, /*covariance=*/true)) {
     if (const std::optional<Eigen::MatrixXd> covariance =
             HuberCovariance(at.covariance_terms, inliers.size())) {
-      PoseCovariance pose_covariance;
-      pose_covariance.pose = covariance->topLeftCorner<6, 6>();
-      pose_covariance.pose = 0.5 * (pose_covariance.pose + pose_covariance.pose.transpose()).eval();
-      if (pose_covariance.pose.allFinite() &&
-          (pose_covariance.pose.diagonal().array() > 0.0).all()) {
-        result.covariance = pose_covariance;
+      Eigen::Matrix<double, 6, 6> block = covariance->topLeftCorner<6, 6>();
+      block = 0.5 * (block + block.transpose()).eval();
+      if (block.allFinite() && (block.diagonal().array() > 0.0).all()) {
+        PoseCovariance& pose_covariance = result.covariance.emplace();
+        PoseBlock(pose_covariance) = block;
+        pose_covariance.position_radius95 = Radius95(PositionBlock(pose_covariance));
         if (unknown_scale) result.scale_std = std::sqrt((*covariance)(6, 6));
       }
     }

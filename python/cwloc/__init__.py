@@ -5,50 +5,16 @@
     result = localizer.localize_photo("photo.jpg", max_image_size=1600)
     if result.success:
         print(result.rotation, result.translation)  # COLMAP's cam_from_world, w x y z
+        print(result.covariance.position_radius95, result.camera.params)
 
 Bindings of libcwloc.so's C++ API (cwloc/cwloc.hpp); every localize_* releases the GIL.
 """
-from ._cwloc import (
-    BadInputError,
-    Camera,
-    Error,
-    ErrorCode,
-    GeoPose,
-    IndexInfo,
-    Inliers,
-    InternalError,
-    InvalidArgumentError,
-    Localizer,
-    Options,
-    OutOfMemoryError,
-    PoseCovariance,
-    PositionPrior,
-    RankedImage,
-    Result,
-    RigImageResult,
-    RigResult,
-    StageTimes,
-    Tracker,
-    Tracking,
-    apply_index_delta,
-    default_options,
-    read_feature_file,
-    version,
-)
+from . import _cwloc
+from ._cwloc import *  # noqa: F401,F403 (every class and function but the private ones)
 
-__version__ = version()
+__version__ = version()  # noqa: F405
 
-__all__ = [
-    "BadInputError", "Camera", "Error", "ErrorCode", "GeoPose", "IndexInfo", "Inliers",
-    "InternalError", "InvalidArgumentError", "Localizer", "Options", "OutOfMemoryError",
-    "PoseCovariance", "PositionPrior", "RankedImage", "Result", "RigImageResult", "RigResult",
-    "StageTimes", "Tracker",
-    "Tracking", "apply_index_delta", "default_options", "read_feature_file", "version",
-    "__version__",
-]
-
-try:  # builds with the indexer (not a device build, -DCWLOC_WITH_COLMAP_DB=OFF)
-    from ._cwloc import build_index
-    __all__.append("build_index")
-except ImportError:
-    pass
+# The extension's public names: its functions, errors, inputs, and the result classes made from
+# the result types' descriptions (results/, docs/python.md); build_index in builds with the
+# indexer.
+__all__ = [name for name in dir(_cwloc) if not name.startswith("_")] + ["__version__"]

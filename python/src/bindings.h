@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "cwloc/cwloc.hpp"
+#include "cwloc/describe.h"
 
 namespace cwloc::python {
 
@@ -21,7 +22,6 @@ void BindOptions(py::module_& m);    // options.cc
 void BindResults(py::module_& m);    // results.cc
 void BindLocalizer(py::module_& m);  // localizer.cc
 void BindTracker(py::module_& m);    // tracker.cc
-void BindRig(py::module_& m);        // rig.cc
 void BindIndexer(py::module_& m);    // indexer.cc, in builds with the indexer
 
 // A Camera, or hloc's "MODEL W H PARAMS..." text. Raises TypeError / ValueError.
@@ -31,9 +31,18 @@ api::Camera ParseCamera(const std::string& text);
 // Keyword options (cwloc-localize's flags, '-' written '_') over `options=` when given.
 api::Options ToOptions(const py::kwargs& kwargs);
 
+// A result with the options it was made with, which its JSON record echoes: cwloc.Result and
+// cwloc.RigResult.
+template <typename T>
+struct Record {
+  T value;
+  api::Options options;
+};
+
 // Localizer.localize_rig (rig.cc): a list of image dicts as one generalized camera.
-api::RigResult LocalizeRig(const api::Localizer& localizer, const py::list& images,
-                           bool unknown_scale, const std::string& name, const py::kwargs& kwargs);
+Record<api::RigResult> LocalizeRig(const api::Localizer& localizer, const py::list& images,
+                                   bool unknown_scale, const std::string& name,
+                                   const py::kwargs& kwargs);
 
 // A str or os.PathLike as a file path. Raises TypeError.
 std::string ToPath(py::handle path, const char* what);

@@ -2,27 +2,17 @@
 #include <cstdio>
 #include <sstream>
 
-#include "python/src/bindings.h"
+#include "python/src/described.h"
 
 namespace cwloc::python {
 namespace {
 
-const char* CalibrationName(api::Calibration calibration) {
-  switch (calibration) {
-    case api::Calibration::kFocalPrior:
-      return "focal_prior";
-    case api::Calibration::kUnknown:
-      return "unknown";
-    default:
-      return "known";
-  }
-}
-
+// The calibration of that name (cwloc/camera.h's, as the JSON spells it); "focal_prior" as
+// earlier versions spelt it.
 api::Calibration ToCalibration(const std::string& name) {
-  if (name == "known") return api::Calibration::kKnown;
-  if (name == "focal_prior") return api::Calibration::kFocalPrior;
-  if (name == "unknown") return api::Calibration::kUnknown;
-  throw py::value_error("calibration '" + name + "': expected 'known', 'focal_prior' or 'unknown'");
+  const FieldInfo calibration = Info("calibration");
+  return FromPython<api::Calibration>(py::str(name == "focal_prior" ? "focal-prior" : name),
+                                      calibration);
 }
 
 api::Camera MakeCamera(std::string model, uint32_t width, uint32_t height,
@@ -68,6 +58,9 @@ api::Camera ParseCamera(const std::string& text) {
 
 api::Camera ToCamera(py::handle camera, const char* what) {
   if (py::isinstance<api::Camera>(camera)) return camera.cast<api::Camera>();
+  // A result's camera, to localize the next query with.
+  if (py::isinstance<api::ResultCamera>(camera)) return camera.cast<api::ResultCamera>();
+  if (py::isinstance<api::CameraUsed>(camera)) return camera.cast<api::CameraUsed>();
   if (py::isinstance<py::str>(camera)) return ParseCamera(camera.cast<std::string>());
   throw py::type_error(std::string(what) +
                        ": expected a cwloc.Camera or 'MODEL W H PARAMS...', got " +
@@ -75,20 +68,23 @@ api::Camera ToCamera(py::handle camera, const char* what) {
 }
 
 void BindCamera(py::module_& m) {
-  py::class_<api::Camera>(m, "Camera",
-                          "A camera in COLMAP's terms: model name (SIMPLE_PINHOLE, PINHOLE, "
-                          "SIMPLE_RADIAL, RADIAL, OPENCV, ...), image size and parameters in "
-                          "COLMAP's order; calibration says what the pose stage may trust: "
-                          "'known' (all fixed), 'focal_prior' (the focal length is a guess) or "
-                          "'unknown' (only the size counts: the focal length is estimated).")
+  py::class_<api::Camera> camera(m, "Camera",
+                                 "A camera in COLMAP's terms: model name (SIMPLE_PINHOLE, PINHOLE, "
+                                 "SIMPLE_RADIAL, RADIAL, OPENCV, ...), image size and parameters "
+                                 "in COLMAP's order; calibration says what the pose stage may "
+                                 "trust: 'known' (all fixed), 'focal-prior' (the focal length is a "
+                                 "guess) or 'unknown' (only the size counts: the focal length is "
+                                 "estimated).");
+  DefineWritableFields(camera);
+  camera
       .def(py::init(&MakeCamera), py::arg("model"), py::arg("width"), py::arg("height"),
            py::arg("params") = std::vector<double>{}, py::arg("calibration") = "known")
       .def_static(
           "from_string",
           [](const std::string& text, const std::string& calibration) {
-            api::Camera camera = ParseCamera(text);
-            camera.calibration = ToCalibration(calibration);
-            return camera;
+            api::Camera parsed = ParseCamera(text);
+            parsed.calibration = ToCalibration(calibration);
+            return parsed;
           },
           py::arg("text"), py::arg("calibration") = "known",
           "A camera from hloc's intrinsics text 'MODEL W H PARAMS...' (as cwloc-localize "
@@ -100,19 +96,11 @@ void BindCamera(py::module_& m) {
           },
           py::arg("width"), py::arg("height"),
           "Only the image size: the focal length is estimated (P4Pf).")
-      .def_readwrite("model", &api::Camera::model, "COLMAP camera model name")
-      .def_readwrite("width", &api::Camera::width, "Image width, pixels")
-      .def_readwrite("height", &api::Camera::height, "Image height, pixels")
-      .def_readwrite("params", &api::Camera::params, "Parameters in COLMAP's order (a list)")
-      .def_property(
-          "calibration", [](const api::Camera& c) { return CalibrationName(c.calibration); },
-          [](api::Camera& c, const std::string& name) { c.calibration = ToCalibration(name); },
-          "'known', 'focal_prior' or 'unknown'")
       .def("__str__", &CameraText, "'MODEL W H PARAMS...', as hloc and cwloc-localize write it")
       .def("__repr__",
            [](const api::Camera& c) {
              return "cwloc.Camera.from_string('" + CameraText(c) + "', calibration='" +
-                    CalibrationName(c.calibration) + "')";
+                    std::string(NameOf(c.calibration)) + "')";
            })
       .def(
           "__eq__",

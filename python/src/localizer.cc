@@ -6,7 +6,7 @@ namespace cwloc::python {
 namespace {
 
 using api::Localizer;
-using api::Result;
+using Result = Record<api::Result>;
 
 bool IsBytesLike(py::handle value) {
   return PyBytes_Check(value.ptr()) || PyByteArray_Check(value.ptr()) ||
@@ -36,12 +36,13 @@ Result LocalizePhoto(const Localizer& localizer, py::handle photo, py::handle ca
     if (bytes.itemsize != 1 || bytes.ndim != 1 || bytes.strides[0] != 1)
       throw py::value_error("photo: expected contiguous bytes");
     py::gil_scoped_release release;
-    return localizer.LocalizeEncodedPhoto(static_cast<const uint8_t*>(bytes.ptr),
-                                          static_cast<size_t>(bytes.size), camera, options);
+    return Result{localizer.LocalizeEncodedPhoto(static_cast<const uint8_t*>(bytes.ptr),
+                                                 static_cast<size_t>(bytes.size), camera, options),
+                  options};
   }
   const std::string path = ToPath(photo, "photo");
   py::gil_scoped_release release;
-  return localizer.LocalizePhoto(path, camera, options);
+  return Result{localizer.LocalizePhoto(path, camera, options), options};
 }
 
 Result LocalizeFeatures(const Localizer& localizer, py::handle keypoints, py::handle descriptors,
@@ -50,7 +51,7 @@ Result LocalizeFeatures(const Localizer& localizer, py::handle keypoints, py::ha
   const api::Camera camera = ToCamera(camera_in, "camera");
   const api::Options options = ToOptions(kwargs);
   py::gil_scoped_release release;
-  return localizer.Localize(features, camera, options);
+  return Result{localizer.Localize(features, camera, options), options};
 }
 
 Result LocalizeGrey(const Localizer& localizer, py::handle image, py::handle camera_in,
@@ -59,8 +60,9 @@ Result LocalizeGrey(const Localizer& localizer, py::handle image, py::handle cam
   const api::Camera camera = ToCamera(camera_in, "camera");
   const api::Options options = ToOptions(kwargs);
   py::gil_scoped_release release;
-  return localizer.LocalizeGreyImage(grey.pixels, grey.width, grey.height, grey.stride, camera,
-                                     options);
+  return Result{localizer.LocalizeGreyImage(grey.pixels, grey.width, grey.height, grey.stride,
+                                            camera, options),
+                options};
 }
 
 // (keypoints float32 (N, 2), descriptors uint8 (N, 128)) of a COLMAP text feature file.

@@ -10,7 +10,6 @@ PYBIND11_MODULE(_cwloc, m) {
   python::BindResults(m);
   python::BindLocalizer(m);
   python::BindTracker(m);
-  python::BindRig(m);
 #ifdef CWLOC_PYTHON_WITH_INDEXER
   python::BindIndexer(m);
 #endif

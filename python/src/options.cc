@@ -3,7 +3,7 @@
 #include <cmath>
 #include <optional>
 
-#include "python/src/bindings.h"
+#include "python/src/described.h"
 
 namespace cwloc::python {
 namespace {
@@ -60,7 +60,10 @@ std::optional<api::PositionPrior> ToPositionPrior(py::handle value) {
   if (n.size() != 3 && n.size() != 4)
     throw py::value_error("prior_position: expected (lat, lon, radius_m[, height_m]), got " +
                           std::to_string(n.size()) + " numbers");
-  api::PositionPrior prior{n[0], n[1], std::nullopt, n[2]};
+  api::PositionPrior prior;
+  prior.latitude_deg = n[0];
+  prior.longitude_deg = n[1];
+  prior.radius_m = n[2];
   if (n.size() == 4) prior.height_m = n[3];
   return prior;
 }
@@ -116,21 +119,23 @@ api::Options ToOptions(const py::kwargs& kwargs) {
 }
 
 void BindOptions(py::module_& m) {
-  py::class_<api::PositionPrior>(
+  py::class_<api::PositionPrior> prior(
       m, "PositionPrior",
       "A GPS fix: the query was taken within radius_m of this WGS84 position (horizontally "
-      "when height_m is None; height above the ellipsoid). Needs a georeferenced index.")
+      "when height_m is None; height above the ellipsoid). Needs a georeferenced index.");
+  DefineWritableFields(prior);
+  prior
       .def(py::init(
                [](double latitude, double longitude, double radius, std::optional<double> height) {
-                 return api::PositionPrior{latitude, longitude, height, radius};
+                 api::PositionPrior made;
+                 made.latitude_deg = latitude;
+                 made.longitude_deg = longitude;
+                 made.radius_m = radius;
+                 made.height_m = height;
+                 return made;
                }),
            py::arg("latitude_deg"), py::arg("longitude_deg"), py::arg("radius_m"),
            py::arg("height_m") = py::none())
-      .def_readwrite("latitude_deg", &api::PositionPrior::latitude_deg, "WGS84 latitude")
-      .def_readwrite("longitude_deg", &api::PositionPrior::longitude_deg, "WGS84 longitude, east")
-      .def_readwrite("height_m", &api::PositionPrior::height_m,
-                     "Height above the WGS84 ellipsoid, or None")
-      .def_readwrite("radius_m", &api::PositionPrior::radius_m, "Radius of the fix, metres")
       .def("__repr__", [](const api::PositionPrior& p) {
         return "cwloc.PositionPrior(" +
                std::string(

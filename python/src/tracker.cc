@@ -10,10 +10,11 @@ namespace cwloc::python {
 namespace {
 
 struct Tracker {
-  Tracker(const api::Localizer& localizer, const api::Options& options)
-      : tracker(localizer, options) {}
+  Tracker(const api::Localizer& localizer, const api::Options& frame_options)
+      : tracker(localizer, frame_options), options(frame_options) {}
   api::Tracker tracker;
-  std::mutex frame;  // one frame at a time, whatever the Python threads do
+  const api::Options options;  // the frames' records echo them
+  std::mutex frame;            // one frame at a time, whatever the Python threads do
 };
 
 // motion: None, or ((w, x, y, z), (tx, ty, tz)[, (sigma_rotation_deg, sigma_position)]), the
@@ -52,8 +53,8 @@ std::optional<double> ToTimestamp(py::handle timestamp) {
   }
 }
 
-api::Result TrackPhoto(Tracker& tracker, py::handle photo, py::handle camera,
-                       py::handle timestamp_in, py::handle motion_in) {
+Record<api::Result> TrackPhoto(Tracker& tracker, py::handle photo, py::handle camera,
+                               py::handle timestamp_in, py::handle motion_in) {
   const std::string path = ToPath(photo, "photo");
   std::optional<api::Camera> frame_camera;
   if (!camera.is_none()) frame_camera = ToCamera(camera, "camera");
@@ -61,30 +62,32 @@ api::Result TrackPhoto(Tracker& tracker, py::handle photo, py::handle camera,
   const std::optional<api::Motion> motion = ToMotion(motion_in);
   py::gil_scoped_release release;
   const std::lock_guard lock(tracker.frame);
-  return tracker.tracker.TrackPhoto(path, frame_camera, timestamp, motion);
+  return {tracker.tracker.TrackPhoto(path, frame_camera, timestamp, motion), tracker.options};
 }
 
-api::Result TrackFeatures(Tracker& tracker, py::handle keypoints, py::handle descriptors,
-                          py::handle camera, py::handle timestamp_in, py::handle motion_in) {
+Record<api::Result> TrackFeatures(Tracker& tracker, py::handle keypoints, py::handle descriptors,
+                                  py::handle camera, py::handle timestamp_in,
+                                  py::handle motion_in) {
   const api::Features features = ToFeatures(keypoints, descriptors);
   const api::Camera frame_camera = ToCamera(camera, "camera");
   const std::optional<double> timestamp = ToTimestamp(timestamp_in);
   const std::optional<api::Motion> motion = ToMotion(motion_in);
   py::gil_scoped_release release;
   const std::lock_guard lock(tracker.frame);
-  return tracker.tracker.Track(features, frame_camera, timestamp, motion);
+  return {tracker.tracker.Track(features, frame_camera, timestamp, motion), tracker.options};
 }
 
-api::Result TrackGrey(Tracker& tracker, py::handle image, py::handle camera,
-                      py::handle timestamp_in, py::handle motion_in) {
+Record<api::Result> TrackGrey(Tracker& tracker, py::handle image, py::handle camera,
+                              py::handle timestamp_in, py::handle motion_in) {
   const GreyImage grey = ToGreyImage(image);
   const api::Camera frame_camera = ToCamera(camera, "camera");
   const std::optional<double> timestamp = ToTimestamp(timestamp_in);
   const std::optional<api::Motion> motion = ToMotion(motion_in);
   py::gil_scoped_release release;
   const std::lock_guard lock(tracker.frame);
-  return tracker.tracker.TrackGreyImage(grey.pixels, grey.width, grey.height, grey.stride,
-                                        frame_camera, timestamp, motion);
+  return {tracker.tracker.TrackGreyImage(grey.pixels, grey.width, grey.height, grey.stride,
+                                         frame_camera, timestamp, motion),
+          tracker.options};
 }
 
 }  // namespace

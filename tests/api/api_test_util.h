@@ -5,7 +5,9 @@
 #include <filesystem>
 #include <sstream>
 #include <string>
+#include <vector>
 
+#include "cwloc/cwloc.h"
 #include "cwloc/cwloc.hpp"
 #include "tests/test_util.h"
 
@@ -41,6 +43,38 @@ void ExpectError(Fn fn, api::ErrorCode code, const std::string& message) {
     EXPECT_EQ(e.code(), code) << e.what();
     EXPECT_EQ(std::string(e.what()), message);
   }
+}
+
+// A C result's fields by path (cwloc_result_value and its siblings); each fails the test when
+// the path names no such value.
+inline double CValue(const cwloc_result* result, const char* path) {
+  double value = -1;
+  EXPECT_EQ(cwloc_result_value(result, path, &value), CWLOC_OK)
+      << path << ": " << cwloc_last_error();
+  return value;
+}
+inline std::string CText(const cwloc_result* result, const char* path) {
+  const char* text = nullptr;
+  EXPECT_EQ(cwloc_result_text(result, path, &text), CWLOC_OK) << path << ": " << cwloc_last_error();
+  return text != nullptr ? text : "(null)";
+}
+inline std::vector<double> CValues(const cwloc_result* result, const char* path) {
+  size_t count = 0;
+  EXPECT_EQ(cwloc_result_values(result, path, nullptr, 0, &count), CWLOC_OK)
+      << path << ": " << cwloc_last_error();
+  std::vector<double> values(count);
+  EXPECT_EQ(cwloc_result_values(result, path, values.data(), values.size(), &count), CWLOC_OK);
+  return values;
+}
+inline size_t CSize(const cwloc_result* result, const char* path) {
+  size_t size = 0;
+  EXPECT_EQ(cwloc_result_size(result, path, &size), CWLOC_OK) << path << ": " << cwloc_last_error();
+  return size;
+}
+// The same numbers as a list of doubles, to compare with a C field.
+template <typename T>
+std::vector<double> Doubles(const T& values) {
+  return std::vector<double>(values.begin(), values.end());
 }
 
 }  // namespace cwloc

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <thread>
 
@@ -22,6 +23,13 @@ using testing::HasSubstr;
 const std::string kIndex = GoldenIndex().string();
 const std::string kQuery = (QueryDir() / "query_00001.jpg.txt").string();
 const double kParams[] = {900, 512, 384, -0.01};  // the generator's camera (queries_gt.txt)
+
+// A JSON record without its times, which differ from run to run.
+nlohmann::json WithoutTimes(const std::string& record) {
+  nlohmann::json json = nlohmann::json::parse(record);
+  json.erase("times_ms");
+  return json;
+}
 
 cwloc_camera KnownCamera() {
   return {"SIMPLE_RADIAL", 1024, 768, kParams, 4, CWLOC_CALIBRATION_KNOWN};
@@ -50,54 +58,70 @@ TEST_F(CApiTest, LocalizesLikeTheCppApi) {
   const cwloc_camera camera = KnownCamera();
   cwloc_result* result = nullptr;
   ASSERT_EQ(Localize(&camera, nullptr, &result), CWLOC_OK) << cwloc_last_error();
-  ASSERT_EQ(cwloc_result_success(result), 1) << cwloc_result_failure_reason(result);
-  EXPECT_STREQ(cwloc_result_failure_reason(result), "");
+  ASSERT_EQ(cwloc_result_success(result), 1) << CText(result, "failure_reason");
+  EXPECT_EQ(CText(result, "failure_reason"), "");
 
   const api::Localizer cpp = api::Localizer::Open(kIndex);
   const api::Result want =
       cpp.Localize(features_, {"SIMPLE_RADIAL", 1024, 768, {900, 512, 384, -0.01}});
-  double rotation[4], translation[3], center[3];
-  cwloc_result_pose(result, rotation, translation, center);
-  for (int i = 0; i < 4; ++i) EXPECT_EQ(rotation[i], want.rotation[i]);
-  for (int i = 0; i < 3; ++i) EXPECT_EQ(translation[i], want.translation[i]);
-  for (int i = 0; i < 3; ++i) EXPECT_EQ(center[i], want.center[i]);
-  EXPECT_EQ(cwloc_result_num_features(result), want.num_features);
-  EXPECT_EQ(cwloc_result_num_correspondences(result), want.correspondences);
-  ASSERT_EQ(cwloc_result_num_inliers(result), want.num_inliers);
+  EXPECT_EQ(CValues(result, "rotation"), Doubles(want.rotation));
+  EXPECT_EQ(CValues(result, "translation"), Doubles(want.translation));
+  EXPECT_EQ(CValues(result, "center"), Doubles(want.center));
+  EXPECT_EQ(CValue(result, "num_features"), want.num_features);
+  EXPECT_EQ(CValue(result, "correspondences"), want.correspondences);
+  EXPECT_EQ(CValue(result, "num_inliers"), want.num_inliers);
+  ASSERT_EQ(CSize(result, "inliers"), want.num_inliers);
   for (uint32_t i = 0; i < want.num_inliers; ++i) {
-    uint32_t feature = 0, point = 0;
-    float keypoint[2];
-    double xyz[3];
-    ASSERT_EQ(cwloc_result_inlier(result, i, &feature, keypoint, &point, xyz), CWLOC_OK);
-    EXPECT_EQ(feature, want.inliers[i].feature);
-    EXPECT_EQ(point, want.inliers[i].point);
-    EXPECT_EQ(keypoint[0], want.inliers[i].keypoint[0]);
-    EXPECT_EQ(xyz[2], want.inliers[i].xyz[2]);
+    const std::string at = "inliers." + std::to_string(i);
+    ASSERT_EQ(CValue(result, (at + ".feature").c_str()), want.inliers[i].feature);
+    EXPECT_EQ(CValue(result, (at + ".point").c_str()), want.inliers[i].point);
+    EXPECT_EQ(CValues(result, (at + ".keypoint").c_str()), Doubles(want.inliers[i].keypoint));
+    EXPECT_EQ(CValues(result, (at + ".xyz").c_str()), Doubles(want.inliers[i].xyz));
   }
-  ASSERT_EQ(cwloc_result_num_ranked_images(result), want.ranked_images.size());
-  uint32_t image_id = 0, votes = 0;
-  const char* name = nullptr;
-  ASSERT_EQ(cwloc_result_ranked_image(result, 0, &image_id, &name, &votes), CWLOC_OK);
-  EXPECT_EQ(image_id, want.ranked_images[0].image_id);
-  EXPECT_EQ(name, want.ranked_images[0].name);
-  EXPECT_EQ(votes, want.ranked_images[0].votes);
+  ASSERT_EQ(CSize(result, "ranked_images"), want.ranked_images.size());
+  EXPECT_EQ(CValue(result, "ranked_images.0.image_id"), want.ranked_images[0].image_id);
+  EXPECT_EQ(CText(result, "ranked_images.0.name"), want.ranked_images[0].name);
+  EXPECT_EQ(CValue(result, "ranked_images.0.votes"), want.ranked_images[0].votes);
 
-  cwloc_camera used{};
-  cwloc_result_camera(result, &used);
-  EXPECT_STREQ(used.model, "SIMPLE_RADIAL");
-  ASSERT_EQ(used.num_params, 4u);
-  EXPECT_EQ(used.params[0], 900);
-  EXPECT_EQ(used.calibration, CWLOC_CALIBRATION_KNOWN);
-  cwloc_stage_times times{};
-  cwloc_result_times(result, &times);
-  EXPECT_GT(times.total, 0);
-  EXPECT_EQ(times.extraction, 0);
+  EXPECT_EQ(CText(result, "camera.model"), "SIMPLE_RADIAL");
+  EXPECT_EQ(CValues(result, "camera.params"), std::vector<double>({900, 512, 384, -0.01}));
+  EXPECT_EQ(CText(result, "camera.calibration"), "known");
+  EXPECT_EQ(CValue(result, "camera.calibration"), CWLOC_CALIBRATION_KNOWN);
+  EXPECT_EQ(CText(result, "camera.distortion.fit"), "given");
+  EXPECT_GT(CValue(result, "times.total"), 0);
+  EXPECT_EQ(CValue(result, "times.extraction"), 0);
+  EXPECT_EQ(CValue(result, "covariance.position_radius95"), want.covariance->position_radius95);
+  EXPECT_EQ(CValues(result, "covariance.pose"), Doubles(want.covariance->pose));
+  EXPECT_EQ(WithoutTimes(cwloc_result_json(result)),
+            WithoutTimes(api::ToJson(want, api::Options())));
 
-  EXPECT_EQ(cwloc_result_inlier(result, want.num_inliers, nullptr, nullptr, nullptr, nullptr),
+  // Out of range, unknown, absent, or not what the accessor reads: a status and why.
+  double value = 0;
+  const std::string last = "inliers." + std::to_string(want.num_inliers) + ".feature";
+  EXPECT_EQ(cwloc_result_value(result, last.c_str(), &value), CWLOC_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(cwloc_last_error(), "'inliers' has " + std::to_string(want.num_inliers) +
+                                    " items, no item '" + std::to_string(want.num_inliers) + "'");
+  EXPECT_EQ(cwloc_result_value(result, "ranked_images.x.votes", &value),
             CWLOC_ERROR_INVALID_ARGUMENT);
-  EXPECT_EQ(cwloc_last_error(), "inlier " + std::to_string(want.num_inliers) + ": out of range");
-  EXPECT_EQ(cwloc_result_ranked_image(result, 1000, nullptr, nullptr, nullptr),
+  EXPECT_EQ(cwloc_result_value(result, "num_outliers", &value), CWLOC_ERROR_INVALID_ARGUMENT);
+  EXPECT_THAT(cwloc_last_error(),
+              testing::StartsWith("'num_outliers' is no field; Result has name, success, "));
+  EXPECT_EQ(cwloc_result_value(result, "camera.distortion.k", &value), CWLOC_ERROR_NOT_AVAILABLE);
+  EXPECT_THAT(cwloc_last_error(), testing::StartsWith("'camera.distortion.k' is absent"));
+  EXPECT_EQ(cwloc_result_value(result, "tracking.mode", &value), CWLOC_ERROR_NOT_AVAILABLE);
+  EXPECT_EQ(cwloc_result_value(result, "camera", &value), CWLOC_ERROR_INVALID_ARGUMENT);
+  EXPECT_STREQ(cwloc_last_error(), "'camera' is an object: name one of its fields");
+  EXPECT_EQ(cwloc_result_value(result, "rotation", &value), CWLOC_ERROR_INVALID_ARGUMENT);
+  EXPECT_STREQ(cwloc_last_error(), "'rotation' is numbers: cwloc_result_values");
+  EXPECT_EQ(cwloc_result_value(result, "num_inliers.x", &value), CWLOC_ERROR_INVALID_ARGUMENT);
+  EXPECT_STREQ(cwloc_last_error(), "'num_inliers' has no field 'x'");
+  double rotation[3];
+  EXPECT_EQ(cwloc_result_values(result, "rotation", rotation, 3, nullptr),
             CWLOC_ERROR_INVALID_ARGUMENT);
+  EXPECT_STREQ(cwloc_last_error(), "'rotation' has 4 values, more than the capacity 3");
+  const char* text = nullptr;
+  EXPECT_EQ(cwloc_result_text(result, "num_inliers", &text), CWLOC_ERROR_INVALID_ARGUMENT);
+  EXPECT_STREQ(cwloc_last_error(), "'num_inliers' is a number: cwloc_result_value");
   cwloc_result_destroy(result);
 }
 
@@ -126,35 +150,38 @@ TEST_F(CApiTest, LocalizesRigsLikeTheCppApi) {
     std::copy_n(image.cam_from_rig_rotation_wxyz, 4, cpp_images[i].cam_from_rig_rotation.begin());
     std::copy_n(image.cam_from_rig_translation, 3, cpp_images[i].cam_from_rig_translation.begin());
   }
-  cwloc_rig_result* result = nullptr;
+  cwloc_result* result = nullptr;
   ASSERT_EQ(cwloc_localize_rig(localizer_, images.data(), images.size(), 0, "f", nullptr, &result),
             CWLOC_OK)
       << cwloc_last_error();
-  ASSERT_EQ(cwloc_rig_result_success(result), 1) << cwloc_rig_result_failure_reason(result);
+  ASSERT_EQ(cwloc_result_success(result), 1) << CText(result, "failure_reason");
   const api::RigResult want =
       api::Localizer::Open(kIndex).LocalizeRig(cpp_images, false, api::Options(), "f");
-  double rotation[4], translation[3], center[3], scale = 0;
-  cwloc_rig_result_pose(result, rotation, translation, center, &scale);
-  for (int i = 0; i < 4; ++i) EXPECT_EQ(rotation[i], want.rotation[i]);
-  for (int i = 0; i < 3; ++i) EXPECT_EQ(translation[i], want.translation[i]);
-  EXPECT_EQ(scale, 1.0);
-  EXPECT_EQ(cwloc_rig_result_num_inliers(result), want.num_inliers);
-  ASSERT_EQ(cwloc_rig_result_num_images(result), 2u);
+  EXPECT_EQ(CValues(result, "rig.rig_from_world.rotation"),
+            Doubles(want.rig.rig_from_world->rotation));
+  EXPECT_EQ(CValues(result, "rig.rig_from_world.translation"),
+            Doubles(want.rig.rig_from_world->translation));
+  EXPECT_EQ(CValue(result, "rig.scale"), 1.0);
+  EXPECT_EQ(CValue(result, "rig.num_inliers"), want.rig.num_inliers);
+  EXPECT_EQ(CValue(result, "rig.refined"), want.rig.refined ? 1 : 0);
+  ASSERT_EQ(CSize(result, "images"), 2u);
   for (uint32_t i = 0; i < 2; ++i) {
-    uint32_t inliers = 0;
-    ASSERT_EQ(cwloc_rig_result_image_pose(result, i, rotation, translation, &inliers), CWLOC_OK);
-    for (int k = 0; k < 4; ++k) EXPECT_EQ(rotation[k], want.images[i].rotation[k]);
-    for (int k = 0; k < 3; ++k) EXPECT_EQ(translation[k], want.images[i].translation[k]);
-    EXPECT_EQ(inliers, want.images[i].num_inliers);
+    const std::string at = "images." + std::to_string(i);
+    EXPECT_EQ(CValues(result, (at + ".pose.rotation").c_str()),
+              Doubles(want.images[i].pose->rotation));
+    EXPECT_EQ(CValues(result, (at + ".pose.translation").c_str()),
+              Doubles(want.images[i].pose->translation));
+    EXPECT_EQ(CValue(result, (at + ".num_inliers").c_str()), want.images[i].num_inliers);
   }
-  EXPECT_EQ(cwloc_rig_result_image_pose(result, 2, nullptr, nullptr, nullptr),
+  double value = 0;
+  EXPECT_EQ(cwloc_result_value(result, "images.2.num_inliers", &value),
             CWLOC_ERROR_INVALID_ARGUMENT);
-  EXPECT_STREQ(cwloc_last_error(), "image 2: out of range");
-  double covariance[36], radius = 0;
-  ASSERT_EQ(cwloc_rig_result_covariance(result, covariance, &radius), CWLOC_OK);
-  EXPECT_EQ(radius, want.covariance->position_radius95);
-  EXPECT_THAT(cwloc_rig_result_json(result), HasSubstr("\"rig\""));
-  cwloc_rig_result_destroy(result);
+  EXPECT_STREQ(cwloc_last_error(), "'images' has 2 items, no item '2'");
+  EXPECT_EQ(CValue(result, "covariance.position_radius95"), want.covariance->position_radius95);
+  EXPECT_EQ(WithoutTimes(cwloc_result_json(result)),
+            WithoutTimes(api::ToJson(want, api::Options())));
+  EXPECT_THAT(cwloc_result_json(result), HasSubstr("\"rig\""));
+  cwloc_result_destroy(result);
 
   // A quaternion that is not of unit length is the caller's argument.
   images[1].cam_from_rig_rotation_wxyz[0] = 2.0;
@@ -169,11 +196,11 @@ TEST_F(CApiTest, UnknownFocalNeedsOnlyTheImageSize) {
   const cwloc_camera size_only = {nullptr, 1024, 768, nullptr, 0, CWLOC_CALIBRATION_UNKNOWN};
   cwloc_result* result = nullptr;
   ASSERT_EQ(Localize(&size_only, nullptr, &result), CWLOC_OK) << cwloc_last_error();
-  ASSERT_EQ(cwloc_result_success(result), 1) << cwloc_result_failure_reason(result);
-  cwloc_camera used{};
-  cwloc_result_camera(result, &used);
-  EXPECT_STREQ(used.model, "SIMPLE_RADIAL");
-  EXPECT_NEAR(used.params[0], 900, 900 * 0.02);  // estimated focal
+  ASSERT_EQ(cwloc_result_success(result), 1) << CText(result, "failure_reason");
+  EXPECT_EQ(CText(result, "camera.model"), "SIMPLE_RADIAL");
+  EXPECT_EQ(CValue(result, "camera.focal_estimated"), 1);
+  EXPECT_NEAR(CValues(result, "camera.params")[0], 900, 900 * 0.02);  // estimated focal
+  EXPECT_GT(CValue(result, "focal_depth.focal_std_px"), 0);
   cwloc_result_destroy(result);
 }
 
@@ -185,7 +212,7 @@ TEST_F(CApiTest, OptionsAreSetByFlagNameAndChecked) {
   cwloc_result* result = nullptr;
   ASSERT_EQ(Localize(&camera, options, &result), CWLOC_OK) << cwloc_last_error();
   EXPECT_EQ(cwloc_result_success(result), 0);
-  EXPECT_THAT(cwloc_result_failure_reason(result), HasSubstr("< 100000"));
+  EXPECT_THAT(CText(result, "failure_reason"), HasSubstr("< 100000"));
   cwloc_result_destroy(result);
 
   EXPECT_EQ(cwloc_options_set(options, "warp-speed", 9), CWLOC_ERROR_INVALID_ARGUMENT);
@@ -212,7 +239,7 @@ TEST_F(CApiTest, OptionsAreSetByFlagNameAndChecked) {
   EXPECT_EQ(cwloc_options_set(options, "k", 5), CWLOC_OK);
   EXPECT_EQ(cwloc_options_set_matcher(options, "cluster-exhaustive"), CWLOC_OK);
   ASSERT_EQ(Localize(&camera, options, &result), CWLOC_OK) << cwloc_last_error();
-  EXPECT_EQ(cwloc_result_success(result), 1) << cwloc_result_failure_reason(result);
+  EXPECT_EQ(cwloc_result_success(result), 1) << CText(result, "failure_reason");
   cwloc_result_destroy(result);
   EXPECT_EQ(cwloc_options_set_matcher(options, "psychic"), CWLOC_ERROR_INVALID_ARGUMENT);
   EXPECT_STREQ(cwloc_last_error(),
@@ -257,7 +284,10 @@ TEST_F(CApiTest, MisuseGetsAStatusAndAMessage) {
 
   // Accessors of a NULL result answer "nothing" instead of crashing.
   EXPECT_EQ(cwloc_result_success(nullptr), 0);
-  EXPECT_EQ(cwloc_result_num_inliers(nullptr), 0u);
+  double value = 0;
+  EXPECT_EQ(cwloc_result_value(nullptr, "num_inliers", &value), CWLOC_ERROR_INVALID_ARGUMENT);
+  EXPECT_STREQ(cwloc_last_error(), "result or path is NULL");
+  EXPECT_STREQ(cwloc_result_json(nullptr), "");
   cwloc_result_destroy(nullptr);
   cwloc_localizer_close(nullptr);
   cwloc_options_destroy(nullptr);
@@ -347,39 +377,45 @@ TEST_F(CApiGeoTest, GeoPoseAndPriorsAreTheCppApis) {
   ASSERT_EQ(cwloc_options_set(options_, "prior-gravity-sigma", 2.5), CWLOC_OK);
   cwloc_result* result = nullptr;
   ASSERT_EQ(Localize(localizer_, options_, &result), CWLOC_OK) << cwloc_last_error();
-  ASSERT_EQ(cwloc_result_success(result), 1) << cwloc_result_failure_reason(result);
+  ASSERT_EQ(cwloc_result_success(result), 1) << CText(result, "failure_reason");
 
   api::Options options;
-  options.position_prior = api::PositionPrior{kLatitude, kLongitude, std::nullopt, 50.0};
+  options.position_prior.emplace();
+  options.position_prior->latitude_deg = kLatitude;
+  options.position_prior->longitude_deg = kLongitude;
+  options.position_prior->radius_m = 50.0;
   options.gravity = std::array<double, 3>{kGravity[0], kGravity[1], kGravity[2]};
   options.prior_gravity_sigma_deg = 2.5;
   const api::Result want = LocalizeCpp(options);
   ASSERT_TRUE(want.geo);
-  cwloc_geo_pose geo{};
-  ASSERT_EQ(cwloc_result_geo_pose(result, &geo), CWLOC_OK) << cwloc_last_error();
-  EXPECT_EQ(geo.latitude_deg, want.geo->latitude_deg);
-  EXPECT_EQ(geo.longitude_deg, want.geo->longitude_deg);
-  EXPECT_EQ(geo.height_m, want.geo->height_m);
-  for (int i = 0; i < 3; ++i) EXPECT_EQ(geo.enu[i], want.geo->enu[i]);
-  EXPECT_EQ(geo.heading_deg, want.geo->heading_deg);
-  EXPECT_EQ(geo.pitch_deg, want.geo->pitch_deg);
-  EXPECT_EQ(geo.roll_deg, want.geo->roll_deg);
-  EXPECT_NEAR(geo.latitude_deg, kLatitude, 2e-5);  // 2 m
+  EXPECT_EQ(CValue(result, "geo.latitude_deg"), want.geo->latitude_deg);
+  EXPECT_EQ(CValue(result, "geo.longitude_deg"), want.geo->longitude_deg);
+  EXPECT_EQ(CValue(result, "geo.height_m"), want.geo->height_m);
+  EXPECT_EQ(CValues(result, "geo.enu"), Doubles(want.geo->enu));
+  EXPECT_EQ(CValue(result, "geo.heading_deg"), want.geo->heading_deg);
+  EXPECT_EQ(CValue(result, "geo.pitch_deg"), want.geo->pitch_deg);
+  EXPECT_EQ(CValue(result, "geo.roll_deg"), want.geo->roll_deg);
+  EXPECT_NEAR(CValue(result, "geo.latitude_deg"), kLatitude, 2e-5);  // 2 m
+  ASSERT_TRUE(want.covariance && want.covariance->enu_position);
+  EXPECT_EQ(CValues(result, "covariance.enu_position"), Doubles(*want.covariance->enu_position));
+  EXPECT_EQ(CValue(result, "covariance.position_radius95_m"),
+            *want.covariance->position_radius95_m);
 
-  cwloc_position_prior used{};
-  uint32_t clusters = 0;
-  ASSERT_EQ(cwloc_result_position_prior(result, &used, &clusters), CWLOC_OK);
-  EXPECT_EQ(used.latitude_deg, kLatitude);
-  EXPECT_EQ(used.longitude_deg, kLongitude);
-  EXPECT_TRUE(std::isnan(used.height_m));
-  EXPECT_EQ(used.radius_m, 50.0);
-  EXPECT_EQ(clusters, want.clusters_in_radius);
-  EXPECT_EQ(clusters, 3u);
-  double error_deg = -1;
-  ASSERT_EQ(cwloc_result_gravity_error(result, &error_deg), CWLOC_OK);
-  ASSERT_TRUE(want.gravity_error_deg);
-  EXPECT_EQ(error_deg, *want.gravity_error_deg);
-  EXPECT_GT(error_deg, 0.0);
+  EXPECT_EQ(CValue(result, "priors.position.latitude_deg"), kLatitude);
+  EXPECT_EQ(CValue(result, "priors.position.longitude_deg"), kLongitude);
+  double height = 0;
+  EXPECT_EQ(cwloc_result_value(result, "priors.position.height_m", &height),
+            CWLOC_ERROR_NOT_AVAILABLE);
+  EXPECT_EQ(CValue(result, "priors.position.radius_m"), 50.0);
+  EXPECT_EQ(CText(result, "priors.position.source"), "option");
+  EXPECT_EQ(CValue(result, "priors.position.clusters_in_radius"),
+            want.priors.position->clusters_in_radius);
+  EXPECT_EQ(CValue(result, "priors.position.clusters_in_radius"), 3);
+  ASSERT_TRUE(want.priors.gravity && want.priors.gravity->error_deg);
+  EXPECT_EQ(CValues(result, "priors.gravity.direction"),
+            std::vector<double>(kGravity, kGravity + 3));
+  EXPECT_EQ(CValue(result, "priors.gravity.error_deg"), *want.priors.gravity->error_deg);
+  EXPECT_GT(CValue(result, "priors.gravity.error_deg"), 0.0);
   cwloc_result_destroy(result);
 
   // A height is kept; NULL removes a prior again.
@@ -387,16 +423,18 @@ TEST_F(CApiGeoTest, GeoPoseAndPriorsAreTheCppApis) {
   ASSERT_EQ(cwloc_options_set_position_prior(options_, &with_height), CWLOC_OK);
   ASSERT_EQ(cwloc_options_set_gravity(options_, nullptr), CWLOC_OK);
   ASSERT_EQ(Localize(localizer_, options_, &result), CWLOC_OK) << cwloc_last_error();
-  ASSERT_EQ(cwloc_result_position_prior(result, &used, &clusters), CWLOC_OK);
-  EXPECT_EQ(used.height_m, 456.6);
-  EXPECT_EQ(cwloc_result_gravity_error(result, &error_deg), CWLOC_ERROR_NOT_AVAILABLE);
-  EXPECT_STREQ(cwloc_last_error(), "gravity error: the query had no gravity prior");
+  EXPECT_EQ(CValue(result, "priors.position.height_m"), 456.6);
+  double error_deg = 0;
+  EXPECT_EQ(cwloc_result_value(result, "priors.gravity.error_deg", &error_deg),
+            CWLOC_ERROR_NOT_AVAILABLE);
+  EXPECT_STREQ(cwloc_last_error(), "'priors.gravity' is absent");
   cwloc_result_destroy(result);
   ASSERT_EQ(cwloc_options_set_position_prior(options_, nullptr), CWLOC_OK);
   ASSERT_EQ(Localize(localizer_, options_, &result), CWLOC_OK) << cwloc_last_error();
-  EXPECT_EQ(cwloc_result_position_prior(result, &used, &clusters), CWLOC_ERROR_NOT_AVAILABLE);
-  EXPECT_STREQ(cwloc_last_error(), "position prior: the query had none");
-  EXPECT_EQ(cwloc_result_geo_pose(result, &geo), CWLOC_OK);  // no priors, still on the globe
+  EXPECT_EQ(cwloc_result_value(result, "priors.position.radius_m", &error_deg),
+            CWLOC_ERROR_NOT_AVAILABLE);
+  EXPECT_STREQ(cwloc_last_error(), "'priors.position' is absent");
+  EXPECT_GE(CValue(result, "geo.heading_deg"), 0);  // no priors, still on the globe
   cwloc_result_destroy(result);
 }
 
@@ -412,16 +450,15 @@ TEST_F(CApiGeoTest, CovarianceIsNotAvailableWithoutAPose) {
       CWLOC_OK)
       << cwloc_last_error();
   ASSERT_EQ(cwloc_result_success(result), 0);
-  double pose[36], radius = 0;
-  EXPECT_EQ(cwloc_result_covariance(result, pose, &radius), CWLOC_ERROR_NOT_AVAILABLE);
-  EXPECT_STREQ(cwloc_last_error(), "covariance: the query was not localized");
-  EXPECT_EQ(cwloc_result_enu_covariance(result, nullptr, &radius), CWLOC_ERROR_NOT_AVAILABLE);
-  EXPECT_STREQ(cwloc_last_error(), "ENU covariance: the query was not localized");
-  EXPECT_EQ(cwloc_result_covariance_calibration(result, nullptr, nullptr),
+  double value = 0;
+  EXPECT_EQ(cwloc_result_value(result, "covariance.position_radius95", &value),
             CWLOC_ERROR_NOT_AVAILABLE);
-  EXPECT_STREQ(cwloc_last_error(), "covariance calibration: the query was not localized");
-  EXPECT_EQ(cwloc_result_covariance(nullptr, pose, &radius), CWLOC_ERROR_INVALID_ARGUMENT);
-  EXPECT_STREQ(cwloc_result_json(nullptr), "");
+  EXPECT_STREQ(cwloc_last_error(),
+               "'covariance' is absent (On success, unless the refinement problem is singular)");
+  EXPECT_EQ(cwloc_result_values(result, "covariance.enu_position", nullptr, 0, nullptr),
+            CWLOC_ERROR_NOT_AVAILABLE);
+  EXPECT_EQ(cwloc_result_value(result, "covariance.calibration.position", &value),
+            CWLOC_ERROR_NOT_AVAILABLE);
   EXPECT_NE(std::string(cwloc_result_json(result)).find("\"success\":false"), std::string::npos);
   cwloc_result_destroy(result);
 }
@@ -434,19 +471,17 @@ TEST_F(CApiGeoTest, MissingValuesAreNotAvailableSayingWhy) {
   cwloc_result* result = nullptr;
   ASSERT_EQ(Localize(localizer_, options_, &result), CWLOC_OK) << cwloc_last_error();
   EXPECT_EQ(cwloc_result_success(result), 0);
-  EXPECT_STREQ(cwloc_result_failure_reason(result),
-               "no model camera within 100 m of the position prior");
-  cwloc_geo_pose geo{};
-  EXPECT_EQ(cwloc_result_geo_pose(result, &geo), CWLOC_ERROR_NOT_AVAILABLE);
-  EXPECT_STREQ(cwloc_last_error(), "geo pose: the query was not localized");
-  double error_deg = 0;
-  EXPECT_EQ(cwloc_result_gravity_error(result, &error_deg), CWLOC_ERROR_NOT_AVAILABLE);
-  EXPECT_STREQ(cwloc_last_error(), "gravity error: the query was not localized");
-  cwloc_position_prior used{};
-  uint32_t clusters = 99;
-  ASSERT_EQ(cwloc_result_position_prior(result, &used, &clusters), CWLOC_OK);
-  EXPECT_EQ(used.longitude_deg, 8.6403);
-  EXPECT_EQ(clusters, 0u);
+  EXPECT_EQ(CText(result, "failure_reason"), "no model camera within 100 m of the position prior");
+  double value = 0;
+  EXPECT_EQ(cwloc_result_value(result, "geo.latitude_deg", &value), CWLOC_ERROR_NOT_AVAILABLE);
+  EXPECT_STREQ(cwloc_last_error(), "'geo' is absent (On success with a georeferenced index)");
+  EXPECT_EQ(cwloc_result_value(result, "priors.gravity.error_deg", &value),
+            CWLOC_ERROR_NOT_AVAILABLE);
+  EXPECT_STREQ(cwloc_last_error(),
+               "'priors.gravity.error_deg' is absent (Angle between the prior and the localized "
+               "pose's gravity)");
+  EXPECT_EQ(CValue(result, "priors.position.longitude_deg"), 8.6403);
+  EXPECT_EQ(CValue(result, "priors.position.clusters_in_radius"), 0);
   cwloc_result_destroy(result);
 
   // Not georeferenced: the golden 1.0 index localizes, but not on the globe.
@@ -454,17 +489,19 @@ TEST_F(CApiGeoTest, MissingValuesAreNotAvailableSayingWhy) {
   ASSERT_EQ(cwloc_localizer_open(kIndex.c_str(), 0, &plain), CWLOC_OK);
   ASSERT_EQ(Localize(plain, nullptr, &result), CWLOC_OK) << cwloc_last_error();
   EXPECT_EQ(cwloc_result_success(result), 1);
-  EXPECT_EQ(cwloc_result_geo_pose(result, &geo), CWLOC_ERROR_NOT_AVAILABLE);
-  EXPECT_STREQ(cwloc_last_error(), "geo pose: the index is not georeferenced");
-  EXPECT_EQ(cwloc_result_gravity_error(result, &error_deg), CWLOC_ERROR_NOT_AVAILABLE);
-  EXPECT_EQ(cwloc_result_position_prior(result, &used, &clusters), CWLOC_ERROR_NOT_AVAILABLE);
+  EXPECT_EQ(cwloc_result_value(result, "geo.latitude_deg", &value), CWLOC_ERROR_NOT_AVAILABLE);
+  EXPECT_EQ(cwloc_result_value(result, "priors.gravity.error_deg", &value),
+            CWLOC_ERROR_NOT_AVAILABLE);
   // A 1.0 index has no calibration: the covariance is the keypoints' alone.
-  double rotation_scale = 0, position_scale = 0;
-  EXPECT_EQ(cwloc_result_covariance(result, nullptr, nullptr), CWLOC_OK);
-  EXPECT_EQ(cwloc_result_covariance_calibration(result, &rotation_scale, &position_scale),
+  EXPECT_GT(CValue(result, "covariance.position_radius95"), 0);
+  EXPECT_EQ(cwloc_result_value(result, "covariance.calibration.position", &value),
             CWLOC_ERROR_NOT_AVAILABLE);
   EXPECT_STREQ(cwloc_last_error(),
-               "covariance calibration: the index has none for the query's calibration mode");
+               "'covariance.calibration' is absent (What the index's calibration multiplied the "
+               "covariance by; none when the index has no calibration for the query's "
+               "calibration mode)");
+  EXPECT_EQ(cwloc_result_value(result, "covariance.position_radius95_m", &value),
+            CWLOC_ERROR_NOT_AVAILABLE);
   cwloc_result_destroy(result);
 
   // ... and priors there are the caller's mistake, with the pipeline's message.
@@ -519,26 +556,24 @@ TEST_F(CApiGeoTest, BadPriorsAndKnobsAreRefused) {
   EXPECT_STREQ(cwloc_last_error(), "options is NULL");
   EXPECT_EQ(cwloc_options_set(nullptr, "use-exif-gps", 1), CWLOC_ERROR_INVALID_ARGUMENT);
   ASSERT_EQ(Localize(localizer_, nullptr, &result), CWLOC_OK);
-  cwloc_geo_pose geo{};
-  cwloc_position_prior used{};
-  uint32_t clusters = 0;
-  double error_deg = 0;
-  EXPECT_EQ(cwloc_result_geo_pose(nullptr, &geo), CWLOC_ERROR_INVALID_ARGUMENT);
-  EXPECT_STREQ(cwloc_last_error(), "result is NULL");
-  EXPECT_EQ(cwloc_result_geo_pose(result, nullptr), CWLOC_ERROR_INVALID_ARGUMENT);
-  EXPECT_STREQ(cwloc_last_error(), "pose is NULL");
-  EXPECT_EQ(cwloc_result_position_prior(nullptr, &used, &clusters), CWLOC_ERROR_INVALID_ARGUMENT);
-  EXPECT_STREQ(cwloc_last_error(), "result is NULL");
-  EXPECT_EQ(cwloc_result_position_prior(result, nullptr, &clusters), CWLOC_ERROR_INVALID_ARGUMENT);
-  EXPECT_STREQ(cwloc_last_error(), "prior or clusters_in_radius is NULL");
-  EXPECT_EQ(cwloc_result_position_prior(result, &used, nullptr), CWLOC_ERROR_INVALID_ARGUMENT);
-  EXPECT_EQ(cwloc_result_gravity_error(nullptr, &error_deg), CWLOC_ERROR_INVALID_ARGUMENT);
-  EXPECT_STREQ(cwloc_last_error(), "result is NULL");
-  EXPECT_EQ(cwloc_result_gravity_error(result, nullptr), CWLOC_ERROR_INVALID_ARGUMENT);
-  EXPECT_STREQ(cwloc_last_error(), "degrees is NULL");
+  double value = 0;
+  const char* text = nullptr;
+  size_t size = 0;
+  EXPECT_EQ(cwloc_result_value(nullptr, "geo.heading_deg", &value), CWLOC_ERROR_INVALID_ARGUMENT);
+  EXPECT_STREQ(cwloc_last_error(), "result or path is NULL");
+  EXPECT_EQ(cwloc_result_value(result, nullptr, &value), CWLOC_ERROR_INVALID_ARGUMENT);
+  EXPECT_STREQ(cwloc_last_error(), "result or path is NULL");
+  EXPECT_EQ(cwloc_result_value(result, "geo.heading_deg", nullptr), CWLOC_ERROR_INVALID_ARGUMENT);
+  EXPECT_STREQ(cwloc_last_error(), "value is NULL");
+  EXPECT_EQ(cwloc_result_text(result, "name", nullptr), CWLOC_ERROR_INVALID_ARGUMENT);
+  EXPECT_STREQ(cwloc_last_error(), "text is NULL");
+  EXPECT_EQ(cwloc_result_size(result, "ranked_images", nullptr), CWLOC_ERROR_INVALID_ARGUMENT);
+  EXPECT_STREQ(cwloc_last_error(), "size is NULL");
   // A success clears the last error.
-  EXPECT_EQ(cwloc_result_geo_pose(result, &geo), CWLOC_OK);
+  EXPECT_EQ(cwloc_result_value(result, "geo.heading_deg", &value), CWLOC_OK);
   EXPECT_STREQ(cwloc_last_error(), "");
+  EXPECT_EQ(cwloc_result_text(result, "name", &text), CWLOC_OK);
+  EXPECT_EQ(cwloc_result_size(result, "ranked_images", &size), CWLOC_OK);
   cwloc_result_destroy(result);
 }
 

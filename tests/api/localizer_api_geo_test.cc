@@ -164,11 +164,18 @@ TEST_F(LocalizerApiGeoTest, GeoPosesAreNearTheTruePositionsAndAttitudes) {
     EXPECT_GE(geo.heading_deg, 0.0);
     EXPECT_LT(geo.heading_deg, 360.0);
 
-    EXPECT_FALSE(result.position_prior);
-    EXPECT_EQ(result.clusters_in_radius, 0u);
-    EXPECT_FALSE(result.gravity);
-    EXPECT_FALSE(result.gravity_error_deg);
+    EXPECT_FALSE(result.priors.position);
+    EXPECT_FALSE(result.priors.gravity);
   }
+}
+
+// A horizontal GPS fix.
+api::PositionPrior Prior(double latitude_deg, double longitude_deg, double radius_m) {
+  api::PositionPrior prior;
+  prior.latitude_deg = latitude_deg;
+  prior.longitude_deg = longitude_deg;
+  prior.radius_m = radius_m;
+  return prior;
 }
 
 // A GPS fix at the true position and the true gravity: the query localizes among the clusters
@@ -181,8 +188,7 @@ TEST_F(LocalizerApiGeoTest, PriorsAreUsedAndEchoed) {
   for (const auto& [name, truth] : geo_truth_) {
     SCOPED_TRACE(name);
     api::Options options;
-    options.position_prior =
-        api::PositionPrior{truth.latitude_deg, truth.longitude_deg, std::nullopt, 50.0};
+    options.position_prior = Prior(truth.latitude_deg, truth.longitude_deg, 50.0);
     options.gravity = TrueGravity(name);
     const api::Result result = LocalizeQuery(name, options);
     ASSERT_TRUE(result.success) << result.failure_reason;
@@ -191,33 +197,38 @@ TEST_F(LocalizerApiGeoTest, PriorsAreUsedAndEchoed) {
                         {result.geo->latitude_deg, result.geo->longitude_deg, result.geo->height_m})
                   .norm(),
               2.5);
-    ASSERT_TRUE(result.position_prior);
-    EXPECT_EQ(result.position_prior->latitude_deg, truth.latitude_deg);
-    EXPECT_EQ(result.position_prior->longitude_deg, truth.longitude_deg);
-    EXPECT_FALSE(result.position_prior->height_m);
-    EXPECT_EQ(result.position_prior->radius_m, 50.0);
-    EXPECT_EQ(result.clusters_in_radius, clusters_within_50m.at(name));
-    EXPECT_EQ(result.gravity, options.gravity);
+    const std::optional<api::PositionPriorUse>& prior = result.priors.position;
+    ASSERT_TRUE(prior);
+    EXPECT_EQ(prior->latitude_deg, truth.latitude_deg);
+    EXPECT_EQ(prior->longitude_deg, truth.longitude_deg);
+    EXPECT_FALSE(prior->height_m);
+    EXPECT_EQ(prior->radius_m, 50.0);
+    EXPECT_EQ(prior->source, api::PriorSource::kOption);
+    EXPECT_EQ(prior->clusters_in_radius, clusters_within_50m.at(name));
+    ASSERT_TRUE(result.priors.gravity);
+    EXPECT_EQ(result.priors.gravity->direction, options.gravity);
     // The true gravity against the georeference's: the fit tilts the model by about 1.2°
     // (measured 1.18 to 1.22°, with and without the pose stage's use of the prior).
-    ASSERT_TRUE(result.gravity_error_deg);
-    EXPECT_GT(*result.gravity_error_deg, 0.0);
-    EXPECT_LT(*result.gravity_error_deg, 2.0);
+    const std::optional<double>& error_deg = result.priors.gravity->error_deg;
+    ASSERT_TRUE(error_deg);
+    EXPECT_GT(*error_deg, 0.0);
+    EXPECT_LT(*error_deg, 2.0);
   }
 }
 
 TEST_F(LocalizerApiGeoTest, APositionPriorFarFromTheModelFailsSayingSo) {
   api::Options options;
-  options.position_prior = api::PositionPrior{47.3779, 8.6403, std::nullopt, 100.0};  // 7.5 km E
+  options.position_prior = Prior(47.3779, 8.6403, 100.0);  // 7.5 km E
   options.gravity = TrueGravity("query_00001.jpg");
   const api::Result result = LocalizeQuery("query_00001.jpg", options);
   EXPECT_FALSE(result.success);
   EXPECT_EQ(result.failure_reason, "no model camera within 100 m of the position prior");
-  EXPECT_EQ(result.clusters_in_radius, 0u);
+  ASSERT_TRUE(result.priors.position);
+  EXPECT_EQ(result.priors.position->clusters_in_radius, 0u);
   EXPECT_EQ(result.correspondences, 0u);
   EXPECT_FALSE(result.geo);
-  EXPECT_TRUE(result.gravity);
-  EXPECT_FALSE(result.gravity_error_deg);
+  ASSERT_TRUE(result.priors.gravity);
+  EXPECT_FALSE(result.priors.gravity->error_deg);
 }
 
 TEST_F(LocalizerApiGeoTest, BadPriorsAreInvalidArgumentsWithThePipelinesMessage) {
@@ -228,7 +239,7 @@ TEST_F(LocalizerApiGeoTest, BadPriorsAreInvalidArgumentsWithThePipelinesMessage)
                 api::ErrorCode::kInvalidArgument, message);
   };
   api::Options options;
-  options.position_prior = api::PositionPrior{91.0, 8.5403, std::nullopt, 50.0};
+  options.position_prior = Prior(91.0, 8.5403, 50.0);
   expect(options,
          "features: position prior 91.000000, 8.540300 is not a latitude in [-90, 90] "
          "and a longitude");
@@ -261,7 +272,7 @@ TEST_F(LocalizerApiGeoTest, BadPriorsAreInvalidArgumentsWithThePipelinesMessage)
       "features: a position or gravity prior needs a georeferenced index (" +
       GoldenIndex().string() + " is not; see cwloc-index build --georef)";
   options = api::Options();
-  options.position_prior = api::PositionPrior{47.3779, 8.5403, std::nullopt, 50.0};
+  options.position_prior = Prior(47.3779, 8.5403, 50.0);
   ExpectError([&] { plain.Localize(plain_features, camera, options); },
               api::ErrorCode::kInvalidArgument, not_georeferenced);
   options = api::Options();
@@ -274,7 +285,7 @@ TEST_F(LocalizerApiGeoTest, BadPriorsAreInvalidArgumentsWithThePipelinesMessage)
   const api::Result result = plain.Localize(plain_features, camera, options);
   EXPECT_TRUE(result.success) << result.failure_reason;
   EXPECT_FALSE(result.geo);
-  EXPECT_FALSE(result.position_prior);
+  EXPECT_FALSE(result.priors.position);
 }
 
 }  // namespace

@@ -156,21 +156,27 @@ TEST(LocalizerApiToolsTest, RigFramesAreCwlocLocalizesBitForBit) {
   const api::RigResult rig = localizer.LocalizeRig(images, false, api::Options(), "f");
   ASSERT_TRUE(rig.success) << rig.failure_reason;
   ASSERT_TRUE(cli["success"].get<bool>()) << output;
-  EXPECT_EQ(rig.rotation, (cli["rig"]["rig_from_world"]["qvec"].get<std::array<double, 4>>()));
-  EXPECT_EQ(rig.translation, (cli["rig"]["rig_from_world"]["tvec"].get<std::array<double, 3>>()));
-  EXPECT_EQ(rig.num_inliers, cli["rig"]["num_inliers"].get<uint32_t>());
+  ASSERT_TRUE(rig.rig.rig_from_world);
+  EXPECT_EQ(rig.rig.rig_from_world->rotation,
+            (cli["rig"]["rig_from_world"]["qvec"].get<std::array<double, 4>>()));
+  EXPECT_EQ(rig.rig.rig_from_world->translation,
+            (cli["rig"]["rig_from_world"]["tvec"].get<std::array<double, 3>>()));
+  EXPECT_EQ(rig.rig.num_inliers, cli["rig"]["num_inliers"].get<uint32_t>());
   ASSERT_EQ(rig.images.size(), names.size());
   for (size_t i = 0; i < names.size(); ++i) {
     SCOPED_TRACE(names[i]);
     const nlohmann::json& image = cli["images"][i];
-    EXPECT_EQ(rig.images[i].rotation, (image["pose"]["qvec"].get<std::array<double, 4>>()));
-    EXPECT_EQ(rig.images[i].translation, (image["pose"]["tvec"].get<std::array<double, 3>>()));
-    const Eigen::Vector3d center(rig.images[i].center.data());
+    ASSERT_TRUE(rig.images[i].pose);
+    const api::Pose& pose = *rig.images[i].pose;
+    EXPECT_EQ(pose.rotation, (image["pose"]["qvec"].get<std::array<double, 4>>()));
+    EXPECT_EQ(pose.translation, (image["pose"]["tvec"].get<std::array<double, 3>>()));
+    const Eigen::Vector3d center(pose.center.data());
     EXPECT_LT((center - truth.at(names[i]).pose.Center()).norm(), 0.05);  // metres
   }
   // The record is the tool's but for its times and where the cameras came from (a list line
   // there, an argument here).
-  nlohmann::json api_record = nlohmann::json::parse(rig.json), cli_record = cli;
+  nlohmann::json api_record = nlohmann::json::parse(api::ToJson(rig, api::Options())),
+                 cli_record = cli;
   for (nlohmann::json* record : {&api_record, &cli_record}) {
     record->erase("times_ms");
     for (nlohmann::json& image : (*record)["images"]) image["camera"].erase("intrinsics_source");
@@ -217,7 +223,7 @@ TEST_F(LocalizerApiPhotoTest, FileBytesAndGreyPixelsGiveOnePoseNearColmaps) {
 
   const api::Result from_file = localizer_->LocalizePhoto(photo.string(), std::nullopt, options);
   ASSERT_TRUE(from_file.success) << from_file.failure_reason;
-  EXPECT_TRUE(from_file.focal_estimated);
+  EXPECT_TRUE(from_file.camera.focal_estimated);
   EXPECT_EQ(from_file.camera.model, "SIMPLE_RADIAL");
   EXPECT_GT(from_file.times.extraction, 0.0);
   const Eigen::Vector3d center(from_file.center[0], from_file.center[1], from_file.center[2]);
@@ -419,17 +425,19 @@ TEST_F(LocalizerApiGeoToolsTest, GeoPosesAndPriorsAreCwlocLocalizesBitForBit) {
     EXPECT_FALSE(covariance.focal_std_px);  // a known camera
 
     const nlohmann::json& position = json.at("priors").at("position");
-    ASSERT_TRUE(result.position_prior);
-    EXPECT_EQ(result.position_prior->latitude_deg, position["latitude_deg"].get<double>());
-    EXPECT_EQ(result.position_prior->longitude_deg, position["longitude_deg"].get<double>());
-    EXPECT_EQ(result.position_prior->height_m, position["height_m"].get<double>());
-    EXPECT_EQ(result.position_prior->radius_m, 50.0);
-    EXPECT_EQ(result.clusters_in_radius, position["clusters_in_radius"].get<uint32_t>());
-    EXPECT_GE(result.clusters_in_radius, 1u);
+    const std::optional<api::PositionPriorUse>& prior = result.priors.position;
+    ASSERT_TRUE(prior);
+    EXPECT_EQ(prior->latitude_deg, position["latitude_deg"].get<double>());
+    EXPECT_EQ(prior->longitude_deg, position["longitude_deg"].get<double>());
+    EXPECT_EQ(prior->height_m, position["height_m"].get<double>());
+    EXPECT_EQ(prior->radius_m, 50.0);
+    EXPECT_EQ(prior->clusters_in_radius, position["clusters_in_radius"].get<uint32_t>());
+    EXPECT_GE(prior->clusters_in_radius, 1u);
     const nlohmann::json& gravity = json.at("priors").at("gravity");
-    EXPECT_EQ(result.gravity, (gravity["direction"].get<std::array<double, 3>>()));
-    ASSERT_TRUE(result.gravity_error_deg);
-    EXPECT_EQ(*result.gravity_error_deg, gravity["error_deg"].get<double>());
+    ASSERT_TRUE(result.priors.gravity && result.priors.gravity->error_deg);
+    EXPECT_EQ(result.priors.gravity->direction,
+              (gravity["direction"].get<std::array<double, 3>>()));
+    EXPECT_EQ(*result.priors.gravity->error_deg, gravity["error_deg"].get<double>());
 
     // The C API on the same query and priors.
     cwloc_options* c_options = nullptr;
@@ -448,30 +456,20 @@ TEST_F(LocalizerApiGeoToolsTest, GeoPosesAndPriorsAreCwlocLocalizesBitForBit) {
                                 c_options, &c_result),
         CWLOC_OK)
         << cwloc_last_error();
-    cwloc_geo_pose c_geo{};
-    ASSERT_EQ(cwloc_result_geo_pose(c_result, &c_geo), CWLOC_OK) << cwloc_last_error();
-    EXPECT_EQ(c_geo.latitude_deg, result.geo->latitude_deg);
-    EXPECT_EQ(c_geo.longitude_deg, result.geo->longitude_deg);
-    EXPECT_EQ(c_geo.height_m, result.geo->height_m);
-    EXPECT_EQ(c_geo.heading_deg, result.geo->heading_deg);
-    double c_error = 0;
-    ASSERT_EQ(cwloc_result_gravity_error(c_result, &c_error), CWLOC_OK);
-    EXPECT_EQ(c_error, *result.gravity_error_deg);
-    std::array<double, 36> c_pose{};
-    std::array<double, 9> c_enu{};
-    double c_radius = 0, c_radius_m = 0;
-    ASSERT_EQ(cwloc_result_covariance(c_result, c_pose.data(), &c_radius), CWLOC_OK);
-    ASSERT_EQ(cwloc_result_enu_covariance(c_result, c_enu.data(), &c_radius_m), CWLOC_OK);
-    EXPECT_EQ(c_pose, covariance.pose);
-    EXPECT_EQ(c_enu, *covariance.enu_position);
-    EXPECT_EQ(c_radius, covariance.position_radius95);
-    EXPECT_EQ(c_radius_m, *covariance.position_radius95_m);
+    EXPECT_EQ(CValue(c_result, "geo.latitude_deg"), result.geo->latitude_deg);
+    EXPECT_EQ(CValue(c_result, "geo.longitude_deg"), result.geo->longitude_deg);
+    EXPECT_EQ(CValue(c_result, "geo.height_m"), result.geo->height_m);
+    EXPECT_EQ(CValue(c_result, "geo.heading_deg"), result.geo->heading_deg);
+    EXPECT_EQ(CValue(c_result, "priors.gravity.error_deg"), *result.priors.gravity->error_deg);
+    EXPECT_EQ(CValues(c_result, "covariance.pose"), Doubles(covariance.pose));
+    EXPECT_EQ(CValues(c_result, "covariance.enu_position"), Doubles(*covariance.enu_position));
+    EXPECT_EQ(CValue(c_result, "covariance.position_radius95"), covariance.position_radius95);
+    EXPECT_EQ(CValue(c_result, "covariance.position_radius95_m"), *covariance.position_radius95_m);
     // The index has cwloc-index build's default calibration.
     ASSERT_TRUE(covariance.calibration);
-    double c_rotation_scale = 0, c_position_scale = 0;
-    ASSERT_EQ(cwloc_result_covariance_calibration(c_result, &c_rotation_scale, &c_position_scale),
-              CWLOC_OK);
-    EXPECT_EQ(c_rotation_scale, covariance.calibration->rotation);
+    const double c_position_scale = CValue(c_result, "covariance.calibration.position");
+    EXPECT_EQ(CValue(c_result, "covariance.calibration.rotation"),
+              covariance.calibration->rotation);
     EXPECT_EQ(c_position_scale, covariance.calibration->position);
     EXPECT_GE(c_position_scale, 1.0);
     EXPECT_EQ(json["covariance"]["calibration"]["position_scale"], c_position_scale);
@@ -505,8 +503,8 @@ TEST_F(LocalizerApiGeoToolsTest, GeoPosesWithoutPriorsAreCwlocLocalizes) {
     EXPECT_EQ(result.geo->height_m, json["geo"]["height_m"].get<double>());
     EXPECT_EQ(result.geo->heading_deg, json["geo"]["heading_deg"].get<double>());
     EXPECT_FALSE(json.contains("priors"));
-    EXPECT_FALSE(result.position_prior);
-    EXPECT_FALSE(result.gravity_error_deg);
+    EXPECT_FALSE(result.priors.position);
+    EXPECT_FALSE(result.priors.gravity);
   }
 }
 
@@ -519,7 +517,8 @@ TEST_F(LocalizerApiGeoToolsTest, APositionPriorFarFromTheModelFailsSayingSo) {
     const api::Result result = localizer_->Localize(DatabaseFeatures(db, name), camera, options);
     EXPECT_FALSE(result.success);
     EXPECT_EQ(result.failure_reason, "no model camera within 100 m of the position prior");
-    EXPECT_EQ(result.clusters_in_radius, 0u);
+    ASSERT_TRUE(result.priors.position);
+    EXPECT_EQ(result.priors.position->clusters_in_radius, 0u);
     EXPECT_FALSE(result.geo);
   }
 }
@@ -536,11 +535,13 @@ TEST_F(LocalizerApiGeoToolsTest, ExifGpsIsThePositionPriorUnlessOneIsGiven) {
   const api::Result from_exif = localizer_->LocalizePhoto(photo.string(), std::nullopt, options);
   EXPECT_FALSE(from_exif.success);
   EXPECT_EQ(from_exif.failure_reason, "no model camera within 50 m of the position prior");
-  ASSERT_TRUE(from_exif.position_prior);
-  EXPECT_NEAR(from_exif.position_prior->latitude_deg, 52.518916667, 1e-9);   // N 52° 31' 8.10"
-  EXPECT_NEAR(from_exif.position_prior->longitude_deg, 13.400294444, 1e-9);  // E 13° 24' 1.06"
-  EXPECT_FALSE(from_exif.position_prior->height_m);                          // EXIF altitude: MSL
-  EXPECT_EQ(from_exif.position_prior->radius_m, 50.0);
+  const std::optional<api::PositionPriorUse>& exif = from_exif.priors.position;
+  ASSERT_TRUE(exif);
+  EXPECT_NEAR(exif->latitude_deg, 52.518916667, 1e-9);   // N 52° 31' 8.10"
+  EXPECT_NEAR(exif->longitude_deg, 13.400294444, 1e-9);  // E 13° 24' 1.06"
+  EXPECT_FALSE(exif->height_m);                          // EXIF altitude: MSL
+  EXPECT_EQ(exif->radius_m, 50.0);
+  EXPECT_EQ(exif->source, api::PriorSource::kExif);
 
   const auto run_tool = [&](const std::string& extra) {
     const auto results = *dir_ / "photo.jsonl";
@@ -557,21 +558,19 @@ TEST_F(LocalizerApiGeoToolsTest, ExifGpsIsThePositionPriorUnlessOneIsGiven) {
   const nlohmann::json cli = run_tool("");
   EXPECT_EQ(cli["failure_reason"], from_exif.failure_reason);
   EXPECT_EQ(cli["priors"]["position"]["source"], "exif");
-  EXPECT_EQ(cli["priors"]["position"]["latitude_deg"].get<double>(),
-            from_exif.position_prior->latitude_deg);
-  EXPECT_EQ(cli["priors"]["position"]["longitude_deg"].get<double>(),
-            from_exif.position_prior->longitude_deg);
+  EXPECT_EQ(cli["priors"]["position"]["latitude_deg"].get<double>(), exif->latitude_deg);
+  EXPECT_EQ(cli["priors"]["position"]["longitude_deg"].get<double>(), exif->longitude_deg);
 
   // A given prior (around the whole city) wins over the EXIF GPS, as --prior-position does.
   options.position_prior = api::PositionPrior{47.3779, 8.5403, std::nullopt, 1000.0};
   const api::Result given = localizer_->LocalizePhoto(photo.string(), std::nullopt, options);
-  ASSERT_TRUE(given.position_prior);
-  EXPECT_EQ(given.position_prior->latitude_deg, 47.3779);
-  EXPECT_GT(given.clusters_in_radius, 100u);
+  ASSERT_TRUE(given.priors.position);
+  EXPECT_EQ(given.priors.position->latitude_deg, 47.3779);
+  EXPECT_GT(given.priors.position->clusters_in_radius, 100u);
   const nlohmann::json cli_given = run_tool("--prior-position '47.3779 8.5403 1000'");
   EXPECT_EQ(cli_given["priors"]["position"]["source"], "option");
   EXPECT_EQ(cli_given["priors"]["position"]["clusters_in_radius"].get<uint32_t>(),
-            given.clusters_in_radius);
+            given.priors.position->clusters_in_radius);
   EXPECT_EQ(cli_given["success"].get<bool>(), given.success);
 }
 
@@ -638,8 +637,7 @@ class TrackerApiTest : public testing::Test {
       EXPECT_TRUE(result.success);
       EXPECT_TRUE(result.tracking.has_value());
       if (!result.success || !result.tracking) continue;
-      EXPECT_EQ(kTrackingModeNames[static_cast<size_t>(result.tracking->mode)],
-                cli["tracking"]["mode"].get<std::string>());
+      EXPECT_EQ(NameOf(result.tracking->mode), cli["tracking"]["mode"].get<std::string>());
       EXPECT_EQ(result.num_inliers, cli["num_inliers"].get<uint32_t>());
       EXPECT_EQ(result.rotation, (cli["pose"]["qvec"].get<std::array<double, 4>>()));
       EXPECT_EQ(result.translation, (cli["pose"]["tvec"].get<std::array<double, 3>>()));
@@ -661,16 +659,22 @@ class TrackerApiTest : public testing::Test {
           CWLOC_OK)
           << cwloc_last_error();
       if (c_result == nullptr) continue;
-      cwloc_tracking c_tracking;
-      EXPECT_EQ(cwloc_result_tracking(c_result, &c_tracking), CWLOC_OK);
-      EXPECT_EQ(int(c_tracking.mode), int(result.tracking->mode));
-      EXPECT_EQ(c_tracking.predicted_from, result.tracking->predicted_from);
-      EXPECT_EQ(c_tracking.has_prediction_error, result.tracking->prediction_error.has_value());
-      std::array<double, 4> rotation;
-      std::array<double, 3> translation, center;
-      cwloc_result_pose(c_result, rotation.data(), translation.data(), center.data());
-      EXPECT_EQ(rotation, result.rotation);
-      EXPECT_EQ(translation, result.translation);
+      EXPECT_EQ(CValue(c_result, "tracking.mode"), int(result.tracking->mode));
+      EXPECT_EQ(CText(c_result, "tracking.mode"), NameOf(result.tracking->mode));
+      const char* predicted_from = nullptr;
+      const cwloc_status status =
+          cwloc_result_text(c_result, "tracking.predicted_from", &predicted_from);
+      if (result.tracking->predicted_from) {
+        EXPECT_EQ(status, CWLOC_OK);
+        EXPECT_EQ(predicted_from, *result.tracking->predicted_from);
+      } else {
+        EXPECT_EQ(status, CWLOC_ERROR_NOT_AVAILABLE);
+      }
+      double error = 0;
+      EXPECT_EQ(cwloc_result_value(c_result, "tracking.prediction_error", &error) == CWLOC_OK,
+                result.tracking->prediction_error.has_value());
+      EXPECT_EQ(CValues(c_result, "rotation"), Doubles(result.rotation));
+      EXPECT_EQ(CValues(c_result, "translation"), Doubles(result.translation));
       cwloc_result_destroy(c_result);
     }
     EXPECT_EQ(cwloc_tracker_reset(c_tracker), CWLOC_OK);
@@ -706,9 +710,9 @@ TEST_F(TrackerApiTest, TracksAVideoAsCwlocLocalizeSequenceDoes) {
       cwloc_localize_features(c_localizer, features.keypoints.data(), features.descriptors.data(),
                               uint32_t(features.keypoints.size() / 2), &c_camera, nullptr, &alone),
       CWLOC_OK);
-  cwloc_tracking none;
-  EXPECT_EQ(cwloc_result_tracking(alone, &none), CWLOC_ERROR_NOT_AVAILABLE);
-  EXPECT_STREQ(cwloc_last_error(), "tracking: the query was not a tracker's frame");
+  double mode = 0;
+  EXPECT_EQ(cwloc_result_value(alone, "tracking.mode", &mode), CWLOC_ERROR_NOT_AVAILABLE);
+  EXPECT_STREQ(cwloc_last_error(), "'tracking' is absent (A frame of a sequence)");
   cwloc_result_destroy(alone);
   cwloc_localizer_close(c_localizer);
 
@@ -716,7 +720,7 @@ TEST_F(TrackerApiTest, TracksAVideoAsCwlocLocalizeSequenceDoes) {
   const api::Result after_reset =
       tracker.Track(DatabaseFeatures(db, frames_[1].first), ParseCamera(frames_[1].second));
   EXPECT_EQ(after_reset.tracking->mode, api::TrackingMode::kRelocalized);
-  EXPECT_EQ(after_reset.tracking->predicted_from, "");
+  EXPECT_FALSE(after_reset.tracking->predicted_from);
 }
 
 // With each frame's true motion (from COLMAP's poses) and its sigmas, in --motion's file and as

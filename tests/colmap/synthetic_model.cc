@@ -151,7 +151,7 @@ colmap::Reconstruction SyntheticModel(const SyntheticModelOptions& options) {
       {{640, 480}, {1024, 768}, {1536, 1024}}};
   std::vector<camera_t> camera_ids;
   for (int i = 0; i < options.num_cameras; ++i) {
-    Camera camera;
+    colmap::Camera camera;
     camera.camera_id = static_cast<camera_t>(i + 1);
     camera.model_id = models[static_cast<size_t>(i) % models.size()];
     const auto& size = kSizes[static_cast<size_t>(i) % kSizes.size()];
@@ -254,7 +254,7 @@ colmap::Reconstruction SyntheticModel(const SyntheticModelOptions& options) {
     entries.insert(entries.end(), static_cast<size_t>(options.num_unobserved_points2D),
                    kInvalidPoint3DId);
     std::shuffle(entries.begin(), entries.end(), Rng());
-    const Camera& camera = model.cameras.at(image.camera_id);
+    const colmap::Camera& camera = model.cameras.at(image.camera_id);
     for (point3D_t entry : entries) {
       Point2D point2D;
       point2D.point3D_id = entry;

@@ -57,19 +57,26 @@ int main(int argc, char** argv) {
   }
   int status = 0;
   if (cwloc_result_success(result)) {
-    double rotation[4], translation[3], center[3];
-    cwloc_result_pose(result, rotation, translation, center);
+    double center[3], inliers = 0;
+    cwloc_result_values(result, "center", center, 3, NULL);
+    cwloc_result_value(result, "num_inliers", &inliers);
     printf("center %.17g %.17g %.17g inliers %u\n", center[0], center[1], center[2],
-           cwloc_result_num_inliers(result));
-    cwloc_index_info info;
-    cwloc_geo_pose geo;
-    if (cwloc_localizer_info(localizer, &info) == CWLOC_OK && info.georeferenced &&
-        cwloc_result_geo_pose(result, &geo) == CWLOC_OK) {
-      printf("geo %.17g %.17g %.17g heading %.17g pitch %.17g roll %.17g\n", geo.latitude_deg,
-             geo.longitude_deg, geo.height_m, geo.heading_deg, geo.pitch_deg, geo.roll_deg);
+           (unsigned)inliers);
+    /* The fields of a geo pose, by their paths; absent unless the index is georeferenced. */
+    static const char* const kGeo[] = {"geo.latitude_deg", "geo.longitude_deg", "geo.height_m",
+                                       "geo.heading_deg",  "geo.pitch_deg",     "geo.roll_deg"};
+    double geo[6];
+    int georeferenced = 1;
+    for (int i = 0; i < 6 && georeferenced; ++i)
+      georeferenced = cwloc_result_value(result, kGeo[i], &geo[i]) == CWLOC_OK;
+    if (georeferenced) {
+      printf("geo %.17g %.17g %.17g heading %.17g pitch %.17g roll %.17g\n", geo[0], geo[1],
+             geo[2], geo[3], geo[4], geo[5]);
     }
   } else {
-    printf("not localized: %s\n", cwloc_result_failure_reason(result));
+    const char* reason = "";
+    cwloc_result_text(result, "failure_reason", &reason);
+    printf("not localized: %s\n", reason);
     status = 1;
   }
   cwloc_result_destroy(result);

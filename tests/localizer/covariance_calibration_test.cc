@@ -47,17 +47,17 @@ TEST_P(CovarianceCalibrationTest, HeldOutQueriesFallInsideTheirCalibrated95Perce
       query.camera = mode;
       const LocalizationResult result = localizer.Localize(query, LocalizerOptions{});
       ASSERT_TRUE(result.success) << name << ": " << result.failure_reason;
-      ASSERT_TRUE(result.covariance && result.covariance_calibration) << name;
+      ASSERT_TRUE(result.covariance && result.covariance->calibration) << name;
       const auto m = static_cast<size_t>(mode.calibration);
-      EXPECT_EQ(result.covariance_calibration->position, calibration->position_scale[m]);
-      EXPECT_EQ(result.covariance_calibration->rotation, calibration->rotation_scale[m]);
-      EXPECT_GE(result.covariance_calibration->position, 1.0);
+      EXPECT_EQ(result.covariance->calibration->position, calibration->position_scale[m]);
+      EXPECT_EQ(result.covariance->calibration->rotation, calibration->rotation_scale[m]);
+      EXPECT_GE(result.covariance->calibration->position, 1.0);
       const Eigen::Vector3d offset = Eigen::Vector3d(result.center.data()) - truth.pose.Center();
-      const Eigen::Matrix3d position = result.covariance->Position();
+      const Eigen::Matrix3d position = PositionBlock(*result.covariance);
       const double d2 = offset.dot(position.ldlt().solve(offset));
       ++total;
       inside += d2 <= kChiSquare3Dof95;
-      inside_uncalibrated += d2 * result.covariance_calibration->position <= kChiSquare3Dof95;
+      inside_uncalibrated += d2 * result.covariance->calibration->position <= kChiSquare3Dof95;
     }
   }
   // Measured: herz_jesu_p25 14 of 15 (9 uncalibrated), sceaux_castle 9 of 9 (4).

@@ -136,30 +136,29 @@ TEST_F(HerzJesuTest, AllQueriesLocalizeWithUnknownFocalAndRecoverIt) {
     query.camera = WithUnknownFocal(query.camera);
     const LocalizationResult result = localizer.Localize(query, LocalizerOptions{});
     ExpectPoseClose(result, truth, 0.05, 0.5);
-    ASSERT_TRUE(result.focal_estimated);
+    ASSERT_TRUE(result.camera.focal_estimated);
     EXPECT_NEAR(result.camera.params[0], kColmapFocal, 0.02 * kColmapFocal) << name;
   }
 }
 
-// keep_correspondences hands out what the pose was fit to (bench/cross_estimation.sh fits them
+// Localize hands out what the pose was fit to when asked (bench/cross_estimation.sh fits them
 // with COLMAP's estimator): as many as the result counts, each a pair the index knows, and
-// fitting them again gives the pose bit for bit. Without it, nothing is kept.
+// fitting them again gives the pose bit for bit.
 TEST_F(HerzJesuTest, KeptCorrespondencesAreWhatThePoseWasFitTo) {
   const DatabaseQueries queries(data_ / "database.db");
   const Localizer localizer(*index_);
   const std::string name = truth_.begin()->first;
   const Query query = queries.Load(name);  // the focal length unknown, so with the N_B growth
   LocalizerOptions options;
-  EXPECT_TRUE(localizer.Localize(query, options).kept_correspondences.empty());
-  options.keep_correspondences = true;
-  const LocalizationResult result = localizer.Localize(query, options);
+  std::vector<FeatureMatch> kept;
+  const LocalizationResult result = localizer.Localize(query, options, nullptr, &kept);
   ASSERT_TRUE(result.success);
-  ASSERT_EQ(result.kept_correspondences.size(), result.correspondences);
-  for (const FeatureMatch& match : result.kept_correspondences) {
+  ASSERT_EQ(kept.size(), result.correspondences);
+  for (const FeatureMatch& match : kept) {
     ASSERT_LT(match.feature, query.NumFeatures());
     ASSERT_LT(match.view, index_->num_views());
   }
-  const QueryPose refit = EstimateQueryPose(*index_, query, result.kept_correspondences, options);
+  const QueryPose refit = EstimateQueryPose(*index_, query, kept, options);
   ASSERT_TRUE(refit.pose.success);
   EXPECT_EQ(refit.pose.num_inliers, int(result.num_inliers));
   const Eigen::Vector3d center = refit.pose.pose.Center();
@@ -178,9 +177,9 @@ TEST_F(HerzJesuTest, DatabaseCameraIsTheExtractorsGuessAndIsEstimated) {
     EXPECT_EQ(query.camera.params[0], 1.2 * 1536);
     const LocalizationResult result = localizer.Localize(query, LocalizerOptions{});
     ExpectPoseClose(result, truth, 0.05, 0.5);
-    ASSERT_TRUE(result.focal_estimated);
+    ASSERT_TRUE(result.camera.focal_estimated);
     EXPECT_NEAR(result.camera.params[0], kColmapFocal, 0.01 * kColmapFocal) << name;
-    EXPECT_EQ(result.camera.source, IntrinsicsSource::kDatabase);
+    EXPECT_EQ(result.camera.intrinsics_source, IntrinsicsSource::kDatabase);
     // A full 1536 px frame with 1,200-2,700 inliers: the focal length is known to a few tenths
     // of a pixel (measured 0.24-0.41), the pose well constrained.
     ASSERT_TRUE(result.focal_depth.has_value()) << name;
@@ -313,13 +312,17 @@ TEST_F(HerzJesuTest, ALatencyBudgetCutsTheStagesItEnds) {
   const LocalizationResult cut = localizer.Localize(query, spent);
   EXPECT_FALSE(cut.success);
   EXPECT_EQ(cut.features_searched, 0u);
-  EXPECT_EQ(cut.budget_cut, std::vector<std::string>{"forward"});
+  ASSERT_TRUE(cut.budget);
+  EXPECT_EQ(cut.budget->ms, 1e-6);
+  EXPECT_EQ(cut.budget->cut, std::vector<std::string>{"forward"});
 
   LocalizerOptions ample;
   ample.budget_ms = 1e9;
   const LocalizationResult whole = localizer.Localize(query, ample);
   const LocalizationResult unbudgeted = localizer.Localize(query, LocalizerOptions{});
-  EXPECT_TRUE(whole.budget_cut.empty());
+  ASSERT_TRUE(whole.budget);
+  EXPECT_TRUE(whole.budget->cut.empty());
+  EXPECT_FALSE(unbudgeted.budget);
   EXPECT_EQ(whole.rotation, unbudgeted.rotation);
   EXPECT_EQ(whole.translation, unbudgeted.translation);
   EXPECT_EQ(whole.num_inliers, unbudgeted.num_inliers);

@@ -65,8 +65,8 @@ class SceauxCastleTest : public testing::Test {
     const PoseError error = ErrorOf(result, truth_.at(result.name));
     EXPECT_LE(error.units, 0.05);
     EXPECT_LE(error.degrees, 0.5);
-    ASSERT_TRUE(result.focal_estimated);
-    EXPECT_EQ(result.camera.model_id, CameraModelId::kSimpleRadial);
+    ASSERT_TRUE(result.camera.focal_estimated);
+    EXPECT_EQ(result.camera.model, "SIMPLE_RADIAL");
     ASSERT_EQ(result.camera.params.size(), 4u);
     EXPECT_NEAR(result.camera.params[0], kSceauxColmapFocal, 0.01 * kSceauxColmapFocal);
     EXPECT_NEAR(result.camera.params[3], kColmapK, 0.01);
@@ -87,7 +87,7 @@ TEST_F(SceauxCastleTest, DatabaseFocalPriorFivePercentOffMeetsTargets) {
     const LocalizationResult result = localizer.Localize(query, LocalizerOptions{});
     ExpectOnTarget(result);
     EXPECT_EQ(result.camera.calibration, Calibration::kFocalPrior);
-    EXPECT_EQ(result.camera.source, IntrinsicsSource::kDatabase);
+    EXPECT_EQ(result.camera.intrinsics_source, IntrinsicsSource::kDatabase);
   }
 }
 

@@ -97,7 +97,7 @@ TEST_F(TrackerTest, FramesInTimeOrderAreTrackedAsAccuratelyAsLocalizedAlone) {
     const TrackingInfo& tracking = *result.tracking;
     if (i == 0) {
       EXPECT_EQ(tracking.mode, TrackingMode::kRelocalized);
-      EXPECT_EQ(tracking.predicted_from, "");
+      EXPECT_FALSE(tracking.predicted_from);
       EXPECT_FALSE(tracking.prediction_error.has_value());
       continue;
     }
@@ -305,7 +305,7 @@ TEST_F(TrackerTest, APredictionsMinimumOfBackMatchesVisitsTheNextImages) {
                  Eigen::Vector3d(alone.translation[0], alone.translation[1], alone.translation[2]));
   prediction.hypothesis.model_id = frame.camera.model_id;
   prediction.hypothesis.params = frame.camera.params;
-  for (const InlierMatch& inlier : alone.inliers) prediction.seen_points.push_back(inlier.point);
+  for (const Inlier& inlier : alone.inliers) prediction.seen_points.push_back(inlier.point);
   prediction.nearest_images_first = true;
   prediction.radius_px = LocalizerOptions{}.guide_radius_px;
   const LocalizationResult nearest = localizer.Localize(frame, LocalizerOptions{}, &prediction);
@@ -327,7 +327,7 @@ TEST_F(TrackerTest, ResetStartsFromScratch) {
   const LocalizationResult result = tracker.Track(Frame(frames_[1]));
   ASSERT_TRUE(result.success);
   EXPECT_EQ(result.tracking->mode, TrackingMode::kRelocalized);
-  EXPECT_EQ(result.tracking->predicted_from, "");
+  EXPECT_FALSE(result.tracking->predicted_from);
 }
 
 // cwloc-localize --sequence: one record per frame in the given order, each with its tracking

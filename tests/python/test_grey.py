@@ -17,7 +17,7 @@ def test_grey_image_gives_the_photos_pose(herz, herz_localizer):
     image.fromarray(grey).save(png, format="PNG")
     options = {"max_image_size": 1600, "max_features": 6000}
     from_photo = herz_localizer.localize_photo(png.getvalue(), **options)
-    assert from_photo.success and from_photo.focal_estimated
+    assert from_photo.success and from_photo.camera.focal_estimated
     height, width = grey.shape
     camera = cwloc.Camera.unknown(width, height)
     padded = np.zeros((height, width + 16), np.uint8)

@@ -48,13 +48,13 @@ def test_rig_frames_give_the_clis_poses(golden, golden_localizer, tmp_path):
     result = golden_localizer.localize_rig(images, name="w")
     assert isinstance(result, cwloc.RigResult)
     assert cli["success"] and result.success
-    assert result.rotation.tolist() == cli["rig"]["rig_from_world"]["qvec"]
-    assert result.translation.tolist() == cli["rig"]["rig_from_world"]["tvec"]
-    assert result.num_inliers == cli["rig"]["num_inliers"]
+    assert result.rig.rig_from_world.rotation.tolist() == cli["rig"]["rig_from_world"]["qvec"]
+    assert result.rig.rig_from_world.translation.tolist() == cli["rig"]["rig_from_world"]["tvec"]
+    assert result.rig.num_inliers == cli["rig"]["num_inliers"]
     for image, record in zip(result.images, cli["images"]):
-        assert image.posed and image.name == record["name"]
-        assert image.rotation.tolist() == record["pose"]["qvec"]
-        assert image.translation.tolist() == record["pose"]["tvec"]
+        assert image.pose is not None and image.name == record["name"]
+        assert image.pose.rotation.tolist() == record["pose"]["qvec"]
+        assert image.pose.translation.tolist() == record["pose"]["tvec"]
     assert result.to_dict()["rig"] == cli["rig"]
 
 

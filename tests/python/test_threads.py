@@ -8,7 +8,7 @@ from conftest import HERZ_OPTIONS
 
 def answer(result):
     return (result.success, result.rotation.tolist(), result.translation.tolist(),
-            result.num_inliers, result.inliers.points.tolist())
+            result.num_inliers, result.inliers.point.tolist())
 
 
 def test_features_on_four_threads(golden, golden_localizer):

@@ -48,25 +48,11 @@ typedef struct cwloc_camera {
   cwloc_calibration calibration;
 } cwloc_camera;
 
-/* Wall-clock seconds per stage: one field per line of <cwloc/stage_times.inc>. */
-typedef struct cwloc_stage_times {
-#define CWLOC_STAGE_TIME(name, help) double name;
-#include "cwloc/stage_times.inc"
-#undef CWLOC_STAGE_TIME
-} cwloc_stage_times;
-
 /* A GPS fix (see cwloc.hpp's PositionPrior): the query was taken within radius_m of this WGS84
  * position; height_m above the ellipsoid, NaN when unknown (then the radius is horizontal). */
 typedef struct cwloc_position_prior {
   double latitude_deg, longitude_deg, height_m, radius_m;
 } cwloc_position_prior;
-
-/* A localized camera on the globe (see cwloc.hpp's GeoPose; docs/geo.md defines the angles). */
-typedef struct cwloc_geo_pose {
-  double latitude_deg, longitude_deg, height_m; /* WGS84, height above the ellipsoid */
-  double enu[3];                                /* metres east, north, up of the index's origin */
-  double heading_deg, pitch_deg, roll_deg;
-} cwloc_geo_pose;
 
 /* What an index holds (see cwloc.hpp's IndexInfo). The strings live as long as the localizer.
  * The origin is that of the ENU frame of cwloc_geo_pose.enu; 0 unless georeferenced. */
@@ -77,22 +63,6 @@ typedef struct cwloc_index_info {
   int georeferenced; /* 1: results have geo poses and queries may have priors */
   double origin_latitude_deg, origin_longitude_deg, origin_height_m;
 } cwloc_index_info;
-
-/* How a frame of a stream got its pose (a tracker; docs/algorithm.md, "Sequences"). */
-typedef enum cwloc_tracking_mode {
-  CWLOC_TRACKED = 0,     /* matched near the pose predicted from the frames before it */
-  CWLOC_RELOCALIZED = 1, /* localized from scratch: the first frame, or tracking failed */
-  CWLOC_LOST = 2         /* neither gave a pose */
-} cwloc_tracking_mode;
-
-typedef struct cwloc_tracking {
-  cwloc_tracking_mode mode;
-  const char* predicted_from; /* the frame the prediction started from; "" without one */
-  int has_prediction_error;   /* whether the next two are set */
-  double prediction_error;    /* model units between the pose's centre and the prediction's */
-  double prediction_error_deg;
-  double seconds; /* the tracker's whole time on the frame */
-} cwloc_tracking;
 
 /* A camera's motion since the previous frame (VIO), as the C++ Motion: the frame's camera from
  * the previous frame's camera, rotation w, x, y, z and translation in metres, and its standard
@@ -124,7 +94,6 @@ typedef struct cwloc_localizer cwloc_localizer;
 typedef struct cwloc_options cwloc_options;
 typedef struct cwloc_result cwloc_result;
 typedef struct cwloc_tracker cwloc_tracker;
-typedef struct cwloc_rig_result cwloc_rig_result;
 
 CWLOC_C_API const char* cwloc_version(void);
 CWLOC_C_API const char* cwloc_last_error(void);
@@ -185,30 +154,12 @@ CWLOC_C_API cwloc_status cwloc_localize_grey_image(
 
 /* Several images localized as one generalized camera (cwloc-localize --frames); unknown_scale
  * 1: the cam_from_rig translations are known up to one scale, which is estimated. name: the
- * frame's, may be NULL ("frame"). */
+ * frame's, may be NULL ("frame"). The result's fields are a rig frame's (cwloc.hpp's
+ * RigResult): "rig.num_inliers", "images.0.pose.rotation", ... */
 CWLOC_C_API cwloc_status cwloc_localize_rig(const cwloc_localizer* localizer,
                                             const cwloc_rig_image* images, size_t num_images,
                                             int unknown_scale, const char* name,
-                                            const cwloc_options* options, cwloc_rig_result** out);
-CWLOC_C_API void cwloc_rig_result_destroy(cwloc_rig_result* result);
-CWLOC_C_API int cwloc_rig_result_success(const cwloc_rig_result* result);
-CWLOC_C_API const char* cwloc_rig_result_failure_reason(const cwloc_rig_result* result);
-/* rig_from_world (X_rig = R X_world + t), the rig's origin, and the scale (1 unless unknown). */
-CWLOC_C_API void cwloc_rig_result_pose(const cwloc_rig_result* result, double rotation_wxyz[4],
-                                       double translation[3], double center[3], double* scale);
-CWLOC_C_API uint32_t cwloc_rig_result_num_inliers(const cwloc_rig_result* result);
-CWLOC_C_API uint32_t cwloc_rig_result_num_images(const cwloc_rig_result* result);
-/* Image i's cam_from_world (cam_from_rig * rig_from_world) and the rig's inliers in it;
- * CWLOC_ERROR_NOT_AVAILABLE when the rig was not localized. Any output may be NULL. */
-CWLOC_C_API cwloc_status cwloc_rig_result_image_pose(const cwloc_rig_result* result, uint32_t i,
-                                                     double rotation_wxyz[4], double translation[3],
-                                                     uint32_t* num_inliers);
-/* The rig pose's 6 x 6 covariance over (theta, C), row-major, and its 95 % position radius;
- * CWLOC_ERROR_NOT_AVAILABLE when the rig was not localized. Either output may be NULL. */
-CWLOC_C_API cwloc_status cwloc_rig_result_covariance(const cwloc_rig_result* result,
-                                                     double pose[36], double* position_radius95);
-/* The frame's JSON record as cwloc-localize writes it. */
-CWLOC_C_API const char* cwloc_rig_result_json(const cwloc_rig_result* result);
+                                            const cwloc_options* options, cwloc_result** out);
 
 /* A tracker: the frames of one moving camera, in order (cwloc-localize --sequence), with the
  * options given here (NULL: the defaults). Each frame is tracked from the frames before it,
@@ -233,66 +184,33 @@ CWLOC_C_API cwloc_status cwloc_track_grey_image(cwloc_tracker* tracker, const ui
                                                 const cwloc_camera* camera, const double* timestamp,
                                                 const cwloc_motion* motion, cwloc_result** out);
 
-/* Results: read with these accessors, then destroy. Pointers they return live as long as the
- * result. */
+/* Results: read with these accessors, then destroy. A field is named by its path: the names of
+ * <cwloc/localization_result.h> (a rig frame's: <cwloc/rig_result.h>), where each field is
+ * described once, joined by dots, a list's item by its index: "num_inliers", "rotation",
+ * "camera.params", "covariance.position_radius95", "tracking.mode", "ranked_images.0.name",
+ * "priors.position.clusters_in_radius". An unknown path is CWLOC_ERROR_INVALID_ARGUMENT; a value
+ * the result does not have (no covariance on failure, no tracking for a query localized alone)
+ * is CWLOC_ERROR_NOT_AVAILABLE; cwloc_last_error() says which. Pointers they return live as long
+ * as the result. */
 CWLOC_C_API void cwloc_result_destroy(cwloc_result* result);
+/* 1 when localized (the field "success"), else 0; 0 for NULL. */
 CWLOC_C_API int cwloc_result_success(const cwloc_result* result);
-CWLOC_C_API const char* cwloc_result_failure_reason(const cwloc_result* result); /* "" if ok */
-/* COLMAP's cam_from_world: rotation (w, x, y, z), translation; and the camera centre. */
-CWLOC_C_API void cwloc_result_pose(const cwloc_result* result, double rotation_wxyz[4],
-                                   double translation[3], double center[3]);
-/* The camera as used (estimated when it was not known). */
-CWLOC_C_API void cwloc_result_camera(const cwloc_result* result, cwloc_camera* camera);
-/* A number of the result by its name in <cwloc/result_fields.inc>, which says what each one
- * counts ("num_inliers", "inlier_ratio", "forward_matches", "back_matches", "guided", ...; a
- * switch is 1 or 0). An unknown name is CWLOC_ERROR_INVALID_ARGUMENT. */
-CWLOC_C_API cwloc_status cwloc_result_value(const cwloc_result* result, const char* name,
+/* A number: an integer or real field, a switch (1 or 0), an enum's index ("tracking.mode": 0
+ * tracked, 1 relocalized, 2 lost, in the order of cwloc.hpp's enums). */
+CWLOC_C_API cwloc_status cwloc_result_value(const cwloc_result* result, const char* path,
                                             double* value);
-CWLOC_C_API uint32_t cwloc_result_num_features(const cwloc_result* result);
-CWLOC_C_API uint32_t cwloc_result_num_correspondences(const cwloc_result* result);
-CWLOC_C_API uint32_t cwloc_result_num_inliers(const cwloc_result* result);
-/* Inlier i < num_inliers: the query feature, its pixel, the index's 3D point and its xyz.
- * Any output pointer may be NULL. */
-CWLOC_C_API cwloc_status cwloc_result_inlier(const cwloc_result* result, uint32_t i,
-                                             uint32_t* feature, float keypoint[2], uint32_t* point,
-                                             double xyz[3]);
-CWLOC_C_API uint32_t cwloc_result_num_ranked_images(const cwloc_result* result);
-CWLOC_C_API cwloc_status cwloc_result_ranked_image(const cwloc_result* result, uint32_t i,
-                                                   uint32_t* image_id, const char** name,
-                                                   uint32_t* votes);
-CWLOC_C_API void cwloc_result_times(const cwloc_result* result, cwloc_stage_times* times);
-/* The camera on the globe; CWLOC_ERROR_NOT_AVAILABLE when the index is not georeferenced or
- * the query was not localized. */
-CWLOC_C_API cwloc_status cwloc_result_geo_pose(const cwloc_result* result, cwloc_geo_pose* pose);
-/* The position prior the query used (the options' or the photo's EXIF GPS) and how many
- * clusters had a model camera within it; CWLOC_ERROR_NOT_AVAILABLE without one. */
-CWLOC_C_API cwloc_status cwloc_result_position_prior(const cwloc_result* result,
-                                                     cwloc_position_prior* prior,
-                                                     uint32_t* clusters_in_radius);
-/* Degrees between the gravity prior and the localized pose's gravity; CWLOC_ERROR_NOT_AVAILABLE
- * without a gravity prior or when the query was not localized. */
-CWLOC_C_API cwloc_status cwloc_result_gravity_error(const cwloc_result* result, double* degrees);
-/* The pose's 6 x 6 covariance, row-major (the C++ PoseCovariance::pose) and its 95 % position
- * radius, model units; CWLOC_ERROR_NOT_AVAILABLE when the query was not localized. Either output
- * may be NULL. */
-CWLOC_C_API cwloc_status cwloc_result_covariance(const cwloc_result* result, double pose[36],
-                                                 double* position_radius95);
-/* What the index's calibration (cwloc-index build --calibration-samples) multiplied the
- * covariance by: its rotation block by rotation_scale, its centre block by position_scale (the
- * cross terms by the root of both); CWLOC_ERROR_NOT_AVAILABLE when the query was not localized
- * or the index has no calibration for its calibration mode. Either output may be NULL. */
-CWLOC_C_API cwloc_status cwloc_result_covariance_calibration(const cwloc_result* result,
-                                                             double* rotation_scale,
-                                                             double* position_scale);
-/* A georeferenced index: the centre's 3 x 3 covariance in square metres in the local
- * east-north-up frame at the camera, row-major, and its 95 % radius in metres;
- * CWLOC_ERROR_NOT_AVAILABLE otherwise. Either output may be NULL. */
-CWLOC_C_API cwloc_status cwloc_result_enu_covariance(const cwloc_result* result,
-                                                     double enu_position[9],
-                                                     double* position_radius95_m);
-/* How a tracker's frame got its pose; CWLOC_ERROR_NOT_AVAILABLE for a query localized alone. */
-CWLOC_C_API cwloc_status cwloc_result_tracking(const cwloc_result* result,
-                                               cwloc_tracking* tracking);
+/* Text: a string field or an enum's name ("name", "failure_reason", "tracking.mode":
+ * "tracked"). */
+CWLOC_C_API cwloc_status cwloc_result_text(const cwloc_result* result, const char* path,
+                                           const char** text);
+/* A list of numbers ("rotation": w, x, y, z; "camera.params"; "covariance.pose": 36, row-major):
+ * *count gets its length, values (NULL to ask the length only) its numbers;
+ * CWLOC_ERROR_INVALID_ARGUMENT when capacity is smaller than the length. */
+CWLOC_C_API cwloc_status cwloc_result_values(const cwloc_result* result, const char* path,
+                                             double* values, size_t capacity, size_t* count);
+/* The length of a list ("ranked_images", "inliers", "images", "camera.params"). */
+CWLOC_C_API cwloc_status cwloc_result_size(const cwloc_result* result, const char* path,
+                                           size_t* size);
 /* The JSON record cwloc-localize writes for this query (schemas/localization-result.schema.json).
  */
 CWLOC_C_API const char* cwloc_result_json(const cwloc_result* result);

@@ -14,7 +14,8 @@
 #include <string>
 #include <vector>
 
-#include "cwloc/result_types.h"
+#include "cwloc/localization_result.h"
+#include "cwloc/rig_result.h"
 
 #if defined(__GNUC__)
 #define CWLOC_API __attribute__((visibility("default")))
@@ -42,24 +43,14 @@ class CWLOC_API Error : public std::runtime_error {
   ErrorCode code_;
 };
 
-// What the pose stage may trust about the camera (COLMAP's prior_focal_length).
-enum class Calibration : int {
-  kKnown = 0,       // every parameter is held fixed
-  kFocalPrior = 1,  // the focal length is a guess: refined with a radial distortion term
-  kUnknown = 2,     // only the image size: the focal length is estimated (P4Pf)
-};
-
-// A camera in COLMAP's terms: model name (SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL,
-// OPENCV, ...) and its parameters in COLMAP's order. For kUnknown only width and height count.
-// For kFocalPrior the model's mean focal length is the guess; the principal point is taken at
-// the image centre.
-struct Camera {
-  std::string model;
-  uint32_t width = 0;
-  uint32_t height = 0;
-  std::vector<double> params;
-  Calibration calibration = Calibration::kKnown;
-};
+// What the pose stage may trust about the camera (COLMAP's prior_focal_length): kKnown holds
+// every parameter fixed; kFocalPrior takes the model's mean focal length as a guess, refined
+// with a radial distortion term (principal point at the image centre); kUnknown has only the
+// image size and estimates the focal length (P4Pf). A Camera in COLMAP's terms: model name
+// (SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL, OPENCV, ...) and its parameters in COLMAP's
+// order (cwloc/camera.h).
+using cwloc::Calibration;
+using cwloc::Camera;
 
 // A query's own SIFT features: keypoints in COLMAP's pixel convention (the image's top-left
 // corner is (0, 0), a pixel centre is at +0.5) and N x 128 uint8 descriptors in COLMAP's
@@ -71,13 +62,9 @@ struct Features {
 
 // A GPS fix: the query was taken within radius_m of this WGS84 position (horizontally when the
 // height is unknown). Only clusters with a model camera that near are matched. Needs a
-// georeferenced index (IndexInfo::georeferenced).
-struct PositionPrior {
-  double latitude_deg = 0;         // [-90, 90]
-  double longitude_deg = 0;        // east
-  std::optional<double> height_m;  // above the WGS84 ellipsoid (not above sea level)
-  double radius_m = 0;             // > 0
-};
+// georeferenced index (IndexInfo::georeferenced). Its `source` is the API's on input
+// (cwloc/priors.h).
+using cwloc::PositionPrior;
 
 // The knobs of cwloc-localize, with its defaults (set by the constructor): one field per line
 // of <cwloc/options.inc>, named there with its cwloc-localize flag, range and meaning
@@ -103,74 +90,44 @@ struct CWLOC_API Options {
   std::optional<std::array<double, 3>> gravity;  // --prior-gravity
 };
 
-// A model image and its votes, a stage's seconds, a camera on the globe: the localizer's own
-// plain types (cwloc/result_types.h).
+// A query's answer, the localizer's own (cwloc/localization_result.h): every field is listed
+// there once with its meaning, and the JSON record, C's accessors by path and Python's
+// properties are walks over that list (docs/api.md). A query that does not localize has success
+// false and failure_reason.
+using Result = cwloc::LocalizationResult;
+using cwloc::Budget;
+using cwloc::CameraUsed;
 using cwloc::CovarianceScales;
+using cwloc::Distortion;
+using cwloc::DistortionFit;
+using cwloc::FocalDepth;
 using cwloc::GeoPose;
+using cwloc::GravityPriorUse;
+using cwloc::Inlier;
+using cwloc::IntrinsicsSource;
+using cwloc::PhotoInfo;
+using cwloc::Pose;
+using cwloc::PoseCovariance;
+using cwloc::PositionPriorUse;
+using cwloc::PriorsUsed;
+using cwloc::PriorSource;
 using cwloc::RankedImage;
+using cwloc::ResultCamera;
 using cwloc::StageTimes;
-// How a Tracker's frame got its pose: mode (kTracked, kRelocalized, kLost), predicted_from,
-// prediction_error (model units), prediction_error_deg, seconds.
 using cwloc::TrackingMode;
+using cwloc::Transform;
 using Tracking = cwloc::TrackingInfo;
 
-// A RANSAC inlier of the reported pose.
-struct Inlier {
-  uint32_t feature = 0;             // row of the query's features
-  std::array<float, 2> keypoint{};  // its pixel
-  uint32_t point = 0;               // row of the index's 3D points
-  std::array<double, 3> xyz{};      // the point, model frame
-};
+// A rig frame's answer (cwloc/rig_result.h).
+using cwloc::RigImageResult;
+using cwloc::RigPoseInfo;
+using cwloc::RigResult;
+using cwloc::RigStageTimes;
 
-// How well the refined pose is known (docs/algorithm.md, "Pose uncertainty"): from the final
-// refinement's Jacobian and its inliers' reprojection residuals; an estimated focal length and
-// distortion are marginalised out.
-struct PoseCovariance {
-  // 6 x 6, row-major, over (theta, C): theta the rotation vector (radians, model frame) of the
-  // error of the camera's orientation, world_from_cam_estimate = exp([theta]x) world_from_cam_true, and
-  // C the camera centre (model units).
-  std::array<double, 36> pose{};
-  double position_radius95 = 0;        // model units: C's 95 % ellipsoid lies within it
-  std::optional<double> focal_std_px;  // when the focal length was estimated
-  // What the index's calibration widened `pose` by; empty when the index has none for the
-  // query's calibration mode (the covariance then knows the keypoints' noise only).
-  std::optional<CovarianceScales> calibration;
-  // A georeferenced index: C's 3 x 3 covariance in square metres, row-major, in the local
-  // east-north-up frame at the camera, and its 95 % radius in metres.
-  std::optional<std::array<double, 9>> enu_position;
-  std::optional<double> position_radius95_m;
-};
-
-struct Result {
-  bool success = false;
-  std::string failure_reason;  // why not, when success is false
-  // COLMAP's cam_from_world: X_cam = R(rotation) X_world + translation; rotation = (w, x, y, z).
-  std::array<double, 4> rotation{1, 0, 0, 0};
-  std::array<double, 3> translation{};
-  std::array<double, 3> center{};  // the camera centre in the model frame
-  Camera camera;                   // as used; estimated (SIMPLE_RADIAL) unless it was known
-  bool focal_estimated = false;
-  // The result's numbers (num_inliers, the match counts, ...): one field per line of
-  // <cwloc/result_fields.inc>, which says what each counts.
-#define CWLOC_RESULT_FIELD(name, type, group, key, help) type name{};
-#include "cwloc/result_fields.inc"
-#undef CWLOC_RESULT_FIELD
-  std::vector<Inlier> inliers;  // on success
-  std::vector<RankedImage> ranked_images;
-  StageTimes times;
-  std::optional<GeoPose> geo;  // on success with a georeferenced index
-  // What the priors did. The position prior used: Options::position_prior, else the photo's
-  // EXIF GPS (Options::use_exif_gps).
-  std::optional<PositionPrior> position_prior;
-  uint32_t clusters_in_radius = 0;  // clusters with a model camera within the position prior
-  std::optional<std::array<double, 3>> gravity;  // the gravity prior used (Options::gravity)
-  // The angle between the gravity prior and the localized pose's gravity; on success with one.
-  std::optional<double> gravity_error_deg;
-  std::optional<PoseCovariance> covariance;  // on success
-  std::optional<Tracking> tracking;          // a frame that a Tracker took
-  // The JSON record cwloc-localize writes for this query (schemas/localization-result.schema.json).
-  std::string json;
-};
+// The JSON record cwloc-localize writes for a result made with these options
+// (schemas/localization-result.schema.json; for a rig frame, its rig_frame).
+CWLOC_API std::string ToJson(const Result& result, const Options& options);
+CWLOC_API std::string ToJson(const RigResult& result, const Options& options);
 
 // One image of a multi-image query (docs/api.md, "Rigs and multi-frame queries"): a rig's
 // frame, or a window of video frames whose relative poses VIO knows. Its SIFT features with a
@@ -185,35 +142,6 @@ struct RigImage {
   std::optional<Camera> camera;
   std::array<double, 4> cam_from_rig_rotation{1, 0, 0, 0};
   std::array<double, 3> cam_from_rig_translation{};
-};
-
-struct RigImageResult {
-  std::string name;
-  bool posed = false;  // the rig was localized: cam_from_world = cam_from_rig * rig_from_world
-  std::array<double, 4> rotation{1, 0, 0, 0};  // cam_from_world
-  std::array<double, 3> translation{};
-  std::array<double, 3> center{};
-  uint32_t num_inliers = 0;  // the rig's inliers in this image
-  Camera camera;             // as used: a focal prior refined with the rig pose
-};
-
-struct RigResult {
-  bool success = false;
-  std::string failure_reason;
-  // rig_from_world: X_rig = R(rotation) X_world + translation; center is the rig's origin.
-  std::array<double, 4> rotation{1, 0, 0, 0};
-  std::array<double, 3> translation{};
-  std::array<double, 3> center{};
-  double scale = 1;  // model units per cam_from_rig translation unit (estimated if unknown)
-  std::optional<double> scale_std;
-  uint32_t num_inliers = 0;      // over all images
-  uint32_t correspondences = 0;  // pooled 2D-3D pairs
-  // The rig pose's covariance over (theta, C) as PoseCovariance defines it for a camera.
-  std::optional<PoseCovariance> covariance;
-  std::optional<GeoPose> geo;  // the reference camera's, with a georeferenced index
-  std::vector<RigImageResult> images;
-  // The JSON record cwloc-localize --frames writes for this frame.
-  std::string json;
 };
 
 struct IndexInfo {

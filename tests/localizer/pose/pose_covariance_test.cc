@@ -70,10 +70,10 @@ Calibration Measure(const test::SyntheticPoseOptions& synth, int trials, Estimat
     EXPECT_TRUE(result.covariance.has_value());
     if (!result.success || !result.covariance) continue;
     const Eigen::Matrix<double, 6, 1> e = PoseError(result.pose, problem.pose);
-    const Eigen::Matrix<double, 6, 6>& s = result.covariance->pose;
+    const Eigen::Matrix<double, 6, 6> s = PoseBlock(*result.covariance);
     out.pose_d2.push_back(e.dot(s.ldlt().solve(e)));
     const Eigen::Vector3d c = e.tail<3>();
-    out.position_d2.push_back(c.dot(result.covariance->Position().ldlt().solve(c)));
+    out.position_d2.push_back(c.dot(PositionBlock(*result.covariance).ldlt().solve(c)));
     ++out.trials;
   }
   out.pearson = PearsonStatistic(out.pose_d2);
@@ -186,7 +186,7 @@ TEST(PoseCovariance, ScalesWithTheNoiseAndMarginalisesTheFocalLength) {
   const auto at_large = PoseCovarianceAt(large, problem.points3D, all, options, problem.pose,
                                          camera, /*radial=*/false);
   ASSERT_TRUE(at_small && at_large);
-  EXPECT_TRUE(at_large->pose.isApprox(9.0 * at_small->pose, 1e-3));
+  EXPECT_TRUE(PoseBlock(*at_large).isApprox(9.0 * PoseBlock(*at_small), 1e-3));
   EXPECT_FALSE(at_small->focal_std_px.has_value());
   // An unknown focal length can only add uncertainty to the pose.
   options.refine_focal_length = true;
@@ -194,7 +194,8 @@ TEST(PoseCovariance, ScalesWithTheNoiseAndMarginalisesTheFocalLength) {
                                            camera, /*radial=*/false);
   ASSERT_TRUE(with_focal && with_focal->focal_std_px);
   EXPECT_GT(*with_focal->focal_std_px, 0.0);
-  EXPECT_GE(Radius95(with_focal->Position()), Radius95(at_small->Position()));
+  EXPECT_GE(Radius95(PositionBlock(*with_focal)), Radius95(PositionBlock(*at_small)));
+  EXPECT_EQ(with_focal->position_radius95, Radius95(PositionBlock(*with_focal)));
   // Radius95: sqrt(7.81 * the largest eigenvalue).
   EXPECT_NEAR(Radius95(Eigen::Vector3d(1.0, 4.0, 2.0).asDiagonal().toDenseMatrix()),
               2.0 * std::sqrt(kChiSquare3Dof95), 1e-12);

@@ -519,12 +519,12 @@ TEST(LocalOptimization, PoseAndFocalConverge) {
 }
 
 // Refines pose, f and k on `trials` noisy copies of one scene: the spread of the estimates, and
-// what FocalDepthUncertaintyAt predicts at each solution (variances and correlations averaged
+// what FocalDepthAt predicts at each solution (variances and correlations averaged
 // over the trials, so that one trial's residual variance does not decide).
 struct Spread {
   int trials = 0;
   double focal_std = 0, depth_std = 0, correlation = 0;
-  FocalDepthUncertainty predicted;
+  FocalDepth predicted;
 };
 
 Spread MeasureSpread(const test::SyntheticPoseOptions& synth, int trials, std::mt19937_64& rng) {
@@ -550,15 +550,16 @@ Spread MeasureSpread(const test::SyntheticPoseOptions& synth, int trials, std::m
     EXPECT_TRUE(RefinePoseAndCamera(pixels, truth.points3D, all, options, &pose, &camera));
     focal.push_back(camera.focal_length_px);
     depth.push_back(axis.dot(pose.Center()));
-    const auto predicted =
-        FocalDepthUncertaintyAt(pixels, truth.points3D, all, options, pose, camera);
+    const auto predicted = FocalDepthAt(pixels, truth.points3D, all, options, pose, camera);
     EXPECT_TRUE(predicted.has_value());
     if (!predicted) continue;
     focal_variance += predicted->focal_std_px * predicted->focal_std_px / trials;
     depth_variance += predicted->depth_std * predicted->depth_std / trials;
     correlation += predicted->correlation / trials;
   }
-  spread.predicted = {std::sqrt(focal_variance), std::sqrt(depth_variance), correlation};
+  spread.predicted.focal_std_px = std::sqrt(focal_variance);
+  spread.predicted.depth_std = std::sqrt(depth_variance);
+  spread.predicted.correlation = correlation;
   const auto mean = [](const std::vector<double>& v) {
     return std::accumulate(v.begin(), v.end(), 0.0) / double(v.size());
   };
@@ -598,7 +599,7 @@ void ExpectPredictedSpread(const Spread& spread) {
               4.0 * (1.0 - rho * rho) / std::sqrt(double(spread.trials)) + 0.005);
 }
 
-TEST(FocalDepthUncertainty, PredictsTheSpreadOfANarrowView) {
+TEST(FocalDepthAt, PredictsTheSpreadOfANarrowView) {
   // A telephoto shot: f = 3000 px on a 1000 x 700 image of a scene 40-50 units deep, 60 inliers
   // with 1.5 px of noise.
   test::SyntheticPoseOptions synth = View(60, 1.5, 3000.0, 1000.0, 700.0);
@@ -613,7 +614,7 @@ TEST(FocalDepthUncertainty, PredictsTheSpreadOfANarrowView) {
       << spread.predicted.focal_std_px << " px";
 }
 
-TEST(FocalDepthUncertainty, AWideDeepViewIsWellConstrained) {
+TEST(FocalDepthAt, AWideDeepViewIsWellConstrained) {
   const test::SyntheticPoseOptions synth = View(150, 1.0, 800.0, 1600.0, 1200.0);
   const Spread spread = MeasureSpread(synth, 300, test::Rng());
   ExpectPredictedSpread(spread);
@@ -621,7 +622,7 @@ TEST(FocalDepthUncertainty, AWideDeepViewIsWellConstrained) {
   EXPECT_FALSE(WeaklyConstrained(spread.predicted, synth.focal_px));
 }
 
-TEST(FocalDepthUncertainty, EmptyWhenTheProblemCannotBeEvaluated) {
+TEST(FocalDepthAt, EmptyWhenTheProblemCannotBeEvaluated) {
   auto& rng = test::Rng();
   const auto problem = test::MakeSyntheticProblem(Clean(), rng);
   PoseRefinementOptions options;
@@ -630,12 +631,11 @@ TEST(FocalDepthUncertainty, EmptyWhenTheProblemCannotBeEvaluated) {
   // Every point behind the camera.
   CameraPose behind = problem.pose;
   behind.translation.z() -= 1e3;
-  EXPECT_FALSE(FocalDepthUncertaintyAt(problem.pixels, problem.points3D,
-                                       AllIndices(problem.pixels.size()), options, behind,
-                                       RadialCamera{problem.focal_px, 0.0}));
+  EXPECT_FALSE(FocalDepthAt(problem.pixels, problem.points3D, AllIndices(problem.pixels.size()),
+                            options, behind, RadialCamera{problem.focal_px, 0.0}));
   // Fewer residuals than parameters.
-  EXPECT_FALSE(FocalDepthUncertaintyAt(problem.pixels, problem.points3D, AllIndices(3), options,
-                                       problem.pose, RadialCamera{problem.focal_px, 0.0}));
+  EXPECT_FALSE(FocalDepthAt(problem.pixels, problem.points3D, AllIndices(3), options, problem.pose,
+                            RadialCamera{problem.focal_px, 0.0}));
 }
 
 }  // namespace

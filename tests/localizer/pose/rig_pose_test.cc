@@ -146,7 +146,7 @@ TEST(EstimateRigPose, TheCovarianceCoversTheTruth) {
     Eigen::Matrix<double, 6, 1> e;
     e << theta.angle() * theta.axis(),
         result.pose.rig_from_world.Center() - scene.truth.rig_from_world.Center();
-    covered += e.dot(result.covariance->pose.ldlt().solve(e)) < 12.59;
+    covered += e.dot(PoseBlock(*result.covariance).ldlt().solve(e)) < 12.59;
   }
   std::printf("%d of %d truths inside the 95 %% region\n", covered, kTrials);
   EXPECT_GE(covered, 0.88 * kTrials);
