@@ -358,8 +358,8 @@ void PrintTable(const std::vector<Row>& rows, double flann_us) {
   }
 }
 
-int Main(int argc, char** argv) {
-  CLI::App app{"Compare FLANN's randomized kd-trees with cwloc's flat kd-forest (kNN of SIFT)"};
+// The command line.
+struct BenchFlags {
   std::string database, query_list, checks_text = "64,128,256", kernel_name;
   size_t synthetic = 2000000, num_queries = 20000, gt_queries = 2000;
   uint32_t trees = 4, leaf_size = 8, threads = 0, flann_checks = 128, interleave = 4;
@@ -368,113 +368,100 @@ int Main(int argc, char** argv) {
   int k = 6, reps = 3;
   uint64_t seed = 1;
   bool no_flann = false, build_only = false, hugepages = false;
-  app.add_option("--database", database, "COLMAP database.db to read SIFT descriptors from");
-  app.add_option("--query-list", query_list,
-                 "image names (one a line) whose descriptors are the queries; default: every "
-                 "5th image of --database");
-  app.add_option("--synthetic,--base-size", synthetic,
-                 "number of generated base descriptors when no --database is given");
-  app.add_option("--queries", num_queries, "query descriptors timed (a random subset)");
-  app.add_option("--gt-queries", gt_queries, "queries with brute-force ground truth for recall");
-  app.add_option("--trees", trees, "trees in both forests");
-  app.add_option("--leaf-size", leaf_size, "our forest's maximum leaf bucket");
-  app.add_option("--checks", checks_text, "our forest's check budgets, comma-separated");
-  app.add_option("--flann-checks", flann_checks, "FLANN's checks (the paper: 128)");
-  app.add_option("-k", k, "neighbours per query (the paper: k+1 = 6)");
-  app.add_option("--reps", reps, "timed repetitions (median is reported)");
-  app.add_option("--threads", threads,
-                 "threads for our build, data generation and brute force "
-                 "(0 = all cores; searches are single-threaded)");
-  app.add_option("--seed", seed, "seed for data generation, query sampling and our build");
-  app.add_option("--kernel", kernel_name,
-                 "distance kernel: scalar, avx2, avx512, avx512vnni, neon, neon-dotprod");
-  app.add_option("--interleave", interleave,
-                 "descents our search keeps in flight (1 = FLANN order)");
-  app.add_option("--batch", batch_text,
-                 "also time our forest with SearchBatch at these widths (searches in flight), "
-                 "comma-separated; 0 or 1 = one at a time only");
-  app.add_option("--batch-chunk", batch_chunk,
-                 "queries per SearchBatch call (the localizer's forward matching calls it with "
-                 "as many queries as the width)");
-  app.add_flag("--no-flann", no_flann, "skip FLANN");
-  app.add_flag("--hugepages", hugepages,
-               "put the base descriptors on transparent huge pages (both methods)");
-  app.add_flag("--build-only", build_only, "only build our forest and report time and memory");
-  CLI11_PARSE(app, argc, argv);
-  if (threads == 0) threads = std::max(1u, std::thread::hardware_concurrency());
-  const std::vector<uint32_t> budgets = ParseCommaList(checks_text);
-  std::vector<uint32_t> batch_widths;
-  for (uint32_t w : ParseCommaList(batch_text)) {
-    if (w > 1) batch_widths.push_back(w);
-  }
-  batch_chunk = std::max<size_t>(batch_chunk, 1);
-  if (k < 2) Fail("-k must be at least 2 (recall@2)");
+};
 
-  const DistanceFunctions* distance = &BestDistanceFunctions();
-  if (!kernel_name.empty()) {
-    const std::map<std::string, DistanceKernel> kernels{
-        {"scalar", DistanceKernel::kScalar}, {"avx2", DistanceKernel::kAvx2},
-        {"avx512", DistanceKernel::kAvx512}, {"avx512vnni", DistanceKernel::kAvx512Vnni},
-        {"neon", DistanceKernel::kNeon},     {"neon-dotprod", DistanceKernel::kNeonDotProd}};
-    const auto it = kernels.find(kernel_name);
-    if (it == kernels.end()) Fail("unknown --kernel " + kernel_name);
-    distance = DistanceFunctionsFor(it->second);
-    if (!distance) Fail("this CPU does not support --kernel " + kernel_name);
-  }
+void AddFlags(CLI::App* app, BenchFlags* f) {
+  app->add_option("--database", f->database, "COLMAP database.db to read SIFT descriptors from");
+  app->add_option("--query-list", f->query_list,
+                  "image names (one a line) whose descriptors are the queries; default: every "
+                  "5th image of --database");
+  app->add_option("--synthetic,--base-size", f->synthetic,
+                  "number of generated base descriptors when no --database is given");
+  app->add_option("--queries", f->num_queries, "query descriptors timed (a random subset)");
+  app->add_option("--gt-queries", f->gt_queries,
+                  "queries with brute-force ground truth for recall");
+  app->add_option("--trees", f->trees, "trees in both forests");
+  app->add_option("--leaf-size", f->leaf_size, "our forest's maximum leaf bucket");
+  app->add_option("--checks", f->checks_text, "our forest's check budgets, comma-separated");
+  app->add_option("--flann-checks", f->flann_checks, "FLANN's checks (the paper: 128)");
+  app->add_option("-k", f->k, "neighbours per query (the paper: k+1 = 6)");
+  app->add_option("--reps", f->reps, "timed repetitions (median is reported)");
+  app->add_option("--threads", f->threads,
+                  "threads for our build, data generation and brute force "
+                  "(0 = all cores; searches are single-threaded)");
+  app->add_option("--seed", f->seed, "seed for data generation, query sampling and our build");
+  app->add_option("--kernel", f->kernel_name,
+                  "distance kernel: scalar, avx2, avx512, avx512vnni, neon, neon-dotprod");
+  app->add_option("--interleave", f->interleave,
+                  "descents our search keeps in flight (1 = FLANN order)");
+  app->add_option("--batch", f->batch_text,
+                  "also time our forest with SearchBatch at these widths (searches in flight), "
+                  "comma-separated; 0 or 1 = one at a time only");
+  app->add_option("--batch-chunk", f->batch_chunk,
+                  "queries per SearchBatch call (the localizer's forward matching calls it with "
+                  "as many queries as the width)");
+  app->add_flag("--no-flann", f->no_flann, "skip FLANN");
+  app->add_flag("--hugepages", f->hugepages,
+                "put the base descriptors on transparent huge pages (both methods)");
+  app->add_flag("--build-only", f->build_only, "only build our forest and report time and memory");
+}
 
-  Stopwatch stopwatch;
-  Dataset data = database.empty() ? GenerateSynthetic(synthetic, std::max(num_queries, gt_queries),
-                                                      seed, threads)
-                                  : LoadColmapDatabase(database, query_list);
-  std::printf("data: %s (%.1f s)\n", data.description.c_str(), stopwatch.Seconds());
-  // A random subset of the queries, in random order (the localizer shuffles its features too).
-  {
-    std::vector<size_t> order(data.NumQueries());
-    std::iota(order.begin(), order.end(), 0);
-    std::shuffle(order.begin(), order.end(), std::mt19937_64(seed));
-    order.resize(std::min(order.size(), std::max(num_queries, gt_queries)));
-    std::vector<uint8_t> picked(order.size() * kDescriptorDim);
-    for (size_t i = 0; i < order.size(); ++i) {
-      std::memcpy(picked.data() + i * kDescriptorDim,
-                  data.queries.data() + order[i] * kDescriptorDim, kDescriptorDim);
-    }
-    data.queries.swap(picked);
-  }
-  const size_t n = data.NumBase();
-  const size_t nq = std::min(num_queries, data.NumQueries());
-  gt_queries = std::min(gt_queries, data.NumQueries());
-  std::printf(
-      "base %zu descriptors (%.1f MB), %zu timed queries, %zu with ground truth; "
-      "k=%d, %u trees, leaf <= %u, distance kernel %s, build threads %u\n",
-      n, double(data.base.size()) / 1e6, nq, gt_queries, k, trees, leaf_size,
-      std::string(distance->name).c_str(), threads);
+// --kernel's distance functions, else the best this CPU has.
+const DistanceFunctions* KernelNamed(const std::string& kernel_name) {
+  if (kernel_name.empty()) return &BestDistanceFunctions();
+  const std::map<std::string, DistanceKernel> kernels{
+      {"scalar", DistanceKernel::kScalar}, {"avx2", DistanceKernel::kAvx2},
+      {"avx512", DistanceKernel::kAvx512}, {"avx512vnni", DistanceKernel::kAvx512Vnni},
+      {"neon", DistanceKernel::kNeon},     {"neon-dotprod", DistanceKernel::kNeonDotProd}};
+  const auto it = kernels.find(kernel_name);
+  if (it == kernels.end()) Fail("unknown --kernel " + kernel_name);
+  const DistanceFunctions* distance = DistanceFunctionsFor(it->second);
+  if (!distance) Fail("this CPU does not support --kernel " + kernel_name);
+  return distance;
+}
 
-  // The matrix both indexes search. Optionally on transparent huge pages: a random row then
-  // costs no page walk (the index file is mapped with 4 KB pages unless copied like this).
-  std::span<const uint8_t> base = data.base;
-  std::unique_ptr<uint8_t, std::function<void(uint8_t*)>> huge;
-  if (hugepages) {
-    constexpr size_t k2M = size_t(1) << 21;
-    const size_t bytes = (data.base.size() + k2M - 1) / k2M * k2M;
-    void* p = mmap(nullptr, bytes, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
-    if (p == MAP_FAILED) Fail("mmap for --hugepages failed");
-    if (madvise(p, bytes, MADV_HUGEPAGE) != 0) std::printf("madvise(MADV_HUGEPAGE) failed\n");
-    huge = {static_cast<uint8_t*>(p), [bytes](uint8_t* q) { munmap(q, bytes); }};
-    std::memcpy(huge.get(), data.base.data(), data.base.size());
-    base = {huge.get(), data.base.size()};
+// Keeps a random subset of `count` queries, in random order (the localizer shuffles its
+// features too).
+void PickQueries(size_t count, uint64_t seed, Dataset* data) {
+  std::vector<size_t> order(data->NumQueries());
+  std::iota(order.begin(), order.end(), 0);
+  std::shuffle(order.begin(), order.end(), std::mt19937_64(seed));
+  order.resize(std::min(order.size(), count));
+  std::vector<uint8_t> picked(order.size() * kDescriptorDim);
+  for (size_t i = 0; i < order.size(); ++i) {
+    std::memcpy(picked.data() + i * kDescriptorDim,
+                data->queries.data() + order[i] * kDescriptorDim, kDescriptorDim);
   }
+  data->queries.swap(picked);
+}
 
-  // Our forest.
+using HugeBuffer = std::unique_ptr<uint8_t, std::function<void(uint8_t*)>>;
+
+// A copy of `bytes` on transparent huge pages: a random row then costs no page walk (the index
+// file is mapped with 4 KB pages unless copied like this).
+HugeBuffer OnHugePages(std::span<const uint8_t> bytes) {
+  constexpr size_t k2M = size_t(1) << 21;
+  const size_t size = (bytes.size() + k2M - 1) / k2M * k2M;
+  void* p = mmap(nullptr, size, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+  if (p == MAP_FAILED) Fail("mmap for --hugepages failed");
+  if (madvise(p, size, MADV_HUGEPAGE) != 0) std::printf("madvise(MADV_HUGEPAGE) failed\n");
+  HugeBuffer huge = {static_cast<uint8_t*>(p), [size](uint8_t* q) { munmap(q, size); }};
+  std::memcpy(huge.get(), bytes.data(), bytes.size());
+  return huge;
+}
+
+// Our forest over `base`, its build's seconds in `build_s`; prints its build, checksum and
+// validation.
+KdForest BuildOurForest(std::span<const uint8_t> base, const BenchFlags& flags, double* build_s) {
   KdForestBuildOptions build_options;
-  build_options.num_trees = trees;
-  build_options.max_leaf_size = leaf_size;
-  build_options.seed = seed;
-  build_options.num_threads = threads;
-  stopwatch.Restart();
+  build_options.num_trees = flags.trees;
+  build_options.max_leaf_size = flags.leaf_size;
+  build_options.seed = flags.seed;
+  build_options.num_threads = flags.threads;
+  Stopwatch stopwatch;
   const double build_cpu_start = ProcessCpuSeconds();
-  const KdForest forest = BuildKdForest(base, build_options);
-  const double build_s = stopwatch.Seconds();
-  const KdForestView view = forest.View(base);
+  KdForest forest = BuildKdForest(base, build_options);
+  *build_s = stopwatch.Seconds();
   const double build_cpu_s = ProcessCpuSeconds() - build_cpu_start;
   uint64_t checksum = 0xcbf29ce484222325ULL;  // FNV-1a of the arrays: same data+seed, same forest
   auto hash = [&checksum](const void* p, size_t bytes) {
@@ -485,92 +472,115 @@ int Main(int argc, char** argv) {
   hash(forest.nodes.data(), forest.nodes.size() * sizeof(KdNode));
   hash(forest.leaves.data(), forest.leaves.size() * sizeof(uint32_t));
   hash(forest.roots.data(), forest.roots.size() * sizeof(uint32_t));
+  const size_t n = base.size() / kDescriptorDim;
   std::printf(
       "our build: %.2f s wall, %.2f s CPU, %zu nodes, %.1f MB (%.2f bytes/descriptor), "
       "checksum %016llx\n",
-      build_s, build_cpu_s, forest.nodes.size(), double(forest.MemoryBytes()) / 1e6,
+      *build_s, build_cpu_s, forest.nodes.size(), double(forest.MemoryBytes()) / 1e6,
       double(forest.MemoryBytes()) / double(std::max<size_t>(n, 1)),
       static_cast<unsigned long long>(checksum));
   stopwatch.Restart();
   std::string error;
-  if (!ValidateKdForest(view, &error)) Fail("our forest does not validate: " + error);
+  if (!ValidateKdForest(forest.View(base), &error)) Fail("our forest does not validate: " + error);
   std::printf("ValidateKdForest: %.3f s\n", stopwatch.Seconds());
-  if (build_only) return 0;
+  return forest;
+}
 
-  stopwatch.Restart();
-  const std::vector<TrueNeighbors> truth = BruteForce(data, gt_queries, threads);
-  std::printf("brute force ground truth: %.1f s\n", stopwatch.Seconds());
-
-  // Every method is a row plus a search function; the timed passes of all methods are
-  // interleaved (rep 1 of each, rep 2 of each, ...) so that load drift on a shared machine hits
-  // them alike, and the median pass is reported.
+// The methods compared, each a row plus a search function; the timed passes of all methods are
+// interleaved (rep 1 of each, rep 2 of each, ...) so that load drift on a shared machine hits
+// them alike, and the median pass is reported.
+struct Methods {
   std::vector<Row> rows;
   std::vector<std::function<void(size_t)>> timed;
-  std::vector<size_t> timed_calls;           // calls of timed[m] per pass
-  std::vector<std::vector<uint32_t>> found;  // ground-truth queries' results, k per query
+  std::vector<size_t> timed_calls;  // calls of timed[m] per pass
+  // rows[checked_row[i]] times in timed[unchecked_row[i] - 1], without the range checks in
+  // timed[unchecked_row[i]].
+  std::vector<size_t> checked_row, unchecked_row;
+};
 
-  std::unique_ptr<flann::Index<flann::L2<unsigned char>>> flann_index;
-  std::vector<size_t> flann_indices(k);
-  std::vector<float> flann_dists(k);
-  const flann::SearchParams flann_params{int(flann_checks)};
-  if (!no_flann) {
-    Row row;
-    row.method = "FLANN 1.9 kd " + std::to_string(trees) + " trees, " +
-                 std::to_string(flann_checks) + " checks";
-    flann::Matrix<unsigned char> dataset(const_cast<uint8_t*>(base.data()), n, kDescriptorDim);
-    flann_index = std::make_unique<flann::Index<flann::L2<unsigned char>>>(
-        dataset, flann::KDTreeIndexParams(int(trees)));
-    stopwatch.Restart();
-    flann_index->buildIndex();
-    row.build_s = stopwatch.Seconds();
-    // FLANN's pools plus its array of row pointers (the descriptors themselves are shared).
-    row.memory_mb = (double(flann_index->usedMemory()) + double(n) * sizeof(void*)) / 1e6;
-    std::printf("FLANN build: %.2f s\n", row.build_s);
-    std::fflush(stdout);
-    auto search = [&](size_t q) {
-      flann::Matrix<unsigned char> query(data.queries.data() + q * kDescriptorDim, 1,
-                                         kDescriptorDim);
-      flann::Matrix<size_t> idx(flann_indices.data(), 1, k);
-      flann::Matrix<float> dst(flann_dists.data(), 1, k);
-      flann_index->knnSearch(query, idx, dst, k, flann_params);
-    };
-    std::vector<uint32_t> f(gt_queries * k);
-    for (size_t q = 0; q < gt_queries; ++q) {
-      search(q);
-      for (int j = 0; j < k; ++j) f[q * k + j] = uint32_t(flann_indices[j]);
-    }
-    Recall(truth, f, k, &row);
-    rows.push_back(row);
-    timed.push_back(search);
-    timed_calls.push_back(nq);
+// FLANN's index and the buffers of one query's search.
+struct FlannSearch {
+  std::unique_ptr<flann::Index<flann::L2<unsigned char>>> index;
+  std::vector<size_t> indices;
+  std::vector<float> dists;
+};
+
+// FLANN's row: builds its index over `base` and measures its recall.
+void AddFlann(const BenchFlags& flags, std::span<const uint8_t> base, const Dataset& data,
+              const std::vector<TrueNeighbors>& truth, size_t nq, FlannSearch* flann,
+              Methods* methods) {
+  const int k = flags.k;
+  const size_t gt_queries = truth.size();
+  const flann::SearchParams flann_params{int(flags.flann_checks)};
+  flann->indices.resize(k);
+  flann->dists.resize(k);
+  Row row;
+  row.method = "FLANN 1.9 kd " + std::to_string(flags.trees) + " trees, " +
+               std::to_string(flags.flann_checks) + " checks";
+  const size_t n = base.size() / kDescriptorDim;
+  flann::Matrix<unsigned char> dataset(const_cast<uint8_t*>(base.data()), n, kDescriptorDim);
+  flann->index = std::make_unique<flann::Index<flann::L2<unsigned char>>>(
+      dataset, flann::KDTreeIndexParams(int(flags.trees)));
+  Stopwatch stopwatch;
+  flann->index->buildIndex();
+  row.build_s = stopwatch.Seconds();
+  // FLANN's pools plus its array of row pointers (the descriptors themselves are shared).
+  row.memory_mb = (double(flann->index->usedMemory()) + double(n) * sizeof(void*)) / 1e6;
+  std::printf("FLANN build: %.2f s\n", row.build_s);
+  std::fflush(stdout);
+  auto search = [&data, flann, k, flann_params](size_t q) {
+    flann::Matrix<unsigned char> query(
+        const_cast<uint8_t*>(data.queries.data()) + q * kDescriptorDim, 1, kDescriptorDim);
+    flann::Matrix<size_t> idx(flann->indices.data(), 1, k);
+    flann::Matrix<float> dst(flann->dists.data(), 1, k);
+    flann->index->knnSearch(query, idx, dst, k, flann_params);
+  };
+  std::vector<uint32_t> f(gt_queries * k);
+  for (size_t q = 0; q < gt_queries; ++q) {
+    search(q);
+    for (int j = 0; j < k; ++j) f[q * k + j] = uint32_t(flann->indices[j]);
   }
+  Recall(truth, f, k, &row);
+  methods->rows.push_back(row);
+  methods->timed.push_back(search);
+  methods->timed_calls.push_back(nq);
+}
 
-  KdForestSearcher searcher(view, *distance);
-  std::vector<KdNeighbor> out(k);
-  std::vector<size_t> checked_row,
-      unchecked_row;  // rows[checked_row[i]] times in timed[unchecked_row[i]]
-  // One-at-a-time results of every timed query per budget: the batched ones must equal them.
-  std::vector<std::vector<KdNeighbor>> alone_neighbors(budgets.size());
-  std::vector<std::vector<KdSearchResult>> alone_results(budgets.size());
+// Our searches one at a time, per budget: what the batched searches must equal.
+struct AloneResults {
+  std::vector<std::vector<KdNeighbor>> neighbors;
+  std::vector<std::vector<KdSearchResult>> results;
+};
+
+// Our forest's rows, a budget each: its recall and checks, timed with and without the range
+// checks.
+void AddOurForest(const BenchFlags& flags, const std::vector<uint32_t>& budgets, double build_s,
+                  const KdForest& forest, KdForestSearcher& searcher, std::vector<KdNeighbor>& out,
+                  const Dataset& data, const std::vector<TrueNeighbors>& truth, size_t nq,
+                  AloneResults* alone, Methods* methods) {
+  const int k = flags.k;
+  const size_t gt_queries = truth.size();
+  alone->neighbors.resize(budgets.size());
+  alone->results.resize(budgets.size());
   for (size_t b = 0; b < budgets.size(); ++b) {
     Row row;
-    row.method = "flat kd-forest " + std::to_string(trees) + " trees, " +
+    row.method = "flat kd-forest " + std::to_string(flags.trees) + " trees, " +
                  std::to_string(budgets[b]) + " checks";
     row.build_s = build_s;
     row.memory_mb = double(forest.MemoryBytes()) / 1e6;
     KdSearchOptions options;
     options.max_checks = budgets[b];
-    options.interleave = interleave;
+    options.interleave = flags.interleave;
     std::vector<uint32_t> f(gt_queries * k, UINT32_MAX);
     uint64_t total_checks = 0;
-    alone_neighbors[b].resize(nq * k);
-    alone_results[b].resize(nq);
+    alone->neighbors[b].resize(nq * k);
+    alone->results[b].resize(nq);
     for (size_t q = 0; q < nq; ++q) {
       const KdSearchResult r =
           searcher.Search(data.queries.data() + q * kDescriptorDim, options, out);
       if (r.corrupt) Fail("search reported a corrupt forest");
-      std::copy(out.begin(), out.end(), alone_neighbors[b].begin() + q * k);
-      alone_results[b][q] = r;
+      std::copy(out.begin(), out.end(), alone->neighbors[b].begin() + q * k);
+      alone->results[b][q] = r;
       total_checks += r.checks;
       if (q < gt_queries) {
         for (uint32_t j = 0; j < r.num_neighbors; ++j) f[q * k + j] = out[j].index;
@@ -578,45 +588,63 @@ int Main(int argc, char** argv) {
     }
     row.checks = double(total_checks) / double(nq);
     Recall(truth, f, k, &row);
-    checked_row.push_back(rows.size());
-    rows.push_back(row);
-    timed.push_back([&searcher, &out, &data, options](size_t q) {
+    methods->checked_row.push_back(methods->rows.size());
+    methods->rows.push_back(row);
+    methods->timed.push_back([&searcher, &out, &data, options](size_t q) {
       searcher.Search(data.queries.data() + q * kDescriptorDim, options, out);
     });
-    timed_calls.push_back(nq);
+    methods->timed_calls.push_back(nq);
     KdSearchOptions unchecked = options;
     unchecked.skip_range_checks = true;
-    unchecked_row.push_back(timed.size());
-    timed.push_back([&searcher, &out, &data, unchecked](size_t q) {
+    methods->unchecked_row.push_back(methods->timed.size());
+    methods->timed.push_back([&searcher, &out, &data, unchecked](size_t q) {
       searcher.Search(data.queries.data() + q * kDescriptorDim, unchecked, out);
     });
-    timed_calls.push_back(nq);
+    methods->timed_calls.push_back(nq);
+  }
+}
+
+// SearchBatch's calls: `chunk` queries per call into a reused output buffer, as a caller would.
+struct BatchBuffers {
+  BatchBuffers(const Dataset& data, size_t nq, size_t batch_chunk, int k)
+      : query_ptrs(nq),
+        chunk(std::min(batch_chunk, std::max<size_t>(nq, 1))),
+        num_chunks((nq + chunk - 1) / chunk),
+        out(chunk * k),
+        spans(chunk),
+        results(chunk) {
+    for (size_t q = 0; q < nq; ++q) query_ptrs[q] = data.queries.data() + q * kDescriptorDim;
+    for (size_t i = 0; i < chunk; ++i) spans[i] = {out.data() + i * k, size_t(k)};
   }
 
-  // Batched: the same searches, `width` in flight, `batch_chunk` queries per call into a reused
-  // output buffer (as a caller would), checked bit for bit against the one-at-a-time results.
-  std::vector<const uint8_t*> query_ptrs(nq);
-  for (size_t q = 0; q < nq; ++q) query_ptrs[q] = data.queries.data() + q * kDescriptorDim;
-  const size_t chunk = std::min(batch_chunk, std::max<size_t>(nq, 1));
-  const size_t num_chunks = (nq + chunk - 1) / chunk;
-  std::vector<KdNeighbor> batch_out(chunk * k);
-  std::vector<std::span<KdNeighbor>> batch_spans(chunk);
-  for (size_t i = 0; i < chunk; ++i) batch_spans[i] = {batch_out.data() + i * k, size_t(k)};
-  std::vector<KdSearchResult> batch_results(chunk);
-  for (const uint32_t width : batch_widths) {
+  std::vector<const uint8_t*> query_ptrs;
+  size_t chunk, num_chunks;
+  std::vector<KdNeighbor> out;
+  std::vector<std::span<KdNeighbor>> spans;
+  std::vector<KdSearchResult> results;
+};
+
+// Batched: the same searches, `width` in flight, checked bit for bit against the
+// one-at-a-time results; a row per width and budget.
+void AddBatched(const BenchFlags& flags, const std::vector<uint32_t>& widths,
+                const std::vector<uint32_t>& budgets, KdForestSearcher& searcher, size_t nq,
+                const AloneResults& alone, BatchBuffers& batch, Methods* methods) {
+  const int k = flags.k;
+  const size_t chunk = batch.chunk, num_chunks = batch.num_chunks;
+  for (const uint32_t width : widths) {
     for (size_t b = 0; b < budgets.size(); ++b) {
-      Row row = rows[checked_row[b]];  // recall and checks: equal to the one-at-a-time row
+      // Recall and checks: equal to the one-at-a-time row.
+      Row row = methods->rows[methods->checked_row[b]];
       row.method =
           "  batch " + std::to_string(width) + " x " + std::to_string(budgets[b]) + " checks";
       KdSearchOptions options;
       options.max_checks = budgets[b];
-      options.interleave = interleave;
-      auto run = [&searcher, &query_ptrs, &batch_spans, &batch_results, nq, chunk, width](
-                     const KdSearchOptions& o, size_t c) {
+      options.interleave = flags.interleave;
+      auto run = [&searcher, &batch, nq, chunk, width](const KdSearchOptions& o, size_t c) {
         const size_t begin = c * chunk, count = std::min(chunk, nq - begin);
-        searcher.SearchBatch(std::span(query_ptrs).subspan(begin, count), o,
-                             std::span<const std::span<KdNeighbor>>(batch_spans).first(count),
-                             std::span(batch_results).first(count), width);
+        searcher.SearchBatch(std::span(batch.query_ptrs).subspan(begin, count), o,
+                             std::span<const std::span<KdNeighbor>>(batch.spans).first(count),
+                             std::span(batch.results).first(count), width);
       };
       for (const bool skip : {false, true}) {
         KdSearchOptions o = options;
@@ -625,60 +653,123 @@ int Main(int argc, char** argv) {
           run(o, c);
           for (size_t i = 0; i < std::min(chunk, nq - c * chunk); ++i) {
             const size_t q = c * chunk + i;
-            const KdSearchResult& r = batch_results[i];
-            const KdSearchResult& a = alone_results[b][q];
+            const KdSearchResult& r = batch.results[i];
+            const KdSearchResult& a = alone.results[b][q];
             if (r.num_neighbors != a.num_neighbors || r.checks != a.checks ||
                 r.corrupt != a.corrupt ||
-                !std::equal(batch_spans[i].begin(), batch_spans[i].begin() + r.num_neighbors,
-                            alone_neighbors[b].begin() + q * k)) {
+                !std::equal(batch.spans[i].begin(), batch.spans[i].begin() + r.num_neighbors,
+                            alone.neighbors[b].begin() + q * k)) {
               Fail("batch " + std::to_string(width) + ", " + std::to_string(budgets[b]) +
                    " checks: query " + std::to_string(q) + " differs from its search alone");
             }
           }
         }
       }
-      checked_row.push_back(rows.size());
-      rows.push_back(row);
-      timed.push_back([run, options](size_t c) { run(options, c); });
-      timed_calls.push_back(num_chunks);
+      methods->checked_row.push_back(methods->rows.size());
+      methods->rows.push_back(row);
+      methods->timed.push_back([run, options](size_t c) { run(options, c); });
+      methods->timed_calls.push_back(num_chunks);
       KdSearchOptions unchecked = options;
       unchecked.skip_range_checks = true;
-      unchecked_row.push_back(timed.size());
-      timed.push_back([run, unchecked](size_t c) { run(unchecked, c); });
-      timed_calls.push_back(num_chunks);
+      methods->unchecked_row.push_back(methods->timed.size());
+      methods->timed.push_back([run, unchecked](size_t c) { run(unchecked, c); });
+      methods->timed_calls.push_back(num_chunks);
     }
   }
-  if (!batch_widths.empty()) {
-    std::printf("batched searches (chunks of %zu queries) equal one-at-a-time: checked\n", chunk);
-  }
+}
 
-  std::vector<std::vector<double>> times(timed.size());
+// Times every method's passes, interleaved, and prints the table and what the range checks
+// cost.
+void TimeAndReport(int reps, size_t nq, bool with_flann, Methods* methods) {
+  std::vector<Row>& rows = methods->rows;
+  std::vector<std::vector<double>> times(methods->timed.size());
   for (int r = 0; r < reps; ++r) {
-    for (size_t m = 0; m < timed.size(); ++m) {
-      times[m].push_back(TimeQueries(timed_calls[m], nq, timed[m]));
+    for (size_t m = 0; m < methods->timed.size(); ++m) {
+      times[m].push_back(TimeQueries(methods->timed_calls[m], nq, methods->timed[m]));
     }
   }
   double flann_us = 0;
-  if (!no_flann) rows[0].us_per_query = flann_us = Median(times[0]);
+  if (with_flann) rows[0].us_per_query = flann_us = Median(times[0]);
   std::vector<std::string> check_costs;
-  for (size_t b = 0; b < checked_row.size(); ++b) {
-    const std::vector<double>& with = times[unchecked_row[b] - 1];
-    const std::vector<double>& without = times[unchecked_row[b]];
-    rows[checked_row[b]].us_per_query = Median(with);
-    rows[checked_row[b]].us_unchecked = Median(without);
+  for (size_t b = 0; b < methods->checked_row.size(); ++b) {
+    const std::vector<double>& with = times[methods->unchecked_row[b] - 1];
+    const std::vector<double>& without = times[methods->unchecked_row[b]];
+    Row& row = rows[methods->checked_row[b]];
+    row.us_per_query = Median(with);
+    row.us_unchecked = Median(without);
     // Passes of one repetition ran back to back: their ratio is robust to load drift.
     std::vector<double> ratios;
     for (int r = 0; r < reps; ++r) ratios.push_back(with[r] / without[r] - 1);
     std::sort(ratios.begin(), ratios.end());
     char text[160];
     std::snprintf(text, sizeof(text), "%s: %+.1f%% (per-pass range %+.1f%% .. %+.1f%%)",
-                  rows[checked_row[b]].method.c_str(), 100 * Median(ratios), 100 * ratios.front(),
+                  row.method.c_str(), 100 * Median(ratios), 100 * ratios.front(),
                   100 * ratios.back());
     check_costs.push_back(text);
   }
   PrintTable(rows, flann_us);
   std::printf("\ncost of the range checks (median over passes of checked / unchecked - 1):\n");
   for (const std::string& line : check_costs) std::printf("  %s\n", line.c_str());
+}
+
+int Main(int argc, char** argv) {
+  CLI::App app{"Compare FLANN's randomized kd-trees with cwloc's flat kd-forest (kNN of SIFT)"};
+  BenchFlags flags;
+  AddFlags(&app, &flags);
+  CLI11_PARSE(app, argc, argv);
+  if (flags.threads == 0) flags.threads = std::max(1u, std::thread::hardware_concurrency());
+  const std::vector<uint32_t> budgets = ParseCommaList(flags.checks_text);
+  std::vector<uint32_t> batch_widths;
+  for (uint32_t w : ParseCommaList(flags.batch_text)) {
+    if (w > 1) batch_widths.push_back(w);
+  }
+  flags.batch_chunk = std::max<size_t>(flags.batch_chunk, 1);
+  if (flags.k < 2) Fail("-k must be at least 2 (recall@2)");
+  const DistanceFunctions* distance = KernelNamed(flags.kernel_name);
+
+  Stopwatch stopwatch;
+  const size_t wanted_queries = std::max(flags.num_queries, flags.gt_queries);
+  Dataset data = flags.database.empty()
+                     ? GenerateSynthetic(flags.synthetic, wanted_queries, flags.seed, flags.threads)
+                     : LoadColmapDatabase(flags.database, flags.query_list);
+  std::printf("data: %s (%.1f s)\n", data.description.c_str(), stopwatch.Seconds());
+  PickQueries(wanted_queries, flags.seed, &data);
+  const size_t n = data.NumBase();
+  const size_t nq = std::min(flags.num_queries, data.NumQueries());
+  const size_t gt_queries = std::min(flags.gt_queries, data.NumQueries());
+  std::printf(
+      "base %zu descriptors (%.1f MB), %zu timed queries, %zu with ground truth; "
+      "k=%d, %u trees, leaf <= %u, distance kernel %s, build threads %u\n",
+      n, double(data.base.size()) / 1e6, nq, gt_queries, flags.k, flags.trees, flags.leaf_size,
+      std::string(distance->name).c_str(), flags.threads);
+
+  // The matrix both indexes search.
+  HugeBuffer huge;
+  if (flags.hugepages) huge = OnHugePages(data.base);
+  const std::span<const uint8_t> base =
+      huge ? std::span<const uint8_t>(huge.get(), data.base.size()) : data.base;
+  double build_s = 0;
+  const KdForest forest = BuildOurForest(base, flags, &build_s);
+  if (flags.build_only) return 0;
+
+  stopwatch.Restart();
+  const std::vector<TrueNeighbors> truth = BruteForce(data, gt_queries, flags.threads);
+  std::printf("brute force ground truth: %.1f s\n", stopwatch.Seconds());
+
+  Methods methods;
+  FlannSearch flann;
+  if (!flags.no_flann) AddFlann(flags, base, data, truth, nq, &flann, &methods);
+  KdForestSearcher searcher(forest.View(base), *distance);
+  std::vector<KdNeighbor> out(flags.k);
+  AloneResults alone;
+  AddOurForest(flags, budgets, build_s, forest, searcher, out, data, truth, nq, &alone, &methods);
+  BatchBuffers batch(data, nq, flags.batch_chunk, flags.k);
+  AddBatched(flags, batch_widths, budgets, searcher, nq, alone, batch, &methods);
+  if (!batch_widths.empty()) {
+    std::printf("batched searches (chunks of %zu queries) equal one-at-a-time: checked\n",
+                batch.chunk);
+  }
+  TimeAndReport(flags.reps, nq, !flags.no_flann, &methods);
   return 0;
 }
 

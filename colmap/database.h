@@ -95,6 +95,12 @@ class DatabaseReader {
 
  private:
   struct Statements;
+  // The constructor's stages once the connection is open; `file` names the database.
+  // PRAGMA query_only, the read transaction of the reader's life, and user_version_.
+  void BeginReading(const std::string& file);
+  // COLMAP's tables and columns are there; sets has_descriptor_type_, has_prior_focal_length_.
+  void CheckTables(const std::string& file);
+  void PrepareStatements(const std::string& file);
   std::string ImageLabel(image_t image_id) const;  // "image 3 'a.jpg'" for messages
   // Steps `stmt`, a query of `table` for one image, and reads and checks the matrix row it
   // returns (only its size with `sizes_only`); false when the image has no row.

@@ -176,22 +176,26 @@ struct DatabaseReader::Statements {
   StmtPtr size_descriptors;
 };
 
-DatabaseReader::DatabaseReader(const std::filesystem::path& path) : path_(path) {
-  const std::string file = path_.string();
+namespace {
+
+// The URI that opens the database at `path` read-only and leaves no side files, once it is a
+// file with SQLite's header and no live journal; throws InputError naming what it is instead.
+std::string ReadOnlyUri(const std::filesystem::path& path) {
+  const std::string file = path.string();
   std::error_code ec;
-  const auto status = std::filesystem::status(path_, ec);
+  const auto status = std::filesystem::status(path, ec);
   if (!std::filesystem::exists(status)) throw InputError(file + ": no such file");
   if (std::filesystem::is_directory(status)) {
     throw InputError(file + ": is a directory, expected a COLMAP database.db file");
   }
   // A device or a pipe would have SQLite read it; no size limit (kColmapDatabaseFile).
-  CheckInputFile(path_, kColmapDatabaseFile);
+  CheckInputFile(path, kColmapDatabaseFile);
 
   // Check the header ourselves: an SQLite handle on a non-database fails late and vaguely,
   // and bytes 18/19 tell whether the file is in WAL mode.
   std::array<char, 100> header{};
   {
-    std::ifstream in(path_, std::ios::binary);
+    std::ifstream in(path, std::ios::binary);
     if (!in) throw InputError(file + ": cannot open for reading");
     in.read(header.data(), header.size());
     if (in.gcount() != static_cast<std::streamsize>(header.size()) ||
@@ -205,11 +209,11 @@ DatabaseReader::DatabaseReader(const std::filesystem::path& path) : path_(path) 
   // them behind. Without a -wal file all content is in the main file, so "immutable" reads
   // it without locks or side files. With a live -wal (a writer is active or crashed) we must
   // read through it, which only works without side effects when its -shm exists too.
-  std::string uri = FileUri(path_);
+  std::string uri = FileUri(path);
   if (wal_mode) {
-    if (!Exists(WithSuffix(path_, "-wal"))) {
+    if (!Exists(WithSuffix(path, "-wal"))) {
       uri += "?immutable=1";
-    } else if (!Exists(WithSuffix(path_, "-shm"))) {
+    } else if (!Exists(WithSuffix(path, "-shm"))) {
       throw InputError(file + ": has a write-ahead log (" + file +
                        "-wal) but no -shm file: it was not closed cleanly. Open it once with "
                        "colmap or run sqlite3 on it to fold the log in, then retry");
@@ -222,7 +226,7 @@ DatabaseReader::DatabaseReader(const std::filesystem::path& path) : path_(path) 
     static constexpr unsigned char kJournalMagic[8] = {0xd9, 0xd5, 0x05, 0xf9,
                                                        0x20, 0xa1, 0x63, 0xd7};
     std::array<char, 8> journal{};
-    std::ifstream in(WithSuffix(path_, "-journal"), std::ios::binary);
+    std::ifstream in(WithSuffix(path, "-journal"), std::ios::binary);
     if (in && in.read(journal.data(), journal.size()) &&
         std::memcmp(journal.data(), kJournalMagic, journal.size()) == 0) {
       throw InputError(file + ": has a live rollback journal (" + file +
@@ -230,7 +234,14 @@ DatabaseReader::DatabaseReader(const std::filesystem::path& path) : path_(path) 
     }
     uri += "?mode=ro";
   }
+  return uri;
+}
 
+}  // namespace
+
+DatabaseReader::DatabaseReader(const std::filesystem::path& path) : path_(path) {
+  const std::string file = path_.string();
+  const std::string uri = ReadOnlyUri(path_);
   const int flags = SQLITE_OPEN_READONLY | SQLITE_OPEN_URI | SQLITE_OPEN_NOMUTEX;
   const int rc = sqlite3_open_v2(uri.c_str(), &db_, flags, nullptr);
   if (rc != SQLITE_OK) {
@@ -241,85 +252,92 @@ DatabaseReader::DatabaseReader(const std::filesystem::path& path) : path_(path) 
   }
 
   try {
-    CheckSqlite<InputError>(
-        db_, sqlite3_exec(db_, "PRAGMA query_only = 1", nullptr, nullptr, nullptr), file);
-    // One read transaction for the reader's life: every query sees the same snapshot, and takes
-    // no shared lock of its own (gathering a city's 13,734 images ran 27,000 queries).
-    CheckSqlite<InputError>(db_, sqlite3_exec(db_, "BEGIN", nullptr, nullptr, nullptr), file);
-    {
-      StmtPtr stmt = Prepare<InputError>(db_, "PRAGMA user_version", file);
-      if (CheckSqlite<InputError>(db_, sqlite3_step(stmt.get()), file) == SQLITE_ROW) {
-        user_version_ = sqlite3_column_int(stmt.get(), 0);
-      }
-    }
-
-    StmtPtr columns_stmt = Prepare<InputError>(db_, "SELECT name FROM pragma_table_info(?1)", file);
-    auto read_columns = [&](const char* table) {
-      std::vector<std::string> columns;
-      StmtScope scope(columns_stmt.get());
-      sqlite3_bind_text(columns_stmt.get(), 1, table, -1, SQLITE_STATIC);
-      while (CheckSqlite<InputError>(db_, sqlite3_step(columns_stmt.get()), file) == SQLITE_ROW) {
-        columns.emplace_back(
-            reinterpret_cast<const char*>(sqlite3_column_text(columns_stmt.get(), 0)));
-      }
-      return columns;
-    };
-    for (const TableSpec& spec : kRequiredTables) {
-      const std::vector<std::string> columns = read_columns(spec.table);
-      if (columns.empty()) {
-        throw InputError(file + ": not a COLMAP database: table '" + spec.table + "' is missing");
-      }
-      for (const char* column : spec.columns) {
-        if (column == nullptr) break;
-        if (std::find(columns.begin(), columns.end(), column) == columns.end()) {
-          throw InputError(file + ": not a COLMAP database: table '" + spec.table +
-                           "' has no column '" + column + "'");
-        }
-      }
-      if (std::string_view(spec.table) == "descriptors") {
-        has_descriptor_type_ = std::find(columns.begin(), columns.end(), "type") != columns.end();
-      }
-      if (std::string_view(spec.table) == "cameras") {
-        has_prior_focal_length_ =
-            std::find(columns.begin(), columns.end(), "prior_focal_length") != columns.end();
-      }
-    }
-
-    stmts_ = std::make_unique<Statements>();
-    stmts_->read_cameras = Prepare<InputError>(
-        db_, "SELECT camera_id, model, width, height, params FROM cameras ORDER BY camera_id",
-        file);
-    if (has_prior_focal_length_) {
-      stmts_->read_prior_focal_lengths = Prepare<InputError>(
-          db_, "SELECT camera_id, prior_focal_length FROM cameras ORDER BY camera_id", file);
-    }
-    stmts_->read_images = Prepare<InputError>(
-        db_, "SELECT image_id, name, camera_id FROM images ORDER BY image_id", file);
-    stmts_->find_image = Prepare<InputError>(
-        db_, "SELECT image_id, name, camera_id FROM images WHERE name = ?1", file);
-    stmts_->image_name =
-        Prepare<InputError>(db_, "SELECT name FROM images WHERE image_id = ?1", file);
-    stmts_->read_keypoints = Prepare<InputError>(
-        db_, "SELECT rows, cols, data FROM keypoints WHERE image_id = ?1", file);
-    // length() and typeof() of a blob column read the record header only, not the blob.
-    stmts_->size_keypoints = Prepare<InputError>(
-        db_, "SELECT rows, cols, length(data), typeof(data) FROM keypoints WHERE image_id = ?1",
-        file);
-    const std::string type_column = has_descriptor_type_ ? "type" : "0";
-    stmts_->read_descriptors = Prepare<InputError>(
-        db_, "SELECT rows, cols, data, " + type_column + " FROM descriptors WHERE image_id = ?1",
-        file);
-    stmts_->size_descriptors =
-        Prepare<InputError>(db_,
-                            "SELECT rows, cols, length(data), typeof(data), " + type_column +
-                                " FROM descriptors WHERE image_id = ?1",
-                            file);
+    BeginReading(file);
+    CheckTables(file);
+    PrepareStatements(file);
   } catch (...) {
     stmts_.reset();
     sqlite3_close(db_);
     db_ = nullptr;
     throw;
   }
+}
+
+void DatabaseReader::BeginReading(const std::string& file) {
+  CheckSqlite<InputError>(
+      db_, sqlite3_exec(db_, "PRAGMA query_only = 1", nullptr, nullptr, nullptr), file);
+  // One read transaction for the reader's life: every query sees the same snapshot, and takes
+  // no shared lock of its own (gathering a city's 13,734 images ran 27,000 queries).
+  CheckSqlite<InputError>(db_, sqlite3_exec(db_, "BEGIN", nullptr, nullptr, nullptr), file);
+  StmtPtr stmt = Prepare<InputError>(db_, "PRAGMA user_version", file);
+  if (CheckSqlite<InputError>(db_, sqlite3_step(stmt.get()), file) == SQLITE_ROW) {
+    user_version_ = sqlite3_column_int(stmt.get(), 0);
+  }
+}
+
+void DatabaseReader::CheckTables(const std::string& file) {
+  StmtPtr columns_stmt = Prepare<InputError>(db_, "SELECT name FROM pragma_table_info(?1)", file);
+  auto read_columns = [&](const char* table) {
+    std::vector<std::string> columns;
+    StmtScope scope(columns_stmt.get());
+    sqlite3_bind_text(columns_stmt.get(), 1, table, -1, SQLITE_STATIC);
+    while (CheckSqlite<InputError>(db_, sqlite3_step(columns_stmt.get()), file) == SQLITE_ROW) {
+      columns.emplace_back(
+          reinterpret_cast<const char*>(sqlite3_column_text(columns_stmt.get(), 0)));
+    }
+    return columns;
+  };
+  for (const TableSpec& spec : kRequiredTables) {
+    const std::vector<std::string> columns = read_columns(spec.table);
+    if (columns.empty()) {
+      throw InputError(file + ": not a COLMAP database: table '" + spec.table + "' is missing");
+    }
+    for (const char* column : spec.columns) {
+      if (column == nullptr) break;
+      if (std::find(columns.begin(), columns.end(), column) == columns.end()) {
+        throw InputError(file + ": not a COLMAP database: table '" + spec.table +
+                         "' has no column '" + column + "'");
+      }
+    }
+    if (std::string_view(spec.table) == "descriptors") {
+      has_descriptor_type_ = std::find(columns.begin(), columns.end(), "type") != columns.end();
+    }
+    if (std::string_view(spec.table) == "cameras") {
+      has_prior_focal_length_ =
+          std::find(columns.begin(), columns.end(), "prior_focal_length") != columns.end();
+    }
+  }
+}
+
+void DatabaseReader::PrepareStatements(const std::string& file) {
+  stmts_ = std::make_unique<Statements>();
+  stmts_->read_cameras = Prepare<InputError>(
+      db_, "SELECT camera_id, model, width, height, params FROM cameras ORDER BY camera_id", file);
+  if (has_prior_focal_length_) {
+    stmts_->read_prior_focal_lengths = Prepare<InputError>(
+        db_, "SELECT camera_id, prior_focal_length FROM cameras ORDER BY camera_id", file);
+  }
+  stmts_->read_images = Prepare<InputError>(
+      db_, "SELECT image_id, name, camera_id FROM images ORDER BY image_id", file);
+  stmts_->find_image = Prepare<InputError>(
+      db_, "SELECT image_id, name, camera_id FROM images WHERE name = ?1", file);
+  stmts_->image_name =
+      Prepare<InputError>(db_, "SELECT name FROM images WHERE image_id = ?1", file);
+  stmts_->read_keypoints =
+      Prepare<InputError>(db_, "SELECT rows, cols, data FROM keypoints WHERE image_id = ?1", file);
+  // length() and typeof() of a blob column read the record header only, not the blob.
+  stmts_->size_keypoints = Prepare<InputError>(
+      db_, "SELECT rows, cols, length(data), typeof(data) FROM keypoints WHERE image_id = ?1",
+      file);
+  const std::string type_column = has_descriptor_type_ ? "type" : "0";
+  stmts_->read_descriptors = Prepare<InputError>(
+      db_, "SELECT rows, cols, data, " + type_column + " FROM descriptors WHERE image_id = ?1",
+      file);
+  stmts_->size_descriptors =
+      Prepare<InputError>(db_,
+                          "SELECT rows, cols, length(data), typeof(data), " + type_column +
+                              " FROM descriptors WHERE image_id = ?1",
+                          file);
 }
 
 DatabaseReader::~DatabaseReader() {

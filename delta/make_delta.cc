@@ -3,6 +3,8 @@
 #include <cstring>
 #include <vector>
 
+#include "kdtree/kd_forest_update.h"
+
 namespace cwloc {
 namespace {
 

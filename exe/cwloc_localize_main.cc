@@ -250,47 +250,197 @@ int RunRigs(const CliOptions& cli, const Index& index) {
   return counts.failed > 0 ? kExitNotLocalized : kExitOk;
 }
 
-int Run(const CliOptions& cli) {
-  // First: a signal while the index and queries are read stops the batch before its first query.
-  StopOnInterrupt();
-  const LocalizerOptions& options = cli.options.localizer;
+// Refuses, before any work, options that do not go together.
+void CheckRunOptions(const CliOptions& cli, bool sequence) {
   if (cli.threads < 1 || cli.threads > 1024)
     throw InputError("--threads must be between 1 and 1024");
-  const bool sequence = cli.sequence || !cli.video_path.empty();
   if (!cli.motion_path.empty() && !sequence)
     throw InputError("--motion needs --sequence or --video (a motion is between frames)");
   if (!cli.trajectory_path.empty() && !sequence)
     throw InputError("--trajectory needs --sequence (a trajectory is a sequence's frames)");
-  TrajectoryFormatNamed(cli.trajectory_format);  // refused before any work
+  TrajectoryFormatNamed(cli.trajectory_format);
 #ifndef CWLOC_WITH_VIDEO
   if (!cli.video_path.empty())
     throw InputError("--video: this cwloc-localize was built without FFmpeg (CWLOC_WITH_VIDEO)");
 #endif
-  const Index index = Index::Open(cli.index_path);
+}
+
+Index OpenIndex(const CliOptions& cli) {
+  Index index = Index::Open(cli.index_path);
   if (cli.verify) {
     index.file().VerifyChecksums();
     index.Validate();
   }
-  if (!cli.rig_config_path.empty() || !cli.frames_path.empty()) return RunRigs(cli, index);
-  const std::vector<QuerySource> sources = CollectQueries(cli);
-  std::unordered_map<std::string, MotionLine> motions;
-  if (!cli.motion_path.empty()) {
-    motions = ReadMotionFile(cli.motion_path);
-    // Every line names a frame: a query of the sequence, or VIDEO#INDEX for a video's.
-    std::unordered_set<std::string> names;
-    for (const QuerySource& source : sources) names.insert(source.name);
-    const std::string video_prefix = cli.video_path + "#";
-    for (const auto& [name, motion] : motions) {
-      const bool video_frame =
-          !cli.video_path.empty() && name.rfind(video_prefix, 0) == 0 &&
-          name.size() > video_prefix.size() &&
-          name.find_first_not_of("0123456789", video_prefix.size()) == std::string::npos;
-      if (!names.count(name) && !video_frame) {
-        throw InputError(cli.motion_path + ":" + std::to_string(motion.line) + ": frame '" + name +
-                         "' is not in the sequence");
-      }
+  return index;
+}
+
+// --motion's lines by frame name; every line names a frame: a query of the sequence, or
+// VIDEO#INDEX for a video's.
+std::unordered_map<std::string, MotionLine> ReadMotions(const CliOptions& cli,
+                                                        const std::vector<QuerySource>& sources) {
+  if (cli.motion_path.empty()) return {};
+  std::unordered_map<std::string, MotionLine> motions = ReadMotionFile(cli.motion_path);
+  std::unordered_set<std::string> names;
+  for (const QuerySource& source : sources) names.insert(source.name);
+  const std::string video_prefix = cli.video_path + "#";
+  for (const auto& [name, motion] : motions) {
+    const bool video_frame =
+        !cli.video_path.empty() && name.rfind(video_prefix, 0) == 0 &&
+        name.size() > video_prefix.size() &&
+        name.find_first_not_of("0123456789", video_prefix.size()) == std::string::npos;
+    if (!names.count(name) && !video_frame) {
+      throw InputError(cli.motion_path + ":" + std::to_string(motion.line) + ": frame '" + name +
+                       "' is not in the sequence");
     }
   }
+  return motions;
+}
+
+// A batch's outcomes so far, counted by its workers.
+struct BatchCounts {
+  std::atomic<int> localized{0}, failed{0}, errors{0}, internal_errors{0};
+  std::atomic<int> modes[EnumNames<TrackingMode>::names.size()] = {};  // of tracked frames
+
+  int Done() const { return localized + failed + errors + internal_errors; }
+  int ExitCode() const {
+    if (internal_errors > 0) return kExitInternalError;
+    if (errors > 0) return kExitBadInput;
+    return failed > 0 ? kExitNotLocalized : kExitOk;
+  }
+};
+
+// One query: read, localized or tracked, written; its seconds, or -1 when it was an error.
+using ProcessQuery = std::function<double(const std::string& name, const std::string& label,
+                                          const std::function<Query()>& load, FrameStamp stamp)>;
+
+// After SIGINT or SIGTERM: how far the batch got, and the shell's code for a process a signal
+// ended. With queries still running (`abandoned`), whose threads use the caller's objects, the
+// process ends here, without unwinding.
+int ReportInterrupted(int signal_number, const BatchCounts& counts, size_t total, int abandoned) {
+  std::fprintf(stderr, "cwloc-localize: interrupted by %s after %d of %zu queries",
+               signal_number == SIGINT ? "SIGINT" : "SIGTERM", counts.Done(), total);
+  if (abandoned > 0) {
+    std::fprintf(stderr, "; %d running %s abandoned\n", abandoned,
+                 abandoned == 1 ? "query" : "queries");
+    std::cout.flush();
+    std::fflush(nullptr);
+    std::_Exit(128 + signal_number);
+  }
+  std::fprintf(stderr, "\n");
+  return 128 + signal_number;
+}
+
+#ifdef CWLOC_WITH_VIDEO
+// --video: the frames as they are decoded, on this thread, or with `decode_ahead` on a thread
+// of their own, the next frame while this one is tracked; each frame's seconds appended to
+// `times`. A stream that breaks ends the run once the frames before the break are written.
+void RunVideo(const CliOptions& cli, const QueryOptions& query_options, bool decode_ahead,
+              const QueryLoader& loader, const ProcessQuery& process, ResultSink& sink,
+              std::vector<double>* times) {
+  VideoFrames video(cli.video_path, query_options.photo.max_image_pixels);
+  std::optional<FramesDecodedAhead> ahead;
+  if (decode_ahead) ahead.emplace(video, cli.video_step);
+  Progress progress("tracking", std::max<uint64_t>(video.estimated_frames() / cli.video_step, 1));
+  std::string broken;
+  while (!sink.failed() && stop_signal == 0) {
+    std::optional<VideoFrame> frame;
+    try {
+      frame = ahead ? ahead->Next() : video.Next(cli.video_step);
+    } catch (const InputError& e) {
+      broken = e.what();
+      break;
+    }
+    if (!frame) break;
+    const std::string name = cli.video_path + "#" + std::to_string(frame->index);
+    times->push_back(process(
+        name, name, [&] { return loader.LoadFrame(name, std::move(frame->image)); },
+        FrameStamp{frame->seconds, true}));
+    progress.Advance();
+  }
+  progress.Finish();
+  if (!broken.empty()) {
+    sink.Close();
+    throw InputError(broken);
+  }
+}
+#endif
+
+// The listed queries on `threads` threads of their own, each query's seconds in `times`. This
+// thread waits for them to finish or for a stop, after which the running queries get
+// kStopGrace to finish; past it, they are abandoned and the process ends.
+void RunListed(const std::vector<QuerySource>& sources, int threads, const QueryLoader& loader,
+               const ProcessQuery& process, ResultSink& sink, const BatchCounts& counts,
+               std::vector<double>* times) {
+  std::atomic<size_t> next{0};
+  Progress progress("localizing", sources.size());
+  auto worker = [&] {
+    for (size_t i = next++; i < sources.size() && !sink.failed() && stop_signal == 0; i = next++) {
+      (*times)[i] = process(
+          sources[i].name, sources[i].Label(), [&] { return loader.Load(sources[i]); },
+          FrameStamp{double(i), false});  // a list's frames: their place
+      progress.Advance();
+    }
+  };
+  std::mutex done_mutex;
+  std::condition_variable done;
+  int running = threads;
+  std::vector<std::thread> pool;
+  for (int t = 0; t < threads; ++t) {
+    pool.emplace_back([&] {
+      worker();
+      const std::lock_guard lock(done_mutex);
+      --running;
+      done.notify_all();
+    });
+  }
+  int abandoned = 0;
+  {
+    std::unique_lock lock(done_mutex);
+    while (running > 0 && stop_signal == 0) done.wait_for(lock, std::chrono::milliseconds(50));
+    done.wait_for(lock, kStopGrace, [&] { return running == 0; });
+    abandoned = running;
+  }
+  for (auto& thread : pool) abandoned > 0 ? thread.detach() : thread.join();
+  progress.Finish();
+  if (abandoned > 0) {
+    // Only a stop abandons queries; their threads use this function's objects.
+    sink.Close();
+    ReportInterrupted(stop_signal, counts, sources.size(), abandoned);
+  }
+}
+
+// The batch's summary line on stderr: counts, and the median seconds of the finished queries.
+void PrintSummary(const BatchCounts& counts, const std::vector<double>& times, bool tracked) {
+  std::vector<double> finished;
+  for (double t : times) {
+    if (t >= 0) finished.push_back(t);
+  }
+  std::sort(finished.begin(), finished.end());
+  std::fprintf(stderr, "cwloc-localize: localized %d of %zu queries", counts.localized.load(),
+               times.size());
+  if (counts.errors > 0) std::fprintf(stderr, " (%d bad input)", counts.errors.load());
+  if (counts.internal_errors > 0) {
+    std::fprintf(stderr, " (%d out of memory or internal error)", counts.internal_errors.load());
+  }
+  if (tracked) {
+    std::fprintf(stderr, " (%d tracked, %d relocalized, %d lost)", counts.modes[0].load(),
+                 counts.modes[1].load(), counts.modes[2].load());
+  }
+  if (!finished.empty())
+    std::fprintf(stderr, ", median %.1f ms per query", finished[finished.size() / 2] * 1e3);
+  std::fprintf(stderr, "\n");
+}
+
+int Run(const CliOptions& cli) {
+  // First: a signal while the index and queries are read stops the batch before its first query.
+  StopOnInterrupt();
+  const LocalizerOptions& options = cli.options.localizer;
+  const bool sequence = cli.sequence || !cli.video_path.empty();
+  CheckRunOptions(cli, sequence);
+  const Index index = OpenIndex(cli);
+  if (!cli.rig_config_path.empty() || !cli.frames_path.empty()) return RunRigs(cli, index);
+  const std::vector<QuerySource> sources = CollectQueries(cli);
+  const std::unordered_map<std::string, MotionLine> motions = ReadMotions(cli, sources);
   const auto motion_of = [&](const std::string& name) -> std::optional<FrameMotion> {
     const auto found = motions.find(name);
     if (found == motions.end()) return std::nullopt;
@@ -310,12 +460,10 @@ int Run(const CliOptions& cli) {
   const Localizer localizer(index);
   std::optional<Tracker> tracker;
   if (sequence) tracker.emplace(localizer, options, cli.options.tracker);
-  std::atomic<int> modes[EnumNames<TrackingMode>::names.size()] = {};
 
-  std::atomic<int> localized{0}, failed{0}, errors{0}, internal_errors{0};
-  // One query: read, localized or tracked, written; its seconds, or -1 when it was an error.
-  const auto process = [&](const std::string& name, const std::string& label,
-                           const std::function<Query()>& load, FrameStamp stamp) {
+  BatchCounts counts;
+  const ProcessQuery process = [&](const std::string& name, const std::string& label,
+                                   const std::function<Query()>& load, FrameStamp stamp) {
     try {
       const Query query = load();
       const LocalizationResult result =
@@ -323,132 +471,175 @@ int Run(const CliOptions& cli) {
                         query, stamp.seconds ? std::optional<double>(stamp.value) : std::nullopt,
                         motion_of(query.name))
                   : localizer.Localize(query, options);
-      if (result.tracking) ++modes[static_cast<size_t>(result.tracking->mode)];
-      (result.success ? localized : failed)++;
+      if (result.tracking) ++counts.modes[static_cast<size_t>(result.tracking->mode)];
+      (result.success ? counts.localized : counts.failed)++;
       sink.Write(result, cli.options, stamp);
       return result.times.total;
     } catch (const InputError& e) {
-      ++errors;
+      ++counts.errors;
       sink.WriteError(name, e.what());
     } catch (const std::bad_alloc&) {
       // A query too big for the memory left (a huge photo on a small device) must not end
       // the batch: its buffers are freed by now.
-      ++internal_errors;
+      ++counts.internal_errors;
       sink.WriteError(name, label + ": out of memory");
     } catch (const std::exception& e) {
-      ++internal_errors;
+      ++counts.internal_errors;
       sink.WriteError(name, label + ": internal error: " + e.what());
     }
     return -1.0;
   };
   std::vector<double> times(sources.size(), -1);
-  size_t total = sources.size();
-  int abandoned = 0;
   if (!cli.video_path.empty()) {
 #ifdef CWLOC_WITH_VIDEO
-    // The frames as they are decoded: on this thread, or with --threads 2 and more on a thread
-    // of their own, the next frame while this one is tracked; a stream that breaks ends the run
-    // once the frames before the break are written (exit 2).
-    VideoFrames video(cli.video_path, query_options.photo.max_image_pixels);
-    std::optional<FramesDecodedAhead> ahead;
-    if (decode_ahead) ahead.emplace(video, cli.video_step);
-    Progress progress("tracking", std::max<uint64_t>(video.estimated_frames() / cli.video_step, 1));
-    std::string broken;
-    while (!sink.failed() && stop_signal == 0) {
-      std::optional<VideoFrame> frame;
-      try {
-        frame = ahead ? ahead->Next() : video.Next(cli.video_step);
-      } catch (const InputError& e) {
-        broken = e.what();
-        break;
-      }
-      if (!frame) break;
-      const std::string name = cli.video_path + "#" + std::to_string(frame->index);
-      times.push_back(process(
-          name, name, [&] { return loader.LoadFrame(name, std::move(frame->image)); },
-          FrameStamp{frame->seconds, true}));
-      progress.Advance();
-    }
-    total = times.size();
-    progress.Finish();
-    if (!broken.empty()) {
-      sink.Close();
-      throw InputError(broken);
-    }
+    RunVideo(cli, query_options, decode_ahead, loader, process, sink, &times);
 #endif
   } else {
-    std::atomic<size_t> next{0};
-    Progress progress("localizing", sources.size());
-    auto worker = [&] {
-      for (size_t i = next++; i < sources.size() && !sink.failed() && stop_signal == 0;
-           i = next++) {
-        times[i] = process(
-            sources[i].name, sources[i].Label(), [&] { return loader.Load(sources[i]); },
-            FrameStamp{double(i), false});  // a list's frames: their place
-        progress.Advance();
-      }
-    };
-    // The workers have threads of their own; this one waits for them to finish or for a stop,
-    // after which the running queries get kStopGrace to finish and are abandoned after it.
-    std::mutex done_mutex;
-    std::condition_variable done;
-    int running = threads;
-    std::vector<std::thread> pool;
-    for (int t = 0; t < threads; ++t) {
-      pool.emplace_back([&] {
-        worker();
-        const std::lock_guard lock(done_mutex);
-        --running;
-        done.notify_all();
-      });
-    }
-    {
-      std::unique_lock lock(done_mutex);
-      while (running > 0 && stop_signal == 0) done.wait_for(lock, std::chrono::milliseconds(50));
-      done.wait_for(lock, kStopGrace, [&] { return running == 0; });
-      abandoned = running;
-    }
-    for (auto& thread : pool) abandoned > 0 ? thread.detach() : thread.join();
-    progress.Finish();
+    RunListed(sources, threads, loader, process, sink, counts, &times);
   }
   sink.Close();
-  if (const int signal_number = stop_signal) {
-    std::fprintf(stderr, "cwloc-localize: interrupted by %s after %d of %zu queries",
-                 signal_number == SIGINT ? "SIGINT" : "SIGTERM",
-                 localized + failed + errors + internal_errors, total);
-    if (abandoned > 0) {
-      // Their threads still use this function's objects: end here, without unwinding.
-      std::fprintf(stderr, "; %d running %s abandoned\n", abandoned,
-                   abandoned == 1 ? "query" : "queries");
-      std::cout.flush();
-      std::fflush(nullptr);
-      std::_Exit(128 + signal_number);
-    }
-    std::fprintf(stderr, "\n");
-    return 128 + signal_number;  // the shell's code for a process a signal ended
-  }
+  if (const int signal_number = stop_signal)
+    return ReportInterrupted(signal_number, counts, times.size(), 0);
+  if (!cli.quiet) PrintSummary(counts, times, tracker.has_value());
+  return counts.ExitCode();
+}
 
-  std::vector<double> finished;
-  for (double t : times) {
-    if (t >= 0) finished.push_back(t);
-  }
-  std::sort(finished.begin(), finished.end());
-  if (!cli.quiet) {
-    std::fprintf(stderr, "cwloc-localize: localized %d of %zu queries", localized.load(), total);
-    if (errors > 0) std::fprintf(stderr, " (%d bad input)", errors.load());
-    if (internal_errors > 0)
-      std::fprintf(stderr, " (%d out of memory or internal error)", internal_errors.load());
-    if (tracker) {
-      std::fprintf(stderr, " (%d tracked, %d relocalized, %d lost)", modes[0].load(),
-                   modes[1].load(), modes[2].load());
-    }
-    if (!finished.empty())
-      std::fprintf(stderr, ", median %.1f ms per query", finished[finished.size() / 2] * 1e3);
-    std::fprintf(stderr, "\n");
-  }
-  if (internal_errors > 0) return kExitInternalError;
-  if (errors > 0) return kExitBadInput;
-  return failed > 0 ? kExitNotLocalized : kExitOk;
+// cwloc-localize's --help groups.
+constexpr const char* kQueries = "Queries";
+constexpr const char* kOutput = "Output";
+
+// The flags of the queries' sources, cameras and priors.
+void AddQueryFlags(CLI::App* app, CliOptions* cli) {
+#ifdef CWLOC_WITH_COLMAP_DB
+  app->add_option("--database", cli->database_path,
+                  "COLMAP database holding the queries' keypoints and descriptors")
+      ->group(kQueries);
+#endif
+  app->add_option("--image", cli->images,
+                  "Query photo, JPEG or PNG (repeatable): SIFT is extracted as colmap "
+                  "feature_extractor does")
+      ->group(kQueries);
+  app->add_option("--image-list", cli->image_list,
+                  "File of query photos, one per line, optionally followed by 'MODEL W H PARAMS' "
+                  "(hloc's queries_with_intrinsics.txt)")
+      ->group(kQueries);
+  app->add_option("--image-dir", cli->image_dir,
+                  "Folder the --image-list names are relative to (default: the list's folder)")
+      ->group(kQueries);
+  app->add_option("--query", cli->query_names, "Query image name in --database (repeatable)")
+      ->group(kQueries);
+  app->add_option("--query-list", cli->query_list,
+                  "File of queries, one per line: a name in --database (or a feature file), "
+                  "optionally followed by "
+                  "'MODEL W H PARAMS' (hloc's queries_with_intrinsics.txt)")
+      ->group(kQueries);
+  app->add_option("--features", cli->feature_files,
+                  "COLMAP text feature file ('N 128', then 'x y scale orientation d1..d128' lines; "
+                  "repeatable)")
+      ->group(kQueries);
+  auto* camera = app->add_option("--camera", cli->camera_spec,
+                                 "Query camera 'MODEL W H PARAMS...' (known focal)")
+                     ->group(kQueries);
+  app->add_option("--image-size", cli->image_size,
+                  "Query image size 'W H' when the focal length is unknown (P4Pf)")
+      ->excludes(camera)
+      ->group(kQueries);
+  app->add_option("--focal", cli->focal,
+                  "Query focal length in pixels, a prior: refined with a radial distortion term "
+                  "(principal point at the image centre)")
+      ->excludes(camera)
+      ->group(kQueries);
+  app->add_flag(
+         "--unknown-focal", cli->unknown_focal,
+         "Withhold the focal length: P4Pf estimates it, then focal and radial distortion are "
+         "refined")
+      ->group(kQueries);
+  app->add_option("--prior-position", cli->prior_position,
+                  "GPS prior 'LAT LON [HEIGHT] RADIUS_M' (WGS84): only model cameras within the "
+                  "radius are matched; needs a georeferenced index")
+      ->group(kQueries);
+  app->add_option(
+         "--prior-gravity", cli->prior_gravity,
+         "Gravity direction 'GX GY GZ' in the camera frame (x right, y down, z forward), as "
+         "an IMU gives it; needs a georeferenced index")
+      ->group(kQueries);
+  app->add_option("--priors", cli->priors_path,
+                  "Per-query priors: lines 'NAME position LAT LON HEIGHT|- RADIUS_M' and 'NAME "
+                  "gravity GX GY GZ'")
+      ->group(kQueries);
+}
+
+void AddOutputFlags(CLI::App* app, CliOptions* cli) {
+  app->add_option("-o,--output", cli->output_path,
+                  "JSON lines output (default: stdout). A file keeps its previous content until "
+                  "this run's first records replace it, about a second in, and only ever holds "
+                  "whole lines, saved about once a second")
+      ->group(kOutput);
+  app->add_option("--poses", cli->poses_path,
+                  "Also write 'NAME QW QX QY QZ TX TY TZ' lines of localized queries (saved as -o "
+                  "is)")
+      ->group(kOutput);
+  app->add_option("--trajectory", cli->trajectory_path,
+                  "With --sequence: also write the frames' poses as a trajectory in "
+                  "--trajectory-format (the timestamp is a video frame's time, else the frame's "
+                  "place in the sequence, from 0; saved as -o is)")
+      ->group(kOutput);
+  app->add_option("--trajectory-format", cli->trajectory_format,
+                  "tum: 'TIMESTAMP TX TY TZ QX QY QZ QW', the camera in the world, as evo reads "
+                  "it; kapture: its trajectories.txt, 'TIMESTAMP, camera, QW, QX, QY, QZ, TX, TY, "
+                  "TZ', the world in the camera; lamar: LaMAR's trajectories.txt, the camera in "
+                  "the world and its 6 x 6 covariance (docs/cli.md); kapture and lamar write "
+                  "microseconds")
+      ->capture_default_str()
+      ->group(kOutput);
+  app->add_flag("-q,--quiet", cli->quiet, "No summary or readable lines")->group(kOutput);
+}
+
+// The flags of a sequence's frames: --video, --motion, --sequence.
+void AddSequenceFlags(CLI::App* app, CliOptions* cli) {
+  app->add_option("--video", cli->video_path,
+                  "A video file (MP4, MOV, MKV, ...; FFmpeg reads it): its frames are a sequence "
+                  "(as --sequence), named FILE#FRAME_INDEX, the trajectory's timestamps their "
+                  "times; the camera from --camera or --focal, else only the frames' size")
+      ->group(kQueries);
+  app->add_option("--video-step", cli->video_step, "Every Nth frame of --video")
+      ->check(CLI::Range(1u, 1000000u))
+      ->capture_default_str()
+      ->group(kQueries);
+  app->add_option("--motion", cli->motion_path,
+                  "With --sequence or --video: each frame's camera motion since the previous "
+                  "frame from VIO, lines 'NAME QW QX QY QZ TX TY TZ [SIGMA_ROT_DEG SIGMA_POS]' "
+                  "(the frame's camera from the previous one's, metres: model units by a "
+                  "georeferenced index's scale, else only the direction counts; optionally its "
+                  "standard deviation per axis, which bounds how far the tracked pose may land "
+                  "from the prediction); it predicts the frame's pose")
+      ->group(kQueries);
+  app->add_flag("--sequence", cli->sequence,
+                "The queries are frames of one moving camera, in the order given: each is "
+                "tracked from the frames before it, or localized from scratch when that fails "
+                "(docs/algorithm.md, \"Sequences\"); one frame at a time")
+      ->group(kQueries);
+}
+
+// The flags of rigs and multi-image frames.
+void AddRigFlags(CLI::App* app, CliOptions* cli) {
+  app->add_option("--rig", cli->rig_config_path,
+                  "COLMAP 3.12's rig_config.json: the --image-list images are cameras of rigs "
+                  "(by image_prefix), and images whose names agree after the prefix one frame, "
+                  "localized as one generalized camera (docs/cli.md, \"Rigs and multi-frame "
+                  "queries\"); translations in model units")
+      ->group(kQueries);
+  app->add_option("--frames", cli->frames_path,
+                  "Multi-image frames, one line per image: 'FRAME_ID IMAGE QW QX QY QZ TX TY TZ "
+                  "[MODEL W H PARAMS]', the image's cam_from_rig (its camera from the frame's "
+                  "reference), a frame's lines consecutive, its first image the reference; IMAGE "
+                  "a photo, or a feature file (.txt), relative to --image-dir or the file's folder")
+      ->group(kQueries);
+  app->add_option("--frames-scale", cli->frames_scale,
+                  "known: cam_from_rig translations are in model units; unknown: up to one scale "
+                  "per frame (VIO without a metric map), which the pose estimates")
+      ->capture_default_str()
+      ->group(kQueries);
 }
 
 }  // namespace
@@ -458,132 +649,16 @@ int main(int argc, char** argv) {
   CLI::App app{"cwloc-localize: 6-DoF camera poses of query images against a cwloc index"};
   app.set_version_flag("--version", std::string("cwloc-localize ") + cwloc::kToolVersion);
   cwloc::CliOptions cli;
-  constexpr const char* kQueries = "Queries";
-  constexpr const char* kOutput = "Output";
 
   app.add_option("--index", cli.index_path, "Index file built by cwloc-index")->required();
-#ifdef CWLOC_WITH_COLMAP_DB
-  app.add_option("--database", cli.database_path,
-                 "COLMAP database holding the queries' keypoints and descriptors")
-      ->group(kQueries);
-#endif
-  app.add_option("--image", cli.images,
-                 "Query photo, JPEG or PNG (repeatable): SIFT is extracted as colmap "
-                 "feature_extractor does")
-      ->group(kQueries);
-  app.add_option("--image-list", cli.image_list,
-                 "File of query photos, one per line, optionally followed by 'MODEL W H PARAMS' "
-                 "(hloc's queries_with_intrinsics.txt)")
-      ->group(kQueries);
-  app.add_option("--image-dir", cli.image_dir,
-                 "Folder the --image-list names are relative to (default: the list's folder)")
-      ->group(kQueries);
-  app.add_option("--query", cli.query_names, "Query image name in --database (repeatable)")
-      ->group(kQueries);
-  app.add_option("--query-list", cli.query_list,
-                 "File of queries, one per line: a name in --database (or a feature file), "
-                 "optionally followed by "
-                 "'MODEL W H PARAMS' (hloc's queries_with_intrinsics.txt)")
-      ->group(kQueries);
-  app.add_option("--features", cli.feature_files,
-                 "COLMAP text feature file ('N 128', then 'x y scale orientation d1..d128' lines; "
-                 "repeatable)")
-      ->group(kQueries);
-  auto* camera = app.add_option("--camera", cli.camera_spec,
-                                "Query camera 'MODEL W H PARAMS...' (known focal)")
-                     ->group(kQueries);
-  app.add_option("--image-size", cli.image_size,
-                 "Query image size 'W H' when the focal length is unknown (P4Pf)")
-      ->excludes(camera)
-      ->group(kQueries);
-  app.add_option("--focal", cli.focal,
-                 "Query focal length in pixels, a prior: refined with a radial distortion term "
-                 "(principal point at the image centre)")
-      ->excludes(camera)
-      ->group(kQueries);
-  app.add_flag("--unknown-focal", cli.unknown_focal,
-               "Withhold the focal length: P4Pf estimates it, then focal and radial distortion are "
-               "refined")
-      ->group(kQueries);
-  app.add_option("--prior-position", cli.prior_position,
-                 "GPS prior 'LAT LON [HEIGHT] RADIUS_M' (WGS84): only model cameras within the "
-                 "radius are matched; needs a georeferenced index")
-      ->group(kQueries);
-  app.add_option(
-         "--prior-gravity", cli.prior_gravity,
-         "Gravity direction 'GX GY GZ' in the camera frame (x right, y down, z forward), as "
-         "an IMU gives it; needs a georeferenced index")
-      ->group(kQueries);
-  app.add_option("--priors", cli.priors_path,
-                 "Per-query priors: lines 'NAME position LAT LON HEIGHT|- RADIUS_M' and 'NAME "
-                 "gravity GX GY GZ'")
-      ->group(kQueries);
-  app.add_option("-o,--output", cli.output_path,
-                 "JSON lines output (default: stdout). A file keeps its previous content until "
-                 "this run's first records replace it, about a second in, and only ever holds "
-                 "whole lines, saved about once a second")
-      ->group(kOutput);
-  app.add_option("--poses", cli.poses_path,
-                 "Also write 'NAME QW QX QY QZ TX TY TZ' lines of localized queries (saved as -o "
-                 "is)")
-      ->group(kOutput);
-  app.add_option("--trajectory", cli.trajectory_path,
-                 "With --sequence: also write the frames' poses as a trajectory in "
-                 "--trajectory-format (the timestamp is a video frame's time, else the frame's "
-                 "place in the sequence, from 0; saved as -o is)")
-      ->group(kOutput);
-  app.add_option("--trajectory-format", cli.trajectory_format,
-                 "tum: 'TIMESTAMP TX TY TZ QX QY QZ QW', the camera in the world, as evo reads "
-                 "it; kapture: its trajectories.txt, 'TIMESTAMP, camera, QW, QX, QY, QZ, TX, TY, "
-                 "TZ', the world in the camera; lamar: LaMAR's trajectories.txt, the camera in "
-                 "the world and its 6 x 6 covariance (docs/cli.md); kapture and lamar write "
-                 "microseconds")
-      ->capture_default_str()
-      ->group(kOutput);
-  app.add_flag("-q,--quiet", cli.quiet, "No summary or readable lines")->group(kOutput);
+  cwloc::AddQueryFlags(&app, &cli);
+  cwloc::AddOutputFlags(&app, &cli);
   app.add_option("--threads", cli.threads,
                  "Threads: queries localized in parallel, and a photo's SIFT gets those no other "
                  "query uses (with --video: one decodes the next frame, SIFT gets the rest)")
       ->capture_default_str();
-  app.add_option("--video", cli.video_path,
-                 "A video file (MP4, MOV, MKV, ...; FFmpeg reads it): its frames are a sequence "
-                 "(as --sequence), named FILE#FRAME_INDEX, the trajectory's timestamps their "
-                 "times; the camera from --camera or --focal, else only the frames' size")
-      ->group(kQueries);
-  app.add_option("--video-step", cli.video_step, "Every Nth frame of --video")
-      ->check(CLI::Range(1u, 1000000u))
-      ->capture_default_str()
-      ->group(kQueries);
-  app.add_option("--motion", cli.motion_path,
-                 "With --sequence or --video: each frame's camera motion since the previous "
-                 "frame from VIO, lines 'NAME QW QX QY QZ TX TY TZ [SIGMA_ROT_DEG SIGMA_POS]' "
-                 "(the frame's camera from the previous one's, metres: model units by a "
-                 "georeferenced index's scale, else only the direction counts; optionally its "
-                 "standard deviation per axis, which bounds how far the tracked pose may land "
-                 "from the prediction); it predicts the frame's pose")
-      ->group(kQueries);
-  app.add_flag("--sequence", cli.sequence,
-               "The queries are frames of one moving camera, in the order given: each is "
-               "tracked from the frames before it, or localized from scratch when that fails "
-               "(docs/algorithm.md, \"Sequences\"); one frame at a time")
-      ->group(kQueries);
-  app.add_option("--rig", cli.rig_config_path,
-                 "COLMAP 3.12's rig_config.json: the --image-list images are cameras of rigs "
-                 "(by image_prefix), and images whose names agree after the prefix one frame, "
-                 "localized as one generalized camera (docs/cli.md, \"Rigs and multi-frame "
-                 "queries\"); translations in model units")
-      ->group(kQueries);
-  app.add_option("--frames", cli.frames_path,
-                 "Multi-image frames, one line per image: 'FRAME_ID IMAGE QW QX QY QZ TX TY TZ "
-                 "[MODEL W H PARAMS]', the image's cam_from_rig (its camera from the frame's "
-                 "reference), a frame's lines consecutive, its first image the reference; IMAGE "
-                 "a photo, or a feature file (.txt), relative to --image-dir or the file's folder")
-      ->group(kQueries);
-  app.add_option("--frames-scale", cli.frames_scale,
-                 "known: cam_from_rig translations are in model units; unknown: up to one scale "
-                 "per frame (VIO without a metric map), which the pose estimates")
-      ->capture_default_str()
-      ->group(kQueries);
+  cwloc::AddSequenceFlags(&app, &cli);
+  cwloc::AddRigFlags(&app, &cli);
   app.add_flag("--verify", cli.verify,
                "Verify the index's checksums and stored indices before localizing");
   cwloc::TableFlags table_flags;

@@ -249,6 +249,56 @@ class SimilarityEstimator {
 
 static_assert(RansacEstimator<SimilarityEstimator>);
 
+// Throws InputError for an option out of its range.
+void CheckFitOptions(const GeoFitOptions& options) {
+  const auto check_option = [](bool ok, const char* option, double value) {
+    if (!ok) {
+      throw InputError(std::string("georeference fit: ") + option + " " + NumberText(value) +
+                       " is out of range");
+    }
+  };
+  check_option(std::isfinite(options.default_sigma_m) && options.default_sigma_m > 0,
+               "default_sigma_m", options.default_sigma_m);
+  check_option(std::isfinite(options.inlier_sigmas) && options.inlier_sigmas > 0, "inlier_sigmas",
+               options.inlier_sigmas);
+  check_option(options.max_iterations >= 1, "max_iterations", options.max_iterations);
+  check_option(options.confidence > 0 && options.confidence < 1, "confidence", options.confidence);
+}
+
+// Weighted least squares on the inliers, re-scored, until the inlier set is stable (or
+// kMaxRefinementRounds): the last fit, and in `fitted` the inliers it was fitted to.
+Similarity FitToInliers(std::span<const Eigen::Vector3d> model_centers,
+                        std::span<const Eigen::Vector3d> positions, std::span<const double> weight,
+                        const SimilarityEstimator& estimator, std::vector<char> inliers,
+                        std::vector<char>* fitted) {
+  const size_t n = inliers.size();
+  const std::string count = std::to_string(n);
+  Similarity model;
+  for (int round = 0; round < kMaxRefinementRounds; ++round) {
+    *fitted = inliers;
+    std::vector<size_t> indices;
+    for (size_t i = 0; i < n; ++i) {
+      if ((*fitted)[i]) indices.push_back(i);
+    }
+    if (indices.size() < 3) {
+      throw InputError("georeference fit: " + std::to_string(indices.size()) + " of " + count +
+                       " observations are inliers, at least 3 are needed");
+    }
+    const std::string inlier_count = std::to_string(indices.size());
+    CheckNotDegenerate(model_centers, positions, indices,
+                       "camera centres of the " + inlier_count + " inliers",
+                       "observed positions of the " + inlier_count + " inliers");
+    model = WeightedUmeyama(model_centers, positions, weight, indices);
+    if (!std::isfinite(model.scale) || !(model.scale > 0)) {
+      throw InputError("georeference fit: the fitted scale " + NumberText(model.scale) +
+                       " is not a positive number");
+    }
+    estimator.FlagInliers(model, &inliers);
+    if (inliers == *fitted) break;
+  }
+  return model;
+}
+
 }  // namespace
 
 std::vector<GeoObservation> ReadGeorefFile(const std::filesystem::path& path) {
@@ -318,18 +368,7 @@ GeoFitResult FitGeoreference(std::span<const Eigen::Vector3d> model_centers,
                                 " camera centres for " + std::to_string(observations.size()) +
                                 " observations");
   }
-  const auto check_option = [](bool ok, const char* option, double value) {
-    if (!ok) {
-      throw InputError(std::string("georeference fit: ") + option + " " + NumberText(value) +
-                       " is out of range");
-    }
-  };
-  check_option(std::isfinite(options.default_sigma_m) && options.default_sigma_m > 0,
-               "default_sigma_m", options.default_sigma_m);
-  check_option(std::isfinite(options.inlier_sigmas) && options.inlier_sigmas > 0, "inlier_sigmas",
-               options.inlier_sigmas);
-  check_option(options.max_iterations >= 1, "max_iterations", options.max_iterations);
-  check_option(options.confidence > 0 && options.confidence < 1, "confidence", options.confidence);
+  CheckFitOptions(options);
 
   const size_t n = observations.size();
   if (n < 3) {
@@ -380,31 +419,9 @@ GeoFitResult FitGeoreference(std::span<const Eigen::Vector3d> model_centers,
   if (std::isfinite(Ransac(estimator, ransac, RansacRun{options.seed, {}}, &best).score))
     estimator.FlagInliers(best, &inliers);
 
-  // Weighted least squares on the inliers, re-scored, until the inlier set is stable.
   std::vector<char> fitted;
-  Similarity model;
-  for (int round = 0; round < kMaxRefinementRounds; ++round) {
-    fitted = inliers;
-    std::vector<size_t> indices;
-    for (size_t i = 0; i < n; ++i) {
-      if (fitted[i]) indices.push_back(i);
-    }
-    if (indices.size() < 3) {
-      throw InputError("georeference fit: " + std::to_string(indices.size()) + " of " + count +
-                       " observations are inliers, at least 3 are needed");
-    }
-    const std::string inlier_count = std::to_string(indices.size());
-    CheckNotDegenerate(model_centers, positions, indices,
-                       "camera centres of the " + inlier_count + " inliers",
-                       "observed positions of the " + inlier_count + " inliers");
-    model = WeightedUmeyama(model_centers, positions, weight, indices);
-    if (!std::isfinite(model.scale) || !(model.scale > 0)) {
-      throw InputError("georeference fit: the fitted scale " + NumberText(model.scale) +
-                       " is not a positive number");
-    }
-    estimator.FlagInliers(model, &inliers);
-    if (inliers == fitted) break;
-  }
+  const Similarity model =
+      FitToInliers(model_centers, positions, weight, estimator, std::move(inliers), &fitted);
 
   // The ENU origin moves to the inliers' geodetic centroid: y2 = M y1 + p, with M the rotation
   // from the first ENU frame to the final one and p the first origin in the final frame.

@@ -204,14 +204,14 @@ void WriteRowsFromIndex(const Index& parent, const IndexImage& old_image, const 
               size_t(image.num_views) * kDescriptorBytes);
 }
 
-Correspondence MatchToParent(const IndexUpdateOptions& options, const Index& parent,
-                             const GrownModel& grown, const colmap::DatabaseReader& database) {
-  const ModelViews& child = grown.views;
-  const std::span<const uint8_t> parent_descriptors = parent.descriptors();
-  Correspondence match;
-  std::vector<uint32_t>& child_of_parent_image = match.child_of_parent_image;
-  std::vector<uint32_t>& parent_of_child_image = match.parent_of_child_image;
-  // Images by COLMAP id; an old one must keep its name, camera and pose.
+namespace {
+
+// The old images found again by COLMAP id, each keeping its name, camera and pose; sets match's
+// image rows and the old cameras' extent.
+void MatchImages(const IndexUpdateOptions& options, const Index& parent, const ModelViews& child,
+                 Correspondence* match) {
+  std::vector<uint32_t>& child_of_parent_image = match->child_of_parent_image;
+  std::vector<uint32_t>& parent_of_child_image = match->parent_of_child_image;
   const std::span<const IndexImage> parent_images = parent.images();
   std::unordered_map<uint32_t, uint32_t> child_row_of_id;
   for (uint32_t i = 0; i < child.images.size(); ++i) child_row_of_id[child.images[i].image_id] = i;
@@ -219,7 +219,7 @@ Correspondence MatchToParent(const IndexUpdateOptions& options, const Index& par
   parent_of_child_image.assign(child.images.size(), kRemovedRow);
   Eigen::AlignedBox3d box;
   for (const IndexImage& image : parent_images) box.extend(CameraCenterOf(image));
-  const double extent = match.extent = std::max(box.diagonal().norm(), 1e-9);
+  const double extent = match->extent = std::max(box.diagonal().norm(), 1e-9);
   for (uint32_t i = 0; i < parent_images.size(); ++i) {
     const IndexImage& old_image = parent_images[i];
     const auto found = child_row_of_id.find(old_image.image_id);
@@ -250,9 +250,17 @@ Correspondence MatchToParent(const IndexUpdateOptions& options, const Index& par
     child_of_parent_image[i] = found->second;
     parent_of_child_image[found->second] = i;
   }
+}
 
-  // Views of the old images: the parent's rows found again, in order, among the image's: by
-  // descriptor, or in a compact index (which stores none) by point id.
+// Views of the old images: the parent's rows found again, in order, among the image's: by
+// descriptor, or in a compact index (which stores none) by point id. Sets match's view rows and
+// which images changed; a full index's view found nowhere must be in the database.
+void MatchViews(const IndexUpdateOptions& options, const Index& parent, const GrownModel& grown,
+                const colmap::DatabaseReader& database, Correspondence* match) {
+  const ModelViews& child = grown.views;
+  const std::span<const uint8_t> parent_descriptors = parent.descriptors();
+  const std::span<const IndexImage> parent_images = parent.images();
+  const std::vector<uint32_t>& child_of_parent_image = match->child_of_parent_image;
   const auto same_view = [&](uint32_t parent_view, uint32_t child_view) {
     if (parent.coded()) {
       return parent.point_ids()[parent.view_points()[parent_view]] ==
@@ -261,9 +269,9 @@ Correspondence MatchToParent(const IndexUpdateOptions& options, const Index& par
     return std::memcmp(Row(parent_descriptors, parent_view), Row(child.descriptors, child_view),
                        kDescriptorBytes) == 0;
   };
-  std::vector<uint32_t>& child_of_parent_view = match.child_of_parent_view;
-  std::vector<uint32_t>& parent_of_child_view = match.parent_of_child_view;
-  std::vector<bool>& image_changed = match.image_changed;
+  std::vector<uint32_t>& child_of_parent_view = match->child_of_parent_view;
+  std::vector<uint32_t>& parent_of_child_view = match->parent_of_child_view;
+  std::vector<bool>& image_changed = match->image_changed;
   child_of_parent_view.assign(parent.num_views(), kRemovedRow);
   parent_of_child_view.assign(child.num_views(), kRemovedRow);
   image_changed.assign(child.images.size(), true);
@@ -312,11 +320,13 @@ Correspondence MatchToParent(const IndexUpdateOptions& options, const Index& par
     image_changed[child_of_parent_image[i]] =
         !(old_image.num_views == image.num_views && unmatched.empty());
   }
+}
 
-  // Points: by their COLMAP ids, which ascend in both.
+// Points: by their COLMAP ids, which ascend in both.
+void MatchPoints(const Index& parent, const ModelViews& child, Correspondence* match) {
   const std::span<const uint64_t> parent_point_ids = parent.point_ids();
-  std::vector<uint32_t>& child_of_parent_point = match.child_of_parent_point;
-  std::vector<uint32_t>& parent_of_child_point = match.parent_of_child_point;
+  std::vector<uint32_t>& child_of_parent_point = match->child_of_parent_point;
+  std::vector<uint32_t>& parent_of_child_point = match->parent_of_child_point;
   child_of_parent_point.assign(parent.num_points(), kRemovedRow);
   parent_of_child_point.assign(child.points.size(), kRemovedRow);
   for (uint32_t p = 0, q = 0; p < parent_point_ids.size() && q < child.point_ids.size();) {
@@ -330,6 +340,16 @@ Correspondence MatchToParent(const IndexUpdateOptions& options, const Index& par
       ++p, ++q;
     }
   }
+}
+
+}  // namespace
+
+Correspondence MatchToParent(const IndexUpdateOptions& options, const Index& parent,
+                             const GrownModel& grown, const colmap::DatabaseReader& database) {
+  Correspondence match;
+  MatchImages(options, parent, grown.views, &match);
+  MatchViews(options, parent, grown, database, &match);
+  MatchPoints(parent, grown.views, &match);
   return match;
 }
 

@@ -4,6 +4,8 @@
 #include <functional>
 #include <limits>
 #include <stdexcept>
+#include <string>
+#include <vector>
 
 #include "base/prefetch.h"
 
@@ -20,55 +22,91 @@ std::string NodeName(size_t tree, size_t node) {
 
 }  // namespace
 
-bool ValidateKdForest(const KdForestView& forest, std::string* error) {
-  auto fail = [error](std::string message) {
-    if (error) *error = std::move(message);
-    return false;
-  };
+namespace {
+
+// The arrays' sizes agree, and the trees' roots are in order within the nodes: "" or what is
+// wrong.
+std::string ShapeError(const KdForestView& forest) {
   if (forest.descriptors.size() % kDescriptorDim != 0) {
-    return fail("kd-forest descriptors: " + std::to_string(forest.descriptors.size()) +
-                " bytes is not a multiple of 128");
+    return "kd-forest descriptors: " + std::to_string(forest.descriptors.size()) +
+           " bytes is not a multiple of 128";
   }
   if (!forest.codes.empty() && (!IsValidCodeBytes(forest.codes.code_bytes) ||
                                 forest.codes.codebook.size() != DescriptorCodes::kCodebookBytes ||
                                 forest.codes.codes.size() % forest.codes.code_bytes != 0)) {
-    return fail("kd-forest codes: " + std::to_string(forest.codes.code_bytes) +
-                "-byte codes over " + std::to_string(forest.codes.codes.size()) + " bytes with a " +
-                std::to_string(forest.codes.codebook.size()) + "-byte codebook");
+    return "kd-forest codes: " + std::to_string(forest.codes.code_bytes) + "-byte codes over " +
+           std::to_string(forest.codes.codes.size()) + " bytes with a " +
+           std::to_string(forest.codes.codebook.size()) + "-byte codebook";
   }
   const uint64_t n = forest.NumDescriptors();
-  if (n > kMaxDescriptors)
-    return fail("kd-forest: too many descriptors (" + std::to_string(n) + ")");
+  if (n > kMaxDescriptors) return "kd-forest: too many descriptors (" + std::to_string(n) + ")";
   const size_t num_trees = forest.roots.size();
   const size_t num_nodes = forest.nodes.size();
   if (num_trees == 0) {
     if (num_nodes != 0 || !forest.leaves.empty()) {
-      return fail("kd-forest: no trees but " + std::to_string(num_nodes) + " nodes and " +
-                  std::to_string(forest.leaves.size()) + " leaf entries");
+      return "kd-forest: no trees but " + std::to_string(num_nodes) + " nodes and " +
+             std::to_string(forest.leaves.size()) + " leaf entries";
     }
-    return true;
+    return "";
   }
   if (num_nodes > std::numeric_limits<uint32_t>::max()) {
-    return fail("kd-forest: too many nodes (" + std::to_string(num_nodes) + ")");
+    return "kd-forest: too many nodes (" + std::to_string(num_nodes) + ")";
   }
   if (forest.leaves.size() != num_trees * n) {
-    return fail("kd-forest leaves: " + std::to_string(forest.leaves.size()) +
-                " entries, expected " + std::to_string(num_trees) + " trees x " +
-                std::to_string(n) + " descriptors");
+    return "kd-forest leaves: " + std::to_string(forest.leaves.size()) + " entries, expected " +
+           std::to_string(num_trees) + " trees x " + std::to_string(n) + " descriptors";
   }
   if (forest.roots[0] != 0) {
-    return fail("kd-forest roots[0] = " + std::to_string(forest.roots[0]) + ", expected 0");
+    return "kd-forest roots[0] = " + std::to_string(forest.roots[0]) + ", expected 0";
   }
   for (size_t t = 0; t < num_trees; ++t) {
     const uint64_t end = t + 1 < num_trees ? forest.roots[t + 1] : num_nodes;
     if (forest.roots[t] >= end || end > num_nodes) {
-      return fail("kd-forest roots[" + std::to_string(t) +
-                  "] = " + std::to_string(forest.roots[t]) +
-                  ": trees must be non-empty, in order and within the " +
-                  std::to_string(num_nodes) + " nodes");
+      return "kd-forest roots[" + std::to_string(t) + "] = " + std::to_string(forest.roots[t]) +
+             ": trees must be non-empty, in order and within the " + std::to_string(num_nodes) +
+             " nodes";
     }
   }
+  return "";
+}
 
+// Leaf `node` of tree t holds the bucket that starts at leaves[next_slot], within the tree's
+// slice, of descriptors not `seen` in the tree before (marked now): "" or what is wrong.
+std::string BucketError(const KdForestView& forest, size_t t, uint32_t node, uint64_t next_slot,
+                        std::vector<uint64_t>* seen) {
+  const uint64_t n = forest.NumDescriptors();
+  const KdNode& leaf = forest.nodes[node];
+  if (leaf.high != 0) return NodeName(t, node) + ": leaf with a nonzero high byte";
+  if (leaf.index != next_slot) {
+    return NodeName(t, node) + ": leaf bucket starts at " + std::to_string(leaf.index) +
+           ", expected " + std::to_string(next_slot) + " (buckets must tile the leaves)";
+  }
+  const uint64_t bucket_end = next_slot + leaf.low;
+  if (bucket_end > (t + 1) * n) {
+    return NodeName(t, node) + ": leaf bucket [" + std::to_string(next_slot) + ", " +
+           std::to_string(bucket_end) + ") runs past the tree's leaves, which end at " +
+           std::to_string((t + 1) * n);
+  }
+  for (uint64_t s = next_slot; s < bucket_end; ++s) {
+    const uint32_t v = forest.leaves[s];
+    if (v >= n) {
+      return "kd-forest leaves[" + std::to_string(s) + "] = " + std::to_string(v) +
+             " is not a descriptor index (N = " + std::to_string(n) + ")";
+    }
+    if ((*seen)[v / 64] >> (v % 64) & 1) {
+      return "kd-forest leaves[" + std::to_string(s) + "]: descriptor " + std::to_string(v) +
+             " appears twice in tree " + std::to_string(t);
+    }
+    (*seen)[v / 64] |= uint64_t(1) << (v % 64);
+  }
+  return "";
+}
+
+// Tree t's nodes, its leaves' buckets tiling its slice of `leaves` in order: "" or what is
+// wrong. `seen` is scratch of a bit per descriptor.
+std::string TreeError(const KdForestView& forest, size_t t, std::vector<uint64_t>* seen) {
+  const uint64_t n = forest.NumDescriptors();
+  const size_t num_trees = forest.roots.size();
   // Each subtree must be exactly a contiguous preorder range [node, end): the node itself, its
   // left subtree [node + 1, right), its right subtree [right, end). Ranges shrink strictly, so
   // this walk visits every node once and proves there is no sharing and no cycle.
@@ -76,72 +114,61 @@ bool ValidateKdForest(const KdForestView& forest, std::string* error) {
     uint32_t node;
     uint32_t end;
   };
-  std::vector<Range> stack;
-  std::vector<uint64_t> seen((n + 63) / 64);
-  for (size_t t = 0; t < num_trees; ++t) {
-    const uint32_t tree_end = t + 1 < num_trees ? forest.roots[t + 1] : uint32_t(num_nodes);
-    uint64_t next_slot = t * n;  // buckets must tile this tree's slice of `leaves` in order
-    std::fill(seen.begin(), seen.end(), 0);
-    stack.assign(1, Range{forest.roots[t], tree_end});
-    while (!stack.empty()) {
-      const Range r = stack.back();
-      stack.pop_back();
-      const KdNode& node = forest.nodes[r.node];
-      if (node.reserved != 0) return fail(NodeName(t, r.node) + ": reserved byte is not zero");
-      if (node.dim == kKdLeaf) {
-        if (r.end != r.node + 1) {
-          return fail(NodeName(t, r.node) + ": a leaf where a subtree of " +
-                      std::to_string(r.end - r.node) + " nodes should be");
-        }
-        if (node.high != 0) return fail(NodeName(t, r.node) + ": leaf with a nonzero high byte");
-        if (node.index != next_slot) {
-          return fail(NodeName(t, r.node) + ": leaf bucket starts at " +
-                      std::to_string(node.index) + ", expected " + std::to_string(next_slot) +
-                      " (buckets must tile the leaves)");
-        }
-        const uint64_t bucket_end = next_slot + node.low;
-        if (bucket_end > (t + 1) * n) {
-          return fail(NodeName(t, r.node) + ": leaf bucket [" + std::to_string(next_slot) + ", " +
-                      std::to_string(bucket_end) + ") runs past the tree's leaves, which end at " +
-                      std::to_string((t + 1) * n));
-        }
-        for (uint64_t s = next_slot; s < bucket_end; ++s) {
-          const uint32_t v = forest.leaves[s];
-          if (v >= n) {
-            return fail("kd-forest leaves[" + std::to_string(s) + "] = " + std::to_string(v) +
-                        " is not a descriptor index (N = " + std::to_string(n) + ")");
-          }
-          if (seen[v / 64] >> (v % 64) & 1) {
-            return fail("kd-forest leaves[" + std::to_string(s) + "]: descriptor " +
-                        std::to_string(v) + " appears twice in tree " + std::to_string(t));
-          }
-          seen[v / 64] |= uint64_t(1) << (v % 64);
-        }
-        next_slot = bucket_end;
-        continue;
+  const uint32_t tree_end = t + 1 < num_trees ? forest.roots[t + 1] : uint32_t(forest.nodes.size());
+  uint64_t next_slot = t * n;  // buckets must tile this tree's slice of `leaves` in order
+  std::fill(seen->begin(), seen->end(), 0);
+  std::vector<Range> stack(1, Range{forest.roots[t], tree_end});
+  while (!stack.empty()) {
+    const Range r = stack.back();
+    stack.pop_back();
+    const KdNode& node = forest.nodes[r.node];
+    if (node.reserved != 0) return NodeName(t, r.node) + ": reserved byte is not zero";
+    if (node.dim == kKdLeaf) {
+      if (r.end != r.node + 1) {
+        return NodeName(t, r.node) + ": a leaf where a subtree of " +
+               std::to_string(r.end - r.node) + " nodes should be";
       }
-      if (node.dim >= kDescriptorDim) {
-        return fail(NodeName(t, r.node) + ": split dimension " + std::to_string(node.dim) +
-                    " is not < 128 (nor the leaf marker 255)");
-      }
-      if (node.low > node.high) {
-        return fail(NodeName(t, r.node) + ": split bounds low " + std::to_string(node.low) +
-                    " > high " + std::to_string(node.high));
-      }
-      if (node.index <= r.node + 1 || node.index >= r.end) {
-        return fail(NodeName(t, r.node) + ": right child " + std::to_string(node.index) +
-                    " is not inside (" + std::to_string(r.node + 1) + ", " + std::to_string(r.end) +
-                    "), the node's subtree after its left child");
-      }
-      stack.push_back(Range{node.index, r.end});
-      stack.push_back(Range{r.node + 1, node.index});
+      std::string error = BucketError(forest, t, r.node, next_slot, seen);
+      if (!error.empty()) return error;
+      next_slot += node.low;
+      continue;
     }
-    if (next_slot != (t + 1) * n) {
-      return fail("kd-forest tree " + std::to_string(t) + ": leaf buckets cover " +
-                  std::to_string(next_slot - t * n) + " of " + std::to_string(n) + " descriptors");
+    if (node.dim >= kDescriptorDim) {
+      return NodeName(t, r.node) + ": split dimension " + std::to_string(node.dim) +
+             " is not < 128 (nor the leaf marker 255)";
+    }
+    if (node.low > node.high) {
+      return NodeName(t, r.node) + ": split bounds low " + std::to_string(node.low) + " > high " +
+             std::to_string(node.high);
+    }
+    if (node.index <= r.node + 1 || node.index >= r.end) {
+      return NodeName(t, r.node) + ": right child " + std::to_string(node.index) +
+             " is not inside (" + std::to_string(r.node + 1) + ", " + std::to_string(r.end) +
+             "), the node's subtree after its left child";
+    }
+    stack.push_back(Range{node.index, r.end});
+    stack.push_back(Range{r.node + 1, node.index});
+  }
+  if (next_slot != (t + 1) * n) {
+    return "kd-forest tree " + std::to_string(t) + ": leaf buckets cover " +
+           std::to_string(next_slot - t * n) + " of " + std::to_string(n) + " descriptors";
+  }
+  return "";
+}
+
+}  // namespace
+
+bool ValidateKdForest(const KdForestView& forest, std::string* error) {
+  std::string message = ShapeError(forest);
+  if (message.empty() && !forest.roots.empty()) {
+    std::vector<uint64_t> seen((forest.NumDescriptors() + 63) / 64);
+    for (size_t t = 0; message.empty() && t < forest.roots.size(); ++t) {
+      message = TreeError(forest, t, &seen);
     }
   }
-  return true;
+  if (message.empty()) return true;
+  if (error) *error = std::move(message);
+  return false;
 }
 
 KdForestSearcher::KdForestSearcher(const KdForestView& forest, const DistanceFunctions& distance)

@@ -375,9 +375,8 @@ struct Job {
   std::vector<KdNode> nodes;
 };
 
-}  // namespace
-
-KdForest BuildKdForest(std::span<const uint8_t> descriptors, const KdForestBuildOptions& options) {
+// Throws std::invalid_argument where BuildKdForest cannot build.
+void CheckBuildInput(std::span<const uint8_t> descriptors, const KdForestBuildOptions& options) {
   if (descriptors.size() % kDescriptorDim != 0) {
     throw std::invalid_argument("BuildKdForest: descriptor bytes (" +
                                 std::to_string(descriptors.size()) + ") not a multiple of 128");
@@ -396,6 +395,87 @@ KdForest BuildKdForest(std::span<const uint8_t> descriptors, const KdForestBuild
     throw std::invalid_argument("BuildKdForest: " + std::to_string(n) + " descriptors x " +
                                 std::to_string(num_trees) + " trees exceed 32-bit leaf slots");
   }
+}
+
+// Phase 1 for tree `tree`, whose rows are ind[0, count) and leaf slots start at `slot_base`:
+// its top kJobDepth levels split serially into `top`, each subtree below them one of `jobs`.
+void SplitTreeTop(ForestBuilder& builder, uint32_t tree, uint32_t* ind, uint64_t slot_base,
+                  uint32_t count, uint64_t seed, Scratch* scratch, std::vector<TopEntry>* top,
+                  std::vector<Job>* jobs) {
+  // Iterative preorder, like BuildSubtree, stopping at kJobDepth.
+  struct Task {
+    uint32_t begin, count, depth;
+    uint64_t seed;
+    uint32_t parent;
+  };
+  std::vector<Task> stack{{0, count, 0, seed, kNoParent}};
+  while (!stack.empty()) {
+    const Task task = stack.back();
+    stack.pop_back();
+    const uint32_t entry = uint32_t(top->size());
+    if (task.parent != kNoParent) (*top)[task.parent].right_entry = entry;
+    if (task.depth == kJobDepth && task.count > builder.max_leaf()) {
+      TopEntry job_entry;
+      job_entry.job = int32_t(jobs->size());
+      top->push_back(job_entry);
+      jobs->push_back(Job{tree, task.begin, task.count, task.seed, {}});
+      continue;
+    }
+    const Split split =
+        builder.SplitNode(builder.GlobalRows(ind + task.begin), task.count, task.seed, scratch);
+    TopEntry e;
+    if (split.leaf) {
+      e.node = KdNode{uint32_t(slot_base + task.begin), kKdLeaf, uint8_t(task.count), 0, 0};
+      top->push_back(e);
+      builder.progress().Add(task.count);
+      continue;
+    }
+    e.node = KdNode{0, split.dim, split.low, split.high, 0};
+    top->push_back(e);
+    stack.push_back(Task{task.begin + split.left_count, task.count - split.left_count,
+                         task.depth + 1, ChildSeed(task.seed, 1), entry});
+    stack.push_back(
+        Task{task.begin, split.left_count, task.depth + 1, ChildSeed(task.seed, 0), kNoParent});
+  }
+}
+
+// Phase 3 for one tree: its top entries and its jobs' subtrees (freed once copied) spliced
+// into one preorder run appended to forest->nodes, its root appended to forest->roots.
+void AppendTree(const std::vector<TopEntry>& top, std::vector<Job>* jobs, KdForest* forest) {
+  const uint32_t root = uint32_t(forest->nodes.size());
+  forest->roots.push_back(root);
+  std::vector<uint32_t> position(top.size());
+  uint64_t cursor = root;
+  for (size_t e = 0; e < top.size(); ++e) {
+    position[e] = uint32_t(cursor);
+    cursor += top[e].job >= 0 ? (*jobs)[top[e].job].nodes.size() : 1;
+  }
+  if (cursor > std::numeric_limits<uint32_t>::max()) {
+    throw std::length_error("BuildKdForest: more than 2^32 nodes");
+  }
+  ReserveOnHugePages(&forest->nodes, cursor);
+  for (size_t e = 0; e < top.size(); ++e) {
+    if (top[e].job < 0) {
+      KdNode node = top[e].node;
+      if (node.dim != kKdLeaf) node.index = position[top[e].right_entry];
+      forest->nodes.push_back(node);
+      continue;
+    }
+    std::vector<KdNode>& sub = (*jobs)[top[e].job].nodes;
+    for (KdNode node : sub) {
+      if (node.dim != kKdLeaf) node.index += position[e];
+      forest->nodes.push_back(node);
+    }
+    std::vector<KdNode>().swap(sub);
+  }
+}
+
+}  // namespace
+
+KdForest BuildKdForest(std::span<const uint8_t> descriptors, const KdForestBuildOptions& options) {
+  CheckBuildInput(descriptors, options);
+  const uint64_t n = descriptors.size() / kDescriptorDim;
+  const uint32_t num_trees = options.num_trees;
   uint32_t num_threads = options.num_threads;
   if (num_threads == 0) num_threads = std::max(1u, std::thread::hardware_concurrency());
 
@@ -422,45 +502,9 @@ KdForest BuildKdForest(std::span<const uint8_t> descriptors, const KdForestBuild
   std::vector<std::vector<TopEntry>> tops(num_trees);
   std::vector<std::vector<Job>> tree_jobs(num_trees);
   RunParallel(num_trees, num_threads, [&](size_t t, uint32_t worker) {
-    uint32_t* ind = forest.leaves.data() + t * n;
-    const uint64_t slot_base = t * n;
-    Scratch* s = ensure_scratch(worker, uint32_t(n));
-    std::vector<TopEntry>& top = tops[t];
-    // Iterative preorder, like BuildSubtree, stopping at kJobDepth.
-    struct Task {
-      uint32_t begin, count, depth;
-      uint64_t seed;
-      uint32_t parent;
-    };
-    std::vector<Task> stack{{0, uint32_t(n), 0, Mix(options.seed ^ Mix(t + 1)), kNoParent}};
-    while (!stack.empty()) {
-      const Task task = stack.back();
-      stack.pop_back();
-      const uint32_t entry = uint32_t(top.size());
-      if (task.parent != kNoParent) top[task.parent].right_entry = entry;
-      if (task.depth == kJobDepth && task.count > builder.max_leaf()) {
-        TopEntry job_entry;
-        job_entry.job = int32_t(tree_jobs[t].size());
-        top.push_back(job_entry);
-        tree_jobs[t].push_back(Job{uint32_t(t), task.begin, task.count, task.seed, {}});
-        continue;
-      }
-      const Split split =
-          builder.SplitNode(builder.GlobalRows(ind + task.begin), task.count, task.seed, s);
-      TopEntry e;
-      if (split.leaf) {
-        e.node = KdNode{uint32_t(slot_base + task.begin), kKdLeaf, uint8_t(task.count), 0, 0};
-        top.push_back(e);
-        builder.progress().Add(task.count);
-        continue;
-      }
-      e.node = KdNode{0, split.dim, split.low, split.high, 0};
-      top.push_back(e);
-      stack.push_back(Task{task.begin + split.left_count, task.count - split.left_count,
-                           task.depth + 1, ChildSeed(task.seed, 1), entry});
-      stack.push_back(
-          Task{task.begin, split.left_count, task.depth + 1, ChildSeed(task.seed, 0), kNoParent});
-    }
+    SplitTreeTop(builder, uint32_t(t), forest.leaves.data() + t * n, t * n, uint32_t(n),
+                 Mix(options.seed ^ Mix(t + 1)), ensure_scratch(worker, uint32_t(n)), &tops[t],
+                 &tree_jobs[t]);
   });
 
   // Phase 2: all subtrees of all trees, largest first for load balance.
@@ -479,35 +523,7 @@ KdForest BuildKdForest(std::span<const uint8_t> descriptors, const KdForestBuild
   scratch.clear();
 
   // Phase 3: splice each tree's top entries and job subtrees into one preorder array.
-  for (uint32_t t = 0; t < num_trees; ++t) {
-    const std::vector<TopEntry>& top = tops[t];
-    const uint32_t root = uint32_t(forest.nodes.size());
-    forest.roots.push_back(root);
-    std::vector<uint32_t> position(top.size());
-    uint64_t cursor = root;
-    for (size_t e = 0; e < top.size(); ++e) {
-      position[e] = uint32_t(cursor);
-      cursor += top[e].job >= 0 ? tree_jobs[t][top[e].job].nodes.size() : 1;
-    }
-    if (cursor > std::numeric_limits<uint32_t>::max()) {
-      throw std::length_error("BuildKdForest: more than 2^32 nodes");
-    }
-    ReserveOnHugePages(&forest.nodes, cursor);
-    for (size_t e = 0; e < top.size(); ++e) {
-      if (top[e].job < 0) {
-        KdNode node = top[e].node;
-        if (node.dim != kKdLeaf) node.index = position[top[e].right_entry];
-        forest.nodes.push_back(node);
-        continue;
-      }
-      std::vector<KdNode>& sub = tree_jobs[t][top[e].job].nodes;
-      for (KdNode node : sub) {
-        if (node.dim != kKdLeaf) node.index += position[e];
-        forest.nodes.push_back(node);
-      }
-      std::vector<KdNode>().swap(sub);
-    }
-  }
+  for (uint32_t t = 0; t < num_trees; ++t) AppendTree(tops[t], &tree_jobs[t], &forest);
   if (options.progress) options.progress(1.0);
   return forest;
 }

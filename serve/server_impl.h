@@ -51,6 +51,15 @@ class ServiceTimes {
 struct Server::Impl {
   explicit Impl(ServeOptions options_in);
 
+  // Server::Server's stages (server.cc): httplib's limits and timeouts; the hooks every request
+  // passes (before routing, httplib's refusals, exceptions, the log line); the routes, whose
+  // /v1/admin/reload calls `server`'s Reload.
+  void ConfigureHttp();
+  void SetHooks();
+  void SetRoutes(Server& server);
+  // Before routing: CORS, the token, and a query turned away while the queue is full.
+  httplib::Server::HandlerResponse PreRoute(const httplib::Request& req, httplib::Response& res);
+
   // /v1/localize, /v1/geopose, /v1/sessions..., /v1/coverage, /v1/info, /v1/map.
   void Localize(const httplib::Request& req, httplib::Response& res);
   void GeoPose(const httplib::Request& req, httplib::Response& res);

@@ -20,6 +20,8 @@ packages=(
   # benchmark.
   libcpp-httplib-dev libjs-three wrk
   colmap hyperfine valgrind time python3 python3-jsonschema python3-matplotlib clang-format
+  # universal-ctags: where each function ends, for tools/check_function_length.py.
+  universal-ctags
   # The Python module (docs/python.md): pybind11 and Python's headers, numpy, its tests, pip's
   # offline build in a venv; Dask.
   pybind11-dev python3-pybind11 python3-dev python3-numpy python3-pytest python3-setuptools

@@ -331,6 +331,48 @@ double GradientMaxNorm(const RefinementProblem& problem, const RefinementParamet
   return AmbientDistance(problem, x, Plus(problem, x, minus_gradient), /*max_norm=*/true);
 }
 
+// Ceres' trust region: its radius mu grows after a step taken, by how well the linear model
+// predicted the decrease, and shrinks twice as fast after each step in a row not taken.
+struct TrustRegion {
+  double radius = kInitialRadius;
+  double decrease_factor = 2.0;
+
+  void Accept(double relative_decrease) {
+    const double t = 2.0 * relative_decrease - 1.0;
+    radius = std::min(kMaxRadius, radius / std::max(1.0 / 3.0, 1.0 - t * t * t));
+    decrease_factor = 2.0;
+  }
+  void Reject() {
+    radius /= decrease_factor;
+    decrease_factor *= 2.0;
+  }
+};
+
+// The step of the scaled normal equations (h, g) within the trust region's radius: solves
+// (h + diag(h) / radius) step = -g, diag(h) clamped. False for what Ceres calls an invalid step
+// (a failed solve, or one whose linear model does not decrease, by `model_cost_change`).
+bool SolveStep(int n, const Matrix& h, const double* g, double radius, double* step,
+               double* model_cost_change) {
+  Matrix damped = {};  // only its n x n corner is read
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < n; ++j) damped[i][j] = h[i][j];
+    damped[i][i] += std::clamp(h[i][i], kMinDiagonal, kMaxDiagonal) / radius;
+  }
+  // Cholesky on the normal equations, where Ceres' DENSE_QR factors [J; D]: the same step up
+  // to rounding.
+  if (!SolveCholesky(n, &damped[0][0], kMaxParams, g, step)) return false;
+  for (int i = 0; i < n; ++i) step[i] = -step[i];
+  double linear = 0.0, quadratic = 0.0;
+  for (int i = 0; i < n; ++i) {
+    linear += step[i] * g[i];
+    double row = 0.0;
+    for (int j = 0; j < n; ++j) row += h[i][j] * step[j];
+    quadratic += step[i] * row;
+  }
+  *model_cost_change = -(linear + 0.5 * quadratic);
+  return *model_cost_change > 0.0;
+}
+
 template <typename Model>
 bool Minimize(const RefinementProblem& problem, RefinementParameters* parameters,
               PoseRefinementSummary* summary) {
@@ -357,8 +399,7 @@ bool Minimize(const RefinementProblem& problem, RefinementParameters* parameters
 
   double cost = normal.cost;
   double gradient_max_norm = GradientMaxNorm(problem, x, normal, n);
-  double radius = kInitialRadius;
-  double decrease_factor = 2.0;
+  TrustRegion trust_region;
   int invalid_in_a_row = 0;
   double x_norm = -1.0;  // Ceres sets it at the first accepted step: no parameter test before
   RefinementParameters best = x;
@@ -373,38 +414,17 @@ bool Minimize(const RefinementProblem& problem, RefinementParameters* parameters
   while (true) {
     if (iteration >= problem.max_iterations) break;
     if (last_step_taken && gradient_max_norm <= kGradientTolerance) break;
-    if (radius <= kMinRadius) break;
+    if (trust_region.radius <= kMinRadius) break;
     ++iteration;
 
-    Matrix damped;
-    for (int i = 0; i < n; ++i) {
-      for (int j = 0; j < n; ++j) damped[i][j] = h[i][j];
-      damped[i][i] += std::clamp(h[i][i], kMinDiagonal, kMaxDiagonal) / radius;
-    }
     double step[kMaxParams];
-    // Cholesky on the normal equations, where Ceres' DENSE_QR factors [J; D]: the same step up
-    // to rounding; a failed solve is what Ceres calls an invalid step.
-    bool valid = SolveCholesky(n, &damped[0][0], kMaxParams, g, step);
     double model_cost_change = 0.0;
-    if (valid) {
-      for (int i = 0; i < n; ++i) step[i] = -step[i];
-      double linear = 0.0, quadratic = 0.0;
-      for (int i = 0; i < n; ++i) {
-        linear += step[i] * g[i];
-        double row = 0.0;
-        for (int j = 0; j < n; ++j) row += h[i][j] * step[j];
-        quadratic += step[i] * row;
-      }
-      model_cost_change = -(linear + 0.5 * quadratic);
-      valid = model_cost_change > 0.0;
-    }
-    if (!valid) {
+    if (!SolveStep(n, h, g, trust_region.radius, step, &model_cost_change)) {
       if (++invalid_in_a_row >= kMaxConsecutiveInvalidSteps) {
         usable = false;
         break;
       }
-      radius /= decrease_factor;
-      decrease_factor *= 2.0;
+      trust_region.Reject();
       last_step_taken = false;
       ++logged;
       final_cost = std::min(final_cost, cost);
@@ -438,9 +458,7 @@ bool Minimize(const RefinementProblem& problem, RefinementParameters* parameters
       scale_normal();
       cost = normal.cost;
       gradient_max_norm = GradientMaxNorm(problem, x, normal, n);
-      const double t = 2.0 * relative_decrease - 1.0;
-      radius = std::min(kMaxRadius, radius / std::max(1.0 / 3.0, 1.0 - t * t * t));
-      decrease_factor = 2.0;
+      trust_region.Accept(relative_decrease);
       last_step_taken = true;
       if (cost < best_cost) {
         best = x;
@@ -448,8 +466,7 @@ bool Minimize(const RefinementProblem& problem, RefinementParameters* parameters
       }
       final_cost = std::min(final_cost, cost);
     } else {
-      radius /= decrease_factor;
-      decrease_factor *= 2.0;
+      trust_region.Reject();
       last_step_taken = false;
       final_cost = std::min(final_cost, candidate_cost);
     }

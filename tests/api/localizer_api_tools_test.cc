@@ -369,44 +369,74 @@ class LocalizerApiGeoToolsTest : public testing::Test {
   static inline api::Localizer* localizer_ = nullptr;
 };
 
-// The same query, camera and priors: the library's pose on the globe and what its priors did
-// are cwloc-localize's JSON, bit for bit; the C API's are the C++ API's.
-TEST_F(LocalizerApiGeoToolsTest, GeoPosesAndPriorsAreCwlocLocalizesBitForBit) {
-  const auto cli = LocalizeWithTheTool("--priors " + test::Quote(City() / "query_priors.txt"));
-  const auto priors = PriorOptions();
-  const colmap::DatabaseReader db(City() / "database.db");
-  cwloc_localizer* c_localizer = nullptr;
-  ASSERT_EQ(cwloc_localizer_open(IndexPath().string().c_str(), 0, &c_localizer), CWLOC_OK);
-  const auto queries = Queries();
-  ASSERT_EQ(queries.size(), 20u);
-  ASSERT_EQ(cli.size(), queries.size());
+// A query localized with its priors by cwloc-localize (its JSON record) and by the C++ API.
+struct LocalizedWithPriors {
+  std::string name;
+  api::Camera camera;
+  api::Options options;
+  api::Features features;
+  api::Result result;
+  nlohmann::json json;
+};
+
+// Every query of the city with its priors, the same camera and priors through the tool and the
+// C++ API.
+class LocalizerApiGeoPriorsTest : public LocalizerApiGeoToolsTest {
+ protected:
+  void SetUp() override {
+    LocalizerApiGeoToolsTest::SetUp();
+    if (IsSkipped()) return;
+    const auto cli = LocalizeWithTheTool("--priors " + test::Quote(City() / "query_priors.txt"));
+    const auto priors = PriorOptions();
+    const colmap::DatabaseReader db(City() / "database.db");
+    const auto queries = Queries();
+    ASSERT_EQ(queries.size(), 20u);
+    ASSERT_EQ(cli.size(), queries.size());
+    for (const auto& [name, camera] : queries) {
+      LocalizedWithPriors& q = queries_.emplace_back();
+      q.name = name;
+      q.camera = camera;
+      q.options = priors.at(name);
+      q.features = DatabaseFeatures(db, name);
+      q.result = localizer_->Localize(q.features, camera, q.options);
+      q.json = cli.at(name);
+    }
+  }
+
+  std::vector<LocalizedWithPriors> queries_;
+};
+
+// The library's pose and pose on the globe are cwloc-localize's JSON, bit for bit.
+TEST_F(LocalizerApiGeoPriorsTest, GeoPosesAreCwlocLocalizesBitForBit) {
+  for (const LocalizedWithPriors& q : queries_) {
+    SCOPED_TRACE(q.name);
+    ASSERT_TRUE(q.json["success"].get<bool>()) << q.json.dump();
+    ASSERT_TRUE(q.result.success) << q.result.failure_reason;
+    EXPECT_EQ(q.result.rotation, (q.json["pose"]["qvec"].get<std::array<double, 4>>()));
+    EXPECT_EQ(q.result.translation, (q.json["pose"]["tvec"].get<std::array<double, 3>>()));
+
+    ASSERT_TRUE(q.result.geo);
+    const nlohmann::json& geo = q.json.at("geo");
+    EXPECT_EQ(q.result.geo->latitude_deg, geo["latitude_deg"].get<double>());
+    EXPECT_EQ(q.result.geo->longitude_deg, geo["longitude_deg"].get<double>());
+    EXPECT_EQ(q.result.geo->height_m, geo["height_m"].get<double>());
+    EXPECT_EQ(q.result.geo->enu, (geo["enu"].get<std::array<double, 3>>()));
+    EXPECT_EQ(q.result.geo->heading_deg, geo["heading_deg"].get<double>());
+    EXPECT_EQ(q.result.geo->pitch_deg, geo["pitch_deg"].get<double>());
+    EXPECT_EQ(q.result.geo->roll_deg, geo["roll_deg"].get<double>());
+  }
+}
+
+// The covariance, in the model frame and in metres on the ground, is cwloc-localize's.
+TEST_F(LocalizerApiGeoPriorsTest, CovariancesAreCwlocLocalizesBitForBit) {
   double first_scale = 0;  // metres per model unit, from the first query's covariance
-  for (const auto& [name, camera] : queries) {
-    SCOPED_TRACE(name);
-    const api::Options& options = priors.at(name);
-    ASSERT_TRUE(options.position_prior && options.gravity);
-    const api::Features features = DatabaseFeatures(db, name);
-    const api::Result result = localizer_->Localize(features, camera, options);
-    const nlohmann::json& json = cli.at(name);
-    ASSERT_TRUE(json["success"].get<bool>()) << json.dump();
-    ASSERT_TRUE(result.success) << result.failure_reason;
-    EXPECT_EQ(result.rotation, (json["pose"]["qvec"].get<std::array<double, 4>>()));
-    EXPECT_EQ(result.translation, (json["pose"]["tvec"].get<std::array<double, 3>>()));
-
-    ASSERT_TRUE(result.geo);
-    const nlohmann::json& geo = json.at("geo");
-    EXPECT_EQ(result.geo->latitude_deg, geo["latitude_deg"].get<double>());
-    EXPECT_EQ(result.geo->longitude_deg, geo["longitude_deg"].get<double>());
-    EXPECT_EQ(result.geo->height_m, geo["height_m"].get<double>());
-    EXPECT_EQ(result.geo->enu, (geo["enu"].get<std::array<double, 3>>()));
-    EXPECT_EQ(result.geo->heading_deg, geo["heading_deg"].get<double>());
-    EXPECT_EQ(result.geo->pitch_deg, geo["pitch_deg"].get<double>());
-    EXPECT_EQ(result.geo->roll_deg, geo["roll_deg"].get<double>());
-
-    // The covariance, in the model frame and in metres on the ground.
-    ASSERT_TRUE(result.covariance);
-    const api::PoseCovariance& covariance = *result.covariance;
-    const nlohmann::json& json_covariance = json.at("covariance");
+  for (const LocalizedWithPriors& q : queries_) {
+    SCOPED_TRACE(q.name);
+    ASSERT_TRUE(q.json["success"].get<bool>()) << q.json.dump();
+    ASSERT_TRUE(q.result.success) << q.result.failure_reason;
+    ASSERT_TRUE(q.result.covariance);
+    const api::PoseCovariance& covariance = *q.result.covariance;
+    const nlohmann::json& json_covariance = q.json.at("covariance");
     for (int r = 0; r < 6; ++r) {
       for (int c = 0; c < 6; ++c)
         EXPECT_EQ(covariance.pose[6 * r + c], json_covariance["pose"][r][c].get<double>());
@@ -423,9 +453,18 @@ TEST_F(LocalizerApiGeoToolsTest, GeoPosesAndPriorsAreCwlocLocalizesBitForBit) {
     if (first_scale == 0) first_scale = scale;
     EXPECT_NEAR(scale, first_scale, 1e-6 * first_scale);
     EXPECT_FALSE(covariance.focal_std_px);  // a known camera
+  }
+}
 
-    const nlohmann::json& position = json.at("priors").at("position");
-    const std::optional<api::PositionPriorUse>& prior = result.priors.position;
+// What the priors did is cwloc-localize's.
+TEST_F(LocalizerApiGeoPriorsTest, PriorsAreCwlocLocalizesBitForBit) {
+  for (const LocalizedWithPriors& q : queries_) {
+    SCOPED_TRACE(q.name);
+    ASSERT_TRUE(q.json["success"].get<bool>()) << q.json.dump();
+    ASSERT_TRUE(q.result.success) << q.result.failure_reason;
+    ASSERT_TRUE(q.options.position_prior && q.options.gravity);
+    const nlohmann::json& position = q.json.at("priors").at("position");
+    const std::optional<api::PositionPriorUse>& prior = q.result.priors.position;
     ASSERT_TRUE(prior);
     EXPECT_EQ(prior->latitude_deg, position["latitude_deg"].get<double>());
     EXPECT_EQ(prior->longitude_deg, position["longitude_deg"].get<double>());
@@ -433,34 +472,48 @@ TEST_F(LocalizerApiGeoToolsTest, GeoPosesAndPriorsAreCwlocLocalizesBitForBit) {
     EXPECT_EQ(prior->radius_m, 50.0);
     EXPECT_EQ(prior->clusters_in_radius, position["clusters_in_radius"].get<uint32_t>());
     EXPECT_GE(prior->clusters_in_radius, 1u);
-    const nlohmann::json& gravity = json.at("priors").at("gravity");
-    ASSERT_TRUE(result.priors.gravity && result.priors.gravity->error_deg);
-    EXPECT_EQ(result.priors.gravity->direction,
+    const nlohmann::json& gravity = q.json.at("priors").at("gravity");
+    ASSERT_TRUE(q.result.priors.gravity && q.result.priors.gravity->error_deg);
+    EXPECT_EQ(q.result.priors.gravity->direction,
               (gravity["direction"].get<std::array<double, 3>>()));
-    EXPECT_EQ(*result.priors.gravity->error_deg, gravity["error_deg"].get<double>());
+    EXPECT_EQ(*q.result.priors.gravity->error_deg, gravity["error_deg"].get<double>());
+  }
+}
 
-    // The C API on the same query and priors.
+// The C API on the same query and priors gives the C++ API's geo pose, gravity error and
+// covariance, and cwloc-localize's record but for the query's name, the times and the priors'
+// source.
+TEST_F(LocalizerApiGeoPriorsTest, TheCApiGivesTheSameGeoPosesAndRecords) {
+  cwloc_localizer* c_localizer = nullptr;
+  ASSERT_EQ(cwloc_localizer_open(IndexPath().string().c_str(), 0, &c_localizer), CWLOC_OK);
+  for (const LocalizedWithPriors& q : queries_) {
+    SCOPED_TRACE(q.name);
+    ASSERT_TRUE(q.json["success"].get<bool>()) << q.json.dump();
+    ASSERT_TRUE(q.result.success) << q.result.failure_reason;
+    ASSERT_TRUE(q.options.position_prior && q.options.gravity);
+    ASSERT_TRUE(q.result.geo && q.result.covariance && q.result.priors.gravity);
+    const api::PoseCovariance& covariance = *q.result.covariance;
     cwloc_options* c_options = nullptr;
     ASSERT_EQ(cwloc_options_create(&c_options), CWLOC_OK);
-    const api::PositionPrior& p = *options.position_prior;
+    const api::PositionPrior& p = *q.options.position_prior;
     const cwloc_position_prior c_prior = {p.latitude_deg, p.longitude_deg, *p.height_m, p.radius_m};
     ASSERT_EQ(cwloc_options_set_position_prior(c_options, &c_prior), CWLOC_OK);
-    ASSERT_EQ(cwloc_options_set_gravity(c_options, options.gravity->data()), CWLOC_OK);
-    const cwloc_camera c_camera = {camera.model.c_str(), camera.width,
-                                   camera.height,        camera.params.data(),
-                                   camera.params.size(), CWLOC_CALIBRATION_KNOWN};
+    ASSERT_EQ(cwloc_options_set_gravity(c_options, q.options.gravity->data()), CWLOC_OK);
+    const cwloc_camera c_camera = {q.camera.model.c_str(), q.camera.width,
+                                   q.camera.height,        q.camera.params.data(),
+                                   q.camera.params.size(), CWLOC_CALIBRATION_KNOWN};
     cwloc_result* c_result = nullptr;
-    ASSERT_EQ(
-        cwloc_localize_features(c_localizer, features.keypoints.data(), features.descriptors.data(),
-                                static_cast<uint32_t>(features.keypoints.size() / 2), &c_camera,
-                                c_options, &c_result),
-        CWLOC_OK)
+    ASSERT_EQ(cwloc_localize_features(c_localizer, q.features.keypoints.data(),
+                                      q.features.descriptors.data(),
+                                      static_cast<uint32_t>(q.features.keypoints.size() / 2),
+                                      &c_camera, c_options, &c_result),
+              CWLOC_OK)
         << cwloc_last_error();
-    EXPECT_EQ(CValue(c_result, "geo.latitude_deg"), result.geo->latitude_deg);
-    EXPECT_EQ(CValue(c_result, "geo.longitude_deg"), result.geo->longitude_deg);
-    EXPECT_EQ(CValue(c_result, "geo.height_m"), result.geo->height_m);
-    EXPECT_EQ(CValue(c_result, "geo.heading_deg"), result.geo->heading_deg);
-    EXPECT_EQ(CValue(c_result, "priors.gravity.error_deg"), *result.priors.gravity->error_deg);
+    EXPECT_EQ(CValue(c_result, "geo.latitude_deg"), q.result.geo->latitude_deg);
+    EXPECT_EQ(CValue(c_result, "geo.longitude_deg"), q.result.geo->longitude_deg);
+    EXPECT_EQ(CValue(c_result, "geo.height_m"), q.result.geo->height_m);
+    EXPECT_EQ(CValue(c_result, "geo.heading_deg"), q.result.geo->heading_deg);
+    EXPECT_EQ(CValue(c_result, "priors.gravity.error_deg"), *q.result.priors.gravity->error_deg);
     EXPECT_EQ(CValues(c_result, "covariance.pose"), Doubles(covariance.pose));
     EXPECT_EQ(CValues(c_result, "covariance.enu_position"), Doubles(*covariance.enu_position));
     EXPECT_EQ(CValue(c_result, "covariance.position_radius95"), covariance.position_radius95);
@@ -472,16 +525,16 @@ TEST_F(LocalizerApiGeoToolsTest, GeoPosesAndPriorsAreCwlocLocalizesBitForBit) {
               covariance.calibration->rotation);
     EXPECT_EQ(c_position_scale, covariance.calibration->position);
     EXPECT_GE(c_position_scale, 1.0);
-    EXPECT_EQ(json["covariance"]["calibration"]["position_scale"], c_position_scale);
+    EXPECT_EQ(q.json["covariance"]["calibration"]["position_scale"], c_position_scale);
     // The record is cwloc-localize's but for the query's name, the times and the priors' source.
     nlohmann::json c_json = nlohmann::json::parse(cwloc_result_json(c_result));
     EXPECT_EQ(c_json["name"], "query");
-    EXPECT_EQ(c_json["pose"], json["pose"]);
-    EXPECT_EQ(c_json["covariance"], json["covariance"]);
-    EXPECT_EQ(c_json["geo"], json["geo"]);
-    EXPECT_EQ(c_json["priors"]["gravity"], json["priors"]["gravity"]);
+    EXPECT_EQ(c_json["pose"], q.json["pose"]);
+    EXPECT_EQ(c_json["covariance"], q.json["covariance"]);
+    EXPECT_EQ(c_json["geo"], q.json["geo"]);
+    EXPECT_EQ(c_json["priors"]["gravity"], q.json["priors"]["gravity"]);
     EXPECT_EQ(c_json["priors"]["position"]["source"], "option");  // the tool's came from a file
-    EXPECT_EQ(c_json["matches"], json["matches"]);
+    EXPECT_EQ(c_json["matches"], q.json["matches"]);
     cwloc_result_destroy(c_result);
     cwloc_options_destroy(c_options);
   }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <numbers>
 #include <random>
 #include <string>
@@ -135,18 +136,29 @@ std::vector<double> TypicalCameraParams(CameraModelId model, uint64_t width, uin
   return {};
 }
 
-colmap::Reconstruction SyntheticModel(const SyntheticModelOptions& options) {
-  using namespace colmap;
-  Reconstruction model;
+namespace {
+
+using colmap::Camera;
+using colmap::Frame;
+using colmap::Image;
+using colmap::Point2D;
+using colmap::Point3D;
+using colmap::Reconstruction;
+using colmap::Rig;
+using colmap::RigSensor;
+using colmap::SensorType;
+
+// The id after `previous`: the next one, or with `sparse` one a gap of up to 2 past it.
+uint64_t NextId(uint64_t previous, bool sparse) {
+  return previous + (sparse ? UniformInt(1, 3) : 1);
+}
+
+// The cameras, the options' models in turn; returns their ids.
+std::vector<camera_t> AddCameras(const SyntheticModelOptions& options, Reconstruction* model) {
   std::vector<CameraModelId> models = options.camera_models;
   if (models.empty()) {
     for (const CameraModelInfo& info : AllCameraModels()) models.push_back(info.id);
   }
-  auto next_id = [&](uint64_t previous) {
-    return previous + (options.sparse_ids ? UniformInt(1, 3) : 1);
-  };
-
-  // Cameras.
   constexpr std::array<std::array<uint64_t, 2>, 3> kSizes = {
       {{640, 480}, {1024, 768}, {1536, 1024}}};
   std::vector<camera_t> camera_ids;
@@ -159,87 +171,97 @@ colmap::Reconstruction SyntheticModel(const SyntheticModelOptions& options) {
     camera.height = size[1];
     camera.params = TypicalCameraParams(camera.model_id, camera.width, camera.height);
     camera_ids.push_back(camera.camera_id);
-    model.cameras.emplace(camera.camera_id, std::move(camera));
+    model->cameras.emplace(camera.camera_id, std::move(camera));
   }
+  return camera_ids;
+}
 
-  // Images (and rigs and frames).
-  constexpr double kDistance = 8;
+constexpr double kDistance = 8;  // of the cameras from the points' centre
+
+// Adds an image of `camera_id` after image `*image_id`, which becomes its id.
+image_t AddImage(camera_t camera_id, const Rigid3d& cam_from_world, bool sparse_ids,
+                 image_t* image_id, Reconstruction* model) {
+  *image_id = static_cast<image_t>(NextId(*image_id, sparse_ids));
+  Image image;
+  image.image_id = *image_id;
+  image.camera_id = camera_id;
+  image.name = "cam" + std::to_string(camera_id) + "/img_" + std::to_string(*image_id) + ".jpg";
+  image.cam_from_world = cam_from_world;
+  model->images.emplace(*image_id, std::move(image));
+  return *image_id;
+}
+
+// Rigs of two cameras, the second 0.3 units to the side, turned a little; returns each rig's
+// cameras.
+std::vector<std::vector<camera_t>> AddRigs(const std::vector<camera_t>& camera_ids,
+                                           Reconstruction* model) {
+  std::vector<std::vector<camera_t>> rig_cameras;
+  for (size_t i = 0; i < camera_ids.size(); i += 2) {
+    Rig rig;
+    rig.rig_id = static_cast<rig_t>(rig_cameras.size() + 1);
+    rig.ref_sensor = {SensorType::kCamera, camera_ids[i]};
+    std::vector<camera_t> cams = {camera_ids[i]};
+    if (i + 1 < camera_ids.size()) {
+      RigSensor sensor;
+      sensor.sensor = {SensorType::kCamera, camera_ids[i + 1]};
+      Rigid3d sensor_from_rig;
+      sensor_from_rig.rotation = ExactRotationNear({1, 0, 0, 0}, 0.1);
+      sensor_from_rig.translation = {-0.3, Uniform(-0.02, 0.02), Uniform(-0.02, 0.02)};
+      sensor.sensor_from_rig = sensor_from_rig;
+      rig.sensors.push_back(sensor);
+      cams.push_back(camera_ids[i + 1]);
+    }
+    if (rig.rig_id == 1) rig.sensors.push_back({{SensorType::kImu, 1}, std::nullopt});
+    rig_cameras.push_back(cams);
+    model->rigs.emplace(rig.rig_id, std::move(rig));
+  }
+  return rig_cameras;
+}
+
+// The images of frames of the rigs in turn, posed as the readers compute them.
+void AddRigFrames(const SyntheticModelOptions& options,
+                  const std::vector<std::vector<camera_t>>& rig_cameras, Reconstruction* model) {
   image_t image_id = 0;
-  auto add_image = [&](camera_t camera_id, const Rigid3d& cam_from_world) {
-    image_id = static_cast<image_t>(next_id(image_id));
-    Image image;
-    image.image_id = image_id;
-    image.camera_id = camera_id;
-    image.name = "cam" + std::to_string(camera_id) + "/img_" + std::to_string(image_id) + ".jpg";
-    image.cam_from_world = cam_from_world;
-    model.images.emplace(image_id, std::move(image));
-    return image_id;
-  };
-  if (!options.with_rigs) {
-    for (int i = 0; i < options.num_images; ++i) {
-      add_image(camera_ids[static_cast<size_t>(i) % camera_ids.size()], RandomPose(kDistance));
-    }
-  } else {
-    // Rigs of two cameras: the second sits 0.3 units to the side, turned a little.
-    std::vector<std::vector<camera_t>> rig_cameras;
-    for (size_t i = 0; i < camera_ids.size(); i += 2) {
-      Rig rig;
-      rig.rig_id = static_cast<rig_t>(rig_cameras.size() + 1);
-      rig.ref_sensor = {SensorType::kCamera, camera_ids[i]};
-      std::vector<camera_t> cams = {camera_ids[i]};
-      if (i + 1 < camera_ids.size()) {
-        RigSensor sensor;
-        sensor.sensor = {SensorType::kCamera, camera_ids[i + 1]};
-        Rigid3d sensor_from_rig;
-        sensor_from_rig.rotation = ExactRotationNear({1, 0, 0, 0}, 0.1);
-        sensor_from_rig.translation = {-0.3, Uniform(-0.02, 0.02), Uniform(-0.02, 0.02)};
-        sensor.sensor_from_rig = sensor_from_rig;
-        rig.sensors.push_back(sensor);
-        cams.push_back(camera_ids[i + 1]);
-      }
-      if (rig.rig_id == 1) rig.sensors.push_back({{SensorType::kImu, 1}, std::nullopt});
-      rig_cameras.push_back(cams);
-      model.rigs.emplace(rig.rig_id, std::move(rig));
-    }
-    frame_t frame_id = 0;
-    for (size_t r = 0; static_cast<int>(model.images.size()) < options.num_images; ++r) {
-      const Rig& rig = model.rigs.at(static_cast<rig_t>(r % rig_cameras.size() + 1));
-      Frame frame;
-      frame_id = static_cast<frame_t>(next_id(frame_id));
-      frame.frame_id = frame_id;
-      frame.rig_id = rig.rig_id;
-      frame.rig_from_world = RandomPose(kDistance);
-      for (camera_t camera_id : rig_cameras[r % rig_cameras.size()]) {
-        if (static_cast<int>(model.images.size()) == options.num_images) break;
-        Rigid3d cam_from_world = frame.rig_from_world;
-        for (const RigSensor& sensor : rig.sensors) {
-          if (sensor.sensor.type == SensorType::kCamera && sensor.sensor.id == camera_id) {
-            cam_from_world = *sensor.sensor_from_rig * frame.rig_from_world;
-          }
+  frame_t frame_id = 0;
+  for (size_t r = 0; static_cast<int>(model->images.size()) < options.num_images; ++r) {
+    const Rig& rig = model->rigs.at(static_cast<rig_t>(r % rig_cameras.size() + 1));
+    Frame frame;
+    frame_id = static_cast<frame_t>(NextId(frame_id, options.sparse_ids));
+    frame.frame_id = frame_id;
+    frame.rig_id = rig.rig_id;
+    frame.rig_from_world = RandomPose(kDistance);
+    for (camera_t camera_id : rig_cameras[r % rig_cameras.size()]) {
+      if (static_cast<int>(model->images.size()) == options.num_images) break;
+      Rigid3d cam_from_world = frame.rig_from_world;
+      for (const RigSensor& sensor : rig.sensors) {
+        if (sensor.sensor.type == SensorType::kCamera && sensor.sensor.id == camera_id) {
+          cam_from_world = *sensor.sensor_from_rig * frame.rig_from_world;
         }
-        const image_t id = add_image(camera_id, cam_from_world);
-        frame.data_ids.push_back({{SensorType::kCamera, camera_id}, id});
       }
-      if (rig.rig_id == 1) frame.data_ids.push_back({{SensorType::kImu, 1}, frame_id});
-      model.frames.emplace(frame_id, std::move(frame));
+      const image_t id = AddImage(camera_id, cam_from_world, options.sparse_ids, &image_id, model);
+      frame.data_ids.push_back({{SensorType::kCamera, camera_id}, id});
     }
+    if (rig.rig_id == 1) frame.data_ids.push_back({{SensorType::kImu, 1}, frame_id});
+    model->frames.emplace(frame_id, std::move(frame));
   }
+}
 
-  // Points and their observations: which images see which point, then points2D per image in
-  // random order, then tracks from the final positions.
+// The 3D points; returns which images see which point (in the points' order).
+std::map<image_t, std::vector<point3D_t>> AddPoints(const SyntheticModelOptions& options,
+                                                    Reconstruction* model) {
   std::vector<image_t> image_ids;
-  for (const auto& [id, image] : model.images) image_ids.push_back(id);
+  for (const auto& [id, image] : model->images) image_ids.push_back(id);
   std::map<image_t, std::vector<point3D_t>> observations;
   point3D_t point_id = 0;
   for (int i = 0; i < options.num_points3D; ++i) {
-    point_id = next_id(point_id);
+    point_id = NextId(point_id, options.sparse_ids);
     if (options.sparse_ids && i == options.num_points3D - 1) point_id += uint64_t{1} << 32;
     Point3D point;
     point.point3D_id = point_id;
     for (double& v : point.xyz) v = Uniform(-2, 2);
     for (uint8_t& c : point.color) c = static_cast<uint8_t>(UniformInt(0, 255));
     point.error = Uniform(0, 2);
-    model.points3D.emplace(point_id, std::move(point));
+    model->points3D.emplace(point_id, std::move(point));
     const int length = std::min<int>(UniformInt(options.min_track_length, options.max_track_length),
                                      static_cast<int>(image_ids.size()));
     std::vector<image_t> seen;
@@ -248,13 +270,23 @@ colmap::Reconstruction SyntheticModel(const SyntheticModelOptions& options) {
       seen.push_back(seen.front());  // twice in one image
     for (image_t id : seen) observations[id].push_back(point_id);
   }
+  return observations;
+}
+
+// Each image's points2D in random order, the observations projected with noise and the
+// unobserved ones anywhere, then the tracks from their final positions.
+void AddPoints2D(const SyntheticModelOptions& options,
+                 const std::map<image_t, std::vector<point3D_t>>& observations,
+                 Reconstruction* model) {
   std::normal_distribution<double> noise(0, 0.3);
-  for (auto& [id, image] : model.images) {
-    std::vector<point3D_t> entries = observations[id];
+  for (auto& [id, image] : model->images) {
+    const auto observed = observations.find(id);
+    std::vector<point3D_t> entries;
+    if (observed != observations.end()) entries = observed->second;
     entries.insert(entries.end(), static_cast<size_t>(options.num_unobserved_points2D),
                    kInvalidPoint3DId);
     std::shuffle(entries.begin(), entries.end(), Rng());
-    const colmap::Camera& camera = model.cameras.at(image.camera_id);
+    const colmap::Camera& camera = model->cameras.at(image.camera_id);
     for (point3D_t entry : entries) {
       Point2D point2D;
       point2D.point3D_id = entry;
@@ -262,7 +294,7 @@ colmap::Reconstruction SyntheticModel(const SyntheticModelOptions& options) {
       const bool projected =
           entry != kInvalidPoint3DId &&
           ProjectToPixel(camera.model_id, camera.params,
-                         image.cam_from_world * model.points3D.at(entry).xyz, &pixel);
+                         image.cam_from_world * model->points3D.at(entry).xyz, &pixel);
       if (projected) {
         point2D.x = pixel[0] + noise(Rng());
         point2D.y = pixel[1] + noise(Rng());
@@ -271,14 +303,31 @@ colmap::Reconstruction SyntheticModel(const SyntheticModelOptions& options) {
         point2D.y = Uniform(0, static_cast<double>(camera.height));
       }
       if (entry != kInvalidPoint3DId) {
-        model.points3D.at(entry).track.push_back(
+        model->points3D.at(entry).track.push_back(
             {id, static_cast<point2D_t>(image.points2D.size())});
       }
       image.points2D.push_back(point2D);
     }
   }
-  for (auto& [id, point] : model.points3D)
+  for (auto& [id, point] : model->points3D)
     std::shuffle(point.track.begin(), point.track.end(), Rng());
+}
+
+}  // namespace
+
+colmap::Reconstruction SyntheticModel(const SyntheticModelOptions& options) {
+  Reconstruction model;
+  const std::vector<camera_t> camera_ids = AddCameras(options, &model);
+  if (!options.with_rigs) {
+    image_t image_id = 0;
+    for (int i = 0; i < options.num_images; ++i) {
+      AddImage(camera_ids[static_cast<size_t>(i) % camera_ids.size()], RandomPose(kDistance),
+               options.sparse_ids, &image_id, &model);
+    }
+  } else {
+    AddRigFrames(options, AddRigs(camera_ids, &model), &model);
+  }
+  AddPoints2D(options, AddPoints(options, &model), &model);
   return model;
 }
 

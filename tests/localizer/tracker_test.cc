@@ -330,23 +330,37 @@ TEST_F(TrackerTest, ResetStartsFromScratch) {
   EXPECT_FALSE(result.tracking->predicted_from);
 }
 
-// cwloc-localize --sequence: one record per frame in the given order, each with its tracking
-// object (schema), and the summary counts the modes.
-TEST_F(TrackerTest, TheCliTracksAQueryListAsASequence) {
-  const test::TempDir dir;
-  const auto out = dir.path() / "frames.jsonl";
-  const auto trajectory = dir.path() / "trajectory.txt";
-  const std::string localize = test::ToolPath("cwloc-localize").string() + " --index " +
-                               index_->file().path().string() + " --database " +
-                               (*data_ / "database.db").string() + " --query-list " +
-                               (*data_ / "queries_with_intrinsics.txt").string();
+// cwloc-localize --sequence over fox_video's query list, its files in a folder of its own.
+class TrackerCliTest : public TrackerTest {
+ protected:
+  void SetUp() override {
+    TrackerTest::SetUp();
+    if (IsSkipped() || HasFatalFailure()) return;
+    localize_ = test::ToolPath("cwloc-localize").string() + " --index " +
+                index_->file().path().string() + " --database " +
+                (*data_ / "database.db").string() + " --query-list " +
+                (*data_ / "queries_with_intrinsics.txt").string();
+  }
+
+  // The sequence's records to out_, its TUM trajectory to trajectory_; the exit code.
+  int RunWithTumTrajectory(std::string* output) const {
+    return test::RunCommand(
+        localize_ + " --sequence -o " + out_.string() + " --trajectory " + trajectory_.string(),
+        output);
+  }
+
+  const test::TempDir dir_;
+  const std::filesystem::path out_ = dir_.path() / "frames.jsonl";
+  const std::filesystem::path trajectory_ = dir_.path() / "trajectory.txt";
+  std::string localize_;
+};
+
+// One record per frame in the given order, each with its tracking object (schema), and the
+// summary counts the modes.
+TEST_F(TrackerCliTest, TracksAQueryListAsASequence) {
   std::string output;
-  ASSERT_EQ(test::RunCommand(localize + " --sequence -o " + out.string() + " --trajectory " +
-                                 trajectory.string(),
-                             &output),
-            0)
-      << output;
-  const std::vector<nlohmann::json> records = test::ReadJsonLines(out);
+  ASSERT_EQ(RunWithTumTrajectory(&output), 0) << output;
+  const std::vector<nlohmann::json> records = test::ReadJsonLines(out_);
   ASSERT_EQ(records.size(), 25u);
   int tracked = 0;
   for (size_t i = 0; i < records.size(); ++i) {
@@ -363,12 +377,17 @@ TEST_F(TrackerTest, TheCliTracksAQueryListAsASequence) {
             std::string::npos)
       << output;
   std::string validation;
-  EXPECT_EQ(test::ValidateJson("localization-result.schema.json", out, true, &validation), 0)
+  EXPECT_EQ(test::ValidateJson("localization-result.schema.json", out_, true, &validation), 0)
       << validation;
+}
 
-  // The TUM trajectory: the frame's place, its centre and world_from_camera's rotation (the
-  // conjugate of the record's cam_from_world quaternion), bit for bit.
-  std::ifstream lines(trajectory);
+// The TUM trajectory: the frame's place, its centre and world_from_camera's rotation (the
+// conjugate of the record's cam_from_world quaternion), bit for bit.
+TEST_F(TrackerCliTest, WritesTheSequenceAsATumTrajectory) {
+  std::string output;
+  ASSERT_EQ(RunWithTumTrajectory(&output), 0) << output;
+  const std::vector<nlohmann::json> records = test::ReadJsonLines(out_);
+  std::ifstream lines(trajectory_);
   size_t frame = 0;
   for (std::string line; std::getline(lines, line); ++frame) {
     std::istringstream fields(line);
@@ -383,14 +402,17 @@ TEST_F(TrackerTest, TheCliTracksAQueryListAsASequence) {
     EXPECT_EQ(qz, -pose["qvec"][3].get<double>());
   }
   EXPECT_EQ(frame, records.size());
+}
 
-  // kapture's trajectories.txt: camera_from_world as the record has it. LaMAR's: world_from_camera
-  // and the covariance of v and omega in T Exp(omega, v), so that the centre moves by R v (R the
-  // line's own world_from_camera rotation) and the rotation by R omega: the record's (theta, C)
-  // covariance turned into the camera's axes.
+// kapture's trajectories.txt: camera_from_world as the record has it. LaMAR's: world_from_camera
+// and the covariance of v and omega in T Exp(omega, v), so that the centre moves by R v (R the
+// line's own world_from_camera rotation) and the rotation by R omega: the record's (theta, C)
+// covariance turned into the camera's axes.
+TEST_F(TrackerCliTest, WritesKaptureAndLamarTrajectories) {
+  std::string output;
   for (const std::string format : {"kapture", "lamar"}) {
-    const auto path = dir.path() / (format + ".txt");
-    ASSERT_EQ(test::RunCommand(localize + " --sequence -q -o " + out.string() + " --trajectory " +
+    const auto path = dir_.path() / (format + ".txt");
+    ASSERT_EQ(test::RunCommand(localize_ + " --sequence -q -o " + out_.string() + " --trajectory " +
                                    path.string() + " --trajectory-format " + format,
                                &output),
               0)
@@ -405,8 +427,9 @@ TEST_F(TrackerTest, TheCliTracksAQueryListAsASequence) {
     EXPECT_EQ(line, format == "kapture"
                         ? "# timestamp, device_id, qw, qx, qy, qz, tx, ty, tz"
                         : "# timestamp, device_id, qw, qx, qy, qz, tx, ty, tz, *covar");
-    const std::vector<nlohmann::json> again = test::ReadJsonLines(out);
-    for (frame = 0; std::getline(file, line); ++frame) {
+    const std::vector<nlohmann::json> again = test::ReadJsonLines(out_);
+    size_t frame = 0;
+    for (; std::getline(file, line); ++frame) {
       std::replace(line.begin(), line.end(), ',', ' ');
       std::istringstream fields(line);
       long long timestamp;
@@ -448,41 +471,55 @@ TEST_F(TrackerTest, TheCliTracksAQueryListAsASequence) {
     }
     EXPECT_EQ(frame, again.size()) << format;
   }
-  EXPECT_EQ(test::RunCommand(localize + " --sequence --trajectory " + trajectory.string() +
+}
+
+TEST_F(TrackerCliTest, RefusesAnUnknownTrajectoryFormat) {
+  std::string output;
+  EXPECT_EQ(test::RunCommand(localize_ + " --sequence --trajectory " + trajectory_.string() +
                                  " --trajectory-format kaptur",
                              &output),
             2);
   EXPECT_EQ(output,
             "cwloc-localize: error: --trajectory-format kaptur: expected tum, kapture or lamar\n");
+}
 
-  // --motion's lines: seven or nine numbers, sigmas not negative, and a frame of the sequence.
-  const auto motion = dir.path() / "motion.txt";
+// --motion's lines: seven or nine numbers, sigmas not negative, and a frame of the sequence.
+TEST_F(TrackerCliTest, RefusesMalformedMotionLines) {
+  std::string output;
+  const auto motion = dir_.path() / "motion.txt";
   std::ofstream(motion) << "# VIO\n0004.jpg 1 0 0 0 0.1 0 0\n0007.jpg 1 0 0 0 0.1 0\n";
-  EXPECT_EQ(test::RunCommand(localize + " --sequence --motion " + motion.string(), &output), 2);
+  EXPECT_EQ(test::RunCommand(localize_ + " --sequence --motion " + motion.string(), &output), 2);
   EXPECT_EQ(output, "cwloc-localize: error: " + motion.string() +
                         ":3: expected 'NAME QW QX QY QZ TX TY TZ [SIGMA_ROT_DEG SIGMA_POS]' "
                         "(seven or nine numbers)\n");
   std::ofstream(motion) << "0004.jpg 1 0 0 0 0.1 0 0 0.5\n";
-  EXPECT_EQ(test::RunCommand(localize + " --sequence --motion " + motion.string(), &output), 2);
+  EXPECT_EQ(test::RunCommand(localize_ + " --sequence --motion " + motion.string(), &output), 2);
   EXPECT_EQ(output, "cwloc-localize: error: " + motion.string() +
                         ":1: expected 'NAME QW QX QY QZ TX TY TZ [SIGMA_ROT_DEG SIGMA_POS]' "
                         "(seven or nine numbers)\n");
   std::ofstream(motion) << "0004.jpg 1 0 0 0 0.1 0 0 0.5 -0.01\n";
-  EXPECT_EQ(test::RunCommand(localize + " --sequence --motion " + motion.string(), &output), 2);
+  EXPECT_EQ(test::RunCommand(localize_ + " --sequence --motion " + motion.string(), &output), 2);
   EXPECT_EQ(output, "cwloc-localize: error: " + motion.string() +
                         ":1: the sigmas are finite and at least 0 (0: not known)\n");
   std::ofstream(motion) << "0004.jpg 1 0 0 0 0.1 0 0\nnope.jpg 1 0 0 0 0.1 0 0\n";
-  EXPECT_EQ(test::RunCommand(localize + " --sequence --motion " + motion.string(), &output), 2);
+  EXPECT_EQ(test::RunCommand(localize_ + " --sequence --motion " + motion.string(), &output), 2);
   EXPECT_EQ(output, "cwloc-localize: error: " + motion.string() +
                         ":2: frame 'nope.jpg' is not in the sequence\n");
-  EXPECT_EQ(test::RunCommand(localize + " --motion " + motion.string(), &output), 2);
+}
+
+TEST_F(TrackerCliTest, MotionAndTrajectoryNeedASequence) {
+  std::string output;
+  const auto motion = dir_.path() / "motion.txt";
+  std::ofstream(motion) << "0004.jpg 1 0 0 0 0.1 0 0\n";
+  EXPECT_EQ(test::RunCommand(localize_ + " --motion " + motion.string(), &output), 2);
   EXPECT_EQ(output,
             "cwloc-localize: error: --motion needs --sequence or --video (a motion is between "
             "frames)\n");
 
-  EXPECT_EQ(test::RunCommand(
-                localize + " -o " + out.string() + " --trajectory " + trajectory.string(), &output),
-            2);
+  EXPECT_EQ(
+      test::RunCommand(localize_ + " -o " + out_.string() + " --trajectory " + trajectory_.string(),
+                       &output),
+      2);
   EXPECT_EQ(output,
             "cwloc-localize: error: --trajectory needs --sequence (a trajectory is a sequence's "
             "frames)\n");

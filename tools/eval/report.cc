@@ -285,6 +285,121 @@ RunReport EvaluateRun(const std::vector<NamedPose>& ground_truth, const RunResul
   return report;
 }
 
+namespace {
+
+// Each query's status and errors.
+ordered_json PerQueryJson(const RunReport& run) {
+  ordered_json per_query = ordered_json::array();
+  for (const QueryOutcome& q : run.per_query) {
+    ordered_json entry = {{"name", q.name}, {"status", QueryStatusName(q.status)}};
+    if (q.status == QueryStatus::kLocalized) {
+      entry["position_error"] = q.position_error;
+      entry["rotation_error_deg"] = q.rotation_error_deg;
+      if (q.inside95) entry["inside95"] = *q.inside95;
+      if (q.enu_error) {
+        entry["ground_error"] = q.enu_error->ground;
+        entry["height_error"] = q.enu_error->height;
+      }
+      if (run.geo) {
+        // null: the result has no "geo", so it is missing for the comparison on the globe.
+        entry["geo"] = q.geo_error ? ordered_json{{"error_m", q.geo_error->distance},
+                                                  {"ground_error_m", q.geo_error->ground},
+                                                  {"height_error_m", q.geo_error->height}}
+                                   : ordered_json(nullptr);
+      }
+    }
+    per_query.push_back(entry);
+  }
+  return per_query;
+}
+
+// One run's entry of the report's "runs".
+ordered_json RunToJson(const RunReport& run, const EvalReport& report) {
+  ordered_json r;
+  r["label"] = run.label;
+  r["path"] = run.path.string();
+  r["format"] = ResultFormatName(run.format);
+  r["queries"] = run.queries;
+  r["localized"] = run.localized;
+  r["not_localized"] = run.not_localized;
+  r["errors"] = run.errors;
+  r["missing"] = run.missing;
+  r["unknown_names"] = run.unknown_names;
+  r["localized_share"] = run.queries ? double(run.localized) / run.queries : 0.0;
+  r["position_error"] = QuartilesJson(run.position_error);
+  r["rotation_error_deg"] = QuartilesJson(run.rotation_error_deg);
+  if (run.enu_errors) {
+    r["ground_error"] = QuartilesJson(run.ground_error);
+    r["height_error"] = QuartilesJson(run.height_error);
+  }
+  ordered_json within = ordered_json::array();
+  for (size_t t = 0; t < kThresholds.size(); ++t) {
+    within.push_back({{"position", kThresholds[t].position},
+                      {"rotation_deg", kThresholds[t].rotation_deg},
+                      {"count", run.within[t]},
+                      {"share", run.queries ? double(run.within[t]) / run.queries : 0.0}});
+  }
+  r["within"] = within;
+  if (run.geo) {
+    const GeoComparison& geo = *run.geo;
+    r["geo"] = {{"compared", geo.compared},
+                {"without_geo", geo.without_geo},
+                {"error_m", QuartilesJson(geo.error)},
+                {"ground_error_m", QuartilesJson(geo.ground_error)},
+                {"height_error_m", QuartilesJson(geo.height_error)},
+                {"within",
+                 {{"distance_m", kGeoWithinMetres},
+                  {"count", geo.within},
+                  {"share", run.queries ? double(geo.within) / run.queries : 0.0}}}};
+  }
+  r["coverage95"] = {
+      {"with_covariance", run.with_covariance},
+      {"inside", run.inside95},
+      {"share", run.with_covariance ? double(run.inside95) / run.with_covariance : 0.0}};
+  if (const auto& rig = run.rig) {
+    r["rig"] = {{"frames", rig->frames},
+                {"localized", rig->localized},
+                {"position_error", QuartilesJson(rig->position_error)},
+                {"rotation_error_deg", QuartilesJson(rig->rotation_error_deg)}};
+  }
+  if (const auto& sequence = run.sequence) {
+    r["sequence"] = {{"frames", sequence->frames},
+                     {"tracked", sequence->tracked},
+                     {"relocalized", sequence->relocalized},
+                     {"lost", sequence->lost},
+                     {"tracked_position_error", QuartilesJson(sequence->tracked_error)},
+                     {"relocalized_position_error", QuartilesJson(sequence->relocalized_error)},
+                     {"longest_without_pose", sequence->longest_without_pose},
+                     {"with_pose_share", sequence->with_pose_share}};
+  }
+  r["timed_records"] = run.timed_records;
+  if (run.times_ms) {
+    ordered_json times;
+    for (size_t s = 0; s < kStageNames.size(); ++s)
+      times[kStageNames[s]] = TimeQuantilesJson((*run.times_ms)[s]);
+    r["times_ms"] = times;
+  } else {
+    r["times_ms"] = nullptr;
+  }
+  r["per_query"] = PerQueryJson(run);
+  if (run.recognition) {
+    const RecognitionScores& scores = *run.recognition;
+    ordered_json top = ordered_json::object();
+    for (size_t k = 0; k < kRecognitionRanks.size(); ++k) {
+      top["top" + std::to_string(kRecognitionRanks[k])] = {
+          {"count", scores.hits[k]},
+          {"share", scores.queries ? double(scores.hits[k]) / scores.queries : 0.0}};
+    }
+    r["recognition"] = {{"min_shared_points", report.recognition_min_shared},
+                        {"queries", scores.queries},
+                        {"with_right_image", scores.with_right_image},
+                        {"top", top}};
+  }
+  return r;
+}
+
+}  // namespace
+
 nlohmann::ordered_json ReportToJson(const EvalReport& report) {
   ordered_json json;
   json["tool"] = "cwloc-eval";
@@ -315,117 +430,16 @@ nlohmann::ordered_json ReportToJson(const EvalReport& report) {
   }
 
   ordered_json runs = ordered_json::array();
-  for (const RunReport& run : report.runs) {
-    ordered_json r;
-    r["label"] = run.label;
-    r["path"] = run.path.string();
-    r["format"] = ResultFormatName(run.format);
-    r["queries"] = run.queries;
-    r["localized"] = run.localized;
-    r["not_localized"] = run.not_localized;
-    r["errors"] = run.errors;
-    r["missing"] = run.missing;
-    r["unknown_names"] = run.unknown_names;
-    r["localized_share"] = run.queries ? double(run.localized) / run.queries : 0.0;
-    r["position_error"] = QuartilesJson(run.position_error);
-    r["rotation_error_deg"] = QuartilesJson(run.rotation_error_deg);
-    if (run.enu_errors) {
-      r["ground_error"] = QuartilesJson(run.ground_error);
-      r["height_error"] = QuartilesJson(run.height_error);
-    }
-    ordered_json within = ordered_json::array();
-    for (size_t t = 0; t < kThresholds.size(); ++t) {
-      within.push_back({{"position", kThresholds[t].position},
-                        {"rotation_deg", kThresholds[t].rotation_deg},
-                        {"count", run.within[t]},
-                        {"share", run.queries ? double(run.within[t]) / run.queries : 0.0}});
-    }
-    r["within"] = within;
-    if (run.geo) {
-      const GeoComparison& geo = *run.geo;
-      r["geo"] = {{"compared", geo.compared},
-                  {"without_geo", geo.without_geo},
-                  {"error_m", QuartilesJson(geo.error)},
-                  {"ground_error_m", QuartilesJson(geo.ground_error)},
-                  {"height_error_m", QuartilesJson(geo.height_error)},
-                  {"within",
-                   {{"distance_m", kGeoWithinMetres},
-                    {"count", geo.within},
-                    {"share", run.queries ? double(geo.within) / run.queries : 0.0}}}};
-    }
-    r["coverage95"] = {
-        {"with_covariance", run.with_covariance},
-        {"inside", run.inside95},
-        {"share", run.with_covariance ? double(run.inside95) / run.with_covariance : 0.0}};
-    if (const auto& rig = run.rig) {
-      r["rig"] = {{"frames", rig->frames},
-                  {"localized", rig->localized},
-                  {"position_error", QuartilesJson(rig->position_error)},
-                  {"rotation_error_deg", QuartilesJson(rig->rotation_error_deg)}};
-    }
-    if (const auto& sequence = run.sequence) {
-      r["sequence"] = {{"frames", sequence->frames},
-                       {"tracked", sequence->tracked},
-                       {"relocalized", sequence->relocalized},
-                       {"lost", sequence->lost},
-                       {"tracked_position_error", QuartilesJson(sequence->tracked_error)},
-                       {"relocalized_position_error", QuartilesJson(sequence->relocalized_error)},
-                       {"longest_without_pose", sequence->longest_without_pose},
-                       {"with_pose_share", sequence->with_pose_share}};
-    }
-    r["timed_records"] = run.timed_records;
-    if (run.times_ms) {
-      ordered_json times;
-      for (size_t s = 0; s < kStageNames.size(); ++s)
-        times[kStageNames[s]] = TimeQuantilesJson((*run.times_ms)[s]);
-      r["times_ms"] = times;
-    } else {
-      r["times_ms"] = nullptr;
-    }
-    ordered_json per_query = ordered_json::array();
-    for (const QueryOutcome& q : run.per_query) {
-      ordered_json entry = {{"name", q.name}, {"status", QueryStatusName(q.status)}};
-      if (q.status == QueryStatus::kLocalized) {
-        entry["position_error"] = q.position_error;
-        entry["rotation_error_deg"] = q.rotation_error_deg;
-        if (q.inside95) entry["inside95"] = *q.inside95;
-        if (q.enu_error) {
-          entry["ground_error"] = q.enu_error->ground;
-          entry["height_error"] = q.enu_error->height;
-        }
-        if (run.geo) {
-          // null: the result has no "geo", so it is missing for the comparison on the globe.
-          entry["geo"] = q.geo_error ? ordered_json{{"error_m", q.geo_error->distance},
-                                                    {"ground_error_m", q.geo_error->ground},
-                                                    {"height_error_m", q.geo_error->height}}
-                                     : ordered_json(nullptr);
-        }
-      }
-      per_query.push_back(entry);
-    }
-    r["per_query"] = per_query;
-    if (run.recognition) {
-      const RecognitionScores& scores = *run.recognition;
-      ordered_json top = ordered_json::object();
-      for (size_t k = 0; k < kRecognitionRanks.size(); ++k) {
-        top["top" + std::to_string(kRecognitionRanks[k])] = {
-            {"count", scores.hits[k]},
-            {"share", scores.queries ? double(scores.hits[k]) / scores.queries : 0.0}};
-      }
-      r["recognition"] = {{"min_shared_points", report.recognition_min_shared},
-                          {"queries", scores.queries},
-                          {"with_right_image", scores.with_right_image},
-                          {"top", top}};
-    }
-    runs.push_back(r);
-  }
+  for (const RunReport& run : report.runs) runs.push_back(RunToJson(run, report));
   json["runs"] = runs;
   return json;
 }
 
-std::string FormatTable(const EvalReport& report) {
+namespace {
+
+// What the report compares, and in which unit.
+std::string Preamble(const EvalReport& report) {
   std::ostringstream out;
-  const char* unit = report.Metric() ? "m" : "units";
   out << "cwloc-eval: " << report.queries << " ground-truth queries from "
       << report.ground_truth_path.string() << "\n";
   if (report.georeference) {
@@ -440,7 +454,12 @@ std::string FormatTable(const EvalReport& report) {
            "as model units\n";
   }
   out << "errors: Q1 / median / Q3 over localized queries; shares: of all ground-truth queries\n\n";
+  return out.str();
+}
 
+// Each run's localized share, errors and shares within the thresholds.
+std::string MainTable(const EvalReport& report) {
+  const char* unit = report.Metric() ? "m" : "units";
   std::vector<std::vector<std::string>> rows;
   std::vector<std::string> header = {
       "run", "localized", std::string("position error (") + unit + ")", "rotation error (deg)"};
@@ -454,8 +473,13 @@ std::string FormatTable(const EvalReport& report) {
       row.push_back(Percent(run.within[t], run.queries));
     rows.push_back(row);
   }
-  out << Columns(rows);
+  return Columns(rows);
+}
 
+// Per run: why queries are not localized, names not in the truth, a sequence's frames, rig
+// frames, and the covariance's coverage.
+std::string RunNotes(const EvalReport& report) {
+  std::ostringstream out;
   // Why a query is not localized matters when comparing runs.
   for (const RunReport& run : report.runs) {
     if (run.not_localized + run.errors + run.missing > 0) {
@@ -503,83 +527,105 @@ std::string FormatTable(const EvalReport& report) {
     out << "  " << run.label << ": true position inside the 95 % ellipsoid: " << run.inside95 << "/"
         << run.with_covariance << " (" << Percent(run.inside95, run.with_covariance) << ")\n";
   }
+  return out.str();
+}
 
-  bool any_enu = false, any_geo = false;
+// Errors on the ground and in height, for runs against a georeferenced index.
+std::string EnuTable(const EvalReport& report) {
+  bool any_enu = false;
+  for (const RunReport& run : report.runs) any_enu = any_enu || run.enu_errors;
+  if (!any_enu) return "";
+  std::ostringstream out;
+  out << "\non the ground, in the index's east-north-up frame\n(horizontal and |vertical| "
+         "distance of the camera centres, m; Q1 / median / Q3 over localized queries)\n";
+  std::vector<std::vector<std::string>> enu_rows = {
+      {"run", "ground error (m)", "height error (m)"}};
   for (const RunReport& run : report.runs) {
-    any_enu = any_enu || run.enu_errors;
-    any_geo = any_geo || run.geo.has_value();
+    if (!run.enu_errors) continue;
+    enu_rows.push_back({run.label, QuartileCell(run.ground_error), QuartileCell(run.height_error)});
   }
-  if (any_enu) {
-    out << "\non the ground, in the index's east-north-up frame\n(horizontal and |vertical| "
-           "distance of the camera centres, m; Q1 / median / Q3 over localized queries)\n";
-    std::vector<std::vector<std::string>> enu_rows = {
-        {"run", "ground error (m)", "height error (m)"}};
-    for (const RunReport& run : report.runs) {
-      if (!run.enu_errors) continue;
-      enu_rows.push_back(
-          {run.label, QuartileCell(run.ground_error), QuartileCell(run.height_error)});
-    }
-    out << Columns(enu_rows);
-  }
-  if (any_geo) {
-    out << "\non the globe, against the true positions in "
-        << (report.geo_truth_path ? report.geo_truth_path->string() : std::string("?"))
-        << "\n(the results' \"geo\" in the local east-north-up frame at each true position, m; "
-           "Q1 / median / Q3 over the compared queries; share: of all ground-truth queries)\n";
-    std::vector<std::vector<std::string>> geo_rows = {
-        {"run", "compared", "3D error (m)", "ground error (m)", "height error (m)",
-         std::string("within ") + Format("%g", kGeoWithinMetres) + " m"}};
-    for (const RunReport& run : report.runs) {
-      if (!run.geo) continue;
-      geo_rows.push_back(
-          {run.label, std::to_string(run.geo->compared) + "/" + std::to_string(run.localized),
-           QuartileCell(run.geo->error), QuartileCell(run.geo->ground_error),
-           QuartileCell(run.geo->height_error), Percent(run.geo->within, run.queries)});
-    }
-    out << Columns(geo_rows);
-    for (const RunReport& run : report.runs) {
-      if (!run.geo || run.geo->without_geo == 0) continue;
-      out << "  " << run.label << ": " << run.geo->without_geo
-          << " localized result(s) without \"geo\" (a poses file, or an index without "
-             "georeference): missing from this comparison\n";
-    }
-  }
+  out << Columns(enu_rows);
+  return out.str();
+}
 
-  if (report.recognition_min_shared > 0) {
-    out << "\nlocation recognition: a ranked image is right when it sees >= "
-        << report.recognition_min_shared
-        << " of the query's ground-truth 3D points; shares of all ground-truth queries\n";
-    std::vector<std::vector<std::string>> recognition_rows;
-    std::vector<std::string> recognition_header = {"run", "queries with a right image"};
-    for (int k : kRecognitionRanks) recognition_header.push_back("top-" + std::to_string(k));
-    recognition_rows.push_back(recognition_header);
-    for (const RunReport& run : report.runs) {
-      if (!run.recognition) continue;
-      std::vector<std::string> row = {run.label, std::to_string(run.recognition->with_right_image)};
-      for (int hits : run.recognition->hits) row.push_back(Percent(hits, run.recognition->queries));
-      recognition_rows.push_back(row);
-    }
-    out << Columns(recognition_rows);
+// The results' "geo" against the true positions on the globe (--gt-geo).
+std::string GeoTable(const EvalReport& report) {
+  bool any_geo = false;
+  for (const RunReport& run : report.runs) any_geo = any_geo || run.geo.has_value();
+  if (!any_geo) return "";
+  std::ostringstream out;
+  out << "\non the globe, against the true positions in "
+      << (report.geo_truth_path ? report.geo_truth_path->string() : std::string("?"))
+      << "\n(the results' \"geo\" in the local east-north-up frame at each true position, m; "
+         "Q1 / median / Q3 over the compared queries; share: of all ground-truth queries)\n";
+  std::vector<std::vector<std::string>> geo_rows = {
+      {"run", "compared", "3D error (m)", "ground error (m)", "height error (m)",
+       std::string("within ") + Format("%g", kGeoWithinMetres) + " m"}};
+  for (const RunReport& run : report.runs) {
+    if (!run.geo) continue;
+    geo_rows.push_back(
+        {run.label, std::to_string(run.geo->compared) + "/" + std::to_string(run.localized),
+         QuartileCell(run.geo->error), QuartileCell(run.geo->ground_error),
+         QuartileCell(run.geo->height_error), Percent(run.geo->within, run.queries)});
   }
-
-  bool any_times = false;
-  for (const RunReport& run : report.runs) any_times = any_times || run.times_ms.has_value();
-  if (any_times) {
-    out << "\ntimes (ms), Q1 / median / Q3 / p90 over the result records that carry times_ms\n";
-    std::vector<std::vector<std::string>> time_rows;
-    std::vector<std::string> time_header = {"run", "records"};
-    for (const char* stage : kStageNames) time_header.push_back(stage);
-    time_rows.push_back(time_header);
-    for (const RunReport& run : report.runs) {
-      std::vector<std::string> row = {run.label, std::to_string(run.timed_records)};
-      for (size_t s = 0; s < kStageNames.size(); ++s) {
-        row.push_back(run.times_ms ? TimeCell((*run.times_ms)[s]) : "-");
-      }
-      time_rows.push_back(row);
-    }
-    out << Columns(time_rows);
+  out << Columns(geo_rows);
+  for (const RunReport& run : report.runs) {
+    if (!run.geo || run.geo->without_geo == 0) continue;
+    out << "  " << run.label << ": " << run.geo->without_geo
+        << " localized result(s) without \"geo\" (a poses file, or an index without "
+           "georeference): missing from this comparison\n";
   }
   return out.str();
+}
+
+// Location recognition's top-k shares (--model, --min-shared).
+std::string RecognitionTable(const EvalReport& report) {
+  if (report.recognition_min_shared <= 0) return "";
+  std::ostringstream out;
+  out << "\nlocation recognition: a ranked image is right when it sees >= "
+      << report.recognition_min_shared
+      << " of the query's ground-truth 3D points; shares of all ground-truth queries\n";
+  std::vector<std::vector<std::string>> recognition_rows;
+  std::vector<std::string> recognition_header = {"run", "queries with a right image"};
+  for (int k : kRecognitionRanks) recognition_header.push_back("top-" + std::to_string(k));
+  recognition_rows.push_back(recognition_header);
+  for (const RunReport& run : report.runs) {
+    if (!run.recognition) continue;
+    std::vector<std::string> row = {run.label, std::to_string(run.recognition->with_right_image)};
+    for (int hits : run.recognition->hits) row.push_back(Percent(hits, run.recognition->queries));
+    recognition_rows.push_back(row);
+  }
+  out << Columns(recognition_rows);
+  return out.str();
+}
+
+// The stages' times, for runs whose records carry them.
+std::string TimesTable(const EvalReport& report) {
+  bool any_times = false;
+  for (const RunReport& run : report.runs) any_times = any_times || run.times_ms.has_value();
+  if (!any_times) return "";
+  std::ostringstream out;
+  out << "\ntimes (ms), Q1 / median / Q3 / p90 over the result records that carry times_ms\n";
+  std::vector<std::vector<std::string>> time_rows;
+  std::vector<std::string> time_header = {"run", "records"};
+  for (const char* stage : kStageNames) time_header.push_back(stage);
+  time_rows.push_back(time_header);
+  for (const RunReport& run : report.runs) {
+    std::vector<std::string> row = {run.label, std::to_string(run.timed_records)};
+    for (size_t s = 0; s < kStageNames.size(); ++s) {
+      row.push_back(run.times_ms ? TimeCell((*run.times_ms)[s]) : "-");
+    }
+    time_rows.push_back(row);
+  }
+  out << Columns(time_rows);
+  return out.str();
+}
+
+}  // namespace
+
+std::string FormatTable(const EvalReport& report) {
+  return Preamble(report) + MainTable(report) + RunNotes(report) + EnuTable(report) +
+         GeoTable(report) + RecognitionTable(report) + TimesTable(report);
 }
 
 }  // namespace cwloc::eval

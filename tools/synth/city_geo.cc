@@ -100,16 +100,15 @@ size_t NumGpsOutliers(const GeoOptions& geo, size_t mapping_images) {
   return size_t(std::llround(geo.gps_outliers * double(mapping_images)));
 }
 
-GeoFiles MakeGeoFiles(const CityScene& scene, const GeoOptions& geo, const ModelFrame& frame) {
-  if (!geo.origin || frame.identity) {
-    throw std::logic_error("MakeGeoFiles needs --geo's origin and model frame");
-  }
+namespace {
+
+// The mapping images' noisy GPS positions (files->georef) and which of them are outliers
+// (files->georef_outliers).
+void MakeGeorefFile(const CityScene& scene, const GeoOptions& geo, const ModelFrame& frame,
+                    const GeoFrame& globe, GeoFiles* files) {
   const uint64_t seed = scene.options().seed;
-  const GeoFrame globe(frame.EnuFromModel(*geo.origin));
   const auto& images = scene.images();
   const size_t num_mapping = scene.num_mapping_images();
-  GeoFiles files;
-
   // Which mapping images get a wild GPS position: exactly round(F x N), a partial
   // Fisher-Yates shuffle of one stream.
   const size_t num_outliers = NumGpsOutliers(geo, num_mapping);
@@ -130,12 +129,12 @@ GeoFiles MakeGeoFiles(const CityScene& scene, const GeoOptions& geo, const Model
                 "%g-%g m off horizontally (and up to %g m vertically).\n",
                 geo.gps_noise, num_outliers, num_mapping, kGpsOutlierMinOffset,
                 kGpsOutlierMaxOffset, kGpsOutlierMaxVertical);
-  files.georef =
+  files->georef =
       "# Camera centres of the mapping images on the globe, as a noisy GPS gives them "
       "(cwloc-synth --geo).\n"
       "# IMAGE_NAME LAT LON HEIGHT: WGS84 degrees and metres above the ellipsoid (a cwloc georef "
       "file).\n";
-  files.georef += line;
+  files->georef += line;
   for (size_t i = 0; i < num_mapping; ++i) {
     const SceneImage& image = images[i];
     Eigen::Vector3d enu = frame.EnuFromWorld(image.pose.centre);
@@ -145,19 +144,28 @@ GeoFiles MakeGeoFiles(const CityScene& scene, const GeoOptions& geo, const Model
       const double distance = rng.Uniform(kGpsOutlierMinOffset, kGpsOutlierMaxOffset);
       const double vertical = rng.Uniform(-kGpsOutlierMaxVertical, kGpsOutlierMaxVertical);
       enu += Eigen::Vector3d(distance * std::cos(heading), distance * std::sin(heading), vertical);
-      files.georef_outliers += image.name + "\n";
+      files->georef_outliers += image.name + "\n";
     } else if (geo.gps_noise > 0) {
       Rng rng(Rng::Seed(seed, kGpsNoiseStream, image.image_id));
       for (int axis = 0; axis < 3; ++axis) enu[axis] += geo.gps_noise * rng.Gaussian();
     }
-    files.georef += image.name + GeodeticText(globe.EnuToGeodetic(enu)) + "\n";
+    files->georef += image.name + GeodeticText(globe.EnuToGeodetic(enu)) + "\n";
   }
+}
 
-  files.queries_geo =
+// The queries' true positions on the globe (files->queries_geo) and their priors as a phone
+// gives them (files->query_priors).
+void MakeQueryFiles(const CityScene& scene, const GeoOptions& geo, const ModelFrame& frame,
+                    const GeoFrame& globe, GeoFiles* files) {
+  const uint64_t seed = scene.options().seed;
+  const auto& images = scene.images();
+  const size_t num_mapping = scene.num_mapping_images();
+  char line[160];
+  files->queries_geo =
       "# True camera centres of the queries on the globe (exact: the generator placed these "
       "cameras).\n"
       "# NAME LAT LON HEIGHT: WGS84 degrees and metres above the ellipsoid.\n";
-  files.query_priors =
+  files->query_priors =
       "# Priors for cwloc-localize --priors (docs/cli.md, docs/synth.md): a position and a "
       "gravity direction per query.\n"
       "# NAME position LAT LON HEIGHT RADIUS_M: WGS84 degrees, metres above the ellipsoid; the "
@@ -168,13 +176,13 @@ GeoFiles MakeGeoFiles(const CityScene& scene, const GeoOptions& geo, const Model
                 "# Generated: positions %g m off the true centres horizontally, gravity %g deg "
                 "off.\n",
                 geo.prior_position_error, geo.prior_gravity_error_deg);
-  files.query_priors += line;
+  files->query_priors += line;
   const std::string radius = NumberText(geo.prior_radius);
   const double gravity_error = geo.prior_gravity_error_deg * kDegree;
   for (size_t i = num_mapping; i < images.size(); ++i) {
     const SceneImage& image = images[i];
     const Eigen::Vector3d enu = frame.EnuFromWorld(image.pose.centre);
-    files.queries_geo += image.name + GeodeticText(globe.EnuToGeodetic(enu)) + "\n";
+    files->queries_geo += image.name + GeodeticText(globe.EnuToGeodetic(enu)) + "\n";
 
     // The camera's own tangent plane and vertical (the ellipsoid normal there), as the rows of
     // local_from_enu: a phone's position error is horizontal where it is, and its gravity
@@ -188,7 +196,7 @@ GeoFiles MakeGeoFiles(const CityScene& scene, const GeoOptions& geo, const Model
         enu + geo.prior_position_error * (std::cos(heading) * local_from_enu.row(0) +
                                           std::sin(heading) * local_from_enu.row(1))
                                              .transpose();
-    files.query_priors +=
+    files->query_priors +=
         image.name + " position" + GeodeticText(globe.EnuToGeodetic(prior)) + " " + radius + "\n";
     // Gravity in the camera frame, then turned by exactly the error about an axis
     // perpendicular to it.
@@ -198,15 +206,19 @@ GeoFiles MakeGeoFiles(const CityScene& scene, const GeoOptions& geo, const Model
     const Eigen::Vector3d noisy =
         (std::cos(gravity_error) * gravity + std::sin(gravity_error) * axis.cross(gravity))
             .normalized();
-    files.query_priors += image.name + " gravity " + NumberText(noisy.x()) + " " +
-                          NumberText(noisy.y()) + " " + NumberText(noisy.z()) + "\n";
+    files->query_priors += image.name + " gravity " + NumberText(noisy.x()) + " " +
+                           NumberText(noisy.y()) + " " + NumberText(noisy.z()) + "\n";
   }
+}
 
+// The similarity from the model to the city's ENU frame, as cwloc-eval --scale reads it.
+std::string ScaleToMetresFile(const GeoOptions& geo, const ModelFrame& frame) {
+  char line[160];
   const Georeference enu_from_model = frame.EnuFromModel(*geo.origin);
   const Eigen::Matrix3d r = enu_from_model.rotation.toRotationMatrix();
   std::snprintf(line, sizeof(line), "%.12f %.12f %.6f", geo.origin->latitude_deg,
                 geo.origin->longitude_deg, geo.origin->height_m);
-  files.scale_to_metres =
+  std::string text =
       "# Similarity model->ENU frame in metres (x east, y north, z up) whose origin is the city "
       "centre on the ground,\n# at WGS84 latitude, longitude, ellipsoidal height " +
       std::string(line) +
@@ -215,14 +227,26 @@ GeoFiles MakeGeoFiles(const CityScene& scene, const GeoOptions& geo, const Model
       "scale " +
       NumberText(enu_from_model.scale) + "\nR";
   for (int row = 0; row < 3; ++row) {
-    for (int col = 0; col < 3; ++col)
-      files.scale_to_metres.append(" ").append(NumberText(r(row, col)));
+    for (int col = 0; col < 3; ++col) text.append(" ").append(NumberText(r(row, col)));
   }
-  files.scale_to_metres += "\nt";
-  for (int i = 0; i < 3; ++i) {
-    files.scale_to_metres += " " + NumberText(enu_from_model.translation[i]);
+  text += "\nt";
+  // Appended, not " " + ...: GCC 12 misreads that here (-Wrestrict).
+  for (int i = 0; i < 3; ++i) text.append(" ").append(NumberText(enu_from_model.translation[i]));
+  text += "\n";
+  return text;
+}
+
+}  // namespace
+
+GeoFiles MakeGeoFiles(const CityScene& scene, const GeoOptions& geo, const ModelFrame& frame) {
+  if (!geo.origin || frame.identity) {
+    throw std::logic_error("MakeGeoFiles needs --geo's origin and model frame");
   }
-  files.scale_to_metres += "\n";
+  const GeoFrame globe(frame.EnuFromModel(*geo.origin));
+  GeoFiles files;
+  MakeGeorefFile(scene, geo, frame, globe, &files);
+  MakeQueryFiles(scene, geo, frame, globe, &files);
+  files.scale_to_metres = ScaleToMetresFile(geo, frame);
   return files;
 }
 

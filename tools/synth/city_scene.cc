@@ -119,7 +119,7 @@ CityScene CityScene::Generate(const SceneOptions& options, const Progress& progr
   std::vector<CameraPose> poses = scene.layout_.PlaceMappingCameras(options.seed);
   const size_t budget =
       size_t(std::lround(options.features_per_image * (1 - options.clutter_fraction)));
-  std::vector<std::vector<Observation>> observations(poses.size());
+  ImageObservations observations(poses.size());
   std::atomic<size_t> done{0};
   ParallelFor(poses.size(), options.threads, [&](size_t i) {
     observations[i] =
@@ -127,103 +127,131 @@ CityScene CityScene::Generate(const SceneOptions& options, const Progress& progr
     const size_t d = ++done;
     if (d % 64 == 0) report("mapping views", double(d) / double(poses.size()));
   });
-  // SfM registers an image only when it sees enough triangulated points (seen by >= 2
-  // images): drop the images below that until nothing changes, since dropping one can starve
-  // the points of another. Sequential, so it does not depend on threads.
-  const size_t min_model_views = std::max<size_t>(30, budget / 6);
-  std::vector<uint32_t> view_count(scene.points_.size(), 0);
-  for (const auto& obs : observations) {
+  const std::vector<uint32_t> view_count =
+      scene.KeepRegisteredImages(std::max<size_t>(30, budget / 6), &poses, &observations);
+  const size_t num_model_points = scene.NumberModelPoints(poses, observations, view_count);
+
+  report("queries", 0);
+  std::vector<CameraPose> query_poses;
+  ImageObservations query_observations;
+  scene.DrawQueries(budget, &query_poses, &query_observations);
+
+  scene.NameImages(poses, query_poses);
+  report("features", 0);
+  const size_t num_mapping = poses.size();
+  ParallelFor(scene.images_.size(), options.threads, [&](size_t i) {
+    auto& obs = i < num_mapping ? observations[i] : query_observations[i - num_mapping];
+    scene.MakeFeatures(&scene.images_[i], std::move(obs));
+  });
+  scene.Count(view_count, num_model_points);
+  report("done", 1);
+  return scene;
+}
+
+std::vector<uint32_t> CityScene::KeepRegisteredImages(size_t min_model_views,
+                                                      std::vector<CameraPose>* poses,
+                                                      ImageObservations* observations) const {
+  // Sequential, so it does not depend on threads.
+  std::vector<uint32_t> view_count(points_.size(), 0);
+  for (const auto& obs : *observations) {
     for (const Observation& o : obs) ++view_count[o.point];
   }
-  std::vector<bool> registered(poses.size(), true);
+  std::vector<bool> registered(poses->size(), true);
   for (bool changed = true; changed;) {
     changed = false;
-    for (size_t i = 0; i < poses.size(); ++i) {
+    for (size_t i = 0; i < poses->size(); ++i) {
       if (!registered[i]) continue;
+      const std::vector<Observation>& image = (*observations)[i];
       const size_t model_views =
-          size_t(std::count_if(observations[i].begin(), observations[i].end(),
+          size_t(std::count_if(image.begin(), image.end(),
                                [&](const Observation& o) { return view_count[o.point] >= 2; }));
       if (model_views >= min_model_views) continue;
       registered[i] = false;
       changed = true;
-      for (const Observation& o : observations[i]) --view_count[o.point];
+      for (const Observation& o : image) --view_count[o.point];
     }
   }
   size_t kept = 0;
-  for (size_t i = 0; i < poses.size(); ++i) {
+  for (size_t i = 0; i < poses->size(); ++i) {
     if (!registered[i]) continue;
     if (kept != i) {
-      poses[kept] = poses[i];
-      observations[kept] = std::move(observations[i]);
+      (*poses)[kept] = (*poses)[i];
+      (*observations)[kept] = std::move((*observations)[i]);
     }
     ++kept;
   }
-  poses.resize(kept);
-  observations.resize(kept);
-  const size_t num_mapping = kept;
+  poses->resize(kept);
+  observations->resize(kept);
+  return view_count;
+}
 
-  // A point enters the model when at least two mapping images see it, as triangulation needs.
-  scene.nearest_view_distance_.assign(scene.points_.size(), std::numeric_limits<float>::max());
-  for (size_t i = 0; i < num_mapping; ++i) {
+size_t CityScene::NumberModelPoints(const std::vector<CameraPose>& poses,
+                                    const ImageObservations& observations,
+                                    const std::vector<uint32_t>& view_count) {
+  nearest_view_distance_.assign(points_.size(), std::numeric_limits<float>::max());
+  for (size_t i = 0; i < poses.size(); ++i) {
     for (const Observation& o : observations[i]) {
-      float& nearest = scene.nearest_view_distance_[o.point];
-      nearest = std::min(nearest, float((scene.points_[o.point].xyz - poses[i].centre).norm()));
+      float& nearest = nearest_view_distance_[o.point];
+      nearest = std::min(nearest, float((points_[o.point].xyz - poses[i].centre).norm()));
     }
   }
-  scene.point3D_ids_.assign(scene.points_.size(), kInvalidPoint3DId);
+  point3D_ids_.assign(points_.size(), kInvalidPoint3DId);
   point3D_t next_id = 1;
-  for (size_t p = 0; p < scene.points_.size(); ++p) {
-    if (view_count[p] >= 2) scene.point3D_ids_[p] = next_id++;
+  for (size_t p = 0; p < points_.size(); ++p) {
+    if (view_count[p] >= 2) point3D_ids_[p] = next_id++;
   }
+  return size_t(next_id - 1);
+}
 
-  // Queries: redraw a pose until its frame sees enough model points (keep the best draw
-  // otherwise), or the walk's frames as they come. With a rig the cameras count together, so
-  // that some of them may see nothing (the sky, down a street), as a real rig's do.
-  const size_t num_frames = size_t(std::max(0, options.queries));
-  const size_t rig = size_t(std::max(1, options.rig_cameras));
+void CityScene::DrawQueries(size_t budget, std::vector<CameraPose>* query_poses,
+                            ImageObservations* query_observations) const {
+  const size_t num_frames = size_t(std::max(0, options_.queries));
+  const size_t rig = size_t(std::max(1, options_.rig_cameras));
   const size_t num_queries = num_frames * rig;
-  std::vector<CameraPose> query_poses(num_queries);
-  std::vector<std::vector<Observation>> query_observations(num_queries);
-  report("queries", 0);
-  const bool walk = options.path_step > 0;
+  query_poses->assign(num_queries, CameraPose());
+  query_observations->assign(num_queries, {});
+  const bool walk = options_.path_step > 0;
   std::vector<CameraPose> walk_poses;
-  if (walk) walk_poses = scene.layout_.WalkCameras(options.seed, num_frames, options.path_step);
-  ParallelFor(num_frames, options.threads, [&](size_t q) {
+  if (walk) walk_poses = layout_.WalkCameras(options_.seed, num_frames, options_.path_step);
+  ParallelFor(num_frames, options_.threads, [&](size_t q) {
     std::vector<CameraPose> frame_poses(rig);
     std::vector<std::vector<Observation>> frame_obs(rig);
     size_t best = 0;
     for (int draw = 0; draw < kMaxQueryDraws; ++draw) {
       const CameraPose rig_pose =
-          walk ? walk_poses[q]
-               : scene.layout_.DrawQueryCamera(options.seed, q * kMaxQueryDraws + draw);
+          walk ? walk_poses[q] : layout_.DrawQueryCamera(options_.seed, q * kMaxQueryDraws + draw);
       size_t in_model = 0;
       for (size_t c = 0; c < rig; ++c) {
         // Camera 0 keeps the single camera's stream: without a rig nothing changes.
         const uint64_t observe_seed =
-            c == 0 ? Rng::Seed(options.seed, kQueryObserveStream, q, uint64_t(draw))
-                   : Rng::Seed(options.seed, kRigObserveStream, q * kMaxRigCameras + c,
+            c == 0 ? Rng::Seed(options_.seed, kQueryObserveStream, q, uint64_t(draw))
+                   : Rng::Seed(options_.seed, kRigObserveStream, q * kMaxRigCameras + c,
                                uint64_t(draw));
         frame_poses[c] = RigCameraPose(rig_pose, int(c), int(rig));
-        frame_obs[c] = scene.Observe(frame_poses[c], observe_seed, budget);
+        frame_obs[c] = Observe(frame_poses[c], observe_seed, budget);
         for (const Observation& o : frame_obs[c])
-          in_model += scene.point3D_ids_[o.point] != kInvalidPoint3DId;
+          in_model += point3D_ids_[o.point] != kInvalidPoint3DId;
       }
       if (draw == 0 || in_model > best) {
         best = in_model;
         for (size_t c = 0; c < rig; ++c) {
-          query_poses[q * rig + c] = frame_poses[c];
-          query_observations[q * rig + c] = std::move(frame_obs[c]);
+          (*query_poses)[q * rig + c] = frame_poses[c];
+          (*query_observations)[q * rig + c] = std::move(frame_obs[c]);
         }
       }
-      if (walk || in_model >= size_t(options.min_query_points)) break;
+      if (walk || in_model >= size_t(options_.min_query_points)) break;
     }
   });
+}
 
-  // Images with their features (points plus clutter, shuffled).
-  scene.num_mapping_images_ = num_mapping;
-  scene.images_.resize(num_mapping + num_queries);
-  for (size_t i = 0; i < scene.images_.size(); ++i) {
-    SceneImage& image = scene.images_[i];
+void CityScene::NameImages(const std::vector<CameraPose>& poses,
+                           const std::vector<CameraPose>& query_poses) {
+  const size_t num_mapping = poses.size();
+  const size_t rig = size_t(std::max(1, options_.rig_cameras));
+  num_mapping_images_ = num_mapping;
+  images_.resize(num_mapping + query_poses.size());
+  for (size_t i = 0; i < images_.size(); ++i) {
+    SceneImage& image = images_[i];
     image.image_id = image_t(i + 1);
     image.query = i >= num_mapping;
     char name[64];
@@ -239,31 +267,27 @@ CityScene CityScene::Generate(const SceneOptions& options, const Progress& progr
     image.name = name;
     image.pose = image.query ? query_poses[i - num_mapping] : poses[i];
   }
-  report("features", 0);
-  ParallelFor(scene.images_.size(), options.threads, [&](size_t i) {
-    auto& obs = i < num_mapping ? observations[i] : query_observations[i - num_mapping];
-    scene.MakeFeatures(&scene.images_[i], std::move(obs));
-  });
+}
 
-  // Counts.
-  SceneCounts& c = scene.counts_;
-  c.mapping_images = num_mapping;
-  c.queries = num_queries;
-  c.facades = scene.layout_.facades().size();
-  c.scene_points = scene.points_.size();
-  c.model_points = size_t(next_id - 1);
-  std::vector<bool> motif_used(size_t(std::max(0, options.motifs)), false);
-  for (size_t p = 0; p < scene.points_.size(); ++p) {
-    if (scene.point3D_ids_[p] == kInvalidPoint3DId) continue;
-    const int32_t motif = scene.points_[p].motif;
+void CityScene::Count(const std::vector<uint32_t>& view_count, size_t num_model_points) {
+  SceneCounts& c = counts_;
+  c.mapping_images = num_mapping_images_;
+  c.queries = images_.size() - num_mapping_images_;
+  c.facades = layout_.facades().size();
+  c.scene_points = points_.size();
+  c.model_points = num_model_points;
+  std::vector<bool> motif_used(size_t(std::max(0, options_.motifs)), false);
+  for (size_t p = 0; p < points_.size(); ++p) {
+    if (point3D_ids_[p] == kInvalidPoint3DId) continue;
+    const int32_t motif = points_[p].motif;
     if (motif == kUniqueTexture) continue;
     ++c.motif_model_points;
     c.motif_views += view_count[p];
     motif_used[size_t(motif)] = true;
   }
   c.distinct_motifs = size_t(std::count(motif_used.begin(), motif_used.end(), true));
-  c.min_query_model_points = num_queries > 0 ? std::numeric_limits<size_t>::max() : 0;
-  for (const SceneImage& image : scene.images_) {
+  c.min_query_model_points = c.queries > 0 ? std::numeric_limits<size_t>::max() : 0;
+  for (const SceneImage& image : images_) {
     size_t in_model = 0;
     for (const SceneFeature& f : image.features) {
       ++c.features;
@@ -272,7 +296,7 @@ CityScene CityScene::Generate(const SceneOptions& options, const Progress& progr
         if (!image.query) ++c.mapping_clutter;
         continue;
       }
-      const bool model = scene.point3D_ids_[f.point] != kInvalidPoint3DId;
+      const bool model = point3D_ids_[f.point] != kInvalidPoint3DId;
       in_model += model;
       if (!image.query) c.single_view_features += !model;
     }
@@ -284,8 +308,6 @@ CityScene CityScene::Generate(const SceneOptions& options, const Progress& progr
       c.views += in_model;
     }
   }
-  report("done", 1);
-  return scene;
 }
 
 void CityScene::MakePoints() {

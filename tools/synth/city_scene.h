@@ -149,8 +149,27 @@ class CityScene {
   struct Observation;
   std::vector<Observation> Observe(const CameraPose& pose, uint64_t image_seed,
                                    size_t budget) const;
+  using ImageObservations = std::vector<std::vector<Observation>>;  // per image
   void MakePoints();
+  // SfM registers an image only when it sees enough triangulated points (seen by >= 2
+  // images): drops the images below `min_model_views` until nothing changes, since dropping
+  // one can starve the points of another. Returns each point's views in the images kept.
+  std::vector<uint32_t> KeepRegisteredImages(size_t min_model_views, std::vector<CameraPose>* poses,
+                                             ImageObservations* observations) const;
+  // A point enters the model when at least two mapping images see it, as triangulation needs:
+  // sets point3D_ids_ and nearest_view_distance_, returns the model's points.
+  size_t NumberModelPoints(const std::vector<CameraPose>& poses,
+                           const ImageObservations& observations,
+                           const std::vector<uint32_t>& view_count);
+  // Queries: redraws a pose until its frame sees enough model points (keeps the best draw
+  // otherwise), or the walk's frames as they come. With a rig the cameras count together, so
+  // that some of them may see nothing (the sky, down a street), as a real rig's do.
+  void DrawQueries(size_t budget, std::vector<CameraPose>* query_poses,
+                   ImageObservations* query_observations) const;
+  // images_: the mapping images, then the queries, with their names and poses.
+  void NameImages(const std::vector<CameraPose>& poses, const std::vector<CameraPose>& query_poses);
   void MakeFeatures(SceneImage* image, std::vector<Observation>&& observations) const;
+  void Count(const std::vector<uint32_t>& view_count, size_t num_model_points);
 
   SceneOptions options_;
   CityLayout layout_;

@@ -238,22 +238,20 @@ SiftGenerator::SiftGenerator(const PatchModel& patch_model, const ViewNoiseModel
   }
 }
 
-void SiftGenerator::Describe(const Appearance& appearance, const ViewChange& view, Rng& view_rng,
-                             SiftVector* out) const {
-  Rng patch_rng(appearance.patch_seed);
-  Structure structures[kMaxStructures];
-  const int n = DrawStructures(patch_model_, patch_rng, structures);
-  TextureGradient textures[kMaxTexture];
-  const int num_textures = DrawTextures(patch_model_, patch_rng, textures);
-  if (appearance.instance_noise > 0) {
-    Rng instance_rng(appearance.instance_seed);
-    PerturbPatch(patch_model_, appearance.instance_noise, instance_rng, structures, n, textures,
-                 num_textures);
-  }
+namespace {
 
-  // Viewpoint: a plane seen at obliquity theta is compressed by cos(theta) along the tilt
-  // direction; the detector then normalizes scale (by sqrt(det)) and orientation (the dominant
-  // gradient back to angle 0), each with its own error.
+// The affine map of the patch into the view as the detector normalizes it: T, canonical patch
+// to view, and T^-1, in float, then the detection's shift.
+struct ViewWarp {
+  float f00, f01, f10, f11;  // T
+  float i00, i01, i10, i11;  // T^-1
+  float shift_x, shift_y;
+};
+
+// Viewpoint: a plane seen at obliquity theta is compressed by cos(theta) along the tilt
+// direction; the detector then normalizes scale (by sqrt(det)) and orientation (the dominant
+// gradient back to angle 0), each with its own error, drawn from `view_rng`.
+ViewWarp DrawViewWarp(const ViewChange& view, const ViewNoiseModel& noise_model, Rng& view_rng) {
   const double sin2 = std::min(view.u * view.u + view.v * view.v, 0.99);
   const double c = std::sqrt(1 - sin2);
   const double phi = std::atan2(view.v, view.u);
@@ -265,10 +263,10 @@ void SiftGenerator::Describe(const Appearance& appearance, const ViewChange& vie
   // The dominant gradient (1, 0) maps to T0^-T (1, 0), proportional to (t11, -t01).
   const double psi = std::atan2(-t01, t11);
   const double rotation =
-      -psi + noise_model_.orientation_error_deg * std::numbers::pi / 180 * view_rng.Normal();
+      -psi + noise_model.orientation_error_deg * std::numbers::pi / 180 * view_rng.Normal();
   // A detected scale too large by 2^e makes the descriptor window cover 2^e more of the patch.
   const double scale =
-      std::exp2(-view.log2_detection_error + noise_model_.scale_error * view_rng.Normal());
+      std::exp2(-view.log2_detection_error + noise_model.scale_error * view_rng.Normal());
   const double cr = std::cos(rotation) * scale, sr = std::sin(rotation) * scale;
   {
     const double a00 = cr * t00 - sr * t10, a01 = cr * t01 - sr * t11;
@@ -276,18 +274,26 @@ void SiftGenerator::Describe(const Appearance& appearance, const ViewChange& vie
     t00 = a00, t01 = a01, t10 = a10, t11 = a11;
   }
   const double det = t00 * t11 - t01 * t10;
-  const float f00 = float(t00), f01 = float(t01), f10 = float(t10), f11 = float(t11);  // T
-  const float i00 = float(t11 / det), i01 = float(-t01 / det);                         // T^-1
-  const float i10 = float(-t10 / det), i11 = float(t00 / det);
-  const float shift_x = float(noise_model_.shift_error * view_rng.Normal());
-  const float shift_y = float(noise_model_.shift_error * view_rng.Normal());
+  ViewWarp warp;
+  warp.f00 = float(t00), warp.f01 = float(t01), warp.f10 = float(t10), warp.f11 = float(t11);
+  warp.i00 = float(t11 / det), warp.i01 = float(-t01 / det);
+  warp.i10 = float(-t10 / det), warp.i11 = float(t00 / det);
+  warp.shift_x = float(noise_model.shift_error * view_rng.Normal());
+  warp.shift_y = float(noise_model.shift_error * view_rng.Normal());
+  return warp;
+}
 
-  // The image gradient at 8x8 samples (2x2 per cell): the sum of every structure's gradient
-  // at the corresponding canonical point.
+// Adds the structures' gradients to the orientation histograms `h`: the image gradient at 8x8
+// samples (2x2 per cell), the sum of every structure's gradient at the corresponding canonical
+// point. Image gradients transform with T^-T.
+void AddStructureGradients(const Structure* structures, int n, const ViewWarp& warp,
+                           const std::array<float, 64>& sample_window, float width, float inv_width,
+                           float* h) {
+  const float i00 = warp.i00, i01 = warp.i01, i10 = warp.i10, i11 = warp.i11;
   alignas(32) float sx[64], sy[64], gx[64] = {}, gy[64] = {};
   for (int s = 0; s < 64; ++s) {
-    const float x = (s % 8) * 0.5f - 1.75f - shift_x;
-    const float y = (s / 8) * 0.5f - 1.75f - shift_y;
+    const float x = (s % 8) * 0.5f - 1.75f - warp.shift_x;
+    const float y = (s / 8) * 0.5f - 1.75f - warp.shift_y;
     sx[s] = i00 * x + i01 * y;
     sy[s] = i10 * x + i11 * y;
   }
@@ -313,28 +319,30 @@ void SiftGenerator::Describe(const Appearance& appearance, const ViewChange& vie
       }
     }
   }
-  // Orientation histograms. Image gradients transform with T^-T.
-  std::array<float, kSiftDim> h{};
-  const float width = float(std::max(1.0, patch_model_.orientation_width));
-  const float inv_width = 1 / width;
   for (int s = 0; s < 64; ++s) {
     const float vx = i00 * gx[s] + i10 * gy[s], vy = i01 * gx[s] + i11 * gy[s];
-    const float magnitude = sample_window_[s] * std::sqrt(vx * vx + vy * vy);
+    const float magnitude = sample_window[s] * std::sqrt(vx * vx + vy * vy);
     if (magnitude < 1e-9f) continue;
-    AddToCell(magnitude, vx, vy, width, inv_width,
-              h.data() + ((s / 16) * kCells + (s % 8) / 2) * kBins);
+    AddToCell(magnitude, vx, vy, width, inv_width, h + ((s / 16) * kCells + (s % 8) / 2) * kBins);
   }
-  // Texture details move with the view (x = T X + shift) and fade in and out with the scale
-  // and, as relief and shading would, with the viewing direction.
-  const float scale_turn = float(noise_model_.scale_texture * view.log2_scale);
-  const float relief_u = float(noise_model_.relief * view.u);
-  const float relief_v = float(noise_model_.relief * view.v);
-  const float inv_window2 = float(1 / (2 * patch_model_.window_sigma * patch_model_.window_sigma));
+}
+
+// Adds the texture details to `h`: they move with the view (x = T X + shift) and fade in and
+// out with the scale and, as relief and shading would, with the viewing direction.
+void AddTextureGradients(const TextureGradient* textures, int num_textures, const ViewWarp& warp,
+                         const ViewChange& view, const PatchModel& patch_model,
+                         const ViewNoiseModel& noise_model, float width, float inv_width,
+                         float* h) {
+  const float scale_turn = float(noise_model.scale_texture * view.log2_scale);
+  const float relief_u = float(noise_model.relief * view.u);
+  const float relief_v = float(noise_model.relief * view.v);
+  const float inv_window2 = float(1 / (2 * patch_model.window_sigma * patch_model.window_sigma));
   for (int k = 0; k < num_textures; ++k) {
     const TextureGradient& t = textures[k];
-    const float x = f00 * t.x + f01 * t.y + shift_x, y = f10 * t.x + f11 * t.y + shift_y;
+    const float x = warp.f00 * t.x + warp.f01 * t.y + warp.shift_x;
+    const float y = warp.f10 * t.x + warp.f11 * t.y + warp.shift_y;
     if (!(x > -2 && x < 2 && y > -2 && y < 2)) continue;
-    const float vx = i00 * t.gx + i10 * t.gy, vy = i01 * t.gx + i11 * t.gy;
+    const float vx = warp.i00 * t.gx + warp.i10 * t.gy, vy = warp.i01 * t.gx + warp.i11 * t.gy;
     const float turn = scale_turn + relief_u * t.p + relief_v * t.q;
     float ct, st;
     FastCosSin(turn, &ct, &st);
@@ -342,10 +350,14 @@ void SiftGenerator::Describe(const Appearance& appearance, const ViewChange& vie
                             FastExp(-(x * x + y * y) * inv_window2);
     if (magnitude < 1e-9f) continue;
     const int cell = int(y + 2) * kCells + int(x + 2);
-    AddToCell(magnitude, vx, vy, width, inv_width, h.data() + cell * kBins);
+    AddToCell(magnitude, vx, vy, width, inv_width, h + cell * kBins);
   }
+}
 
-  // VLFeat: L2 normalize, clamp at 0.2, L2 normalize. COLMAP: L1 normalize, element-wise sqrt.
+// The descriptor of histograms `h`: VLFeat's (L2 normalize, clamp at 0.2, L2 normalize), then
+// COLMAP's (L1 normalize, element-wise sqrt), with the pixel noise drawn from `view_rng`.
+void NormalizeWithNoise(const std::array<float, kSiftDim>& h, const ViewNoiseModel& noise_model,
+                        Rng& view_rng, SiftVector* out) {
   SiftVector d;
   for (int i = 0; i < kSiftDim; ++i) d[i] = h[i];
   NormalizeL2(&d);
@@ -354,13 +366,37 @@ void SiftGenerator::Describe(const Appearance& appearance, const ViewChange& vie
   float l1 = 0;
   for (float x : d) l1 += x;
   const float inv_l1 = 1 / l1;
-  const float sigma = float(noise_model_.pixel_noise / std::sqrt(double(kSiftDim)));
+  const float sigma = float(noise_model.pixel_noise / std::sqrt(double(kSiftDim)));
   std::array<float, kSiftDim> noise;
   view_rng.FillNormal(noise.data(), kSiftDim);
   for (int i = 0; i < kSiftDim; ++i) {
     (*out)[i] = std::max(0.0f, std::sqrt(d[i] * inv_l1) + sigma * noise[i]);
   }
   NormalizeL2(out);
+}
+
+}  // namespace
+
+void SiftGenerator::Describe(const Appearance& appearance, const ViewChange& view, Rng& view_rng,
+                             SiftVector* out) const {
+  Rng patch_rng(appearance.patch_seed);
+  Structure structures[kMaxStructures];
+  const int n = DrawStructures(patch_model_, patch_rng, structures);
+  TextureGradient textures[kMaxTexture];
+  const int num_textures = DrawTextures(patch_model_, patch_rng, textures);
+  if (appearance.instance_noise > 0) {
+    Rng instance_rng(appearance.instance_seed);
+    PerturbPatch(patch_model_, appearance.instance_noise, instance_rng, structures, n, textures,
+                 num_textures);
+  }
+  const ViewWarp warp = DrawViewWarp(view, noise_model_, view_rng);
+  std::array<float, kSiftDim> h{};
+  const float width = float(std::max(1.0, patch_model_.orientation_width));
+  const float inv_width = 1 / width;
+  AddStructureGradients(structures, n, warp, sample_window_, width, inv_width, h.data());
+  AddTextureGradients(textures, num_textures, warp, view, patch_model_, noise_model_, width,
+                      inv_width, h.data());
+  NormalizeWithNoise(h, noise_model_, view_rng, out);
 }
 
 void QuantizeDescriptor(const SiftVector& descriptor, uint8_t* out) {

@@ -117,6 +117,82 @@ int64_t MinimumViews(const SceneOptions& options) {
   return int64_t(std::ceil(EstimatedViewsPerFacadeMetre(options) * 4 * kMinBlockSide));
 }
 
+namespace {
+
+// The camera, shared by all images.
+void SetCamera(const SynthKnobs& knobs, SceneOptions* o) {
+  const int64_t width = Pick(knobs.width, {}, int64_t{1024});
+  const int64_t height = Pick(knobs.height, {}, int64_t{768});
+  Require(width >= 64 && height >= 64 && width <= 100000 && height <= 100000,
+          "--width and --height must be in [64, 100000] pixels (got " + Str(width) + "x" +
+              Str(height) + ")");
+  const double focal = Pick(knobs.focal, {}, 900.0);
+  Require(focal > 0 && focal <= 1e6,
+          "--focal must be in (0, 1000000] pixels (got " + Str(focal) + ")");
+  const double radial = Pick(knobs.radial, {}, -0.01);
+  Require(std::abs(radial) <= 0.5, "--radial must be in [-0.5, 0.5] (got " + Str(radial) + ")");
+  const std::string model = Pick(knobs.camera_model, {}, std::string("SIMPLE_RADIAL"));
+  const double cx = double(width) / 2, cy = double(height) / 2;
+  o->camera.camera_id = 1;
+  o->camera.width = uint64_t(width);
+  o->camera.height = uint64_t(height);
+  if (model == "SIMPLE_PINHOLE") {
+    o->camera.model_id = CameraModelId::kSimplePinhole;
+    o->camera.params = {focal, cx, cy};
+  } else if (model == "PINHOLE") {
+    o->camera.model_id = CameraModelId::kPinhole;
+    o->camera.params = {focal, focal, cx, cy};
+  } else if (model == "SIMPLE_RADIAL") {
+    o->camera.model_id = CameraModelId::kSimpleRadial;
+    o->camera.params = {focal, cx, cy, radial};
+  } else if (model == "RADIAL") {
+    o->camera.model_id = CameraModelId::kRadial;
+    o->camera.params = {focal, cx, cy, radial, 0};
+  } else {
+    throw InputError(
+        "--camera-model must be SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL or RADIAL (got '" + model +
+        "')");
+  }
+}
+
+// The city size: explicit blocks, or as many as the target number of views needs.
+void SetCitySize(const SynthKnobs& knobs, const Preset& preset, SceneOptions* o) {
+  const std::optional<int64_t> blocks = knobs.blocks  ? knobs.blocks
+                                        : knobs.views ? std::nullopt
+                                                      : preset.blocks;
+  if (blocks) {
+    Require(*blocks >= 1 && *blocks <= 100000,
+            "--blocks must be in [1, 100000] (got " + Str(*blocks) + ")");
+    o->layout.blocks_x = int(std::ceil(std::sqrt(double(*blocks))));
+    o->layout.blocks_y = int((*blocks + o->layout.blocks_x - 1) / o->layout.blocks_x);
+    return;
+  }
+  const int64_t views = Pick(knobs.views, preset.views, kDefaultViews);
+  Require(views > 0, "--views must be positive (got " + Str(views) + ")");
+  Require(views <= kMaxViews,
+          "--views must be at most " + Str(kMaxViews) + " (got " + Str(views) + ")");
+  const int64_t minimum = MinimumViews(*o);
+  Require(views >= minimum, "--views " + Str(views) + " is too small to make a city: at least " +
+                                Str(minimum) + " views are needed with --features-per-image " +
+                                Str(o->features_per_image) + " and --camera-spacing " +
+                                Str(o->layout.camera_spacing));
+  const double per_metre = EstimatedViewsPerFacadeMetre(*o);
+  const double mean_side = 0.5 * (o->layout.min_block_side + o->layout.max_block_side);
+  const double per_block = per_metre * 4 * mean_side;
+  const double wanted = double(views) / per_block;
+  // A near-square grid; block sides are scaled so that the facade length (and so the number of
+  // views) matches the target. Below one block's worth, one smaller block.
+  const int64_t bx = std::max<int64_t>(1, std::llround(std::sqrt(wanted)));
+  const int64_t by = std::max<int64_t>(1, std::llround(wanted / double(bx)));
+  const double scale = wanted / double(bx * by);
+  o->layout.min_block_side *= scale;
+  o->layout.max_block_side *= scale;
+  o->layout.blocks_x = int(bx);
+  o->layout.blocks_y = int(by);
+}
+
+}  // namespace
+
 SceneOptions MakeSceneOptions(const SynthKnobs& knobs) {
   const Preset preset = FindPreset(knobs.preset);
   SceneOptions o;
@@ -172,73 +248,8 @@ SceneOptions MakeSceneOptions(const SynthKnobs& knobs) {
     o.layout.max_block_side = 40;
   }
 
-  // The camera, shared by all images.
-  const int64_t width = Pick(knobs.width, {}, int64_t{1024});
-  const int64_t height = Pick(knobs.height, {}, int64_t{768});
-  Require(width >= 64 && height >= 64 && width <= 100000 && height <= 100000,
-          "--width and --height must be in [64, 100000] pixels (got " + Str(width) + "x" +
-              Str(height) + ")");
-  const double focal = Pick(knobs.focal, {}, 900.0);
-  Require(focal > 0 && focal <= 1e6,
-          "--focal must be in (0, 1000000] pixels (got " + Str(focal) + ")");
-  const double radial = Pick(knobs.radial, {}, -0.01);
-  Require(std::abs(radial) <= 0.5, "--radial must be in [-0.5, 0.5] (got " + Str(radial) + ")");
-  const std::string model = Pick(knobs.camera_model, {}, std::string("SIMPLE_RADIAL"));
-  const double cx = double(width) / 2, cy = double(height) / 2;
-  o.camera.camera_id = 1;
-  o.camera.width = uint64_t(width);
-  o.camera.height = uint64_t(height);
-  if (model == "SIMPLE_PINHOLE") {
-    o.camera.model_id = CameraModelId::kSimplePinhole;
-    o.camera.params = {focal, cx, cy};
-  } else if (model == "PINHOLE") {
-    o.camera.model_id = CameraModelId::kPinhole;
-    o.camera.params = {focal, focal, cx, cy};
-  } else if (model == "SIMPLE_RADIAL") {
-    o.camera.model_id = CameraModelId::kSimpleRadial;
-    o.camera.params = {focal, cx, cy, radial};
-  } else if (model == "RADIAL") {
-    o.camera.model_id = CameraModelId::kRadial;
-    o.camera.params = {focal, cx, cy, radial, 0};
-  } else {
-    throw InputError(
-        "--camera-model must be SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL or RADIAL (got '" + model +
-        "')");
-  }
-
-  // The city size: explicit blocks, or as many as the target number of views needs.
-  const std::optional<int64_t> blocks = knobs.blocks  ? knobs.blocks
-                                        : knobs.views ? std::nullopt
-                                                      : preset.blocks;
-  if (blocks) {
-    Require(*blocks >= 1 && *blocks <= 100000,
-            "--blocks must be in [1, 100000] (got " + Str(*blocks) + ")");
-    o.layout.blocks_x = int(std::ceil(std::sqrt(double(*blocks))));
-    o.layout.blocks_y = int((*blocks + o.layout.blocks_x - 1) / o.layout.blocks_x);
-    return o;
-  }
-  const int64_t views = Pick(knobs.views, preset.views, kDefaultViews);
-  Require(views > 0, "--views must be positive (got " + Str(views) + ")");
-  Require(views <= kMaxViews,
-          "--views must be at most " + Str(kMaxViews) + " (got " + Str(views) + ")");
-  const int64_t minimum = MinimumViews(o);
-  Require(views >= minimum, "--views " + Str(views) + " is too small to make a city: at least " +
-                                Str(minimum) + " views are needed with --features-per-image " +
-                                Str(features) + " and --camera-spacing " +
-                                Str(o.layout.camera_spacing));
-  const double per_metre = EstimatedViewsPerFacadeMetre(o);
-  const double mean_side = 0.5 * (o.layout.min_block_side + o.layout.max_block_side);
-  const double per_block = per_metre * 4 * mean_side;
-  const double wanted = double(views) / per_block;
-  // A near-square grid; block sides are scaled so that the facade length (and so the number of
-  // views) matches the target. Below one block's worth, one smaller block.
-  const int64_t bx = std::max<int64_t>(1, std::llround(std::sqrt(wanted)));
-  const int64_t by = std::max<int64_t>(1, std::llround(wanted / double(bx)));
-  const double scale = wanted / double(bx * by);
-  o.layout.min_block_side *= scale;
-  o.layout.max_block_side *= scale;
-  o.layout.blocks_x = int(bx);
-  o.layout.blocks_y = int(by);
+  SetCamera(knobs, &o);
+  SetCitySize(knobs, preset, &o);
   return o;
 }
 
