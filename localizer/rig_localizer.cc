@@ -125,12 +125,12 @@ void ReportRigPose(const Localizer& localizer, const RigQuery& query, const RigM
     const FeatureMatch& match = matches.pairs[c][k];
     const uint32_t point = index.view_points()[match.view];
     const std::vector<float>& keypoints = query.images[c].query.keypoints;
-    result->images[c].inliers.push_back({match.feature,
-                                         {keypoints[2 * match.feature],
-                                          keypoints[2 * match.feature + 1]},
-                                         point,
-                                         index.PointXyz(point),
-                                         match.view});
+    result->images[c].inliers.push_back(
+        {match.feature,
+         {keypoints[2 * match.feature], keypoints[2 * match.feature + 1]},
+         point,
+         index.PointXyz(point),
+         match.view});
   }
   const CameraPose reference = pose.pose.CameraFromWorld(query.images.front().cam_from_rig);
   result->covariance = pose.covariance;
