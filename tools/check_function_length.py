@@ -26,7 +26,6 @@ IN_PROGRESS_ELSEWHERE = {
     ("indexer/index_update.cc", "UpdateIndex"),
     ("delta/apply_delta.cc", "AppliedDelta::AppliedDelta"),
     ("exe/cwloc_index_main.cc", "main"),
-    ("python/src/results.cc", "BindParts"),
     ("indexer/model_views.cc", "GatherModelViews"),
 }
 
