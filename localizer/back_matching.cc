@@ -59,13 +59,18 @@ std::optional<FeatureMatch> BackMatcher::MatchView(uint32_t view) {
 }
 
 void BackMatcher::Run(uint32_t back_matches) {
-  if (voted_.empty() || query_.NumFeatures() < 2 || result_.stopped_by_deadline) return;
+  if (result_.stopped_by_deadline) return;
+  if (voted_.empty() || query_.NumFeatures() < 2) {
+    result_.stop = BackStop::kNoVotes;
+    return;
+  }
   Stopwatch stopwatch;
   if (!started_) {
     started_ = true;
     if (guide_ == nullptr) {
       if (stop_.Passed()) {
         result_.stopped_by_deadline = true;  // the forest alone would cost milliseconds
+        result_.stop = BackStop::kDeadline;
         return;
       }
       const std::span<const uint8_t> descriptors(query_.descriptors.data(),
@@ -114,6 +119,10 @@ void BackMatcher::Run(uint32_t back_matches) {
     result_.visited.push_back({best, votes[best], found_here});
     if (found_here >= options_.min_matches_to_vote) pending_votes_ = {best, first_match};
   }
+  result_.stop = result_.stopped_by_deadline                            ? BackStop::kDeadline
+                 : result_.matches.size() >= back_matches               ? BackStop::kTarget
+                 : result_.visited.size() >= options_.max_back_clusters ? BackStop::kImages
+                                                                        : BackStop::kNoVotes;
   result_.seconds_matching += stopwatch.Seconds();
 }
 

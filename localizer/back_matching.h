@@ -32,6 +32,7 @@ struct BackMatchingResult {
   double seconds_query_tree = 0;
   double seconds_matching = 0;
   bool stopped_by_deadline = false;  // the latency budget ended it, possibly inside a cluster
+  BackStop stop = BackStop::kNotRun;  // why the last Run ended
 };
 
 // Back-matching's ratio test and N_B for this query: `ratio` and `back_matches`, or for a query

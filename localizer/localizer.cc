@@ -49,6 +49,7 @@ struct MatcherOutput {
   double seconds_guide = 0;  // the pose hypothesis of guided back-matching
   bool guided = false;
   bool back_stopped_by_deadline = false;
+  BackStop back_stop = BackStop::kNotRun;
   // The cluster-wise matcher's back-matching, to continue it (ConstrainFocalLength).
   std::unique_ptr<PoseGuide> guide;
   std::unique_ptr<BackMatcher> back_matcher;
@@ -91,6 +92,7 @@ std::optional<PoseHypothesis> FitPoseHypothesis(const Index& index, const Query&
 void TakeBackMatches(const Index& index, MatcherOutput* out) {
   const BackMatchingResult& back = out->back_matcher->result();
   out->back_stopped_by_deadline = back.stopped_by_deadline;
+  out->back_stop = back.stop;
   out->back = back.matches;
   out->back_matched_clusters = static_cast<uint32_t>(back.visited.size());
   out->seconds_query_tree = back.seconds_query_tree;
@@ -316,6 +318,7 @@ void ReportMatching(const Index& index, const Query& query, const MatcherOutput&
   result->forward_matches = static_cast<uint32_t>(matched.forward.size());
   result->back_matches = static_cast<uint32_t>(matched.back.size());
   result->back_matched_clusters = matched.back_matched_clusters;
+  result->back_stop = matched.back_stop;
   result->guided = matched.guided;
   result->correspondences = static_cast<uint32_t>(matched.correspondences.size());
   result->ranked_images = RankImages(index, matched.forward, matched.back, options.ranked_images);

@@ -51,6 +51,20 @@ struct Budget {
   std::vector<std::string> cut;  // "forward", "back_matching", "ransac", "refinement"
 };
 
+// Why back-matching stopped (LocalizerOptions::back_matches and its neighbours).
+enum class BackStop : int {
+  kTarget,    // it had N_B back-matches (more for an estimated focal length: --nb-max)
+  kImages,    // it had back-matched --max-back-images clusters
+  kNoVotes,   // no cluster it had not matched had votes left
+  kDeadline,  // a latency budget ended it
+  kNotRun,    // it did not run: another matcher, or nothing to start from
+};
+template <>
+struct EnumNames<BackStop> {
+  static constexpr std::array<std::string_view, 5> names = {"target", "images", "no-votes",
+                                                            "deadline", "not-run"};
+};
+
 // A RANSAC inlier of the reported pose: which query feature saw which 3D point of the index.
 struct Inlier {
   uint32_t feature = 0;             // row of the query's keypoints and descriptors
@@ -81,6 +95,7 @@ struct LocalizationResult {
   uint32_t back_matches = 0;
   uint32_t correspondences = 0;
   uint32_t back_matched_clusters = 0;
+  BackStop back_stop = BackStop::kNotRun;
   bool guided = false;
   uint32_t ransac_iterations = 0;
   std::vector<RankedImage> ranked_images;
@@ -242,6 +257,8 @@ struct Description<LocalizationResult> {
                     .Json("matches.back_matched_images")
                     .Help("Clusters back-matched (one model image each unless the "
                           "index was built with --clusters)")),
+      MakeField(&R::back_stop,
+                Info("back_stop").Json("matches.back_stop").Help("Why back-matching stopped")),
       MakeField(&R::guided, Info("guided")
                                 .Json("matches.guided")
                                 .Help("Whether a pose hypothesis guided "
