@@ -12,6 +12,10 @@ install(FILES api/include/cwloc/cwloc.hpp api/include/cwloc/cwloc.h
   ${PROJECT_BINARY_DIR}/generated/cwloc/options.inc ${CWLOC_INSTALLED_RESULT_HEADERS}
   DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/cwloc)
 
+# cwloc-localize loads FFmpeg's module from here with its first --video (photo/video/).
+if(TARGET cwloc_video_ffmpeg)
+  install(TARGETS cwloc_video_ffmpeg LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})
+endif()
 foreach(tool cwloc_localize_exe cwloc_index_exe cwloc_synth_exe cwloc_eval_exe)
   if(TARGET ${tool})
     install(TARGETS ${tool} RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})

@@ -31,7 +31,7 @@ struct BackMatchingResult {
   std::vector<uint32_t> cluster_votes;
   double seconds_query_tree = 0;
   double seconds_matching = 0;
-  bool stopped_by_deadline = false;  // the latency budget ended it, possibly inside a cluster
+  bool stopped_by_deadline = false;   // the latency budget ended it, possibly inside a cluster
   BackStop stop = BackStop::kNotRun;  // why the last Run ended
 };
 

@@ -2,7 +2,8 @@
 # Installs what the viewer's browser test needs (tests/serve/viewer_browser_test.mjs,
 # docs/serve.md): Debian's Chromium, Node.js and npm, and puppeteer-core at the version
 # tests/serve/package-lock.json pins (no browser download: it drives Debian's Chromium).
-# Idempotent. CI runs it; without it that one test is skipped with a message.
+# Idempotent. tools/quickstart.sh test and CI run it; without it that one test is skipped with a
+# message, which fails CI (tools/check_skips.py).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 packages=(chromium nodejs npm)

@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # The README's two commands.
 #   tools/quickstart.sh demo   install, build, run the main job on the built-in demo city
-#   tools/quickstart.sh test   install, build, run every test
+#   tools/quickstart.sh test   install, build, run every test (the viewer's browser test too),
+#                              then list the tests that skipped (tools/check_skips.py: in CI,
+#                              CI=true, a skip tests/allowed_skips.txt does not allow fails)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -12,6 +14,8 @@ case "$mode" in
 esac
 
 tools/install-deps.sh
+# Chromium, Node.js and puppeteer-core for the viewer's browser test (tests/serve).
+if [ "$mode" = test ]; then tools/install-browser-deps.sh; fi
 cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
 if [ "$mode" = demo ]; then
   # The four tools the demo runs and their libraries; `test` builds the rest.
@@ -39,5 +43,8 @@ if [ "$mode" = demo ]; then
     --scale "$demo/city/scale_to_metres.txt" --label cwloc \
     --model "$demo/city/mapping_model/bin" --gt-points "$demo/city/queries_gt_points.txt"
 else
-  ctest --test-dir build --output-on-failure -j "$(nproc)"
+  status=0
+  ctest --test-dir build --output-on-failure -j "$(nproc)" || status=$?
+  tools/check_skips.py build || status=1
+  exit "$status"
 fi

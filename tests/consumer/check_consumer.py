@@ -2,7 +2,8 @@
 """Installs a built cwloc tree into a fresh prefix, builds the consumer apps of this folder
 against it with find_package(cwloc), runs them (C++ and C) on the golden indexes shipped in
 tests/data, and checks that both localize their queries near the ground truth with the same
-pose, and on the georeferenced one (index-1.1.cwl) near the true WGS84 position.
+pose, and on the georeferenced one (index-1.1.cwl) near the true WGS84 position. In a build
+with video, the installed cwloc-localize reads a clip through the FFmpeg module it installed.
 
 Usage: check_consumer.py BUILD_DIR SOURCE_DIR
 """
@@ -32,6 +33,8 @@ def main():
         missing = [p for p in expected if not (prefix / p).exists()]
         if missing:
             sys.exit(f"check_consumer: the install lacks {missing}")
+        if (build / "lib" / "libcwloc_video_ffmpeg.so").exists():
+            check_video(prefix, source / "tests" / "data" / "golden", Path(tmp))
 
         run("cmake", "-S", source / "tests" / "consumer", "-B", consumer_build, "-G", "Ninja",
             f"-DCMAKE_PREFIX_PATH={prefix}", "-DCMAKE_BUILD_TYPE=Release")
@@ -77,6 +80,23 @@ def check_index(consumer_build, golden, version):
     if worst_geo > 2.5:
         sys.exit(f"check_consumer: {version}: worst WGS84 position error {worst_geo:.2f} m > 2.5 m")
     return worst_geo if geo_truth is not None else worst
+
+
+def check_video(prefix, golden, tmp):
+    """The installed cwloc-localize loads FFmpeg's module from the installed lib/ with its first
+    video: a clip of two test pictures gives its two frames' records (lost on the golden city)."""
+    clip = tmp / "clip.mp4"
+    run("ffmpeg", "-loglevel", "error", "-y", "-f", "lavfi", "-i", "testsrc2=size=320x240:rate=2",
+        "-frames:v", "2", "-pix_fmt", "yuv420p", clip)
+    records = tmp / "video.jsonl"
+    result = subprocess.run([str(prefix / "bin" / "cwloc-localize"), "--index",
+                             str(golden / "index-1.0.cwl"), "--video", str(clip), "-q", "-o",
+                             str(records)], capture_output=True, text=True)
+    names = [line.split('"name":"', 1)[1].split('"', 1)[0]
+             for line in records.read_text().splitlines()] if records.exists() else []
+    if result.returncode > 1 or names != [f"{clip}#0", f"{clip}#1"]:
+        sys.exit(f"check_consumer: the installed cwloc-localize --video gave exit "
+                 f"{result.returncode} and frames {names}:\n{result.stdout}{result.stderr}")
 
 
 def read_queries_geo(path):

@@ -250,5 +250,26 @@ TEST_F(SharedPhotoTest, SceauxCastleFromTheExifFocalRefinesFocalAndDistortion) {
   }
 }
 
+// Issue #64's bar for the photo default: the peak resident set of one cwloc-localize run on
+// herz_jesu's heaviest photo at the defaults is under 100 MB. Measured 85 MB; 106 MB while
+// FFmpeg's libraries were loaded at every start (video_frames.h).
+TEST_F(SharedPhotoTest, APhotoAtTheDefaultsPeaksUnder100MB) {
+  if (test::kSanitized) GTEST_SKIP() << "a sanitizer's shadow memory is not the tool's";
+  if (!Open("herz_jesu_p25")) GTEST_SKIP() << "shared data 'herz_jesu_p25' not found";
+  std::string output;
+  ASSERT_EQ(
+      test::RunCommand("/usr/bin/time -f 'peak %M KiB' " + Quote(test::ToolPath("cwloc-localize")) +
+                           " --index " + Quote(index_) + " --image " +
+                           Quote(data_ / "query_images" / "0022.jpg") + " -q",
+                       &output),
+      0)
+      << output;
+  const size_t peak = output.rfind("peak ");
+  ASSERT_NE(peak, std::string::npos) << output;
+  const double mib = std::stod(output.substr(peak + 5)) / 1024;
+  EXPECT_GT(mib, 20.0) << output;  // the photo's planes alone are more
+  EXPECT_LT(mib, 100.0) << output;
+}
+
 }  // namespace
 }  // namespace cwloc

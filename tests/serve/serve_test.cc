@@ -366,7 +366,8 @@ TEST_F(ServeTest, InfoAndMetricsSayWhatWasServed) {
 
 // The viewer in headless Chromium (viewer_browser_test.mjs): a photo dropped through the page
 // shows the pose /v1/localize gave for it. Skipped where Chromium or puppeteer-core is missing
-// (tools/install-browser-deps.sh installs them; CI runs it).
+// (tools/install-browser-deps.sh installs them, as tools/quickstart.sh test does; a skip fails
+// CI: tools/check_skips.py).
 TEST_F(ServeTest, TheViewerShowsThePoseTheApiReturned) {
   std::string output;
   if (test::RunCommand("command -v node", &output) != 0) GTEST_SKIP() << "no node";
