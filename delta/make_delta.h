@@ -12,6 +12,7 @@
 
 #include "delta/delta_file.h"
 #include "format/index.h"
+#include "kdtree/kd_forest_update.h"
 
 namespace cwloc {
 

@@ -21,6 +21,7 @@
 #include "geo/index_georeference.h"
 #include "indexer/index_update.h"
 #include "indexer/index_writer.h"
+#include "indexer/model_views.h"
 #include "kdtree/kd_forest_update.h"
 
 namespace cwloc {
