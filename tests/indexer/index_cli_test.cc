@@ -3,6 +3,7 @@
 #include <gmock/gmock.h>
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstring>
 #include <fstream>
@@ -11,7 +12,9 @@
 #include <set>
 #include <sstream>
 
+#include "format/index.h"
 #include "format/index_file.h"
+#include "format/index_section_table.h"
 #include "indexer/build_option_table.h"
 #include "kdtree/kd_forest_builder.h"
 #include "tests/indexer/indexer_fixture.h"
@@ -98,6 +101,69 @@ TEST_F(IndexCliTest, BuildInfoAndVerifySucceed) {
   EXPECT_THAT(output, HasSubstr("10 images, 400 points"));
   EXPECT_EQ(Run("verify " + index_path_.string(), &output), 0) << output;
   EXPECT_THAT(output, HasSubstr(": OK: 16 section checksums and every stored index verified"));
+}
+
+// Every optional section of the table reaches tiles and updates: the elements of a section
+// kept with its rows are the parent's for each kept view or point, and a section the parent
+// gives whole is the parent's.
+TEST_F(IndexCliTest, EverySectionOfTheTableReachesATileAndAnUpdate) {
+  ASSERT_NO_FATAL_FAILURE(
+      Build(" --keypoints --point-colors --model-frame enu:47.3779,8.5403,400"));
+  const Index parent = Index::Open(index_path_);
+  for (const IndexSectionSpec& spec : IndexSectionTable()) {
+    if (spec.InIndexOfKind(false))
+      EXPECT_NE(parent.file().FindSection(spec.tag), nullptr) << SectionTagName(spec.tag);
+  }
+  const auto list = dir_ / "images.txt", tile_path = dir_ / "tile.cwl";
+  std::ofstream(list) << parent.ImageName(parent.images()[3]) << "\n"
+                      << parent.ImageName(parent.images()[7]) << "\n";
+  std::string output;
+  ASSERT_EQ(Run("extract --index " + index_path_.string() + " --images " + list.string() + " -o " +
+                    tile_path.string(),
+                &output),
+            0)
+      << output;
+  const auto updated = dir_ / "updated.cwl";
+  ASSERT_EQ(Run("update --index " + index_path_.string() + " --model " + model_dir_.string() +
+                    " --database " + database_path_.string() + " -o " + updated.string(),
+                &output),
+            0)
+      << output;
+  const Index tile = Index::Open(tile_path);
+  const Index update = Index::Open(updated);
+  // The tile's views and points as the parent's rows: images by id, points by COLMAP id.
+  std::vector<uint32_t> parent_views, parent_points;
+  for (const IndexImage& image : tile.images()) {
+    for (const IndexImage& old_image : parent.images()) {
+      for (uint32_t v = 0; old_image.image_id == image.image_id && v < image.num_views; ++v)
+        parent_views.push_back(old_image.first_view + v);
+    }
+  }
+  for (const uint64_t id : tile.point_ids()) {
+    const auto ids = parent.point_ids();
+    parent_points.push_back(uint32_t(std::lower_bound(ids.begin(), ids.end(), id) - ids.begin()));
+  }
+  ASSERT_EQ(parent_views.size(), tile.num_views());
+  for (const IndexSectionSpec& spec : IndexSectionTable()) {
+    const std::string tag = SectionTagName(spec.tag);
+    const std::span<const uint8_t> from = spec.bytes(parent.rows());
+    if (spec.child == SectionInChild::kMade || from.empty()) continue;
+    EXPECT_TRUE(std::ranges::equal(spec.bytes(update.rows()), from)) << tag;
+    const std::span<const uint8_t> kept = spec.bytes(tile.rows());
+    if (spec.child == SectionInChild::kParents) {
+      EXPECT_TRUE(std::ranges::equal(kept, from)) << tag;
+      continue;
+    }
+    const std::vector<uint32_t>& rows =
+        spec.count == SectionCount::kPerView ? parent_views : parent_points;
+    const size_t size = spec.ElementBytes(parent.rows());
+    ASSERT_EQ(kept.size(), rows.size() * size) << tag;
+    for (size_t i = 0; i < rows.size(); ++i) {
+      ASSERT_TRUE(
+          std::ranges::equal(kept.subspan(i * size, size), from.subspan(rows[i] * size, size)))
+          << tag << " row " << i;
+    }
+  }
 }
 
 TEST_F(IndexCliTest, InfoJsonValidatesAgainstItsSchema) {
