@@ -16,6 +16,7 @@
 #include "format/index_file.h"
 #include "format/index_section_table.h"
 #include "indexer/build_option_table.h"
+#include "indexer/index_command_flags.h"
 #include "kdtree/kd_forest_builder.h"
 #include "tests/indexer/indexer_fixture.h"
 
@@ -341,6 +342,32 @@ TEST_F(IndexCliTest, BuildHelpListsEveryLineOfTheBuildOptionTable) {
   EXPECT_EQ(listed, expected);
   EXPECT_THAT(help, HasSubstr("--trees UINT=4 "));
   EXPECT_THAT(help, HasSubstr("--georef-sigma FLOAT=5 "));
+}
+
+// build, update, extract and apply list their lines of the command table, each with its help
+// and a number's default; --threads is the build option table's line on each of them, with one
+// type, range and message.
+TEST_F(IndexCliTest, EachCommandTakesItsLinesOfTheCommandTable) {
+  const auto expect_listed = [&](const std::string& command, const auto& table) {
+    std::string help;
+    ASSERT_EQ(Run(command + " --help", &help), 0) << help;
+    for (const auto& spec : table) {
+      EXPECT_THAT(help, HasSubstr("  " + spec.names + " ")) << command << " " << spec.names;
+      EXPECT_THAT(help, HasSubstr(spec.help)) << command << " " << spec.names;
+    }
+    EXPECT_THAT(help, HasSubstr("  --threads INT=0 ")) << command;
+  };
+  expect_listed("build", CommandFlagTable<IndexBuildOptions>());
+  expect_listed("update", CommandFlagTable<IndexUpdateOptions>());
+  expect_listed("extract", CommandFlagTable<IndexExtractOptions>());
+  expect_listed("apply", CommandFlagTable<IndexApplyOptions>());
+  for (const std::string command :
+       {"build --model m --database d -o o", "update --index i --model m --database d -o o",
+        "extract --index i --near '47 8 100' -o o", "apply --index i --delta d -o o"}) {
+    std::string output;
+    EXPECT_EQ(Run(command + " --threads 2x", &output), 2) << command;
+    EXPECT_EQ(output, "cwloc-index: error: --threads 2x: expected a whole number\n") << command;
+  }
 }
 
 // Every input file of a build given as a device, a pipe or an oversized file is refused by name
