@@ -16,6 +16,7 @@
 #include "delta/apply_delta.h"
 #include "exe/tool_main.h"
 #include "format/index.h"
+#include "format/index_section_table.h"
 #include "format/xxhash64.h"
 #include "indexer/build_option_table.h"
 #include "indexer/index_build_flags.h"
@@ -201,6 +202,17 @@ std::string DescriptorStorage(const Index& index) {
   return text;
 }
 
+// What a section holds, as the section table says, with the format that introduced it; a
+// section this cwloc does not know is one Index::Open skipped (a required one it refuses).
+std::string SectionContents(uint32_t tag) {
+  const IndexSectionSpec* spec = FindIndexSection(tag);
+  if (spec == nullptr) return "unknown to this cwloc (optional: skipped)";
+  std::string note = spec->optional() ? "optional" : "";
+  if (spec->minor > 0)
+    note += (note.empty() ? "" : ", ") + std::string("format 1.") + std::to_string(spec->minor);
+  return std::string(spec->help) + (note.empty() ? "" : " (" + note + ")");
+}
+
 int RunInfo(const std::string& path, bool json) {
   const Stopwatch open_time;
   const Index index = Index::Open(path);
@@ -223,7 +235,8 @@ int RunInfo(const std::string& path, bool json) {
                                  {"count", entry.count},
                                  {"element_bytes", entry.element_size},
                                  {"required", (entry.flags & kSectionRequired) != 0},
-                                 {"checksum", "xxh64:" + HashHex(entry.checksum)}});
+                                 {"checksum", "xxh64:" + HashHex(entry.checksum)},
+                                 {"contents", SectionContents(entry.tag)}});
     }
     out["manifest"] = manifest;
     std::cout << out.dump(2) << "\n";
@@ -250,13 +263,15 @@ int RunInfo(const std::string& path, bool json) {
   if (manifest.contains("georeference") && manifest["georeference"].is_object())
     PrintGeoreference(manifest["georeference"]);
   std::printf("  descriptors: %s\n", DescriptorStorage(index).c_str());
-  std::printf("  %-6s %12s %14s %12s  %s\n", "tag", "offset", "bytes", "count", "bytes/view");
+  std::printf("  %-6s %12s %14s %12s  %s  %s\n", "tag", "offset", "bytes", "count", "bytes/view",
+              "contents");
   const double views = static_cast<double>(index.num_views());
   for (const SectionEntry& entry : index.file().sections()) {
-    std::printf("  %-6s %12llu %14llu %12llu  %8.2f\n", SectionTagName(entry.tag).c_str(),
+    std::printf("  %-6s %12llu %14llu %12llu  %8.2f    %s\n", SectionTagName(entry.tag).c_str(),
                 static_cast<unsigned long long>(entry.offset),
                 static_cast<unsigned long long>(entry.size),
-                static_cast<unsigned long long>(entry.count), double(entry.size) / views);
+                static_cast<unsigned long long>(entry.count), double(entry.size) / views,
+                SectionContents(entry.tag).c_str());
   }
   std::printf("  total %.2f bytes per view\n", double(header.file_size) / views);
   return kExitOk;
@@ -272,6 +287,13 @@ int RunVerify(const std::string& path) {
   const double seconds = stopwatch.Seconds();
   std::printf("%s: OK: %zu section checksums and every stored index verified in %.2f s\n",
               path.c_str(), index.file().sections().size(), seconds);
+  for (const SectionEntry& entry : index.file().sections()) {
+    if (FindIndexSection(entry.tag) == nullptr) {
+      std::printf(
+          "  section '%s' is unknown to this cwloc: its checksum verified, not its contents\n",
+          SectionTagName(entry.tag).c_str());
+    }
+  }
   return kExitOk;
 }
 

@@ -104,6 +104,35 @@ TEST_F(IndexCliTest, BuildInfoAndVerifySucceed) {
   EXPECT_THAT(output, HasSubstr(": OK: 16 section checksums and every stored index verified"));
 }
 
+// A section this cwloc does not know, flagged optional, is skipped: verify and info name it
+// (what it knows is the section table, format/index_section_table.inc).
+TEST_F(IndexCliTest, VerifyAndInfoNameAnOptionalSectionThisCwlocDoesNotKnow) {
+  ASSERT_NO_FATAL_FAILURE(Build(" --calibration-samples 0"));
+  std::vector<SectionData> sections;
+  const IndexFile file = IndexFile::Open(index_path_);
+  for (const SectionEntry& entry : file.sections()) {
+    sections.push_back({entry.tag, entry.flags, entry.element_size, entry.count,
+                        file.bytes().subspan(entry.offset, entry.size)});
+  }
+  const uint8_t newer[3] = {1, 2, 3};
+  sections.push_back(MakeSection(SectionTag("ZZZZ"), std::span<const uint8_t>(newer), 0));
+  const std::string path = (dir_ / "newer.cwl").string();
+  WriteIndexFile(path, sections);
+  std::string output;
+  EXPECT_EQ(Run("verify " + path, &output), 0) << output;
+  EXPECT_THAT(output, HasSubstr(": OK: 16 section checksums and every stored index verified"));
+  EXPECT_THAT(output, HasSubstr("\n  section 'ZZZZ' is unknown to this cwloc: its checksum "
+                                "verified, not its contents\n"));
+  EXPECT_EQ(Run("info " + path, &output), 0) << output;
+  EXPECT_THAT(output, HasSubstr("  PIDS "));
+  EXPECT_THAT(output, HasSubstr("each point's COLMAP id (optional, format 1.5)\n"));
+  EXPECT_THAT(output, HasSubstr("unknown to this cwloc (optional: skipped)\n"));
+  ASSERT_EQ(Run("info --json " + path, &output), 0) << output;
+  ExpectValidInfoJson(output);
+  EXPECT_EQ(nlohmann::json::parse(output)["sections"].back()["contents"],
+            "unknown to this cwloc (optional: skipped)");
+}
+
 // Every optional section of the table reaches tiles and updates: the elements of a section
 // kept with its rows are the parent's for each kept view or point, and a section the parent
 // gives whole is the parent's.
