@@ -436,9 +436,10 @@ void BuildFlags::Apply(IndexBuildOptions* options, IndexBuildFlags* flags) const
     BuildOptionTable()[line].set(value, options, flags);
 }
 
-// A subcommand whose flags come from the command table (indexer/index_command_flags.inc):
-// `Options` as they set them.
-template <typename Options>
+// A subcommand whose flags come from the command table (indexer/index_command_flags.inc) and,
+// with kBuildFlags (build; update, which compares them with the index's), the build option
+// table's after them.
+template <typename Options, bool kBuildFlags = false>
 class TableCommand {
  public:
   bool parsed() const { return command_->parsed(); }
@@ -447,78 +448,71 @@ class TableCommand {
   CLI::App* Add(CLI::App* app, const std::string& name, const std::string& description) {
     command_ = app->add_subcommand(name, description);
     flags_.AddTo(command_);
+    if constexpr (kBuildFlags) build_flags_.AddTo(command_);
     return command_;
   }
+  // `Options` as the command table's flags set them.
   Options Parsed() const {
     Options options;
     flags_.Apply(&options);
     return options;
   }
+  const BuildFlags& build_flags() const { return build_flags_; }
 
  private:
   CLI::App* command_ = nullptr;
   CommandFlags<Options> flags_;
+  BuildFlags build_flags_;
 };
 
-class BuildCommand : public TableCommand<IndexBuildOptions> {
+class BuildCommand : public TableCommand<IndexBuildOptions, /*kBuildFlags=*/true> {
  public:
-  void AddTo(CLI::App* app, bool* json) {
+  CLI::App* AddTo(CLI::App* app) {
     CLI::App* build =
         Add(app, "build", "Build an index from a COLMAP sparse model and its database");
-    build_flags_.AddTo(build);
     build->get_option("--clusters")->excludes(build->get_option("--cluster-file"));
-    build->add_flag("--json", *json, "Print the build report as JSON");
+    return build;
   }
   int Run(bool json) const {
     IndexBuildOptions options = Parsed();
     IndexBuildFlags flags;
-    build_flags_.Apply(&options, &flags);
+    build_flags().Apply(&options, &flags);
     ValidateBuildOptions(options, flags);
     ApplyBuildFlags(flags, &options);
     return RunBuild(options, json);
   }
-
- private:
-  BuildFlags build_flags_;
 };
 
 class ExtractCommand : public TableCommand<IndexExtractOptions> {
  public:
-  void AddTo(CLI::App* app, bool* json) {
+  CLI::App* AddTo(CLI::App* app) {
     CLI::App* extract =
         Add(app, "extract",
             "Write the part of an index near a position, or around listed images, as an index");
     extract->get_option("--images")->excludes(extract->get_option("--near"));
-    extract->add_flag("--json", *json, "Print the report as JSON");
+    return extract;
   }
   int Run(bool json) const { return RunExtract(Parsed(), json); }
 };
 
-class UpdateCommand : public TableCommand<IndexUpdateOptions> {
+class UpdateCommand : public TableCommand<IndexUpdateOptions, /*kBuildFlags=*/true> {
  public:
-  void AddTo(CLI::App* app, bool* json) {
-    CLI::App* update =
-        Add(app, "update",
-            "Update an index for a grown COLMAP model; optionally write the delta for devices");
-    build_flags_.AddTo(update);  // each must be the index's, but --threads
-    update->add_flag("--json", *json, "Print the report as JSON");
+  CLI::App* AddTo(CLI::App* app) {
+    return Add(app, "update",
+               "Update an index for a grown COLMAP model; optionally write the delta for devices");
   }
   int Run(bool json) const {
     IndexUpdateOptions options = Parsed();
-    options.build_flags = build_flags_.Given();
+    options.build_flags = build_flags().Given();  // each must be the index's, but --threads
     TakeThreadsOfBuildFlags(&options);
     return RunUpdate(options, json);
   }
-
- private:
-  BuildFlags build_flags_;
 };
 
 class ApplyCommand : public TableCommand<IndexApplyOptions> {
  public:
-  void AddTo(CLI::App* app, bool* json) {
-    Add(app, "apply", "Apply a delta of cwloc-index update to the index it was made for")
-        ->add_flag("--json", *json, "Print the report as JSON");
+  CLI::App* AddTo(CLI::App* app) {
+    return Add(app, "apply", "Apply a delta of cwloc-index update to the index it was made for");
   }
   int Run(bool json) const { return RunApply(Parsed(), json); }
 };
@@ -534,13 +528,13 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   bool json = false;
   cwloc::BuildCommand build;
-  build.AddTo(&app, &json);
+  build.AddTo(&app)->add_flag("--json", json, "Print the build report as JSON");
   cwloc::ExtractCommand extract;
-  extract.AddTo(&app, &json);
+  extract.AddTo(&app)->add_flag("--json", json, "Print the report as JSON");
   cwloc::UpdateCommand update;
-  update.AddTo(&app, &json);
+  update.AddTo(&app)->add_flag("--json", json, "Print the report as JSON");
   cwloc::ApplyCommand apply;
-  apply.AddTo(&app, &json);
+  apply.AddTo(&app)->add_flag("--json", json, "Print the report as JSON");
   std::string index_path;
   auto* info = app.add_subcommand("info", "Print an index's counts, sections and build parameters");
   info->add_option("index", index_path, "Index file")->required();
