@@ -25,7 +25,7 @@ std::span<const std::span<const uint8_t>> PiecesOf(const SectionData& section) {
 }  // namespace
 
 uint16_t FormatMinorOf(std::span<const SectionData> sections) {
-  uint16_t minor = 1;  // a full index without optional sections is 1.1, as since 1.1
+  uint16_t minor = 1;  // what a full index without optional sections has declared since 1.1
   for (const SectionData& section : sections) {
     if (const IndexSectionSpec* spec = FindIndexSection(section.tag))
       minor = std::max(minor, spec->minor);
