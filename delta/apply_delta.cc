@@ -10,7 +10,7 @@
 #include "delta/covisibility.h"
 #include "delta/make_delta.h"
 #include "delta/tracks.h"
-#include "format/index_contents.h"
+#include "format/index_rows.h"
 #include "format/xxhash64.h"
 #include "kdtree/kd_forest_update.h"
 
@@ -76,33 +76,31 @@ void CheckChangedRows(const std::vector<Change>& changes, size_t rows, const cha
   }
 }
 
-}  // namespace
-
-struct AppliedDelta::Child {
-  // A full child's descriptors are the parent's kept rows and the delta's new ones, read where
-  // they are and written as runs of each. Only a forest rebuilt from scratch needs them in one
-  // array (every byte written: no zero-filling of a gigabyte first).
-  std::unique_ptr<uint8_t[]> descriptor_bytes;
-  std::vector<std::span<const uint8_t>> descriptor_pieces;
-  IndexPointOrigin origin{};  // a compact child's, which the rows written ahead point to
-  std::unique_ptr<IndexFileWriter> writer;  // writing the descriptors while the rest is composed
-  std::vector<uint32_t> view_points;
-  std::vector<ViewKeypoint> view_keypoints;
-  std::vector<float> neighbor_distances;
-  std::vector<IndexPoint> points;
-  std::vector<PointColor> point_colors;
-  std::vector<uint64_t> point_ids;
-  std::vector<uint32_t> tracks;
-  CovisibilityGraph graph;
-  KdForest forest;
-  // A compact child: positions as offsets from the parent's origin, codes with its codebook,
-  // and the codes decoded (the kd-forest's rows).
-  std::vector<IndexPointOffset> point_offsets;
-  std::vector<uint8_t> codes;
-  std::vector<uint8_t> decoded;
+// Child row <-> parent row of the child's views and of its points.
+struct ChildRowMaps {
+  RowMaps views, points;
 };
 
-namespace {
+// The delta names this parent, and codes points as it does.
+void CheckMadeFor(const Index& parent, const IndexDelta& delta, const std::string& name) {
+  const FileHeader& parent_header = parent.file().header();
+  if (delta.header.parent_checksum != parent_header.header_checksum ||
+      delta.header.parent_file_size != parent_header.file_size) {
+    throw InputError(name + ": made for the index with checksum " +
+                     HashHex(delta.header.parent_checksum) + " (" +
+                     std::to_string(delta.header.parent_file_size) + " bytes), and " +
+                     FileName(parent) + " has " + HashHex(parent_header.header_checksum) + " (" +
+                     std::to_string(parent_header.file_size) +
+                     " bytes): apply a chain's deltas in order, each to the index the one "
+                     "before made");
+  }
+  const uint32_t code_bytes = parent.codes().code_bytes;
+  if (delta.code_bytes != code_bytes) {
+    throw InputError(name + ": the delta's point codes are of " + std::to_string(delta.code_bytes) +
+                     " bytes, " + FileName(parent) + "'s of " + std::to_string(code_bytes) +
+                     " (0: a full index, which stores descriptors)");
+  }
+}
 
 void CheckImages(const IndexDelta& delta, size_t* num_views, const std::string& name) {
   uint64_t next_view = 0;
@@ -151,9 +149,9 @@ std::vector<std::span<const uint8_t>> DescriptorPieces(const Index& parent,
 // invalid parent) is counted afresh instead.
 KeptCovisibilityRows KeptGraphRows(const Index& parent, std::span<const IndexImage> images,
                                    const RowMaps& views, const RowMaps& points,
-                                   const std::vector<uint32_t>& tracks,
-                                   const std::vector<IndexPoint>& child_points,
-                                   const std::vector<uint32_t>& view_points) {
+                                   std::span<const uint32_t> tracks,
+                                   std::span<const IndexPoint> child_points,
+                                   std::span<const uint32_t> view_points) {
   constexpr uint32_t kNotKept = KeptCovisibilityRows::kNotKept;
   const std::span<const IndexImage> parent_images = parent.images();
   KeptCovisibilityRows kept;
@@ -217,42 +215,11 @@ KeptCovisibilityRows KeptGraphRows(const Index& parent, std::span<const IndexIma
   return kept;
 }
 
-}  // namespace
-
-void CheckParentKdForest(const Index& parent) {
-  std::string error;
-  if (!ValidateKdForest(parent.kd_forest(), &error))
-    throw InputError(FileName(parent) + ": " + error);
-}
-
-AppliedDelta::AppliedDelta(const Index& parent, const IndexDelta& delta,
-                           const std::string& delta_name, const std::filesystem::path& output,
-                           int threads, ParentForest parent_forest)
-    : parent_(parent), delta_(delta), child_(std::make_unique<Child>()) {
-  const std::string& name = delta_name;
-  const FileHeader& parent_header = parent.file().header();
-  if (delta.header.parent_checksum != parent_header.header_checksum ||
-      delta.header.parent_file_size != parent_header.file_size) {
-    throw InputError(name + ": made for the index with checksum " +
-                     HashHex(delta.header.parent_checksum) + " (" +
-                     std::to_string(delta.header.parent_file_size) + " bytes), and " +
-                     FileName(parent) + " has " + HashHex(parent_header.header_checksum) + " (" +
-                     std::to_string(parent_header.file_size) +
-                     " bytes): apply a chain's deltas in order, each to the index the one "
-                     "before made");
-  }
-  const DeltaHeader& header = delta.header;
-  const bool coded = parent.coded();
-  const uint32_t code_bytes = parent.codes().code_bytes;
-  if (delta.code_bytes != code_bytes) {
-    throw InputError(name + ": the delta's point codes are of " + std::to_string(delta.code_bytes) +
-                     " bytes, " + FileName(parent) + "'s of " + std::to_string(code_bytes) +
-                     " (0: a full index, which stores descriptors)");
-  }
+// The child's rows from the delta's runs and new rows, checked before any row map is allocated:
+// a delta describes no more rows than the parent and its own sections hold.
+ChildRowMaps MapChildRows(const Index& parent, const IndexDelta& delta, const std::string& name) {
   size_t child_views = 0;
   CheckImages(delta, &child_views, name);
-  // The rows the runs and the delta's new rows give, checked before any row map is allocated:
-  // a delta describes no more rows than the parent and its own sections hold.
   const auto rows_given = [&](const std::vector<RowRun>& runs, size_t parent_rows, size_t new_rows,
                               const char* what) {
     uint64_t kept = 0;
@@ -264,18 +231,29 @@ AppliedDelta::AppliedDelta(const Index& parent, const IndexDelta& delta,
     return size_t(kept + new_rows);
   };
   // A compact index stores no view descriptors: its new views are their points.
-  const size_t new_views =
-      coded ? delta.new_view_points.size() : delta.new_descriptors.size() / kDescriptorBytes;
+  const size_t new_views = parent.coded() ? delta.new_view_points.size()
+                                          : delta.new_descriptors.size() / kDescriptorBytes;
   const size_t views_given = rows_given(delta.view_runs, parent.num_views(), new_views, "view");
   if (views_given != child_views) {
     throw InputError(name + ": the delta's runs and new views give " + std::to_string(views_given) +
                      " views, its images " + std::to_string(child_views));
   }
-  const RowMaps views = MapRows(delta.view_runs, child_views, parent.num_views(), "view", name);
   const size_t child_points =
       rows_given(delta.point_runs, parent.num_points(), delta.new_points.size(), "point");
-  const RowMaps points =
-      MapRows(delta.point_runs, child_points, parent.num_points(), "point", name);
+  return {MapRows(delta.view_runs, child_views, parent.num_views(), "view", name),
+          MapRows(delta.point_runs, child_points, parent.num_points(), "point", name)};
+}
+
+// Each of the delta's sections of new and changed rows holds as many rows as the runs leave, of
+// the rows the parent stores.
+void CheckNewRows(const Index& parent, const IndexDelta& delta, const ChildRowMaps& maps,
+                  const std::string& name) {
+  const bool coded = parent.coded();
+  const uint32_t code_bytes = parent.codes().code_bytes;
+  const RowMaps& views = maps.views;
+  const RowMaps& points = maps.points;
+  const size_t child_views = views.child_to_parent.size();
+  const size_t child_points = points.child_to_parent.size();
   CheckCount(delta.new_points, points.num_new, "NPNT", name);
   if (delta.new_descriptors.size() != (coded ? 0 : views.num_new) * kDescriptorBytes) {
     throw InputError(name + ": the delta's section 'NDSC' has " +
@@ -289,7 +267,6 @@ AppliedDelta::AppliedDelta(const Index& parent, const IndexDelta& delta,
   }
   CheckCount(delta.new_view_points, views.num_new, "NV2P", name);
   // v_NN: per view in a full index, per point in a compact one.
-  const size_t neighbor_rows = coded ? child_points : child_views;
   CheckCount(delta.new_view_neighbors, coded ? points.num_new : views.num_new, "NVNN", name);
   const bool keypoints = !parent.view_keypoints().empty();
   if (keypoints && parent.view_keypoints().size() != parent.num_views())
@@ -297,44 +274,37 @@ AppliedDelta::AppliedDelta(const Index& parent, const IndexDelta& delta,
   CheckCount(delta.new_view_keypoints, keypoints ? views.num_new : 0, "NVKP", name);
   const bool colors = !parent.point_colors().empty();
   CheckCount(delta.new_point_colors, colors ? points.num_new : 0, "NRGB", name);
-  const bool ids = !parent.point_ids().empty();
-  CheckCount(delta.new_point_ids, ids ? points.num_new : 0, "NPID", name);
+  CheckCount(delta.new_point_ids, parent.point_ids().empty() ? 0 : points.num_new, "NPID", name);
   CheckChangedRows(delta.view_point_changes, child_views, "CV2P", name);
-  CheckChangedRows(delta.view_neighbor_changes, neighbor_rows, "CVNN", name);
+  CheckChangedRows(delta.view_neighbor_changes, coded ? child_points : child_views, "CVNN", name);
   CheckChangedRows(delta.point_moves, child_points, "CPNT", name);
   CheckChangedRows(delta.point_color_changes, colors ? child_points : 0, "CRGB", name);
-  if (header.forest_leaf_size == 0 || header.forest_leaf_size > kMaxKdLeafSize) {
-    throw InputError(name + ": the delta's kd leaf size " +
-                     std::to_string(header.forest_leaf_size) + " is not in 1.." +
-                     std::to_string(kMaxKdLeafSize));
+  const uint32_t leaf_size = delta.header.forest_leaf_size;
+  if (leaf_size == 0 || leaf_size > kMaxKdLeafSize) {
+    throw InputError(name + ": the delta's kd leaf size " + std::to_string(leaf_size) +
+                     " is not in 1.." + std::to_string(kMaxKdLeafSize));
   }
+}
 
-  Child& child = *child_;
-  const bool forest_rebuilt = (header.flags & kDeltaForestRebuilt) != 0;
-  uint8_t* composed = nullptr;
-  if (!coded && forest_rebuilt) {
-    child.descriptor_bytes =
-        std::make_unique_for_overwrite<uint8_t[]>(child_views * kDescriptorBytes);
-    composed = child.descriptor_bytes.get();
-    AdviseHugePages(composed, child_views * kDescriptorBytes);
-  }
-  ReserveOnHugePages(&child.view_points, child_views);
-  child.view_points.resize(child_views);
-  // The rows checked, a full child's descriptors are known: on their way to the disk while the
-  // rest is composed (the city's 1 % update: its write stage overlapped with the kd-forest's).
-  // The other rows follow once composed, while the kd-forest and the graph are made.
-  const bool background = threads > 1;
-  std::vector<SectionData> leading;
+// The child's views: each new one's rows from the delta, each kept one's from the parent, its
+// point renumbered or changed. A full child's descriptors are written into `composed` when given
+// (a kd-forest rebuilt from them), its v_NN kept per view.
+void ComposeViews(const Index& parent, const IndexDelta& delta, const ChildRowMaps& maps,
+                  uint8_t* composed, OwnedIndexRows* child, const std::string& name) {
+  const bool coded = parent.coded();
+  const RowMaps& views = maps.views;
+  const size_t child_views = views.child_to_parent.size();
+  const size_t child_points = maps.points.child_to_parent.size();
+  const bool keypoints = !parent.view_keypoints().empty();
+  ReserveOnHugePages(&child->view_points, child_views);
+  child->view_points.resize(child_views);
   if (!coded) {
-    child.descriptor_pieces = DescriptorPieces(parent, delta);
-    leading.push_back(DescriptorSection(Contents(&child.origin)));
+    ReserveOnHugePages(&child->view_neighbor_distances, child_views);
+    child->view_neighbor_distances.resize(child_views);
   }
-  child.writer = std::make_unique<IndexFileWriter>(output, std::move(leading), background);
-  ReserveOnHugePages(&child.neighbor_distances, neighbor_rows);
-  child.neighbor_distances.resize(neighbor_rows);
   if (keypoints) {
-    ReserveOnHugePages(&child.view_keypoints, child_views);
-    child.view_keypoints.resize(child_views);
+    ReserveOnHugePages(&child->view_keypoints, child_views);
+    child->view_keypoints.resize(child_views);
   }
   const std::span<const uint8_t> parent_descriptors = parent.descriptors();
   size_t next_new = 0;
@@ -348,10 +318,10 @@ AppliedDelta::AppliedDelta(const Index& parent, const IndexDelta& delta,
           std::memcpy(composed + size_t(v) * kDescriptorBytes,
                       &delta.new_descriptors[next_new * kDescriptorBytes], kDescriptorBytes);
         }
-        child.neighbor_distances[v] = delta.new_view_neighbors[next_new];
+        child->view_neighbor_distances[v] = delta.new_view_neighbors[next_new];
       }
       point = delta.new_view_points[next_new];
-      if (keypoints) child.view_keypoints[v] = delta.new_view_keypoints[next_new];
+      if (keypoints) child->view_keypoints[v] = delta.new_view_keypoints[next_new];
       ++next_new;
     } else {
       if (!coded) {
@@ -359,12 +329,12 @@ AppliedDelta::AppliedDelta(const Index& parent, const IndexDelta& delta,
           std::memcpy(composed + size_t(v) * kDescriptorBytes,
                       &parent_descriptors[size_t(from) * kDescriptorBytes], kDescriptorBytes);
         }
-        child.neighbor_distances[v] = parent.view_neighbor_distances()[from];
+        child->view_neighbor_distances[v] = parent.view_neighbor_distances()[from];
       }
       const uint32_t parent_point = parent.view_points()[from];
-      point = parent_point < points.parent_to_child.size() ? points.parent_to_child[parent_point]
-                                                           : kRemovedRow;
-      if (keypoints) child.view_keypoints[v] = parent.view_keypoints()[from];
+      const std::vector<uint32_t>& child_of_point = maps.points.parent_to_child;
+      point = parent_point < child_of_point.size() ? child_of_point[parent_point] : kRemovedRow;
+      if (keypoints) child->view_keypoints[v] = parent.view_keypoints()[from];
     }
     if (next_change < delta.view_point_changes.size() &&
         delta.view_point_changes[next_change].row == v) {
@@ -374,106 +344,184 @@ AppliedDelta::AppliedDelta(const Index& parent, const IndexDelta& delta,
       throw InputError(name + ": the delta gives view " + std::to_string(v) +
                        " no point of the child's " + std::to_string(child_points));
     }
-    child.view_points[v] = point;
+    child->view_points[v] = point;
   }
+}
 
-  ReserveOnHugePages(&child.points, child_points);
-  child.points.resize(child_points);
-  if (colors) child.point_colors.resize(child_points);
+// The child's points: each new one's rows from the delta, each kept one's from the parent, then
+// the delta's changes (positions, colours, v_NN) and the tracks of the views composed before. A
+// compact child's v_NN is per point.
+void ComposePoints(const Index& parent, const IndexDelta& delta, const ChildRowMaps& maps,
+                   OwnedIndexRows* child, const std::string& name) {
+  const bool coded = parent.coded();
+  const std::vector<uint32_t>& parent_of_point = maps.points.child_to_parent;
+  const size_t child_points = parent_of_point.size();
+  const bool colors = !parent.point_colors().empty();
+  const bool ids = !parent.point_ids().empty();
+  ReserveOnHugePages(&child->points, child_points);
+  child->points.resize(child_points);
+  if (colors) child->point_colors.resize(child_points);
   if (ids) {
-    ReserveOnHugePages(&child.point_ids, child_points);
-    child.point_ids.resize(child_points);
+    ReserveOnHugePages(&child->point_ids, child_points);
+    child->point_ids.resize(child_points);
   }
-  next_new = 0;
+  if (coded) {
+    ReserveOnHugePages(&child->point_neighbor_distances, child_points);
+    child->point_neighbor_distances.resize(child_points);
+  }
+  size_t next_new = 0;
   for (uint32_t p = 0; p < child_points; ++p) {
-    const uint32_t from = points.child_to_parent[p];
+    const uint32_t from = parent_of_point[p];
     IndexPoint point{};
     if (from == kRemovedRow) {
       std::memcpy(point.xyz, delta.new_points[next_new].xyz, sizeof(point.xyz));
-      if (colors) child.point_colors[p] = delta.new_point_colors[next_new];
-      if (ids) child.point_ids[p] = delta.new_point_ids[next_new];
-      if (coded) child.neighbor_distances[p] = delta.new_view_neighbors[next_new];
+      if (colors) child->point_colors[p] = delta.new_point_colors[next_new];
+      if (ids) child->point_ids[p] = delta.new_point_ids[next_new];
+      if (coded) child->point_neighbor_distances[p] = delta.new_view_neighbors[next_new];
       ++next_new;
     } else {
       const std::array<double, 3> xyz = parent.PointXyz(from);
       std::copy(xyz.begin(), xyz.end(), point.xyz);
-      if (colors) child.point_colors[p] = parent.point_colors()[from];
-      if (ids) child.point_ids[p] = parent.point_ids()[from];
-      if (coded) child.neighbor_distances[p] = parent.point_neighbor_distances()[from];
+      if (colors) child->point_colors[p] = parent.point_colors()[from];
+      if (ids) child->point_ids[p] = parent.point_ids()[from];
+      if (coded) child->point_neighbor_distances[p] = parent.point_neighbor_distances()[from];
     }
-    child.points[p] = point;
+    child->points[p] = point;
   }
+  auto& neighbor_distances =
+      coded ? child->point_neighbor_distances : child->view_neighbor_distances;
   for (const RowChange<float>& change : delta.view_neighbor_changes)
-    child.neighbor_distances[change.row] = change.value;
+    neighbor_distances[change.row] = change.value;
   for (const PointMove& move : delta.point_moves)
-    std::memcpy(child.points[move.row].xyz, move.xyz, sizeof(move.xyz));
+    std::memcpy(child->points[move.row].xyz, move.xyz, sizeof(move.xyz));
   for (const PointColorChange& change : delta.point_color_changes)
-    child.point_colors[change.row] = change.color;
-  child.tracks = TracksOfViews(child.view_points, child.points);
+    child->point_colors[change.row] = change.color;
+  child->tracks = TracksOfViews(child->view_points, child->points);
   for (uint32_t p = 0; p < child_points; ++p) {
-    if (child.points[p].track_length == 0)
+    if (child->points[p].track_length == 0)
       throw InputError(name + ": the delta leaves point " + std::to_string(p) + " without views");
-  }
-
-  if (coded) ComposeCodes(parent, delta, points.child_to_parent);
-  child.writer->WriteAhead(RowSections(Contents(&child.origin)), background);
-
-  const std::vector<IndexImage> images = delta.images;
-  const KeptCovisibilityRows kept_rows =
-      KeptGraphRows(parent, images, views, points, child.tracks, child.points, child.view_points);
-  child.graph = BuildCovisibilityGraph(images, child.points, child.tracks, child.view_points,
-                                       threads, &kept_rows);
-  // The kd-forest's rows: views, or a compact index's points decoded.
-  const RowMaps& rows = coded ? points : views;
-  if (forest_rebuilt) {
-    KdForestBuildOptions options;
-    options.num_trees = uint32_t(parent.kd_forest().NumTrees());
-    options.max_leaf_size = header.forest_leaf_size;
-    options.seed = header.forest_seed;
-    options.num_threads = uint32_t(threads);
-    child.forest =
-        BuildKdForest(coded ? std::span<const uint8_t>(child.decoded)
-                            : std::span<const uint8_t>(composed, child_views * kDescriptorBytes),
-                      options);
-  } else {
-    if (parent_forest == ParentForest::kUnchecked) CheckParentKdForest(parent);
-    std::vector<uint32_t> inserted;
-    for (uint32_t row = 0; row < rows.child_to_parent.size(); ++row) {
-      if (rows.child_to_parent[row] == kRemovedRow) inserted.push_back(row);
-    }
-    const KdForestChange change{rows.parent_to_child, inserted};
-    // A full child's kept rows are read in the parent, its new ones in the delta.
-    child.forest = coded ? UpdateKdForest(parent.kd_forest(), change, child.decoded,
-                                          header.forest_leaf_size, header.forest_seed, threads)
-                         : UpdateKdForest(parent.kd_forest(), change, parent.descriptors(),
-                                          delta.new_descriptors, header.forest_leaf_size,
-                                          header.forest_seed, threads);
   }
 }
 
 // A compact child's points: offsets from the parent's origin (a kept point that did not move
-// keeps its offset's bits), codes (the parent's, or the delta's for new points), decoded.
-void AppliedDelta::ComposeCodes(const Index& parent, const IndexDelta& delta,
-                                const std::vector<uint32_t>& parent_of_point) {
-  Child& child = *child_;
+// keeps its offset's bits), codes (the parent's, or the delta's for new points). Returns the
+// codes decoded: the kd-forest's rows.
+std::vector<uint8_t> ComposeCodes(const Index& parent, const IndexDelta& delta,
+                                  std::span<const uint32_t> parent_of_point,
+                                  OwnedIndexRows* child) {
   const IndexPointOrigin origin = parent.point_origin();
   const DescriptorCodes& parent_codes = parent.codes();
-  std::vector<bool> moved(child.points.size(), false);
+  std::vector<bool> moved(child->points.size(), false);
   for (const PointMove& move : delta.point_moves) moved[move.row] = true;
-  child.point_offsets.resize(child.points.size());
-  for (uint32_t p = 0; p < child.points.size(); ++p) {
+  child->point_offsets.resize(child->points.size());
+  for (uint32_t p = 0; p < child->points.size(); ++p) {
     const uint32_t from = parent_of_point[p];
-    IndexPointOffset& offset = child.point_offsets[p];
-    offset.first_track = child.points[p].first_track;
-    const std::array<float, 3> moved_to = OffsetFrom(origin, child.points[p]);
+    IndexPointOffset& offset = child->point_offsets[p];
+    offset.first_track = child->points[p].first_track;
+    const std::array<float, 3> moved_to = OffsetFrom(origin, child->points[p]);
     std::memcpy(
         offset.offset,
         from != kRemovedRow && !moved[p] ? parent.point_offsets()[from].offset : moved_to.data(),
         sizeof(offset.offset));
   }
-  child.codes = ChildCodes(parent_codes, parent_of_point, delta.new_point_codes);
-  child.decoded =
-      DescriptorCodes{parent_codes.codebook, child.codes, parent_codes.code_bytes}.DecodeAll();
+  child->codes = ChildCodes(parent_codes, parent_of_point, delta.new_point_codes);
+  return DescriptorCodes{parent_codes.codebook, child->codes, parent_codes.code_bytes}.DecodeAll();
+}
+
+// The child's co-visibility graph: the parent's rows of images whose views and tracks it kept,
+// the others counted.
+CovisibilityGraph ComposeGraph(const Index& parent, const IndexDelta& delta,
+                               const ChildRowMaps& maps, const OwnedIndexRows& child, int threads) {
+  const KeptCovisibilityRows kept_rows = KeptGraphRows(
+      parent, delta.images, maps.views, maps.points, child.tracks, child.points, child.view_points);
+  return BuildCovisibilityGraph(delta.images, child.points, child.tracks, child.view_points,
+                                threads, &kept_rows);
+}
+
+// The child's kd-forest over `rows` (N x 128: views, or a compact child's points decoded): built
+// afresh when the delta says so, else the parent's with its rows renumbered, removed and
+// inserted (a full child's kept rows read in the parent, its new ones in the delta).
+KdForest ComposeForest(const Index& parent, const IndexDelta& delta, const ChildRowMaps& maps,
+                       std::span<const uint8_t> rows, int threads,
+                       AppliedDelta::ParentForest parent_forest) {
+  const DeltaHeader& header = delta.header;
+  if ((header.flags & kDeltaForestRebuilt) != 0) {
+    KdForestBuildOptions options;
+    options.num_trees = uint32_t(parent.kd_forest().NumTrees());
+    options.max_leaf_size = header.forest_leaf_size;
+    options.seed = header.forest_seed;
+    options.num_threads = uint32_t(threads);
+    return BuildKdForest(rows, options);
+  }
+  if (parent_forest == AppliedDelta::ParentForest::kUnchecked) CheckParentKdForest(parent);
+  const RowMaps& row_maps = parent.coded() ? maps.points : maps.views;
+  std::vector<uint32_t> inserted;
+  for (uint32_t row = 0; row < row_maps.child_to_parent.size(); ++row) {
+    if (row_maps.child_to_parent[row] == kRemovedRow) inserted.push_back(row);
+  }
+  const KdForestChange change{row_maps.parent_to_child, inserted};
+  return parent.coded() ? UpdateKdForest(parent.kd_forest(), change, rows, header.forest_leaf_size,
+                                         header.forest_seed, threads)
+                        : UpdateKdForest(parent.kd_forest(), change, parent.descriptors(),
+                                         delta.new_descriptors, header.forest_leaf_size,
+                                         header.forest_seed, threads);
+}
+
+}  // namespace
+
+struct AppliedDelta::Child {
+  OwnedIndexRows rows;  // what the child composes; Rows() adds what it borrows
+  // A full child's descriptors are the parent's kept rows and the delta's new ones, read where
+  // they are and written as runs of each. Only a forest rebuilt from scratch needs them in one
+  // array (every byte written: no zero-filling of a gigabyte first).
+  std::unique_ptr<uint8_t[]> descriptor_bytes;
+  std::vector<std::span<const uint8_t>> descriptor_pieces;
+  std::unique_ptr<IndexFileWriter> writer;  // writing the rows while the rest is composed
+  CovisibilityGraph graph;
+  KdForest forest;
+  std::vector<uint8_t> decoded;  // a compact child's codes decoded: the kd-forest's rows
+};
+
+void CheckParentKdForest(const Index& parent) {
+  std::string error;
+  if (!ValidateKdForest(parent.kd_forest(), &error))
+    throw InputError(FileName(parent) + ": " + error);
+}
+
+AppliedDelta::AppliedDelta(const Index& parent, const IndexDelta& delta,
+                           const std::string& delta_name, const std::filesystem::path& output,
+                           int threads, ParentForest parent_forest)
+    : parent_(parent), delta_(delta), child_(std::make_unique<Child>()) {
+  CheckMadeFor(parent, delta, delta_name);
+  const ChildRowMaps maps = MapChildRows(parent, delta, delta_name);
+  CheckNewRows(parent, delta, maps, delta_name);
+
+  Child& child = *child_;
+  const bool coded = parent.coded();
+  const size_t child_views = maps.views.child_to_parent.size();
+  if (!coded && (delta.header.flags & kDeltaForestRebuilt) != 0) {
+    child.descriptor_bytes =
+        std::make_unique_for_overwrite<uint8_t[]>(child_views * kDescriptorBytes);
+    AdviseHugePages(child.descriptor_bytes.get(), child_views * kDescriptorBytes);
+  }
+  // The rows checked, a full child's descriptors are known: on their way to the disk while the
+  // rest is composed (the city's 1 % update: its write stage overlapped with the kd-forest's).
+  // The other rows follow once composed, while the kd-forest and the graph are made.
+  const bool background = threads > 1;
+  if (!coded) child.descriptor_pieces = DescriptorPieces(parent, delta);
+  child.writer = std::make_unique<IndexFileWriter>(
+      output, IndexSectionsOf(Rows(), SectionBatch::kDescriptorBatch), background);
+  ComposeViews(parent, delta, maps, child.descriptor_bytes.get(), &child.rows, delta_name);
+  ComposePoints(parent, delta, maps, &child.rows, delta_name);
+  if (coded) child.decoded = ComposeCodes(parent, delta, maps.points.child_to_parent, &child.rows);
+  child.writer->WriteAhead(IndexSectionsOf(Rows(), SectionBatch::kRowBatch), background);
+  child.graph = ComposeGraph(parent, delta, maps, child.rows, threads);
+  // The kd-forest's rows: a compact child's points decoded, or a full one's views, in one array
+  // only for a forest rebuilt (an update reads them where they are).
+  std::span<const uint8_t> forest_rows = child.decoded;
+  if (child.descriptor_bytes)
+    forest_rows = {child.descriptor_bytes.get(), child_views * kDescriptorBytes};
+  child.forest = ComposeForest(parent, delta, maps, forest_rows, threads, parent_forest);
 }
 
 AppliedDelta::~AppliedDelta() = default;
@@ -482,41 +530,25 @@ size_t AppliedDelta::num_kd_nodes() const { return child_->forest.nodes.size(); 
 
 size_t AppliedDelta::num_covisibility_edges() const { return child_->graph.edges.size(); }
 
-IndexContents AppliedDelta::Contents(IndexPointOrigin* origin) const {
+IndexRows AppliedDelta::Rows() const {
   const Child& child = *child_;
-  IndexContents contents;
-  contents.cameras = delta_.cameras;
-  contents.images = delta_.images;
-  contents.strings = delta_.strings;
-  if (parent_.coded()) {
-    KeepParentCoding(parent_, origin, &contents);
-    contents.point_offsets = child.point_offsets;
-    contents.codes = child.codes;
-  } else {
-    contents.points = child.points;
-  }
-  contents.tracks = child.tracks;
-  contents.view_points = child.view_points;
-  contents.neighbor_distances = child.neighbor_distances;
-  contents.forest = &child.forest;
-  contents.covisibility_offsets = child.graph.offsets;
-  contents.covisibility_edges = child.graph.edges;
-  contents.view_keypoints = child.view_keypoints;
-  contents.point_colors = child.point_colors;
-  contents.point_ids = child.point_ids;
-  contents.georeference = parent_.georeference();
-  contents.covariance_calibration = parent_.covariance_calibration();
-  contents.descriptor_pieces = child.descriptor_pieces;
-  return contents;
+  IndexRows rows = child.rows.Borrow();
+  TakeParentsSections(parent_.rows(), &rows);
+  rows.cameras = delta_.cameras;
+  rows.images = delta_.images;
+  rows.strings = delta_.strings;
+  BorrowKdForest(child.forest, &rows);
+  rows.covisibility_offsets = child.graph.offsets;
+  rows.covisibility_edges = child.graph.edges;
+  rows.descriptor_pieces = child.descriptor_pieces;
+  return rows;
 }
 
 uint64_t AppliedDelta::Write(std::string_view manifest,
                              std::optional<uint64_t> expected_checksum) const {
-  const Child& child = *child_;
-  IndexPointOrigin origin{};
-  const IndexContents contents = Contents(&origin);
-  const std::vector<SectionData> sections = IndexSectionsOf(contents, manifest);
-  return child.writer->Finish(sections, kIndexContainer, 0, expected_checksum);
+  IndexRows rows = Rows();
+  rows.manifest = manifest;
+  return child_->writer->Finish(IndexSectionsOf(rows), kIndexContainer, 0, expected_checksum);
 }
 
 ApplyDeltaReport ApplyDelta(const std::filesystem::path& index_path,

@@ -10,7 +10,7 @@
 
 #include "delta/delta_file.h"
 #include "format/index.h"
-#include "format/index_contents.h"
+#include "format/index_rows.h"
 
 namespace cwloc {
 
@@ -46,10 +46,9 @@ class AppliedDelta {
 
  private:
   struct Child;
-  // What the child's sections are made of, so far; `origin` holds a compact child's.
-  IndexContents Contents(IndexPointOrigin* origin) const;
-  void ComposeCodes(const Index& parent, const IndexDelta& delta,
-                    const std::vector<uint32_t>& parent_of_point);
+  // The child's rows so far: those composed, the delta's small sections and the parent's whole
+  // ones (TakeParentsSections).
+  IndexRows Rows() const;
   const Index& parent_;
   const IndexDelta& delta_;
   std::unique_ptr<Child> child_;

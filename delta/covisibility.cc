@@ -6,10 +6,10 @@
 
 namespace cwloc {
 
-CovisibilityGraph BuildCovisibilityGraph(const std::vector<IndexImage>& images,
-                                         const std::vector<IndexPoint>& points,
-                                         const std::vector<uint32_t>& tracks,
-                                         const std::vector<uint32_t>& view_points, int num_threads,
+CovisibilityGraph BuildCovisibilityGraph(std::span<const IndexImage> images,
+                                         std::span<const IndexPoint> points,
+                                         std::span<const uint32_t> tracks,
+                                         std::span<const uint32_t> view_points, int num_threads,
                                          const KeptCovisibilityRows* kept) {
   // Image row of every view, from the contiguous view ranges.
   std::vector<uint32_t> image_of_view(view_points.size());

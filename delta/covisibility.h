@@ -31,10 +31,10 @@ struct KeptCovisibilityRows {
 // Tracks are CSR over points; images' views are contiguous rows of `view_points`. With `kept`,
 // the rows it keeps are copied, the same rows a count would give (a city's 1 % update: 0.6 s
 // less).
-CovisibilityGraph BuildCovisibilityGraph(const std::vector<IndexImage>& images,
-                                         const std::vector<IndexPoint>& points,
-                                         const std::vector<uint32_t>& tracks,
-                                         const std::vector<uint32_t>& view_points, int num_threads,
+CovisibilityGraph BuildCovisibilityGraph(std::span<const IndexImage> images,
+                                         std::span<const IndexPoint> points,
+                                         std::span<const uint32_t> tracks,
+                                         std::span<const uint32_t> view_points, int num_threads,
                                          const KeptCovisibilityRows* kept = nullptr);
 
 }  // namespace cwloc

@@ -39,11 +39,11 @@ bool PointMoved(const Index& parent, uint32_t parent_point, const IndexPoint& ch
                      sizeof(child_point.xyz)) != 0;
 }
 
-std::vector<uint8_t> ChildCodes(const DescriptorCodes& parent,
-                                std::span<const uint32_t> parent_of_point,
-                                std::span<const uint8_t> new_codes) {
+OwnedRows<uint8_t> ChildCodes(const DescriptorCodes& parent,
+                              std::span<const uint32_t> parent_of_point,
+                              std::span<const uint8_t> new_codes) {
   const uint32_t code_bytes = parent.code_bytes;
-  std::vector<uint8_t> codes(parent_of_point.size() * code_bytes);
+  OwnedRows<uint8_t> codes(parent_of_point.size() * code_bytes);
   size_t next_new = 0;
   for (size_t p = 0; p < parent_of_point.size(); ++p) {
     const uint32_t from = parent_of_point[p];
@@ -55,12 +55,13 @@ std::vector<uint8_t> ChildCodes(const DescriptorCodes& parent,
 }
 
 IndexDelta MakeDelta(const Index& parent, const DeltaChild& child) {
+  const IndexRows& rows = child.rows;
   IndexDelta delta;
   delta.header.parent_checksum = parent.file().header().header_checksum;
   delta.header.parent_file_size = parent.file().header().file_size;
-  delta.cameras.assign(child.cameras.begin(), child.cameras.end());
-  delta.images.assign(child.images.begin(), child.images.end());
-  delta.strings = child.strings;
+  delta.cameras.assign(rows.cameras.begin(), rows.cameras.end());
+  delta.images.assign(rows.images.begin(), rows.images.end());
+  delta.strings.assign(rows.strings.begin(), rows.strings.end());
   const bool coded = parent.coded();
   const uint32_t code_bytes = parent.codes().code_bytes;
   delta.code_bytes = code_bytes;
@@ -69,49 +70,50 @@ IndexDelta MakeDelta(const Index& parent, const DeltaChild& child) {
   const bool ids = !parent.point_ids().empty();
 
   std::vector<uint32_t> child_of_parent_point(parent.num_points(), kRemovedRow);
-  for (uint32_t q = 0; q < child.points.size(); ++q) {
+  for (uint32_t q = 0; q < rows.points.size(); ++q) {
     const uint32_t from = child.parent_of_point[q];
     if (from == kRemovedRow) {
-      const IndexPoint& point = child.points[q];
+      const IndexPoint& point = rows.points[q];
       delta.new_points.push_back(IndexPoint{{point.xyz[0], point.xyz[1], point.xyz[2]}, 0, 0});
-      if (ids) delta.new_point_ids.push_back(child.point_ids[q]);
-      if (colors) delta.new_point_colors.push_back(child.point_colors[q]);
+      if (ids) delta.new_point_ids.push_back(rows.point_ids[q]);
+      if (colors) delta.new_point_colors.push_back(rows.point_colors[q]);
       if (coded) {
-        const uint8_t* code = &child.codes[size_t(q) * code_bytes];
+        const uint8_t* code = &rows.codes[size_t(q) * code_bytes];
         delta.new_point_codes.insert(delta.new_point_codes.end(), code, code + code_bytes);
-        delta.new_view_neighbors.push_back(child.neighbor_distances[q]);
+        delta.new_view_neighbors.push_back(rows.point_neighbor_distances[q]);
       }
       continue;
     }
     child_of_parent_point[from] = q;
     AddRun(&delta.point_runs, q, from);
-    if (PointMoved(parent, from, child.points[q])) {
-      const IndexPoint& point = child.points[q];
+    if (PointMoved(parent, from, rows.points[q])) {
+      const IndexPoint& point = rows.points[q];
       delta.point_moves.push_back({q, 0, {point.xyz[0], point.xyz[1], point.xyz[2]}});
     }
-    if (colors && std::memcmp(&parent.point_colors()[from], &child.point_colors[q], 3) != 0)
-      delta.point_color_changes.push_back({q, child.point_colors[q], 0});
-    if (coded && !SameBits(child.neighbor_distances[q], parent.point_neighbor_distances()[from]))
-      delta.view_neighbor_changes.push_back({q, child.neighbor_distances[q]});
+    if (colors && std::memcmp(&parent.point_colors()[from], &rows.point_colors[q], 3) != 0)
+      delta.point_color_changes.push_back({q, rows.point_colors[q], 0});
+    if (coded &&
+        !SameBits(rows.point_neighbor_distances[q], parent.point_neighbor_distances()[from]))
+      delta.view_neighbor_changes.push_back({q, rows.point_neighbor_distances[q]});
   }
 
-  for (uint32_t w = 0; w < child.view_points.size(); ++w) {
+  for (uint32_t w = 0; w < rows.view_points.size(); ++w) {
     const uint32_t v = child.parent_of_view[w];
     if (v == kRemovedRow) {
       if (!coded) {
-        const uint8_t* row = &child.descriptors[size_t(w) * kDescriptorBytes];
+        const uint8_t* row = &rows.descriptors[size_t(w) * kDescriptorBytes];
         delta.new_descriptors.insert(delta.new_descriptors.end(), row, row + kDescriptorBytes);
-        delta.new_view_neighbors.push_back(child.neighbor_distances[w]);
+        delta.new_view_neighbors.push_back(rows.view_neighbor_distances[w]);
       }
-      delta.new_view_points.push_back(child.view_points[w]);
-      if (keypoints) delta.new_view_keypoints.push_back(child.view_keypoints[w]);
+      delta.new_view_points.push_back(rows.view_points[w]);
+      if (keypoints) delta.new_view_keypoints.push_back(rows.view_keypoints[w]);
       continue;
     }
     AddRun(&delta.view_runs, w, v);
-    if (child_of_parent_point[parent.view_points()[v]] != child.view_points[w])
-      delta.view_point_changes.push_back({w, child.view_points[w]});
-    if (!coded && !SameBits(child.neighbor_distances[w], parent.view_neighbor_distances()[v]))
-      delta.view_neighbor_changes.push_back({w, child.neighbor_distances[w]});
+    if (child_of_parent_point[parent.view_points()[v]] != rows.view_points[w])
+      delta.view_point_changes.push_back({w, rows.view_points[w]});
+    if (!coded && !SameBits(rows.view_neighbor_distances[w], parent.view_neighbor_distances()[v]))
+      delta.view_neighbor_changes.push_back({w, rows.view_neighbor_distances[w]});
   }
   return delta;
 }

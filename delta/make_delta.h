@@ -12,25 +12,18 @@
 
 #include "delta/delta_file.h"
 #include "format/index.h"
+#include "format/index_rows.h"
+#include "kdtree/kd_forest_update.h"
 
 namespace cwloc {
 
-// Borrowed. Child rows whose parent row is kRemovedRow are new; a compact parent's child (codes
-// per point) has no descriptors, and its neighbor_distances are per point.
+// Borrowed: the child's rows, and each child view's and point's parent row (kRemovedRow: a new
+// one). A compact parent's child (codes per point) has no descriptors, and gives its points'
+// positions in `rows.points` beside their offsets.
 struct DeltaChild {
-  std::span<const IndexCamera> cameras;
-  std::span<const IndexImage> images;
-  std::string_view strings;
+  IndexRows rows;
   std::span<const uint32_t> parent_of_view;
-  std::span<const uint8_t> descriptors;  // full: views x 128 (new rows are read)
-  std::span<const uint32_t> view_points;
-  std::span<const ViewKeypoint> view_keypoints;  // when the parent stores them
-  std::span<const float> neighbor_distances;     // per view, or per point (compact)
   std::span<const uint32_t> parent_of_point;
-  std::span<const IndexPoint> points;  // positions (tracks unused)
-  std::span<const uint64_t> point_ids;
-  std::span<const PointColor> point_colors;  // when the parent stores them
-  std::span<const uint8_t> codes;            // compact: points x code bytes (new rows are read)
 };
 
 // A kept point moved when its position differs: a compact index compares the float offsets
@@ -42,9 +35,9 @@ std::array<float, 3> OffsetFrom(const IndexPointOrigin& origin, const IndexPoint
 
 // A compact child's codes (points x code bytes): the parent's for a kept point, the next of
 // `new_codes` for a new one (kRemovedRow in `parent_of_point`), in row order.
-std::vector<uint8_t> ChildCodes(const DescriptorCodes& parent,
-                                std::span<const uint32_t> parent_of_point,
-                                std::span<const uint8_t> new_codes);
+OwnedRows<uint8_t> ChildCodes(const DescriptorCodes& parent,
+                              std::span<const uint32_t> parent_of_point,
+                              std::span<const uint8_t> new_codes);
 
 // The delta's rows and small sections; its header names the parent.
 IndexDelta MakeDelta(const Index& parent, const DeltaChild& child);

@@ -4,8 +4,8 @@
 
 namespace cwloc {
 
-std::vector<uint32_t> TracksOfViews(std::span<const uint32_t> view_points,
-                                    std::span<IndexPoint> points) {
+OwnedRows<uint32_t> TracksOfViews(std::span<const uint32_t> view_points,
+                                  std::span<IndexPoint> points) {
   // Counting sort: views keep their order within a point.
   std::vector<uint32_t> first(points.size() + 1, 0);
   for (uint32_t point : view_points) ++first[point + 1];
@@ -14,7 +14,7 @@ std::vector<uint32_t> TracksOfViews(std::span<const uint32_t> view_points,
     points[p].track_length = first[p + 1];
     first[p + 1] += first[p];
   }
-  std::vector<uint32_t> tracks;
+  OwnedRows<uint32_t> tracks;
   ReserveOnHugePages(&tracks, view_points.size());
   tracks.resize(view_points.size());
   for (uint32_t v = 0; v < view_points.size(); ++v) tracks[first[view_points[v]]++] = v;

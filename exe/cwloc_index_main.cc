@@ -5,6 +5,10 @@
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
+#include <span>
+#include <variant>
+#include <vector>
 
 #include "base/error.h"
 #include "base/stopwatch.h"
@@ -12,10 +16,12 @@
 #include "delta/apply_delta.h"
 #include "exe/tool_main.h"
 #include "format/index.h"
+#include "format/index_section_table.h"
 #include "format/xxhash64.h"
 #include "indexer/build_option_table.h"
 #include "indexer/index_build_flags.h"
 #include "indexer/index_builder.h"
+#include "indexer/index_command_flags.h"
 #include "indexer/index_extract.h"
 #include "indexer/index_update.h"
 
@@ -109,9 +115,10 @@ int RunUpdate(const IndexUpdateOptions& options, bool json) {
   return kExitOk;
 }
 
-int RunApply(const std::filesystem::path& index, const std::filesystem::path& delta,
-             const std::filesystem::path& output, int threads, bool json) {
-  const ApplyDeltaReport report = ApplyDelta(index, delta, output, threads);
+int RunApply(const IndexApplyOptions& options, bool json) {
+  const std::filesystem::path& output = options.output_path;
+  const ApplyDeltaReport report =
+      ApplyDelta(options.index_path, options.delta_path, output, options.threads);
   if (json) {
     const nlohmann::ordered_json out = {
         {"output", output.string()},           {"file_bytes", report.file_bytes},
@@ -195,6 +202,17 @@ std::string DescriptorStorage(const Index& index) {
   return text;
 }
 
+// What a section holds, as the section table says, with the format that introduced it; a
+// section this cwloc does not know is one Index::Open skipped (a required one it refuses).
+std::string SectionContents(uint32_t tag) {
+  const IndexSectionSpec* spec = FindIndexSection(tag);
+  if (spec == nullptr) return "unknown to this cwloc (optional: skipped)";
+  std::string note = spec->optional() ? "optional" : "";
+  if (spec->minor > 0)
+    note += (note.empty() ? "" : ", ") + std::string("format 1.") + std::to_string(spec->minor);
+  return std::string(spec->help) + (note.empty() ? "" : " (" + note + ")");
+}
+
 int RunInfo(const std::string& path, bool json) {
   const Stopwatch open_time;
   const Index index = Index::Open(path);
@@ -217,7 +235,8 @@ int RunInfo(const std::string& path, bool json) {
                                  {"count", entry.count},
                                  {"element_bytes", entry.element_size},
                                  {"required", (entry.flags & kSectionRequired) != 0},
-                                 {"checksum", "xxh64:" + HashHex(entry.checksum)}});
+                                 {"checksum", "xxh64:" + HashHex(entry.checksum)},
+                                 {"contents", SectionContents(entry.tag)}});
     }
     out["manifest"] = manifest;
     std::cout << out.dump(2) << "\n";
@@ -244,13 +263,15 @@ int RunInfo(const std::string& path, bool json) {
   if (manifest.contains("georeference") && manifest["georeference"].is_object())
     PrintGeoreference(manifest["georeference"]);
   std::printf("  descriptors: %s\n", DescriptorStorage(index).c_str());
-  std::printf("  %-6s %12s %14s %12s  %s\n", "tag", "offset", "bytes", "count", "bytes/view");
+  std::printf("  %-6s %12s %14s %12s  %s  %s\n", "tag", "offset", "bytes", "count", "bytes/view",
+              "contents");
   const double views = static_cast<double>(index.num_views());
   for (const SectionEntry& entry : index.file().sections()) {
-    std::printf("  %-6s %12llu %14llu %12llu  %8.2f\n", SectionTagName(entry.tag).c_str(),
+    std::printf("  %-6s %12llu %14llu %12llu  %8.2f    %s\n", SectionTagName(entry.tag).c_str(),
                 static_cast<unsigned long long>(entry.offset),
                 static_cast<unsigned long long>(entry.size),
-                static_cast<unsigned long long>(entry.count), double(entry.size) / views);
+                static_cast<unsigned long long>(entry.count), double(entry.size) / views,
+                SectionContents(entry.tag).c_str());
   }
   std::printf("  total %.2f bytes per view\n", double(header.file_size) / views);
   return kExitOk;
@@ -266,81 +287,234 @@ int RunVerify(const std::string& path) {
   const double seconds = stopwatch.Seconds();
   std::printf("%s: OK: %zu section checksums and every stored index verified in %.2f s\n",
               path.c_str(), index.file().sections().size(), seconds);
+  for (const SectionEntry& entry : index.file().sections()) {
+    if (FindIndexSection(entry.tag) == nullptr) {
+      std::printf(
+          "  section '%s' is unknown to this cwloc: its checksum verified, not its contents\n",
+          SectionTagName(entry.tag).c_str());
+    }
+  }
   return kExitOk;
 }
 
-// `cwloc-index build`'s flags, one per line of the build option table
-// (indexer/build_option_table.inc), with the defaults of IndexBuildOptions and IndexBuildFlags.
-class BuildFlags {
+std::string TypeName(size_t type) {
+  switch (type) {
+    case OptionTypeIndex<int32_t>():
+      return "INT";
+    case OptionTypeIndex<double>():
+      return "FLOAT";
+    case OptionTypeIndex<std::string>():
+    case OptionTypeIndex<std::filesystem::path>():
+      return "TEXT";
+    default:
+      return "UINT";
+  }
+}
+
+bool IsSwitch(size_t type) { return type == OptionTypeIndex<bool>(); }
+
+// One flag as a table line describes it.
+struct TableFlag {
+  std::string names;  // "--trees", "-o,--output"
+  std::string_view flag;
+  std::string help;
+  ValueRange range;
+  size_t type;  // index in OptionValue
+  bool required = false;
+  std::optional<OptionValue> shown_default;  // what --help shows after the type
+};
+
+// Each value is kept as given and, once the command line is parsed, read as the flag's type and
+// checked against its range, so that every command refuses a bad value with one message
+// ("--FLAG VALUE: expected ...").
+class TableFlags {
  public:
-  void AddTo(CLI::App* build) {
-    const IndexBuildOptions options;
-    const IndexBuildFlags flags;
-    const std::span<const BuildOptionSpec> table = BuildOptionTable();
-    texts_.resize(table.size());
-    switches_ = std::make_unique<bool[]>(table.size());
-    for (size_t i = 0; i < table.size(); ++i) {
-      const BuildOptionSpec& spec = table[i];
-      const std::optional<OptionValue> value = spec.get(options, flags);
-      const std::string flag = "--" + std::string(spec.flag);
-      if (IsSwitch(spec)) {
-        options_.push_back(build->add_flag(flag, switches_[i], spec.help));
-        continue;
-      }
-      CLI::Option* option =
-          build->add_option(flag, texts_[i], spec.help)->type_name(TypeName(spec));
-      // Numbers show their default; an unset optional, an empty path or name has none.
-      if (value && !std::holds_alternative<std::string>(*value) &&
-          !std::holds_alternative<std::filesystem::path>(*value))
-        option->default_str(FormatOptionValue(*value));
-      options_.push_back(option);
-    }
-  }
-
-  // The flags given, by name, as values of their types (range-checked).
-  std::vector<std::pair<std::string, OptionValue>> Given() const {
-    std::vector<std::pair<std::string, OptionValue>> given;
-    const std::span<const BuildOptionSpec> table = BuildOptionTable();
-    for (size_t i = 0; i < table.size(); ++i) {
-      if (options_[i]->count() == 0) continue;
-      const BuildOptionSpec& spec = table[i];
-      given.emplace_back(std::string(spec.flag), IsSwitch(spec)
-                                                     ? OptionValue(switches_[i])
-                                                     : ParseBuildOption(spec, texts_[i]));
-    }
-    return given;
-  }
-
-  // Every flag given, through the table; ValidateBuildOptions checks the ranges.
-  void Apply(IndexBuildOptions* options, IndexBuildFlags* flags) const {
-    const std::span<const BuildOptionSpec> table = BuildOptionTable();
-    for (size_t i = 0; i < table.size(); ++i) {
-      if (options_[i]->count() == 0) continue;
-      const BuildOptionSpec& spec = table[i];
-      spec.set(IsSwitch(spec) ? OptionValue(switches_[i]) : ParseBuildOption(spec, texts_[i]),
-               options, flags);
-    }
-  }
+  void AddTo(CLI::App* command, std::vector<TableFlag> flags);
+  // The flags given, by their place in AddTo's list, as values of their types; InputError for
+  // a value out of range.
+  std::vector<std::pair<size_t, OptionValue>> Given() const;
 
  private:
-  static bool IsSwitch(const BuildOptionSpec& spec) { return spec.type == OptionTypeIndex<bool>(); }
-  static std::string TypeName(const BuildOptionSpec& spec) {
-    switch (spec.type) {
-      case OptionTypeIndex<int32_t>():
-        return "INT";
-      case OptionTypeIndex<double>():
-        return "FLOAT";
-      case OptionTypeIndex<std::string>():
-      case OptionTypeIndex<std::filesystem::path>():
-        return "TEXT";
-      default:
-        return "UINT";
-    }
-  }
-
+  std::vector<TableFlag> flags_;
   std::vector<std::string> texts_;
   std::unique_ptr<bool[]> switches_;  // CLI11 sets bools, and vector<bool> has none to point at
   std::vector<CLI::Option*> options_;
+};
+
+// `cwloc-index build`'s (and update's) option table flags, with the defaults of
+// IndexBuildOptions and IndexBuildFlags.
+class BuildFlags {
+ public:
+  void AddTo(CLI::App* command);
+  // The flags given, by name, as values of their types (range-checked).
+  std::vector<std::pair<std::string, OptionValue>> Given() const;
+  // Every flag given, through the table; ValidateBuildOptions checks the ranges.
+  void Apply(IndexBuildOptions* options, IndexBuildFlags* flags) const;
+
+ private:
+  TableFlags flags_;
+};
+
+// A command's lines of the command table, with the defaults of its options.
+template <typename Options>
+class CommandFlags {
+ public:
+  void AddTo(CLI::App* command) {
+    table_ = CommandFlagTable<Options>();
+    const Options defaults;
+    std::vector<TableFlag> flags;
+    for (const CommandFlagSpec<Options>& spec : table_) {
+      flags.push_back({spec.names, spec.flag, spec.help, spec.range, spec.type, spec.required,
+                       spec.shown_default(defaults)});
+    }
+    flags_.AddTo(command, std::move(flags));
+  }
+  void Apply(Options* options) const {
+    for (const auto& [line, value] : flags_.Given()) table_[line].set(value, options);
+  }
+
+ private:
+  std::span<const CommandFlagSpec<Options>> table_;
+  TableFlags flags_;
+};
+
+void TableFlags::AddTo(CLI::App* command, std::vector<TableFlag> flags) {
+  flags_ = std::move(flags);
+  texts_.resize(flags_.size());
+  switches_ = std::make_unique<bool[]>(flags_.size());
+  for (size_t i = 0; i < flags_.size(); ++i) {
+    const TableFlag& flag = flags_[i];
+    if (IsSwitch(flag.type)) {
+      options_.push_back(command->add_flag(flag.names, switches_[i], flag.help));
+      continue;
+    }
+    CLI::Option* option =
+        command->add_option(flag.names, texts_[i], flag.help)->type_name(TypeName(flag.type));
+    if (flag.shown_default) option->default_str(FormatOptionValue(*flag.shown_default));
+    if (flag.required) option->required();
+    options_.push_back(option);
+  }
+}
+
+std::vector<std::pair<size_t, OptionValue>> TableFlags::Given() const {
+  std::vector<std::pair<size_t, OptionValue>> given;
+  for (size_t i = 0; i < flags_.size(); ++i) {
+    if (options_[i]->count() == 0) continue;
+    const TableFlag& flag = flags_[i];
+    given.emplace_back(i, IsSwitch(flag.type)
+                              ? OptionValue(switches_[i])
+                              : ParseOptionValue(flag.flag, flag.range, flag.type, texts_[i]));
+  }
+  return given;
+}
+
+void BuildFlags::AddTo(CLI::App* command) {
+  const IndexBuildOptions options;
+  const IndexBuildFlags flags;
+  std::vector<TableFlag> table_flags;
+  for (const BuildOptionSpec& spec : BuildOptionTable()) {
+    // Numbers show their default; an unset optional, an empty path or name has none.
+    std::optional<OptionValue> value = spec.get(options, flags);
+    if (value && (std::holds_alternative<std::string>(*value) ||
+                  std::holds_alternative<std::filesystem::path>(*value)))
+      value.reset();
+    table_flags.push_back(
+        {"--" + std::string(spec.flag), spec.flag, spec.help, spec.range, spec.type, false, value});
+  }
+  flags_.AddTo(command, std::move(table_flags));
+}
+
+std::vector<std::pair<std::string, OptionValue>> BuildFlags::Given() const {
+  std::vector<std::pair<std::string, OptionValue>> given;
+  for (auto& [line, value] : flags_.Given())
+    given.emplace_back(std::string(BuildOptionTable()[line].flag), std::move(value));
+  return given;
+}
+
+void BuildFlags::Apply(IndexBuildOptions* options, IndexBuildFlags* flags) const {
+  for (const auto& [line, value] : flags_.Given())
+    BuildOptionTable()[line].set(value, options, flags);
+}
+
+// A subcommand whose flags come from the command table (indexer/index_command_flags.inc) and,
+// with kBuildFlags (build; update, which compares them with the index's), the build option
+// table's after them.
+template <typename Options, bool kBuildFlags = false>
+class TableCommand {
+ public:
+  bool parsed() const { return command_->parsed(); }
+
+ protected:
+  CLI::App* Add(CLI::App* app, const std::string& name, const std::string& description) {
+    command_ = app->add_subcommand(name, description);
+    flags_.AddTo(command_);
+    if constexpr (kBuildFlags) build_flags_.AddTo(command_);
+    return command_;
+  }
+  // `Options` as the command table's flags set them.
+  Options Parsed() const {
+    Options options;
+    flags_.Apply(&options);
+    return options;
+  }
+  const BuildFlags& build_flags() const { return build_flags_; }
+
+ private:
+  CLI::App* command_ = nullptr;
+  CommandFlags<Options> flags_;
+  BuildFlags build_flags_;
+};
+
+class BuildCommand : public TableCommand<IndexBuildOptions, /*kBuildFlags=*/true> {
+ public:
+  CLI::App* AddTo(CLI::App* app) {
+    CLI::App* build =
+        Add(app, "build", "Build an index from a COLMAP sparse model and its database");
+    build->get_option("--clusters")->excludes(build->get_option("--cluster-file"));
+    return build;
+  }
+  int Run(bool json) const {
+    IndexBuildOptions options = Parsed();
+    IndexBuildFlags flags;
+    build_flags().Apply(&options, &flags);
+    ValidateBuildOptions(options, flags);
+    ApplyBuildFlags(flags, &options);
+    return RunBuild(options, json);
+  }
+};
+
+class ExtractCommand : public TableCommand<IndexExtractOptions> {
+ public:
+  CLI::App* AddTo(CLI::App* app) {
+    CLI::App* extract =
+        Add(app, "extract",
+            "Write the part of an index near a position, or around listed images, as an index");
+    extract->get_option("--images")->excludes(extract->get_option("--near"));
+    return extract;
+  }
+  int Run(bool json) const { return RunExtract(Parsed(), json); }
+};
+
+class UpdateCommand : public TableCommand<IndexUpdateOptions, /*kBuildFlags=*/true> {
+ public:
+  CLI::App* AddTo(CLI::App* app) {
+    return Add(app, "update",
+               "Update an index for a grown COLMAP model; optionally write the delta for devices");
+  }
+  int Run(bool json) const {
+    IndexUpdateOptions options = Parsed();
+    options.build_flags = build_flags().Given();  // each must be the index's, but --threads
+    TakeThreadsOfBuildFlags(&options);
+    return RunUpdate(options, json);
+  }
+};
+
+class ApplyCommand : public TableCommand<IndexApplyOptions> {
+ public:
+  CLI::App* AddTo(CLI::App* app) {
+    return Add(app, "apply", "Apply a delta of cwloc-index update to the index it was made for");
+  }
+  int Run(bool json) const { return RunApply(Parsed(), json); }
 };
 
 }  // namespace
@@ -352,85 +526,15 @@ int main(int argc, char** argv) {
       "model, apply a delta, extract a region of one, inspect or verify it"};
   app.set_version_flag("--version", std::string("cwloc-index ") + cwloc::kToolVersion);
   app.require_subcommand(1);
-
-  cwloc::IndexBuildOptions options;
-  cwloc::IndexBuildFlags flags;
   bool json = false;
-  auto* build =
-      app.add_subcommand("build", "Build an index from a COLMAP sparse model and its database");
-  build->add_option("--model", options.model_dir, "COLMAP sparse model directory (binary or text)")
-      ->required();
-  build
-      ->add_option("--database", options.database_path,
-                   "COLMAP database.db with the model's descriptors (read only)")
-      ->required();
-  build->add_option("-o,--output", options.output_path, "Index file to write (atomically)")
-      ->required();
-  cwloc::BuildFlags build_flags;
-  build_flags.AddTo(build);
-  build->get_option("--clusters")->excludes(build->get_option("--cluster-file"));
-  build->add_flag("--json", json, "Print the build report as JSON");
-
-  cwloc::IndexExtractOptions extract_options;
-  std::string near;
-  auto* extract = app.add_subcommand(
-      "extract",
-      "Write the part of an index near a position, or around listed images, as an index");
-  extract->add_option("--index", extract_options.index_path, "Index file to extract from")
-      ->required();
-  auto* near_option = extract->add_option(
-      "--near", near,
-      "'LAT LON [HEIGHT] RADIUS_M': the clusters with a camera within RADIUS_M of this WGS84 "
-      "position (horizontally without HEIGHT), as --prior-position selects them");
-  extract
-      ->add_option("--images", extract_options.images_file,
-                   "File of image names, one per line: the clusters that hold them")
-      ->excludes(near_option);
-  extract
-      ->add_option("-o,--output", extract_options.output_path, "Index file to write (atomically)")
-      ->required();
-  extract->add_option("--threads", extract_options.threads, "Worker threads (0 = all cores)")
-      ->capture_default_str();
-  extract->add_option("--parent-tile", extract_options.parent_tile_path,
-                      "The same region's tile of the index this one was updated from: write the "
-                      "tile as it changed by a delta (--delta), which devices apply to it; "
-                      "without --near or --images, the parent tile's region");
-  extract->add_option("--delta", extract_options.delta_path,
-                      "With --parent-tile: the delta file to write (cwloc-index apply)");
-  extract->add_flag("--json", json, "Print the report as JSON");
-
-  cwloc::IndexUpdateOptions update_options;
-  auto* update = app.add_subcommand(
-      "update", "Update an index for a grown COLMAP model; optionally write the delta for devices");
-  update->add_option("--index", update_options.index_path, "The index of the model before")
-      ->required();
-  update->add_option("--model", update_options.model_dir, "The grown COLMAP sparse model")
-      ->required();
-  update->add_option("--database", update_options.database_path, "Its database.db (read only)")
-      ->required();
-  update->add_option("-o,--output", update_options.output_path, "Index file to write (atomically)")
-      ->required();
-  update->add_option("--delta", update_options.delta_path,
-                     "Also write the change as a delta file (cwloc-index apply)");
-  update->add_option("--remove-images", update_options.remove_images_file,
-                     "File of image names, one per line, to take out of the index");
-  update->add_flag("--rebuild-if-needed", update_options.rebuild_if_needed,
-                   "Build the index afresh when the model was not grown but changed");
-  cwloc::BuildFlags update_flags;
-  update_flags.AddTo(update);
-  update->add_flag("--json", json, "Print the report as JSON");
-
-  std::filesystem::path apply_index, apply_delta, apply_output;
-  int apply_threads = 0;
-  auto* apply = app.add_subcommand(
-      "apply", "Apply a delta of cwloc-index update to the index it was made for");
-  apply->add_option("--index", apply_index, "The index the delta was made for")->required();
-  apply->add_option("--delta", apply_delta, "The delta (cwloc-index update --delta)")->required();
-  apply->add_option("-o,--output", apply_output, "Index file to write (atomically)")->required();
-  apply->add_option("--threads", apply_threads, "Worker threads (0 = all cores)")
-      ->capture_default_str();
-  apply->add_flag("--json", json, "Print the report as JSON");
-
+  cwloc::BuildCommand build;
+  build.AddTo(&app)->add_flag("--json", json, "Print the build report as JSON");
+  cwloc::ExtractCommand extract;
+  extract.AddTo(&app)->add_flag("--json", json, "Print the report as JSON");
+  cwloc::UpdateCommand update;
+  update.AddTo(&app)->add_flag("--json", json, "Print the report as JSON");
+  cwloc::ApplyCommand apply;
+  apply.AddTo(&app)->add_flag("--json", json, "Print the report as JSON");
   std::string index_path;
   auto* info = app.add_subcommand("info", "Print an index's counts, sections and build parameters");
   info->add_option("index", index_path, "Index file")->required();
@@ -445,25 +549,10 @@ int main(int argc, char** argv) {
     return app.exit(e) == 0 ? cwloc::kExitOk : cwloc::kExitBadInput;
   }
   return cwloc::RunTool("cwloc-index", [&]() -> int {
-    if (build->parsed()) {
-      build_flags.Apply(&options, &flags);
-      cwloc::ValidateBuildOptions(options, flags);
-      cwloc::ApplyBuildFlags(flags, &options);
-      return cwloc::RunBuild(options, json);
-    }
-    if (extract->parsed()) {
-      if (!near.empty()) extract_options.near = cwloc::ParseGeoRegion(near, "--near");
-      return cwloc::RunExtract(extract_options, json);
-    }
-    if (update->parsed()) {
-      update_options.build_flags = update_flags.Given();
-      for (const auto& [flag, value] : update_options.build_flags) {
-        if (flag == "threads") update_options.threads = std::get<int32_t>(value);
-      }
-      return cwloc::RunUpdate(update_options, json);
-    }
-    if (apply->parsed())
-      return cwloc::RunApply(apply_index, apply_delta, apply_output, apply_threads, json);
+    if (build.parsed()) return build.Run(json);
+    if (extract.parsed()) return extract.Run(json);
+    if (update.parsed()) return update.Run(json);
+    if (apply.parsed()) return apply.Run(json);
     if (info->parsed()) return cwloc::RunInfo(index_path, json);
     return cwloc::RunVerify(index_path);
   });

@@ -57,6 +57,11 @@ class IndexFile {
     const SectionEntry& entry = RequireSection(tag, sizeof(T));
     return {reinterpret_cast<const T*>(data_ + entry.offset), static_cast<size_t>(entry.count)};
   }
+  // The same as bytes, for elements of `element_size` bytes.
+  std::span<const uint8_t> SectionBytes(uint32_t tag, size_t element_size) const {
+    const SectionEntry& entry = RequireSection(tag, element_size);
+    return {data_ + entry.offset, static_cast<size_t>(entry.size)};
+  }
 
   // Recomputes every section checksum; throws InputError naming the first corrupt section.
   void VerifyChecksums() const;
@@ -93,7 +98,7 @@ struct SectionData {
 };
 
 // The format minor a file with these sections declares: the oldest 1.x that knows them all
-// (1.1 without the compact index's sections, 1.2 with them, 1.3 with PCAL, 1.4 with PRGB).
+// (at least 1.1; format/index_section_table.inc says which minor introduced each section).
 uint16_t FormatMinorOf(std::span<const SectionData> sections);
 
 // Writes an index (or a delta) atomically through an AtomicFile (base/atomic_file.h: an unnamed

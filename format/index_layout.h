@@ -3,6 +3,7 @@
 // The on-disk structures of a cwloc index file (docs/format.md is the byte-level spec).
 // All integers are little-endian and fixed-width; structs are read in place from the mapping.
 
+#include <algorithm>
 #include <bit>
 #include <cstddef>
 #include <cstdint>
@@ -17,7 +18,12 @@ static_assert(
 
 inline constexpr uint32_t kByteOrderMark = 0x01020304;
 inline constexpr uint16_t kFormatMajor = 1;
-inline constexpr uint16_t kFormatMinor = 5;
+// The newest section's minor (format/index_section_table.inc): what this cwloc reads up to.
+inline constexpr uint16_t kFormatMinor = std::max({
+#define CWLOC_INDEX_SECTION(name, tag, minor, ...) uint16_t{minor},
+#include "format/index_section_table.inc"
+#undef CWLOC_INDEX_SECTION
+});
 inline constexpr uint64_t kSectionAlignment = 64;
 
 // Feature bits: a reader refuses a file with a required bit it does not know.
@@ -65,50 +71,18 @@ constexpr uint32_t SectionTag(const char (&name)[5]) {
          (uint32_t(uint8_t(name[2])) << 16) | (uint32_t(uint8_t(name[3])) << 24);
 }
 
-// The sections of format 1.x (docs/format.md describes each one's layout).
+// The sections of format 1.x, one constant per line of the section table
+// (format/index_section_table.inc; docs/format.md describes each one's layout).
 namespace section {
-inline constexpr uint32_t kManifest = SectionTag("MANI");  // JSON, schemas/index-manifest
-inline constexpr uint32_t kCameras = SectionTag("CAMS");
-inline constexpr uint32_t kImages = SectionTag("IMGS");
-inline constexpr uint32_t kStrings = SectionTag("STRS");  // image names
-inline constexpr uint32_t kPoints = SectionTag("PNTS");
-inline constexpr uint32_t kTracks = SectionTag("TRKS");         // point -> views
-inline constexpr uint32_t kDescriptors = SectionTag("DESC");    // view descriptors, N x 128
-inline constexpr uint32_t kViewPoint = SectionTag("V2PT");      // view -> point
-inline constexpr uint32_t kViewKeypoints = SectionTag("VKXY");  // view keypoint x, y
-inline constexpr uint32_t kViewNeighbor = SectionTag("VNND");   // v_NN distance in its cluster
-inline constexpr uint32_t kKdNodes = SectionTag("KDND");
-inline constexpr uint32_t kKdLeaves = SectionTag("KDLF");
-inline constexpr uint32_t kKdRoots = SectionTag("KDRT");
-inline constexpr uint32_t kCovisOffsets = SectionTag("CVOF");  // CSR row offsets per image
-inline constexpr uint32_t kCovisEdges = SectionTag("CVED");    // (image, shared points)
-inline constexpr uint32_t kGeoreference = SectionTag("GEOR");  // optional, format 1.1
-// A compact index (format 1.2) has these three required sections instead of DESC and VNND:
-// one coded descriptor per 3D point, and the kd-forest's rows are points.
-inline constexpr uint32_t kCodebook = SectionTag("PQCB");       // 256 x 128 uint8 centroids
-inline constexpr uint32_t kPointCodes = SectionTag("PCOD");     // point descriptor codes
-inline constexpr uint32_t kPointNeighbor = SectionTag("PVNN");  // v_NN distance per point
-// ... and its points as float offsets from one double origin, instead of PNTS.
-inline constexpr uint32_t kPointOrigin = SectionTag("PORG");   // one IndexPointOrigin
-inline constexpr uint32_t kPointOffsets = SectionTag("PNTF");  // IndexPointOffset per point
-// Optional (format 1.3): the pose covariance's calibration on the model.
-inline constexpr uint32_t kCovarianceCalibration = SectionTag("PCAL");
-// Optional (format 1.4): each point's colour in the COLMAP model, for viewers.
-inline constexpr uint32_t kPointColors = SectionTag("PRGB");
-// Optional (format 1.5): each point's COLMAP point3D id, which `cwloc-index update` follows.
-inline constexpr uint32_t kPointIds = SectionTag("PIDS");
-inline constexpr uint32_t kAll[] = {kManifest,      kCameras,
-                                    kImages,        kStrings,
-                                    kPoints,        kTracks,
-                                    kDescriptors,   kViewPoint,
-                                    kViewKeypoints, kViewNeighbor,
-                                    kKdNodes,       kKdLeaves,
-                                    kKdRoots,       kCovisOffsets,
-                                    kCovisEdges,    kGeoreference,
-                                    kCodebook,      kPointCodes,
-                                    kPointNeighbor, kPointOrigin,
-                                    kPointOffsets,  kCovarianceCalibration,
-                                    kPointColors,   kPointIds};
+#define CWLOC_INDEX_SECTION(name, tag, ...) inline constexpr uint32_t name = SectionTag(tag);
+#include "format/index_section_table.inc"
+#undef CWLOC_INDEX_SECTION
+// Every tag this cwloc reads: a required section with another tag is refused.
+inline constexpr uint32_t kAll[] = {
+#define CWLOC_INDEX_SECTION(name, ...) name,
+#include "format/index_section_table.inc"
+#undef CWLOC_INDEX_SECTION
+};
 }  // namespace section
 
 // "DESC" for a tag, with non-printable bytes escaped, for messages.

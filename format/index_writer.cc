@@ -6,6 +6,7 @@
 
 #include "base/atomic_file.h"
 #include "format/index_file.h"
+#include "format/index_section_table.h"
 #include "format/xxhash64.h"
 
 namespace cwloc {
@@ -24,15 +25,10 @@ std::span<const std::span<const uint8_t>> PiecesOf(const SectionData& section) {
 }  // namespace
 
 uint16_t FormatMinorOf(std::span<const SectionData> sections) {
-  uint16_t minor = 1;
+  uint16_t minor = 1;  // what a full index without optional sections has declared since 1.1
   for (const SectionData& section : sections) {
-    if (section.tag == section::kCodebook || section.tag == section::kPointCodes ||
-        section.tag == section::kPointNeighbor || section.tag == section::kPointOrigin ||
-        section.tag == section::kPointOffsets)
-      minor = std::max<uint16_t>(minor, 2);
-    if (section.tag == section::kCovarianceCalibration) minor = std::max<uint16_t>(minor, 3);
-    if (section.tag == section::kPointColors) minor = std::max<uint16_t>(minor, 4);
-    if (section.tag == section::kPointIds) minor = std::max<uint16_t>(minor, 5);
+    if (const IndexSectionSpec* spec = FindIndexSection(section.tag))
+      minor = std::max(minor, spec->minor);
   }
   return minor;
 }

@@ -161,32 +161,25 @@ void WriteIndexOfViews(ModelViews views, const Clustering& clustering,
 
   stage.Restart();
   const PointOffsets point_offsets = coded ? OffsetPoints(views.points) : PointOffsets{};
-  IndexContents contents;
-  contents.cameras = views.cameras;
-  contents.images = views.images;
-  contents.strings = views.strings;
-  contents.tracks = views.tracks;
-  contents.view_points = views.view_points;
-  contents.neighbor_distances = neighbor_distances;
-  contents.forest = &forest;
-  contents.covisibility_offsets = graph.offsets;
-  contents.covisibility_edges = graph.edges;
+  // What the model views hold that this index does not store: a compact one's points and
+  // descriptors are its offsets and codes, keypoints and colours are optional.
+  IndexRows rows = views.Borrow();
+  (coded ? rows.point_neighbor_distances : rows.view_neighbor_distances) = neighbor_distances;
+  BorrowKdForest(forest, &rows);
+  rows.covisibility_offsets = graph.offsets;
+  rows.covisibility_edges = graph.edges;
   if (coded) {
-    contents.point_origin = &point_offsets.origin;
-    contents.point_offsets = point_offsets.offsets;
-    contents.codebook = point_codes.codebook;
-    contents.codes = point_codes.codes;
-    contents.code_bytes = options.code_bytes;
-  } else {
-    contents.points = views.points;
-    contents.descriptors = views.descriptors;
+    rows.point_origin = {&point_offsets.origin, 1};
+    rows.point_offsets = point_offsets.offsets;
+    rows.codebook = point_codes.codebook;
+    rows.codes = point_codes.codes;
+    rows.code_bytes = options.code_bytes;
   }
-  contents.point_ids = views.point_ids;  // what `update` follows the model's points by
-  if (options.keypoints) contents.view_keypoints = views.view_keypoints;
-  if (options.point_colors) contents.point_colors = views.point_colors;
-  if (georeference) contents.georeference = &georeference->section;
-  if (calibration) contents.covariance_calibration = &calibration->section;
-  WriteIndex(output, contents, std::move(manifest));
+  if (!options.keypoints) rows.view_keypoints = {};
+  if (!options.point_colors) rows.point_colors = {};
+  if (georeference) rows.georeference = {&georeference->section, 1};
+  if (calibration) rows.covariance_calibration = {&calibration->section, 1};
+  WriteIndex(output, rows, std::move(manifest));
   report->seconds_write = stage.Seconds();
   report->file_bytes = std::filesystem::file_size(output);
 }

@@ -63,29 +63,35 @@ std::vector<char> ClustersOfListedImages(const Index& parent, const std::filesys
   return keep;
 }
 
-// Every array of the tile, owned.
+// The tile's rows but the parent's whole sections and the kd-forest, owned.
 struct Tile {
-  std::vector<IndexCamera> cameras;
-  std::vector<IndexImage> images;
-  std::string strings;
-  std::vector<IndexPoint> points;
-  std::vector<IndexPointOffset> point_offsets;
-  std::vector<uint32_t> tracks;
-  std::vector<uint8_t> descriptors;  // full: views x 128
-  std::vector<uint8_t> codes;        // compact: points x code bytes
-  std::vector<uint8_t> rows;         // the kd-forest's: views x 128, or decoded points
-  std::vector<uint32_t> view_points;
-  std::vector<float> neighbor_distances;
-  std::vector<ViewKeypoint> view_keypoints;
-  std::vector<PointColor> point_colors;
-  std::vector<uint64_t> point_ids;
-  std::vector<uint32_t> covisibility_offsets;
-  std::vector<CovisibilityEdge> covisibility_edges;
+  OwnedIndexRows rows;
+  std::vector<uint8_t> decoded;  // a compact tile's codes decoded: its kd-forest's rows
   uint32_t num_clusters = 0;
 };
 
+// The sections kept with their rows (the table's kKeptWithRow: descriptors or codes, v_NN,
+// keypoints, colours, ids): each kept view's or point's element, in order, copied a run of
+// consecutive rows at a time.
+void KeepRowSections(const IndexRows& parent, std::span<const uint32_t> views,
+                     std::span<const uint32_t> points, OwnedIndexRows* tile) {
+  for (const IndexSectionSpec& spec : IndexSectionTable()) {
+    const std::span<const uint8_t> from = spec.bytes(parent);
+    if (spec.child != SectionInChild::kKeptWithRow || from.empty()) continue;
+    const std::span<const uint32_t> rows = spec.count == SectionCount::kPerView ? views : points;
+    const size_t element_bytes = spec.ElementBytes(parent);
+    const std::span<uint8_t> to = spec.resize(rows.size(), element_bytes, tile);
+    for (size_t i = 0, run = 1; i < rows.size(); i += run) {
+      for (run = 1; i + run < rows.size() && rows[i + run] == rows[i] + run;) ++run;
+      std::memcpy(&to[i * element_bytes], &from[size_t(rows[i]) * element_bytes],
+                  run * element_bytes);
+    }
+  }
+}
+
 Tile CutTile(const Index& parent, const std::vector<char>& keep_cluster) {
   Tile tile;
+  OwnedIndexRows& rows = tile.rows;
   const auto parent_images = parent.images();
   std::vector<uint32_t> cluster_of(keep_cluster.size(), UINT32_MAX);
   for (size_t c = 0; c < keep_cluster.size(); ++c) {
@@ -99,83 +105,64 @@ Tile CutTile(const Index& parent, const std::vector<char>& keep_cluster) {
     if (!keep_cluster[parent_images[i].cluster]) continue;
     IndexImage image = parent_images[i];
     if (camera_of[image.camera_index] == UINT32_MAX) {
-      camera_of[image.camera_index] = static_cast<uint32_t>(tile.cameras.size());
-      tile.cameras.push_back(parent.cameras()[image.camera_index]);
+      camera_of[image.camera_index] = static_cast<uint32_t>(rows.cameras.size());
+      rows.cameras.push_back(parent.cameras()[image.camera_index]);
     }
     const std::string_view name = parent.ImageName(image);
     image.camera_index = camera_of[image.camera_index];
-    image.name_offset = static_cast<uint32_t>(tile.strings.size());
-    tile.strings += name;
+    image.name_offset = static_cast<uint32_t>(rows.strings.size());
+    rows.strings += name;
     image.cluster = cluster_of[image.cluster];
     image.first_view = static_cast<uint32_t>(parent_views.size());
     for (uint32_t v = 0; v < image.num_views; ++v) {
       view_of[parent_images[i].first_view + v] = static_cast<uint32_t>(parent_views.size());
       parent_views.push_back(parent_images[i].first_view + v);
     }
-    image_of[i] = static_cast<uint32_t>(tile.images.size());
-    tile.images.push_back(image);
+    image_of[i] = static_cast<uint32_t>(rows.images.size());
+    rows.images.push_back(image);
   }
 
   // Points seen by a kept view, in the parent's order, with their kept views.
   const bool coded = parent.coded();
-  tile.view_points.resize(parent_views.size());
+  rows.view_points.resize(parent_views.size());
   std::vector<uint32_t> parent_points;
   for (uint32_t p = 0; p < parent.num_points(); ++p) {
-    const size_t first_track = tile.tracks.size();
+    const size_t first_track = rows.tracks.size();
     const auto point = static_cast<uint32_t>(parent_points.size());
     for (const uint32_t view : parent.TrackOf(p)) {
       if (view_of[view] == UINT32_MAX) continue;
-      tile.tracks.push_back(view_of[view]);
-      tile.view_points[view_of[view]] = point;
+      rows.tracks.push_back(view_of[view]);
+      rows.view_points[view_of[view]] = point;
     }
-    if (tile.tracks.size() == first_track) continue;
+    if (rows.tracks.size() == first_track) continue;
     parent_points.push_back(p);
-    if (!parent.point_colors().empty()) tile.point_colors.push_back(parent.point_colors()[p]);
-    if (!parent.point_ids().empty()) tile.point_ids.push_back(parent.point_ids()[p]);
     if (coded) {
       IndexPointOffset offset = parent.point_offsets()[p];
       offset.first_track = static_cast<uint32_t>(first_track);
-      tile.point_offsets.push_back(offset);
+      rows.point_offsets.push_back(offset);
     } else {
       IndexPoint copy = parent.points()[p];
       copy.first_track = static_cast<uint32_t>(first_track);
-      copy.track_length = static_cast<uint32_t>(tile.tracks.size() - first_track);
-      tile.points.push_back(copy);
+      copy.track_length = static_cast<uint32_t>(rows.tracks.size() - first_track);
+      rows.points.push_back(copy);
     }
   }
-
+  KeepRowSections(parent.rows(), parent_views, parent_points, &rows);
   if (coded) {
     const DescriptorCodes& codes = parent.codes();
-    tile.rows.resize(parent_points.size() * kDescriptorBytes);
-    for (size_t i = 0; i < parent_points.size(); ++i) {
-      const uint8_t* code = codes.Code(parent_points[i]);
-      tile.codes.insert(tile.codes.end(), code, code + codes.code_bytes);
-      codes.Decode(parent_points[i], tile.rows.data() + i * kDescriptorBytes);
-      tile.neighbor_distances.push_back(parent.point_neighbor_distances()[parent_points[i]]);
-    }
-  } else {
-    tile.descriptors.reserve(parent_views.size() * kDescriptorBytes);
-    for (const uint32_t view : parent_views) {
-      const uint8_t* d = parent.descriptors().data() + size_t{view} * kDescriptorBytes;
-      tile.descriptors.insert(tile.descriptors.end(), d, d + kDescriptorBytes);
-      tile.neighbor_distances.push_back(parent.view_neighbor_distances()[view]);
-    }
-  }
-  if (!parent.view_keypoints().empty()) {
-    for (const uint32_t view : parent_views)
-      tile.view_keypoints.push_back(parent.view_keypoints()[view]);
+    tile.decoded = DescriptorCodes{codes.codebook, rows.codes, codes.code_bytes}.DecodeAll();
   }
 
   // The parent's edges between kept images: the same shared-point counts (a point both see
   // keeps both views), still sorted, since image rows keep their order.
-  tile.covisibility_offsets.push_back(0);
+  rows.covisibility_offsets.push_back(0);
   for (uint32_t i = 0; i < parent_images.size(); ++i) {
     if (image_of[i] == UINT32_MAX) continue;
     for (const CovisibilityEdge& edge : parent.CovisibleImages(i)) {
       if (image_of[edge.image_index] != UINT32_MAX)
-        tile.covisibility_edges.push_back({image_of[edge.image_index], edge.shared_points});
+        rows.covisibility_edges.push_back({image_of[edge.image_index], edge.shared_points});
     }
-    tile.covisibility_offsets.push_back(static_cast<uint32_t>(tile.covisibility_edges.size()));
+    rows.covisibility_offsets.push_back(static_cast<uint32_t>(rows.covisibility_edges.size()));
   }
   return tile;
 }
@@ -207,9 +194,9 @@ void RegionOfParentTile(const nlohmann::ordered_json& manifest, IndexExtractOpti
 
 // The new tile as the parent tile and a delta: views matched within each image by point id (and
 // descriptor, and keypoint), points by id (and, compact, code). Writes both.
-void WriteTileByDelta(const IndexExtractOptions& options, const Index& old_tile, const Tile& tile,
-                      const IndexPointOrigin& origin, nlohmann::ordered_json manifest,
-                      IndexExtractReport* report) {
+void WriteTileByDelta(const IndexExtractOptions& options, const Index& old_tile,
+                      const OwnedIndexRows& tile, const IndexPointOrigin& origin,
+                      nlohmann::ordered_json manifest, IndexExtractReport* report) {
   const std::string old_name = options.parent_tile_path.string();
   const bool coded = old_tile.coded();
   if (old_tile.point_ids().empty() || tile.point_ids.empty()) {
@@ -271,29 +258,17 @@ void WriteTileByDelta(const IndexExtractOptions& options, const Index& old_tile,
     }
   }
 
-  std::vector<IndexPoint> points = tile.points;  // a compact tile's from its offsets
+  DeltaChild child{tile.Borrow(), parent_of_view, parent_of_point};
+  std::vector<IndexPoint> positions;  // a compact tile's points, from its offsets
   if (coded) {
     for (const IndexPointOffset& offset : tile.point_offsets) {
-      points.push_back({{origin.xyz[0] + offset.offset[0], origin.xyz[1] + offset.offset[1],
-                         origin.xyz[2] + offset.offset[2]},
-                        0,
-                        0});
+      positions.push_back({{origin.xyz[0] + offset.offset[0], origin.xyz[1] + offset.offset[1],
+                            origin.xyz[2] + offset.offset[2]},
+                           0,
+                           0});
     }
+    child.rows.points = positions;
   }
-  DeltaChild child;
-  child.cameras = tile.cameras;
-  child.images = tile.images;
-  child.strings = tile.strings;
-  child.parent_of_view = parent_of_view;
-  child.descriptors = tile.descriptors;
-  child.view_points = tile.view_points;
-  child.view_keypoints = tile.view_keypoints;
-  child.neighbor_distances = tile.neighbor_distances;
-  child.parent_of_point = parent_of_point;
-  child.points = points;
-  child.point_ids = tile.point_ids;
-  child.point_colors = tile.point_colors;
-  child.codes = tile.codes;
   IndexDelta delta = MakeDelta(old_tile, child);
 
   // The tile's kd-forest: updated until past the balance bound, as an index's.
@@ -365,6 +340,7 @@ IndexExtractReport ExtractIndex(const IndexExtractOptions& given) {
     throw InputError(options.index_path.string() + ": " + where + "; nothing to extract");
   }
   const Tile tile = CutTile(parent, keep);
+  const OwnedIndexRows& rows = tile.rows;
 
   // Built anew, unless the tile is its parent tile changed by a delta.
   KdForest forest;
@@ -373,17 +349,19 @@ IndexExtractReport ExtractIndex(const IndexExtractOptions& given) {
     KdForestBuildOptions forest_options;
     forest_options.num_trees = parameters["kd_trees"].get<uint32_t>();
     forest_options.max_leaf_size = parameters["kd_leaf_size"].get<uint32_t>();
-    forest = BuildIndexForest(parent.coded() ? tile.rows : tile.descriptors, forest_options,
-                              parameters["seed"].get<uint64_t>(), ResolveThreads(options.threads));
+    forest = BuildIndexForest(parent.coded() ? std::span<const uint8_t>(tile.decoded)
+                                             : std::span<const uint8_t>(rows.descriptors),
+                              forest_options, parameters["seed"].get<uint64_t>(),
+                              ResolveThreads(options.threads));
   }
 
   IndexExtractReport report;
-  report.num_cameras = tile.cameras.size();
-  report.num_images = tile.images.size();
-  report.num_points = parent.coded() ? tile.point_offsets.size() : tile.points.size();
-  report.num_views = tile.view_points.size();
+  report.num_cameras = rows.cameras.size();
+  report.num_images = rows.images.size();
+  report.num_points = parent.coded() ? rows.point_offsets.size() : rows.points.size();
+  report.num_views = rows.view_points.size();
   report.num_clusters = tile.num_clusters;
-  report.num_covisibility_edges = tile.covisibility_edges.size();
+  report.num_covisibility_edges = rows.covisibility_edges.size();
   report.parent_images = parent.images().size();
   report.parent_views = parent.num_views();
 
@@ -403,37 +381,16 @@ IndexExtractReport ExtractIndex(const IndexExtractOptions& given) {
   manifest.erase("update");  // the index's own; a tile's record its own updates
   if (old_tile) {
     IndexPointOrigin origin = parent.point_origin();
-    WriteTileByDelta(options, *old_tile, tile, origin, std::move(manifest), &report);
+    WriteTileByDelta(options, *old_tile, rows, origin, std::move(manifest), &report);
     report.file_bytes = std::filesystem::file_size(options.output_path);
     report.seconds_total = total.Seconds();
     return report;
   }
 
-  IndexContents contents;
-  contents.cameras = tile.cameras;
-  contents.images = tile.images;
-  contents.strings = tile.strings;
-  contents.tracks = tile.tracks;
-  contents.view_points = tile.view_points;
-  contents.neighbor_distances = tile.neighbor_distances;
-  contents.forest = &forest;
-  contents.covisibility_offsets = tile.covisibility_offsets;
-  contents.covisibility_edges = tile.covisibility_edges;
-  contents.view_keypoints = tile.view_keypoints;
-  contents.point_colors = tile.point_colors;
-  contents.point_ids = tile.point_ids;
-  contents.georeference = parent.georeference();
-  contents.covariance_calibration = parent.covariance_calibration();
-  IndexPointOrigin origin{};
-  if (parent.coded()) {
-    KeepParentCoding(parent, &origin, &contents);
-    contents.point_offsets = tile.point_offsets;
-    contents.codes = tile.codes;
-  } else {
-    contents.points = tile.points;
-    contents.descriptors = tile.descriptors;
-  }
-  WriteIndex(options.output_path, contents, std::move(manifest));
+  IndexRows tile_rows = rows.Borrow();
+  TakeParentsSections(parent.rows(), &tile_rows);
+  BorrowKdForest(forest, &tile_rows);
+  WriteIndex(options.output_path, tile_rows, std::move(manifest));
   report.file_bytes = std::filesystem::file_size(options.output_path);
   report.seconds_total = total.Seconds();
   return report;

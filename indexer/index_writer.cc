@@ -7,17 +7,13 @@
 
 namespace cwloc {
 
-void WriteIndex(const std::filesystem::path& path, const IndexContents& contents,
+void WriteIndex(const std::filesystem::path& path, IndexRows rows,
                 nlohmann::ordered_json manifest) {
-  std::vector<SectionData> sections = IndexSectionsOf(contents, {});
   manifest["format_version"] =
-      std::to_string(kFormatMajor) + "." + std::to_string(FormatMinorOf(sections));
+      std::to_string(kFormatMajor) + "." + std::to_string(FormatMinorOf(IndexSectionsOf(rows)));
   const std::string manifest_text = manifest.dump(2) + "\n";
-  for (SectionData& section : sections) {
-    if (section.tag == section::kManifest)
-      section = MakeSection<char>(section::kManifest, {manifest_text.data(), manifest_text.size()});
-  }
-  WriteIndexFile(path, sections);
+  rows.manifest = manifest_text;
+  WriteIndexFile(path, IndexSectionsOf(rows));
 }
 
 KdForest BuildIndexForest(std::span<const uint8_t> rows, KdForestBuildOptions options,

@@ -4,14 +4,13 @@
 #include <nlohmann/json.hpp>
 #include <span>
 
-#include "format/index_contents.h"
+#include "format/index_rows.h"
 #include "kdtree/kd_forest_builder.h"
 
 namespace cwloc {
 
-// Writes the sections atomically, `manifest` first with its format_version set from them.
-void WriteIndex(const std::filesystem::path& path, const IndexContents& contents,
-                nlohmann::ordered_json manifest);
+// Writes the rows' sections atomically, `manifest` (its format_version set from them) as MANI.
+void WriteIndex(const std::filesystem::path& path, IndexRows rows, nlohmann::ordered_json manifest);
 
 // The global kd-forest over an index's rows (N x 128: views, or a compact index's decoded
 // points), with a progress bar on a terminal.

@@ -60,6 +60,28 @@ class PointIndexOfId {
   std::unordered_map<point3D_t, uint32_t> map_;
 };
 
+// Drops the points no view sees (none in a consistent model) and renumbers the views' points.
+void DropPointsWithoutViews(ModelViews* views) {
+  std::vector<uint32_t> num_views(views->points.size(), 0);
+  for (uint32_t point : views->view_points) ++num_views[point];
+  if (std::find(num_views.begin(), num_views.end(), 0) == num_views.end()) return;
+  std::vector<uint32_t> new_index(views->points.size(), UINT32_MAX);
+  decltype(views->points) kept_points;
+  decltype(views->point_ids) kept_ids;
+  decltype(views->point_colors) kept_colors;
+  for (size_t p = 0; p < views->points.size(); ++p) {
+    if (num_views[p] == 0) continue;
+    new_index[p] = static_cast<uint32_t>(kept_points.size());
+    kept_points.push_back(views->points[p]);
+    kept_ids.push_back(views->point_ids[p]);
+    kept_colors.push_back(views->point_colors[p]);
+  }
+  for (uint32_t& point : views->view_points) point = new_index[point];
+  views->points = std::move(kept_points);
+  views->point_ids = std::move(kept_ids);
+  views->point_colors = std::move(kept_colors);
+}
+
 }  // namespace
 
 ModelViews GatherModelViews(const colmap::Reconstruction& model,
@@ -162,26 +184,7 @@ ModelViews GatherModelViews(const colmap::Reconstruction& model,
   if (views.view_points.size() != total_views)
     throw std::logic_error("GatherModelViews: the model's observations are not its tracks'");
 
-  // Drop points without views (none in a consistent model) and renumber.
-  std::vector<uint32_t> num_views(views.points.size(), 0);
-  for (uint32_t point : views.view_points) ++num_views[point];
-  if (std::find(num_views.begin(), num_views.end(), 0) != num_views.end()) {
-    std::vector<uint32_t> new_index(views.points.size(), UINT32_MAX);
-    std::vector<IndexPoint> kept_points;
-    std::vector<point3D_t> kept_ids;
-    std::vector<PointColor> kept_colors;
-    for (size_t p = 0; p < views.points.size(); ++p) {
-      if (num_views[p] == 0) continue;
-      new_index[p] = static_cast<uint32_t>(kept_points.size());
-      kept_points.push_back(views.points[p]);
-      kept_ids.push_back(views.point_ids[p]);
-      kept_colors.push_back(views.point_colors[p]);
-    }
-    for (uint32_t& point : views.view_points) point = new_index[point];
-    views.points = std::move(kept_points);
-    views.point_ids = std::move(kept_ids);
-    views.point_colors = std::move(kept_colors);
-  }
+  DropPointsWithoutViews(&views);
   views.tracks = TracksOfViews(views.view_points, views.points);
   return views;
 }

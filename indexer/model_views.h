@@ -11,27 +11,19 @@
 #include "base/huge_pages.h"
 #include "colmap/database.h"
 #include "colmap/reconstruction.h"
-#include "format/index_sections.h"
+#include "format/index_rows.h"
 
 namespace cwloc {
 
 // Everything the index stores about the model, gathered from a COLMAP model and its database:
 // only views that belong to a 3D point, grouped by image (images in id order), so that one
-// image's views are contiguous.
-struct ModelViews {
-  std::vector<IndexCamera> cameras;
-  std::vector<IndexImage> images;        // cluster left 0; filled by the clustering step
-  std::string strings;                   // image names
-  std::vector<IndexPoint> points;        // 3D points with at least one view, in id order
-  std::vector<point3D_t> point_ids;      // COLMAP id of each point
-  std::vector<PointColor> point_colors;  // each point's colour in the model
-  std::vector<uint32_t> tracks;          // view indices, grouped by point
-  // views x 128; rows GatherModelViews leaves unwritten are the caller's to fill or not read.
-  std::vector<uint8_t, UnwrittenAllocator<uint8_t>> descriptors;
-  std::vector<uint32_t> view_points;  // point index of each view
-  std::vector<ViewKeypoint> view_keypoints;
-
-  size_t num_views() const { return view_points.size(); }
+// image's views are contiguous. The gather fills cameras, images (cluster left 0, for the
+// clustering step), strings, points (those with a view, in id order), point_ids, point_colors,
+// tracks, descriptors (views x 128; rows GatherModelViews leaves unwritten are the caller's to fill
+// or not read), view_points and view_keypoints: more than an index of any kind stores (a compact
+// one has codes instead of descriptors, keypoints and colours are optional); the build's later
+// stages compute the rest.
+struct ModelViews : OwnedIndexRows {
   std::string_view ImageName(const IndexImage& image) const {
     return std::string_view(strings).substr(image.name_offset, image.name_size);
   }

@@ -78,7 +78,7 @@ std::vector<uint8_t> CodePointsWithCodebook(const ModelViews& views, std::span<c
   return codes;
 }
 
-PointOffsets OffsetPoints(const std::vector<IndexPoint>& points) {
+PointOffsets OffsetPoints(std::span<const IndexPoint> points) {
   PointOffsets out{};
   for (const IndexPoint& point : points)
     for (int i = 0; i < 3; ++i) out.origin.xyz[i] += point.xyz[i] / double(points.size());

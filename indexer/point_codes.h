@@ -34,7 +34,7 @@ struct PointOffsets {
   IndexPointOrigin origin;
   std::vector<IndexPointOffset> offsets;
 };
-PointOffsets OffsetPoints(const std::vector<IndexPoint>& points);
+PointOffsets OffsetPoints(std::span<const IndexPoint> points);
 
 // PVNN: per point, the distance from its decoded descriptor to the nearest other point's, over
 // every cluster that sees it (the smallest of ComputeViewNeighborDistances over its views when

@@ -3,6 +3,7 @@
 #include <gmock/gmock.h>
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstring>
 #include <fstream>
@@ -11,8 +12,11 @@
 #include <set>
 #include <sstream>
 
+#include "format/index.h"
 #include "format/index_file.h"
+#include "format/index_section_table.h"
 #include "indexer/build_option_table.h"
+#include "indexer/index_command_flags.h"
 #include "kdtree/kd_forest_builder.h"
 #include "tests/indexer/indexer_fixture.h"
 
@@ -98,6 +102,98 @@ TEST_F(IndexCliTest, BuildInfoAndVerifySucceed) {
   EXPECT_THAT(output, HasSubstr("10 images, 400 points"));
   EXPECT_EQ(Run("verify " + index_path_.string(), &output), 0) << output;
   EXPECT_THAT(output, HasSubstr(": OK: 16 section checksums and every stored index verified"));
+}
+
+// A section this cwloc does not know, flagged optional, is skipped: verify and info name it
+// (what it knows is the section table, format/index_section_table.inc).
+TEST_F(IndexCliTest, VerifyAndInfoNameAnOptionalSectionThisCwlocDoesNotKnow) {
+  ASSERT_NO_FATAL_FAILURE(Build(" --calibration-samples 0"));
+  std::vector<SectionData> sections;
+  const IndexFile file = IndexFile::Open(index_path_);
+  for (const SectionEntry& entry : file.sections()) {
+    sections.push_back({entry.tag, entry.flags, entry.element_size, entry.count,
+                        file.bytes().subspan(entry.offset, entry.size)});
+  }
+  const uint8_t newer[3] = {1, 2, 3};
+  sections.push_back(MakeSection(SectionTag("ZZZZ"), std::span<const uint8_t>(newer), 0));
+  const std::string path = (dir_ / "newer.cwl").string();
+  WriteIndexFile(path, sections);
+  std::string output;
+  EXPECT_EQ(Run("verify " + path, &output), 0) << output;
+  EXPECT_THAT(output, HasSubstr(": OK: 16 section checksums and every stored index verified"));
+  EXPECT_THAT(output, HasSubstr("\n  section 'ZZZZ' is unknown to this cwloc: its checksum "
+                                "verified, not its contents\n"));
+  EXPECT_EQ(Run("info " + path, &output), 0) << output;
+  EXPECT_THAT(output, HasSubstr("  PIDS "));
+  EXPECT_THAT(output, HasSubstr("each point's COLMAP id (optional, format 1.5)\n"));
+  EXPECT_THAT(output, HasSubstr("unknown to this cwloc (optional: skipped)\n"));
+  ASSERT_EQ(Run("info --json " + path, &output), 0) << output;
+  ExpectValidInfoJson(output);
+  EXPECT_EQ(nlohmann::json::parse(output)["sections"].back()["contents"],
+            "unknown to this cwloc (optional: skipped)");
+}
+
+// Every optional section of the table reaches tiles and updates: the elements of a section
+// kept with its rows are the parent's for each kept view or point, and a section the parent
+// gives whole is the parent's.
+TEST_F(IndexCliTest, EverySectionOfTheTableReachesATileAndAnUpdate) {
+  ASSERT_NO_FATAL_FAILURE(
+      Build(" --keypoints --point-colors --model-frame enu:47.3779,8.5403,400"));
+  const Index parent = Index::Open(index_path_);
+  for (const IndexSectionSpec& spec : IndexSectionTable()) {
+    if (spec.InIndexOfKind(false))
+      EXPECT_NE(parent.file().FindSection(spec.tag), nullptr) << SectionTagName(spec.tag);
+  }
+  const auto list = dir_ / "images.txt", tile_path = dir_ / "tile.cwl";
+  std::ofstream(list) << parent.ImageName(parent.images()[3]) << "\n"
+                      << parent.ImageName(parent.images()[7]) << "\n";
+  std::string output;
+  ASSERT_EQ(Run("extract --index " + index_path_.string() + " --images " + list.string() + " -o " +
+                    tile_path.string(),
+                &output),
+            0)
+      << output;
+  const auto updated = dir_ / "updated.cwl";
+  ASSERT_EQ(Run("update --index " + index_path_.string() + " --model " + model_dir_.string() +
+                    " --database " + database_path_.string() + " -o " + updated.string(),
+                &output),
+            0)
+      << output;
+  const Index tile = Index::Open(tile_path);
+  const Index update = Index::Open(updated);
+  // The tile's views and points as the parent's rows: images by id, points by COLMAP id.
+  std::vector<uint32_t> parent_views, parent_points;
+  for (const IndexImage& image : tile.images()) {
+    for (const IndexImage& old_image : parent.images()) {
+      for (uint32_t v = 0; old_image.image_id == image.image_id && v < image.num_views; ++v)
+        parent_views.push_back(old_image.first_view + v);
+    }
+  }
+  for (const uint64_t id : tile.point_ids()) {
+    const auto ids = parent.point_ids();
+    parent_points.push_back(uint32_t(std::lower_bound(ids.begin(), ids.end(), id) - ids.begin()));
+  }
+  ASSERT_EQ(parent_views.size(), tile.num_views());
+  for (const IndexSectionSpec& spec : IndexSectionTable()) {
+    const std::string tag = SectionTagName(spec.tag);
+    const std::span<const uint8_t> from = spec.bytes(parent.rows());
+    if (spec.child == SectionInChild::kMade || from.empty()) continue;
+    EXPECT_TRUE(std::ranges::equal(spec.bytes(update.rows()), from)) << tag;
+    const std::span<const uint8_t> kept = spec.bytes(tile.rows());
+    if (spec.child == SectionInChild::kParents) {
+      EXPECT_TRUE(std::ranges::equal(kept, from)) << tag;
+      continue;
+    }
+    const std::vector<uint32_t>& rows =
+        spec.count == SectionCount::kPerView ? parent_views : parent_points;
+    const size_t size = spec.ElementBytes(parent.rows());
+    ASSERT_EQ(kept.size(), rows.size() * size) << tag;
+    for (size_t i = 0; i < rows.size(); ++i) {
+      ASSERT_TRUE(
+          std::ranges::equal(kept.subspan(i * size, size), from.subspan(rows[i] * size, size)))
+          << tag << " row " << i;
+    }
+  }
 }
 
 TEST_F(IndexCliTest, InfoJsonValidatesAgainstItsSchema) {
@@ -275,6 +371,32 @@ TEST_F(IndexCliTest, BuildHelpListsEveryLineOfTheBuildOptionTable) {
   EXPECT_EQ(listed, expected);
   EXPECT_THAT(help, HasSubstr("--trees UINT=4 "));
   EXPECT_THAT(help, HasSubstr("--georef-sigma FLOAT=5 "));
+}
+
+// build, update, extract and apply list their lines of the command table, each with its help
+// and a number's default; --threads is the build option table's line on each of them, with one
+// type, range and message.
+TEST_F(IndexCliTest, EachCommandTakesItsLinesOfTheCommandTable) {
+  const auto expect_listed = [&](const std::string& command, const auto& table) {
+    std::string help;
+    ASSERT_EQ(Run(command + " --help", &help), 0) << help;
+    for (const auto& spec : table) {
+      EXPECT_THAT(help, HasSubstr("  " + spec.names + " ")) << command << " " << spec.names;
+      EXPECT_THAT(help, HasSubstr(spec.help)) << command << " " << spec.names;
+    }
+    EXPECT_THAT(help, HasSubstr("  --threads INT=0 ")) << command;
+  };
+  expect_listed("build", CommandFlagTable<IndexBuildOptions>());
+  expect_listed("update", CommandFlagTable<IndexUpdateOptions>());
+  expect_listed("extract", CommandFlagTable<IndexExtractOptions>());
+  expect_listed("apply", CommandFlagTable<IndexApplyOptions>());
+  for (const std::string command :
+       {"build --model m --database d -o o", "update --index i --model m --database d -o o",
+        "extract --index i --near '47 8 100' -o o", "apply --index i --delta d -o o"}) {
+    std::string output;
+    EXPECT_EQ(Run(command + " --threads 2x", &output), 2) << command;
+    EXPECT_EQ(output, "cwloc-index: error: --threads 2x: expected a whole number\n") << command;
+  }
 }
 
 // Every input file of a build given as a device, a pipe or an oversized file is refused by name
