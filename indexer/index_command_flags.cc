@@ -29,10 +29,10 @@ std::optional<OptionValue> ShownDefault(const T& member) {
 }
 
 template <typename Type, typename T>
-void Assign(const Type& value, T* member) {
+void AssignFlag(const Type& value, T* member) {
   *member = T(value);
 }
-void Assign(const std::string& text, std::optional<GeoRegion>* near) {
+void AssignFlag(const std::string& text, std::optional<GeoRegion>* near) {
   *near = ParseGeoRegion(text, "--near");
 }
 
@@ -68,7 +68,7 @@ std::vector<CommandFlagSpec<Options>> CommandTable() {
                      need == kRequired,                                                         \
                      [](const Options& options) { return ShownDefault<type>(options.member); }, \
                      [](const OptionValue& value, Options* options) {                           \
-                       Assign(std::get<type>(value), &options->member);                         \
+                       AssignFlag(std::get<type>(value), &options->member);                     \
                      }});                                                                       \
   }
 #define CWLOC_INDEX_BUILD_FLAG(commands, build_flag, member)                                       \

@@ -20,15 +20,6 @@ from pathlib import Path
 
 MAX_LINES = 120
 
-# Owned by another change in progress, which makes them short: the merge that lands it empties
-# this list. (path, name as printed)
-IN_PROGRESS_ELSEWHERE = {
-    ("indexer/index_update.cc", "UpdateIndex"),
-    ("delta/apply_delta.cc", "AppliedDelta::AppliedDelta"),
-    ("exe/cwloc_index_main.cc", "main"),
-    ("indexer/model_views.cc", "GatherModelViews"),
-}
-
 # Debian's universal-ctags installs this name; `ctags` may be another ctags's alternative.
 CTAGS = shutil.which("ctags-universal") or "ctags"
 SUFFIXES = {".c", ".cc", ".cpp", ".h", ".hpp"}
@@ -109,20 +100,14 @@ def main():
     root = Path(sys.argv[1] if len(sys.argv) > 1 else Path(__file__).resolve().parent.parent)
     self_check()
     files = list(source_files(root))
-    found = long_functions(root, files)
-    allowed = [f for f in found if (f[0], f[2]) in IN_PROGRESS_ELSEWHERE]
-    failing = [f for f in found if (f[0], f[2]) not in IN_PROGRESS_ELSEWHERE]
-    for path, line, name, length in allowed:
-        print(f"{path}:{line}: {name} is {length} lines (allowed: owned by another change "
-              "in progress)")
+    failing = long_functions(root, files)
     for path, line, name, length in failing:
         print(f"{path}:{line}: {name} is {length} lines, over {MAX_LINES}")
     if failing:
         print(f"check_function_length: {len(failing)} functions over {MAX_LINES} lines: split "
               "each into named stages", file=sys.stderr)
         return 1
-    print(f"check_function_length: no function over {MAX_LINES} lines in {len(files)} files "
-          f"({len(allowed)} allowed for now)")
+    print(f"check_function_length: no function over {MAX_LINES} lines in {len(files)} files")
     return 0
 
 

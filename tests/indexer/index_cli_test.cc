@@ -141,8 +141,9 @@ TEST_F(IndexCliTest, EverySectionOfTheTableReachesATileAndAnUpdate) {
       Build(" --keypoints --point-colors --model-frame enu:47.3779,8.5403,400"));
   const Index parent = Index::Open(index_path_);
   for (const IndexSectionSpec& spec : IndexSectionTable()) {
-    if (spec.InIndexOfKind(false))
+    if (spec.InIndexOfKind(false)) {
       EXPECT_NE(parent.file().FindSection(spec.tag), nullptr) << SectionTagName(spec.tag);
+    }
   }
   const auto list = dir_ / "images.txt", tile_path = dir_ / "tile.cwl";
   std::ofstream(list) << parent.ImageName(parent.images()[3]) << "\n"
