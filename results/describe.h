@@ -52,24 +52,46 @@ struct FieldInfo {
   bool columns = false;
   std::string_view why_not;  // why a surface does not have the field
 
-  constexpr FieldInfo Json(std::string_view key) const { return With(&FieldInfo::json, key); }
-  constexpr FieldInfo Unit(std::string_view text) const { return With(&FieldInfo::unit, text); }
-  constexpr FieldInfo Help(std::string_view text) const { return With(&FieldInfo::help, text); }
-  constexpr FieldInfo NullWhenAbsent() const {
-    return With(&FieldInfo::when_absent, WhenAbsent::kNull);
-  }
-  constexpr FieldInfo Scale(double scale) const { return With(&FieldInfo::json_scale, scale); }
-  constexpr FieldInfo Rows(int count) const { return With(&FieldInfo::rows, count); }
-  constexpr FieldInfo AsColumns() const { return With(&FieldInfo::columns, true); }
-  constexpr FieldInfo WhyNot(std::string_view text) const {
-    return With(&FieldInfo::why_not, text);
-  }
-
- private:
-  template <typename V>
-  constexpr FieldInfo With(V FieldInfo::*member, V value) const {
+  // Each setter copies by hand: clang will not run a member template in a constant expression
+  // before the class that uses it is complete.
+  constexpr FieldInfo Json(std::string_view key) const {
     FieldInfo copy = *this;
-    copy.*member = value;
+    copy.json = key;
+    return copy;
+  }
+  constexpr FieldInfo Unit(std::string_view text) const {
+    FieldInfo copy = *this;
+    copy.unit = text;
+    return copy;
+  }
+  constexpr FieldInfo Help(std::string_view text) const {
+    FieldInfo copy = *this;
+    copy.help = text;
+    return copy;
+  }
+  constexpr FieldInfo NullWhenAbsent() const {
+    FieldInfo copy = *this;
+    copy.when_absent = WhenAbsent::kNull;
+    return copy;
+  }
+  constexpr FieldInfo Scale(double scale) const {
+    FieldInfo copy = *this;
+    copy.json_scale = scale;
+    return copy;
+  }
+  constexpr FieldInfo Rows(int count) const {
+    FieldInfo copy = *this;
+    copy.rows = count;
+    return copy;
+  }
+  constexpr FieldInfo AsColumns() const {
+    FieldInfo copy = *this;
+    copy.columns = true;
+    return copy;
+  }
+  constexpr FieldInfo WhyNot(std::string_view text) const {
+    FieldInfo copy = *this;
+    copy.why_not = text;
     return copy;
   }
 };

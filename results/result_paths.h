@@ -113,7 +113,10 @@ PathValue ResolveValue(const T& value, std::string_view rest, const std::string&
 
 template <typename T>
 PathValue Resolve(const T& value, std::string_view path, const std::string& where) {
-  const auto [segment, rest] = Split(path);
+  // Named copies, not a structured binding: clang 14 cannot capture one in the lambdas below.
+  const auto parts = Split(path);
+  const std::string_view segment = parts.first;
+  const std::string_view rest = parts.second;
   std::optional<PathValue> found;
   ForEachField<T>([&](const auto& field) {
     if (!found && field.info.name == segment)
