@@ -24,7 +24,7 @@ struct ServeCli {
   std::vector<std::string> indexes;
   std::string listen = "127.0.0.1:8080";
   std::string token_file;
-  double max_body_mb = 32;
+  double max_body_mb = static_cast<double>(HttpLimits().max_body_bytes) / (1 << 20);
 };
 
 // "HOST:PORT", "[V6]:PORT" or ":PORT" (localhost).
@@ -65,7 +65,7 @@ int Run(const ServeCli& cli, ServeOptions options) {
   ParseListen(cli.listen, &options);
   if (!(cli.max_body_mb > 0) || cli.max_body_mb > 4096)
     throw InputError("--max-body-mb must be more than 0 and at most 4096");
-  options.max_body_bytes = static_cast<size_t>(cli.max_body_mb * (1 << 20));
+  options.http.max_body_bytes = static_cast<size_t>(cli.max_body_mb * (1 << 20));
   if (!cli.token_file.empty()) options.token = ReadTokenFile(cli.token_file);
 
 #ifdef __GLIBC__
@@ -116,16 +116,20 @@ int main(int argc, char** argv) {
   app.add_option("--queue", options.queue,
                  "Queries that may wait for a worker (0: 4 per worker); more get 503 at once")
       ->capture_default_str();
-  app.add_option("--max-connections", options.max_connections,
-                 "Connections read and answered at once; others wait to be accepted")
+  app.add_option("--max-connections", options.http.max_connections,
+                 "Connections served at once; one more is answered 503 at once")
       ->capture_default_str();
   app.add_option("--max-body-mb", cli.max_body_mb, "Largest request body (MiB); larger get 413")
       ->capture_default_str();
-  app.add_option("--read-timeout", options.read_timeout_s,
-                 "Seconds a client may send nothing before its connection is dropped")
+  app.add_option("--request-timeout", options.http.request_timeout_s,
+                 "Seconds a request's headers may take (from the connection's last answer), "
+                 "its body this plus its size over --min-body-rate; later: 408")
       ->capture_default_str();
-  app.add_option("--write-timeout", options.write_timeout_s,
-                 "Seconds a client may read nothing before its connection is dropped")
+  app.add_option("--min-body-rate", options.http.min_body_rate,
+                 "Bytes per second a request's body must at least arrive at")
+      ->capture_default_str();
+  app.add_option("--write-timeout", options.http.write_timeout_s,
+                 "Seconds an answer may take to be sent before its connection is dropped")
       ->capture_default_str();
   app.add_option("--session-ttl", options.session_ttl_s,
                  "Seconds a tracking session may go without a frame before it ends")

@@ -27,13 +27,12 @@ struct RequestBody {
   std::string filename;  // a part's
 };
 
-RequestBody BodyOf(const httplib::Request& req) {
-  if (req.is_multipart_form_data()) {
-    for (const char* part : {"image", "features"}) {
-      if (req.has_file(part)) {
-        const auto& file = req.files.find(part)->second;
-        return {file.content, file.content_type, std::string("part '") + part + "'", file.filename};
-      }
+RequestBody BodyOf(const HttpRequest& req) {
+  if (req.IsMultipart()) {
+    for (const char* name : {"image", "features"}) {
+      if (const FormPart* part = req.Part(name))
+        return {part->content, part->content_type, std::string("part '") + name + "'",
+                part->filename};
     }
     throw HttpError{400, "multipart request without an 'image' or a 'features' part",
                     "bad_request"};
@@ -44,24 +43,24 @@ RequestBody BodyOf(const httplib::Request& req) {
                     "'image' part",
                     "bad_request"};
   }
-  return {req.body, req.get_header_value("Content-Type"), "body", ""};
+  return {req.body, req.Header("content-type"), "body", ""};
 }
 
-std::string OptionsPart(const httplib::Request& req) {
-  if (!req.is_multipart_form_data() || !req.has_file("options")) return "";
-  return req.files.find("options")->second.content;
+std::string OptionsPart(const HttpRequest& req) {
+  const FormPart* part = req.IsMultipart() ? req.Part("options") : nullptr;
+  return part != nullptr ? std::string(part->content) : "";
 }
 
-void SetJson(httplib::Response& res, const nlohmann::ordered_json& json) {
-  res.set_content(json.dump(), "application/json");
+void SetJson(HttpResponse& res, const nlohmann::ordered_json& json) {
+  res.SetContent(json.dump(), "application/json");
 }
 
-double ParamNumber(const httplib::Request& req, const char* name, std::optional<double> fallback) {
-  if (!req.has_param(name)) {
+double ParamNumber(const HttpRequest& req, const char* name, std::optional<double> fallback) {
+  if (req.params.count(name) == 0) {
     if (fallback) return *fallback;
     throw HttpError{400, std::string("give ?") + name + "=", "bad_request"};
   }
-  const std::string text = req.get_param_value(name);
+  const std::string text = req.Param(name);
   char* end = nullptr;
   const double value = std::strtod(text.c_str(), &end);
   if (text.empty() || *end != '\0' || !std::isfinite(value))
@@ -72,8 +71,8 @@ double ParamNumber(const httplib::Request& req, const char* name, std::optional<
 
 }  // namespace
 
-std::shared_ptr<const ServedIndex> Server::Impl::IndexOf(const httplib::Request& req) const {
-  const std::string name = req.get_param_value("index");
+std::shared_ptr<const ServedIndex> Server::Impl::IndexOf(const HttpRequest& req) const {
+  const std::string name = req.Param("index");
   std::shared_ptr<const ServedIndex> served = registry.Find(name);
   if (!served)
     throw HttpError{404, "no index named '" + name + "' (GET /v1/info lists them)", "not_found"};
@@ -113,88 +112,109 @@ void ServiceTimes::Add(bool photo, double seconds) {
   average = average == 0 ? seconds : 0.9 * average + 0.1 * seconds;
 }
 
-void Server::Impl::RunOnWorker(const std::function<void()>& job, bool photo,
-                               Clock::time_point deadline) {
-  std::exception_ptr error;
-  const std::function<void()> caught = [&] {
-    const Clock::time_point start = Clock::now();
-    try {
-      job();
-    } catch (...) {
-      error = std::current_exception();
-    }
-    service_times.Add(photo, std::chrono::duration<double>(Clock::now() - start).count());
-  };
-  const Clock::time_point start_by =
-      deadline -
-      std::chrono::microseconds(static_cast<int64_t>(service_times.Expected(photo) * 1e6));
-  switch (work.Run(caught, start_by)) {
-    case WorkQueue::Outcome::kDone:
-      break;
-    case WorkQueue::Outcome::kQueueFull:
-      throw HttpError{503, BusyMessage(work.capacity()), "overloaded"};
-    case WorkQueue::Outcome::kExpired:
-      throw HttpError{503,
-                      "busy: no worker was free early enough to answer within --budget-ms; retry "
-                      "later",
-                      "expired"};
-    case WorkQueue::Outcome::kStopped:
-      throw HttpError{503, "the server is stopping", "stopping"};
-  }
-  if (error) std::rethrow_exception(error);
+void Server::Impl::Defer(HttpResponse& res, std::function<void(HttpResponse&)> work, bool photo,
+                         Clock::time_point deadline) {
+  res.deferred = DeferredWork{std::move(work), photo, deadline};
 }
 
-void Server::Impl::Localize(const httplib::Request& req, httplib::Response& res) {
+void Server::Impl::RunDeferred(DeferredWork deferred, std::shared_ptr<HttpResponse> res,
+                               std::function<void()> done) {
+  // The work, its refusals as the response, its time for the next requests' deadlines.
+  auto job = std::make_shared<DeferredWork>(std::move(deferred));
+  const auto answer = [this, res](const HttpError& error) {
+    if (!error.kind.empty()) metrics.CountError(error.kind);
+    SetError(*res, error);
+  };
+  const auto run = [this, job, res, answer] {
+    const Clock::time_point start = Clock::now();
+    try {
+      job->work(*res);
+    } catch (const HttpError& e) {
+      answer(e);
+    } catch (const InputError& e) {
+      answer({400, e.what(), "bad_request"});
+    } catch (const std::bad_alloc&) {
+      answer({503, "out of memory", "out_of_memory"});
+    } catch (const std::exception& e) {
+      answer({500, std::string("internal error: ") + e.what(), "internal"});
+    }
+    service_times.Add(job->photo, std::chrono::duration<double>(Clock::now() - start).count());
+  };
+  const Clock::time_point start_by =
+      job->deadline -
+      std::chrono::microseconds(static_cast<int64_t>(service_times.Expected(job->photo) * 1e6));
+  work.Post(run, start_by, [this, answer, done](WorkQueue::Outcome outcome) {
+    switch (outcome) {
+      case WorkQueue::Outcome::kDone:
+        break;
+      case WorkQueue::Outcome::kQueueFull:
+        answer({503, BusyMessage(work.capacity()), "overloaded"});
+        break;
+      case WorkQueue::Outcome::kExpired:
+        answer({503,
+                "busy: no worker was free early enough to answer within --budget-ms; retry later",
+                "expired"});
+        break;
+      case WorkQueue::Outcome::kStopped:
+        answer({503, "the server is stopping", "stopping"});
+        break;
+    }
+    done();
+  });
+}
+
+void Server::Impl::Localize(const HttpRequest& req, HttpResponse& res) {
   const Clock::time_point deadline = DeadlineFrom(Clock::now());
   const std::shared_ptr<const ServedIndex> served = IndexOf(req);
   RequestInputs inputs = InputsOf(OptionsPart(req));
   const RequestBody body = BodyOf(req);
   if (!body.filename.empty() && inputs.name == "query") inputs.name = body.filename;
   const BodyKind kind = BodyKindOf(body.content_type, body.bytes);
-  nlohmann::ordered_json record;
-  RunOnWorker(
-      [&] {
+  // The request (and so the body's bytes) outlives the deferred work (http_server.h).
+  Defer(
+      res,
+      [this, served, inputs, body, kind, deadline](HttpResponse& answer) mutable {
         const Query query = QueryFromBody(body.bytes, kind, inputs, body.what);
         BoundByDeadline(deadline, &inputs.options);
         const LocalizationResult result =
             served->localizer.Localize(query, inputs.options.localizer);
         metrics.CountResult(result.success, result.times);
-        record = ResultToJson(result, inputs.options);
+        SetJson(answer, ResultToJson(result, inputs.options));
       },
       kind == BodyKind::kPhoto, deadline);
-  SetJson(res, record);
 }
 
-void Server::Impl::GeoPose(const httplib::Request& req, httplib::Response& res) {
+void Server::Impl::GeoPose(const HttpRequest& req, HttpResponse& res) {
   const Clock::time_point deadline = DeadlineFrom(Clock::now());
   RequestInputs inputs = InputsOf("");
-  const GeoPoseRequest request = ParseGeoPoseRequest(req.body, &inputs);
+  auto request = std::make_shared<const GeoPoseRequest>(ParseGeoPoseRequest(req.body, &inputs));
   const std::shared_ptr<const ServedIndex> served = IndexOf(req);
   if (!served->localizer.geo()) {
     throw HttpError{
         400, "index '" + served->spec.name + "' is not georeferenced (cwloc-index build --georef)",
         "bad_request"};
   }
-  inputs.name = request.id.empty() ? "geopose" : request.id;
-  std::optional<LocalizationResult> result;
-  RunOnWorker(
-      [&] {
+  inputs.name = request->id.empty() ? "geopose" : request->id;
+  Defer(
+      res,
+      [this, served, inputs, request, deadline](HttpResponse& answer) mutable {
         const Query query =
-            request.grey ? QueryFromGreyPixels(request.image, request.width, request.height, inputs,
-                                               "geopose image")
-                         : QueryFromBody(request.image, BodyKind::kPhoto, inputs, "geopose image");
+            request->grey
+                ? QueryFromGreyPixels(request->image, request->width, request->height, inputs,
+                                      "geopose image")
+                : QueryFromBody(request->image, BodyKind::kPhoto, inputs, "geopose image");
         BoundByDeadline(deadline, &inputs.options);
-        result = served->localizer.Localize(query, inputs.options.localizer);
-        metrics.CountResult(result->success, result->times);
+        const LocalizationResult result =
+            served->localizer.Localize(query, inputs.options.localizer);
+        metrics.CountResult(result.success, result.times);
+        if (!result.success)
+          throw HttpError{422, "not localized: " + result.failure_reason, "not_localized"};
+        SetJson(answer, GeoPoseResponse(request->id, result, served->localizer.geo()->frame()));
       },
       /*photo=*/true, deadline);
-  if (!result->success) {
-    throw HttpError{422, "not localized: " + result->failure_reason, "not_localized"};
-  }
-  SetJson(res, GeoPoseResponse(request.id, *result, served->localizer.geo()->frame()));
 }
 
-void Server::Impl::StartSession(const httplib::Request& req, httplib::Response& res) {
+void Server::Impl::StartSession(const HttpRequest& req, HttpResponse& res) {
   const std::shared_ptr<const ServedIndex> served = IndexOf(req);
   auto session = std::make_shared<Session>(served, InputsOf(req.body));
   const std::string id = sessions.Add(session);
@@ -210,7 +230,7 @@ void Server::Impl::StartSession(const httplib::Request& req, httplib::Response& 
   SetJson(res, answer);
 }
 
-void Server::Impl::SessionFrame(const httplib::Request& req, httplib::Response& res) {
+void Server::Impl::SessionFrame(const HttpRequest& req, HttpResponse& res) {
   const Clock::time_point deadline = DeadlineFrom(Clock::now());
   const std::string id = req.matches[1];
   const std::shared_ptr<Session> session = sessions.Find(id);
@@ -233,32 +253,34 @@ void Server::Impl::SessionFrame(const httplib::Request& req, httplib::Response& 
   }
   const RequestBody body = BodyOf(req);
   if (!body.filename.empty() && inputs.name == session->inputs.name) inputs.name = body.filename;
-  std::unique_lock<std::mutex> one_frame(session->busy, std::try_to_lock);
-  if (!one_frame.owns_lock()) {
+  if (session->busy.exchange(true)) {
     throw HttpError{409, "session '" + id + "' is still tracking its previous frame",
                     "session_busy"};
   }
+  // Frees the session for its next frame when the frame is answered or turned away.
+  const std::shared_ptr<void> one_frame(nullptr, [session](void*) { session->busy = false; });
   const BodyKind kind = BodyKindOf(body.content_type, body.bytes);
-  nlohmann::ordered_json record;
-  RunOnWorker(
-      [&] {
+  Defer(
+      res,
+      [this, session, inputs, body, kind, one_frame](HttpResponse& answer) mutable {
+        // Released as the frame's answer is made, before the client can send the next.
+        const std::shared_ptr<void> frame = std::move(one_frame);
         const Query query = QueryFromBody(body.bytes, kind, inputs, body.what);
         const LocalizationResult result =
             session->tracker.Track(query, inputs.timestamp, inputs.motion);
         metrics.CountResult(result.success, result.times);
-        record = ResultToJson(result, session->inputs.options);
+        SetJson(answer, ResultToJson(result, session->inputs.options));
       },
       kind == BodyKind::kPhoto, deadline);
-  SetJson(res, record);
 }
 
-void Server::Impl::EndSession(const httplib::Request& req, httplib::Response& res) {
+void Server::Impl::EndSession(const HttpRequest& req, HttpResponse& res) {
   const std::string id = req.matches[1];
   if (!sessions.Remove(id)) throw HttpError{404, "no session '" + id + "'", "not_found"};
   res.status = 204;
 }
 
-void Server::Impl::Coverage(const httplib::Request& req, httplib::Response& res) {
+void Server::Impl::Coverage(const HttpRequest& req, HttpResponse& res) {
   const double latitude = ParamNumber(req, "lat", std::nullopt);
   const double longitude = ParamNumber(req, "lon", std::nullopt);
   const double radius = ParamNumber(req, "radius", kDefaultExifGpsRadiusM);
@@ -279,20 +301,20 @@ void Server::Impl::Coverage(const httplib::Request& req, httplib::Response& res)
   SetJson(res, answer);
 }
 
-void Server::Impl::Info(const httplib::Request&, httplib::Response& res) {
+void Server::Impl::Info(const HttpRequest&, HttpResponse& res) {
   nlohmann::ordered_json answer;
   answer["indexes"] = nlohmann::json::array();
   for (const auto& served : registry.All()) answer["indexes"].push_back(served->Info());
   answer["default_index"] = answer["indexes"][0]["name"];
   answer["threads"] = work.threads();
   answer["queue"] = work.capacity();
-  answer["max_body_bytes"] = options.max_body_bytes;
+  answer["max_body_bytes"] = options.http.max_body_bytes;
   answer["session_ttl_s"] = options.session_ttl_s;
   answer["parameters"] = OptionsToJson(options.defaults);
   SetJson(res, answer);
 }
 
-void Server::Impl::Map(const httplib::Request& req, httplib::Response& res) {
+void Server::Impl::Map(const HttpRequest& req, HttpResponse& res) {
   const std::shared_ptr<const ServedIndex> served = IndexOf(req);
   const Index& index = served->index;
   const double wanted = ParamNumber(req, "max_points", 50000);

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <map>
 #include <new>
 #include <nlohmann/json.hpp>
 #include <thread>
@@ -18,10 +19,6 @@ namespace cwloc {
 namespace {
 
 using Clock = WorkQueue::Clock;
-
-// When this thread's request began, for its latency (httplib calls the pre-routing handler,
-// the handler and the logger on one thread).
-thread_local Clock::time_point request_start;
 
 // The endpoint a path counts under in /metrics: a session's id is left out.
 std::string EndpointOf(const std::string& path) {
@@ -47,40 +44,19 @@ bool ConstantTimeEqual(const std::string& a, const std::string& b) {
   return difference == 0;
 }
 
-std::string StatusWord(int status) {
-  switch (status) {
-    case 400:
-      return "a malformed request";
-    case 404:
-      return "no such endpoint";
-    case 405:
-      return "method not allowed";
-    case 408:
-      return "the request was not read in time";
-    case 413:
-      return "the body is too large";
-    case 414:
-      return "the URI is too long";
-    case 416:
-      return "range not satisfiable";
-    default:
-      return "HTTP error";
-  }
-}
-
 }  // namespace
 
 std::string BusyMessage(size_t capacity) {
   return "busy: " + std::to_string(capacity) + " queries wait already (--queue); retry later";
 }
 
-void SetError(httplib::Response& res, const HttpError& error) {
+void SetError(HttpResponse& res, const HttpError& error) {
   res.status = error.status;
   nlohmann::ordered_json body;
   body["error"] = error.message;
   body["status"] = error.status;
-  res.set_content(body.dump(), "application/json");
-  if (error.status == 503) res.set_header("Retry-After", "1");
+  res.SetContent(body.dump(), "application/json");
+  if (error.status == 503) res.SetHeader("Retry-After", "1");
 }
 
 Server::Impl::Impl(ServeOptions options_in)
@@ -100,10 +76,12 @@ ServeOptions Checked(ServeOptions options) {
   if (options.threads < 1 || options.threads > 1024)
     throw InputError("--threads must be between 1 and 1024");
   if (options.queue == 0) options.queue = 4 * static_cast<size_t>(options.threads);
-  if (options.max_connections < 1 || options.max_connections > 10000)
+  const HttpLimits& http = options.http;
+  if (http.max_connections < 1 || http.max_connections > 10000)
     throw InputError("--max-connections must be between 1 and 10000");
-  if (!(options.read_timeout_s > 0) || !(options.write_timeout_s > 0))
-    throw InputError("--read-timeout and --write-timeout must be more than 0 seconds");
+  if (!(http.request_timeout_s > 0) || !(http.write_timeout_s > 0))
+    throw InputError("--request-timeout and --write-timeout must be more than 0 seconds");
+  if (!(http.min_body_rate > 0)) throw InputError("--min-body-rate must be more than 0");
   if (!(options.session_ttl_s > 0)) throw InputError("--session-ttl must be more than 0 seconds");
   // One query per worker: a photo's SIFT runs on the worker's thread alone.
   options.defaults.photo.sift.num_threads = 1;
@@ -114,187 +92,176 @@ ServeOptions Checked(ServeOptions options) {
 
 Server::Server(ServeOptions options) {
   impl_ = std::make_unique<Impl>(Checked(std::move(options)));
-  impl_->ConfigureHttp();
-  impl_->SetHooks();
-  impl_->SetRoutes(*this);
+  impl_->http = std::make_unique<HttpServer>(impl_->options.http, impl_->Callbacks(*this));
 }
 
-void Server::Impl::ConfigureHttp() {
-  const size_t connections = options.max_connections;
-  http.new_task_queue = [connections] { return new httplib::ThreadPool(connections); };
-  http.set_payload_max_length(options.max_body_bytes);
-  const auto micros = [](double seconds) {
-    return std::chrono::microseconds(static_cast<int64_t>(seconds * 1e6));
+HttpCallbacks Server::Impl::Callbacks(Server& server) {
+  HttpCallbacks callbacks;
+  callbacks.screen = [this](const HttpRequest& req) { return Screen(req); };
+  callbacks.handle = [this, &server](HttpRequest& req, HttpResponse& res) {
+    Route(server, req, res);
   };
-  http.set_read_timeout(micros(options.read_timeout_s));
-  http.set_write_timeout(micros(options.write_timeout_s));
-  http.set_tcp_nodelay(true);  // else Nagle holds a response's body back ~40 ms (measured)
-  http.set_keep_alive_timeout(5);
-  http.set_keep_alive_max_count(1000);
+  callbacks.defer = [this](DeferredWork deferred, std::shared_ptr<HttpResponse> res,
+                           std::function<void()> done) {
+    RunDeferred(std::move(deferred), std::move(res), std::move(done));
+  };
+  callbacks.error = [this](int status, const std::string& message, const std::string& kind) {
+    if (!kind.empty()) metrics.CountError(kind);
+    HttpResponse res;
+    AllowOrigin(res);
+    SetError(res, {status, message, kind});
+    return res;
+  };
+  callbacks.log = [this](const HttpRequest& req, const HttpResponse& res, double seconds) {
+    Log(req, res, seconds);
+  };
+  return callbacks;
 }
 
-httplib::Server::HandlerResponse Server::Impl::PreRoute(const httplib::Request& req,
-                                                        httplib::Response& res) {
-  request_start = Clock::now();
-  // curl --data-binary sends any body as a form unless told otherwise, and httplib caps forms
-  // at 8 KB: our API takes no forms, so such a body is read as the bytes it is. (The request
-  // is httplib's own, not const; its body is read after this handler.)
-  if (req.get_header_value("Content-Type") == "application/x-www-form-urlencoded") {
-    auto& headers = const_cast<httplib::Request&>(req).headers;
-    headers.erase("Content-Type");
-    headers.emplace("Content-Type", "application/octet-stream");
-  }
-  // No compression: Debian's cpp-httplib compresses with Brotli at its highest quality, 1.6 s
-  // of a connection thread for three.js's 850 KB (measured), outside --threads. A proxy in
-  // front compresses if the network needs it (docs/serve.md).
-  const_cast<httplib::Request&>(req).headers.erase("Accept-Encoding");
+// Every answer, errors too: a browser hides an answer without it from the page.
+void Server::Impl::AllowOrigin(HttpResponse& res) const {
+  if (!options.allow_origin.empty())
+    res.SetHeader("Access-Control-Allow-Origin", options.allow_origin);
+}
+
+std::optional<HttpResponse> Server::Impl::Screen(const HttpRequest& req) {
+  HttpResponse res;
+  AllowOrigin(res);
   if (!options.allow_origin.empty()) {
-    res.set_header("Access-Control-Allow-Origin", options.allow_origin);
     if (req.method == "OPTIONS") {
-      res.set_header("Access-Control-Allow-Methods", "GET, POST, DELETE, OPTIONS");
-      res.set_header("Access-Control-Allow-Headers", "Authorization, Content-Type");
-      res.set_header("Access-Control-Max-Age", "600");
+      res.SetHeader("Access-Control-Allow-Methods", "GET, POST, DELETE, OPTIONS");
+      res.SetHeader("Access-Control-Allow-Headers", "Authorization, Content-Type");
+      res.SetHeader("Access-Control-Max-Age", "600");
       res.status = 204;
-      return httplib::Server::HandlerResponse::Handled;
+      return res;
     }
   }
   // The viewer's files hold no map data; the page asks for the token itself.
   const bool static_file =
       req.method == "GET" && (req.path == "/" || req.path.rfind("/viewer/", 0) == 0);
   if (!options.token.empty() && !static_file) {
-    const std::string header = req.get_header_value("Authorization");
+    const std::string header = req.Header("authorization");
     const std::string prefix = "Bearer ";
     if (header.rfind(prefix, 0) != 0 ||
         !ConstantTimeEqual(header.substr(prefix.size()), options.token)) {
       metrics.CountError("unauthorized");
       SetError(res, {401, "this server needs 'Authorization: Bearer TOKEN'", "unauthorized"});
-      res.set_header("WWW-Authenticate", "Bearer");
-      return httplib::Server::HandlerResponse::Handled;
+      res.SetHeader("WWW-Authenticate", "Bearer");
+      return res;
     }
   }
   // A query that would find the queue full is turned away before its body is read: under
   // overload, reading and parsing the bodies of requests that get 503 anyway took the cores
-  // the queries needed (half the throughput at twice the sustainable rate, measured). The
-  // unread body ends the connection.
+  // the queries needed (half the throughput at twice the sustainable rate, measured).
   if (req.method == "POST" && (req.path == "/v1/localize" || req.path == "/v1/geopose" ||
                                (req.path.rfind("/v1/sessions/", 0) == 0))) {
     if (work.queued() >= work.capacity()) {
       metrics.CountError("overloaded");
       SetError(res, {503, BusyMessage(work.capacity()), "overloaded"});
-      res.set_header("Connection", "close");
-      return httplib::Server::HandlerResponse::Handled;
+      return res;
     }
   }
-  return httplib::Server::HandlerResponse::Unhandled;
+  return std::nullopt;
 }
 
-void Server::Impl::SetHooks() {
-  http.set_pre_routing_handler(
-      [this](const httplib::Request& req, httplib::Response& res) { return PreRoute(req, res); });
-  // httplib's own refusals (404, 413, 400, ...) get a JSON body too.
-  http.set_error_handler(httplib::Server::HandlerWithResponse(
-      [this](const httplib::Request& req, httplib::Response& res) {
-        if (!res.body.empty()) return httplib::Server::HandlerResponse::Unhandled;
-        std::string message = StatusWord(res.status);
-        if (res.status == 404) message += ": " + req.method + " " + req.path;
-        if (res.status == 413)
-          message += ": over --max-body-mb (" + std::to_string(options.max_body_bytes) + " bytes)";
-        metrics.CountError(res.status == 404   ? "not_found"
-                           : res.status == 413 ? "too_large"
-                                               : "bad_request");
-        SetError(res, {res.status, message, ""});
-        return httplib::Server::HandlerResponse::Handled;
-      }));
-  http.set_exception_handler(
-      [this](const httplib::Request&, httplib::Response& res, std::exception_ptr error) {
-        std::string what = "unknown exception";
-        try {
-          std::rethrow_exception(error);
-        } catch (const std::exception& e) {
-          what = e.what();
-        } catch (...) {
-        }
-        metrics.CountError("internal");
-        SetError(res, {500, "internal error: " + what, "internal"});
-      });
-  http.set_logger([this](const httplib::Request& req, const httplib::Response& res) {
-    const double seconds = std::chrono::duration<double>(Clock::now() - request_start).count();
-    metrics.CountRequest(EndpointOf(req.path), res.status, seconds);
-    if (!options.quiet) {
-      std::fprintf(stderr, "cwloc-serve: %s %s %d %.1f ms\n", req.method.c_str(), req.path.c_str(),
-                   res.status, seconds * 1e3);
-    }
-  });
+void Server::Impl::Log(const HttpRequest& req, const HttpResponse& res, double seconds) {
+  metrics.CountRequest(EndpointOf(req.path), res.status, seconds);
+  if (!options.quiet) {
+    std::fprintf(stderr, "cwloc-serve: %s %s %d %.1f ms\n", req.method.c_str(), req.path.c_str(),
+                 res.status, seconds * 1e3);
+  }
 }
 
-void Server::Impl::SetRoutes(Server& server) {
-  // Each handler's refusals become their status and a JSON error.
-  const auto handled = [this](void (Impl::*handler)(const httplib::Request&, httplib::Response&)) {
-    return [this, handler](const httplib::Request& req, httplib::Response& res) {
-      try {
-        (this->*handler)(req, res);
-      } catch (const HttpError& e) {
-        if (!e.kind.empty()) metrics.CountError(e.kind);
-        SetError(res, e);
-      } catch (const InputError& e) {
-        metrics.CountError("bad_request");
-        SetError(res, {400, e.what(), "bad_request"});
-      } catch (const std::bad_alloc&) {
-        metrics.CountError("out_of_memory");
-        SetError(res, {503, "out of memory", "out_of_memory"});
-      }
-    };
-  };
-  http.Post("/v1/localize", handled(&Impl::Localize));
-  http.Post("/v1/geopose", handled(&Impl::GeoPose));
-  http.Post("/v1/sessions", handled(&Impl::StartSession));
-  http.Post(R"(/v1/sessions/([0-9a-f]+)/frames)", handled(&Impl::SessionFrame));
-  http.Delete(R"(/v1/sessions/([0-9a-f]+))", handled(&Impl::EndSession));
-  http.Get("/v1/coverage", handled(&Impl::Coverage));
-  http.Get("/v1/info", handled(&Impl::Info));
-  http.Get("/v1/map", handled(&Impl::Map));
-  http.Post("/v1/admin/reload", [this, &server](const httplib::Request&, httplib::Response& res) {
-    if (options.token.empty()) {
-      SetError(res,
-               {403, "reloading over HTTP needs --token-file (SIGHUP reloads too)", "forbidden"});
-      return;
+void Server::Impl::MetricsPage(HttpResponse& res) {
+  const std::vector<Metrics::Gauge> gauges = {
+      {"cwloc_queue_depth", "Queries waiting for a worker.", static_cast<double>(work.queued())},
+      {"cwloc_queue_capacity", "Queries that may wait (--queue).",
+       static_cast<double>(work.capacity())},
+      {"cwloc_workers_busy", "Workers running a query.", static_cast<double>(work.busy())},
+      {"cwloc_workers", "Query workers (--threads).", static_cast<double>(work.threads())},
+      {"cwloc_connections", "Connections open (--max-connections).",
+       static_cast<double>(http->connections())},
+      {"cwloc_sessions", "Open sessions.", static_cast<double>(sessions.size())},
+      {"cwloc_index_generation", "Reloads of the index files so far.",
+       static_cast<double>(registry.generation())}};
+  res.SetContent(metrics.Text(gauges), "text/plain; version=0.0.4");
+}
+
+void Server::Impl::ViewerFile(const ViewerAsset& asset, HttpResponse& res) {
+  // From --viewer-dir at every request, so that an edited viewer shows on reload; the built-in
+  // copy of a file the folder lacks (three.js).
+  std::ifstream in;
+  if (!options.viewer_dir.empty())
+    in.open(std::filesystem::path(options.viewer_dir) / asset.file, std::ios::binary);
+  if (in.is_open()) {
+    res.SetContent(std::string(std::istreambuf_iterator<char>(in), {}), asset.content_type);
+  } else {
+    res.SetContent(std::string(asset.bytes.begin(), asset.bytes.end()), asset.content_type);
+  }
+}
+
+void Server::Impl::AdminReload(Server& server, HttpResponse& res) {
+  if (options.token.empty()) {
+    throw HttpError{403, "reloading over HTTP needs --token-file (SIGHUP reloads too)",
+                    "forbidden"};
+  }
+  if (!server.Reload()) {
+    throw HttpError{500, "reload failed; the old indexes stay (the reason is on stderr)",
+                    "reload_failed"};
+  }
+  res.SetContent(nlohmann::json{{"generation", registry.generation()}}.dump(), "application/json");
+}
+
+namespace {
+
+// A session's id in /v1/sessions/ID[/frames]: hex digits; empty when the path is no such.
+std::string SessionId(const std::string& path, bool frames) {
+  const std::string prefix = "/v1/sessions/", suffix = frames ? "/frames" : "";
+  if (path.rfind(prefix, 0) != 0 || path.size() <= prefix.size() + suffix.size() ||
+      path.compare(path.size() - suffix.size(), suffix.size(), suffix) != 0)
+    return "";
+  const std::string id = path.substr(prefix.size(), path.size() - prefix.size() - suffix.size());
+  return id.find_first_not_of("0123456789abcdef") == std::string::npos ? id : "";
+}
+
+}  // namespace
+
+void Server::Impl::Route(Server& server, HttpRequest& req, HttpResponse& res) {
+  using Handler = void (Impl::*)(const HttpRequest&, HttpResponse&);
+  static const std::map<std::pair<std::string, std::string>, Handler> kRoutes = {
+      {{"POST", "/v1/localize"}, &Impl::Localize},
+      {{"POST", "/v1/geopose"}, &Impl::GeoPose},
+      {{"POST", "/v1/sessions"}, &Impl::StartSession},
+      {{"GET", "/v1/coverage"}, &Impl::Coverage},
+      {{"GET", "/v1/info"}, &Impl::Info},
+      {{"GET", "/v1/map"}, &Impl::Map}};
+  AllowOrigin(res);
+  try {
+    if (const auto found = kRoutes.find({req.method, req.path}); found != kRoutes.end())
+      return (this->*found->second)(req, res);
+    if (req.method == "POST" && !SessionId(req.path, true).empty()) {
+      req.matches = {req.path, SessionId(req.path, true)};
+      return SessionFrame(req, res);
     }
-    if (!server.Reload()) {
-      SetError(res, {500, "reload failed; the old indexes stay (the reason is on stderr)",
-                     "reload_failed"});
-      return;
+    if (req.method == "DELETE" && !SessionId(req.path, false).empty()) {
+      req.matches = {req.path, SessionId(req.path, false)};
+      return EndSession(req, res);
     }
-    res.set_content(nlohmann::json{{"generation", registry.generation()}}.dump(),
-                    "application/json");
-  });
-  http.Get("/healthz", [](const httplib::Request&, httplib::Response& res) {
-    res.set_content("ok\n", "text/plain");
-  });
-  http.Get("/metrics", [this](const httplib::Request&, httplib::Response& res) {
-    const std::vector<Metrics::Gauge> gauges = {
-        {"cwloc_queue_depth", "Queries waiting for a worker.", static_cast<double>(work.queued())},
-        {"cwloc_queue_capacity", "Queries that may wait (--queue).",
-         static_cast<double>(work.capacity())},
-        {"cwloc_workers_busy", "Workers running a query.", static_cast<double>(work.busy())},
-        {"cwloc_workers", "Query workers (--threads).", static_cast<double>(work.threads())},
-        {"cwloc_sessions", "Open sessions.", static_cast<double>(sessions.size())},
-        {"cwloc_index_generation", "Reloads of the index files so far.",
-         static_cast<double>(registry.generation())}};
-    res.set_content(metrics.Text(gauges), "text/plain; version=0.0.4");
-  });
-  for (const ViewerAsset& asset : ViewerAssets()) {
-    http.Get(asset.path, [&asset, this](const httplib::Request&, httplib::Response& res) {
-      // From --viewer-dir at every request, so that an edited viewer shows on reload; the
-      // built-in copy of a file the folder lacks (three.js).
-      std::ifstream in;
-      if (!options.viewer_dir.empty())
-        in.open(std::filesystem::path(options.viewer_dir) / asset.file, std::ios::binary);
-      if (in.is_open()) {
-        res.set_content(std::string(std::istreambuf_iterator<char>(in), {}), asset.content_type);
-      } else {
-        res.set_content(asset.bytes.data(), asset.bytes.size(), asset.content_type);
-      }
-    });
+    if (req.method == "POST" && req.path == "/v1/admin/reload") return AdminReload(server, res);
+    if (req.method == "GET" && req.path == "/healthz") return res.SetContent("ok\n", "text/plain");
+    if (req.method == "GET" && req.path == "/metrics") return MetricsPage(res);
+    for (const ViewerAsset& asset : ViewerAssets())
+      if (req.method == "GET" && req.path == asset.path) return ViewerFile(asset, res);
+    throw HttpError{404, "no such endpoint: " + req.method + " " + req.path, "not_found"};
+  } catch (const HttpError& e) {
+    if (!e.kind.empty()) metrics.CountError(e.kind);
+    SetError(res, e);
+  } catch (const InputError& e) {
+    metrics.CountError("bad_request");
+    SetError(res, {400, e.what(), "bad_request"});
+  } catch (const std::bad_alloc&) {
+    metrics.CountError("out_of_memory");
+    SetError(res, {503, "out of memory", "out_of_memory"});
   }
 }
 
@@ -304,22 +271,17 @@ int Server::Bind() {
   Impl& s = *impl_;
   if (s.options.port < 0 || s.options.port > 65535)
     throw InputError("--listen: port " + std::to_string(s.options.port) + " is not in 0..65535");
-  int port = s.options.port;
-  if (port == 0) {
-    port = s.http.bind_to_any_port(s.options.host);
-  } else if (!s.http.bind_to_port(s.options.host, port)) {
-    port = -1;
-  }
-  if (port < 0) {
+  const std::optional<int> port = s.http->Bind(s.options.host, s.options.port);
+  if (!port) {
     throw InputError("--listen " + s.options.host + ":" + std::to_string(s.options.port) +
                      ": cannot bind (in use, or not an address of this machine)");
   }
-  return port;
+  return *port;
 }
 
-void Server::Serve() { impl_->http.listen_after_bind(); }
+void Server::Serve() { impl_->http->Serve(); }
 
-void Server::Stop() { impl_->http.stop(); }
+void Server::Stop() { impl_->http->Stop(); }
 
 bool Server::Reload() {
   try {

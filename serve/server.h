@@ -1,7 +1,7 @@
 #pragma once
 
-// cwloc-serve: localization over HTTP/1.1 (docs/serve.md). cpp-httplib parses HTTP and runs
-// connections on a pool of its own; queries run on a WorkQueue of --threads workers.
+// cwloc-serve: localization over HTTP/1.1 (docs/serve.md). One thread reads and writes every
+// connection (http_server.h); queries run on a WorkQueue of --threads workers.
 
 #include <cstddef>
 #include <memory>
@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "io/option_table.h"
+#include "serve/http_server.h"
 #include "serve/index_registry.h"
 
 namespace cwloc {
@@ -16,13 +17,10 @@ namespace cwloc {
 struct ServeOptions {
   std::vector<IndexSpec> indexes;  // the first is the default
   std::string host = "127.0.0.1";
-  int port = 8080;              // 0: a free port (Bind returns it)
-  int threads = 0;              // query workers; 0: the cores
-  size_t queue = 0;             // queries waiting for a worker; 0: 4 per worker
-  size_t max_connections = 64;  // connections read and answered at once
-  size_t max_body_bytes = 32 << 20;
-  double read_timeout_s = 10;  // a client that sends nothing for this long is dropped
-  double write_timeout_s = 10;
+  int port = 8080;             // 0: a free port (Bind returns it)
+  int threads = 0;             // query workers; 0: the cores
+  size_t queue = 0;            // queries waiting for a worker; 0: 4 per worker
+  HttpLimits http;             // connections, body and header sizes, deadlines
   double session_ttl_s = 300;  // a session unused for this long ends
   size_t max_sessions = 1024;
   std::string token;         // when set, requests need "Authorization: Bearer TOKEN"

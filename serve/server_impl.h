@@ -3,8 +3,6 @@
 // What Server's two files share: its state, and the request handlers (handlers.cc) that
 // server.cc routes to.
 
-#include <httplib.h>
-
 #include <chrono>
 #include <functional>
 #include <memory>
@@ -12,11 +10,13 @@
 #include <optional>
 #include <string>
 
+#include "serve/http_server.h"
 #include "serve/index_registry.h"
 #include "serve/metrics.h"
 #include "serve/request_inputs.h"
 #include "serve/server.h"
 #include "serve/sessions.h"
+#include "serve/viewer_assets.h"
 #include "serve/work_queue.h"
 
 namespace cwloc {
@@ -32,7 +32,7 @@ struct HttpError {
 std::string BusyMessage(size_t capacity);
 
 // Sets a JSON error body {"error": message, "status": status}.
-void SetError(httplib::Response& res, const HttpError& error);
+void SetError(HttpResponse& res, const HttpError& error);
 
 // Recent queries' seconds on a worker, for photos and for features (a photo's SIFT takes 20-50
 // times a query's matching): how long before its deadline a waiting request must start to
@@ -51,34 +51,40 @@ class ServiceTimes {
 struct Server::Impl {
   explicit Impl(ServeOptions options_in);
 
-  // Server::Server's stages (server.cc): httplib's limits and timeouts; the hooks every request
-  // passes (before routing, httplib's refusals, exceptions, the log line); the routes, whose
-  // /v1/admin/reload calls `server`'s Reload.
-  void ConfigureHttp();
-  void SetHooks();
-  void SetRoutes(Server& server);
-  // Before routing: CORS, the token, and a query turned away while the queue is full.
-  httplib::Server::HandlerResponse PreRoute(const httplib::Request& req, httplib::Response& res);
+  // The HTTP layer's callbacks (server.cc): a request screened before its body is read (CORS,
+  // the token, a query turned away while the queue is full), routed, its deferred work run on
+  // a worker, a refusal made, an answer logged.
+  HttpCallbacks Callbacks(Server& server);
+  std::optional<HttpResponse> Screen(const HttpRequest& req);
+  void AllowOrigin(HttpResponse& res) const;
+  void Route(Server& server, HttpRequest& req, HttpResponse& res);
+  void RunDeferred(DeferredWork work, std::shared_ptr<HttpResponse> res,
+                   std::function<void()> done);
+  void Log(const HttpRequest& req, const HttpResponse& res, double seconds);
+  // GET /metrics, the viewer's files, POST /v1/admin/reload.
+  void MetricsPage(HttpResponse& res);
+  void ViewerFile(const ViewerAsset& asset, HttpResponse& res);
+  void AdminReload(Server& server, HttpResponse& res);
 
-  // /v1/localize, /v1/geopose, /v1/sessions..., /v1/coverage, /v1/info, /v1/map.
-  void Localize(const httplib::Request& req, httplib::Response& res);
-  void GeoPose(const httplib::Request& req, httplib::Response& res);
-  void StartSession(const httplib::Request& req, httplib::Response& res);
-  void SessionFrame(const httplib::Request& req, httplib::Response& res);
-  void EndSession(const httplib::Request& req, httplib::Response& res);
-  void Coverage(const httplib::Request& req, httplib::Response& res);
-  void Info(const httplib::Request& req, httplib::Response& res);
-  void Map(const httplib::Request& req, httplib::Response& res);
+  // /v1/localize, /v1/geopose, /v1/sessions..., /v1/coverage, /v1/info, /v1/map (handlers.cc).
+  void Localize(const HttpRequest& req, HttpResponse& res);
+  void GeoPose(const HttpRequest& req, HttpResponse& res);
+  void StartSession(const HttpRequest& req, HttpResponse& res);
+  void SessionFrame(const HttpRequest& req, HttpResponse& res);
+  void EndSession(const HttpRequest& req, HttpResponse& res);
+  void Coverage(const HttpRequest& req, HttpResponse& res);
+  void Info(const HttpRequest& req, HttpResponse& res);
+  void Map(const HttpRequest& req, HttpResponse& res);
 
   // The request's ?index=, or the default; throws HttpError 404.
-  std::shared_ptr<const ServedIndex> IndexOf(const httplib::Request& req) const;
+  std::shared_ptr<const ServedIndex> IndexOf(const HttpRequest& req) const;
   // The server's defaults, and the request's options part or body when it has one.
   RequestInputs InputsOf(const std::string& options_json) const;
-  // Runs `work` (a photo's query, or features') on a worker within the request's deadline;
-  // throws HttpError 503 when the queue is full or no worker is free early enough to finish
-  // by the deadline. `work` may throw HttpError or InputError.
-  void RunOnWorker(const std::function<void()>& work, bool photo,
-                   WorkQueue::Clock::time_point deadline);
+  // Answers with `work` (a photo's query, or features') run on a worker within the request's
+  // deadline; 503 when the queue is full or no worker is free early enough to finish by the
+  // deadline. `work` fills the response, or throws HttpError or InputError.
+  static void Defer(HttpResponse& res, std::function<void(HttpResponse&)> work, bool photo,
+                    WorkQueue::Clock::time_point deadline);
   // The request's deadline under --budget-ms (far away without one).
   WorkQueue::Clock::time_point DeadlineFrom(WorkQueue::Clock::time_point start) const;
   // The localizer's budget for a query whose features are known now: the request's rest.
@@ -91,7 +97,7 @@ struct Server::Impl {
   SessionTable sessions;
   ServiceTimes service_times;
   Metrics metrics;
-  httplib::Server http;
+  std::unique_ptr<HttpServer> http;  // made by Server::Server with Callbacks
 };
 
 }  // namespace cwloc

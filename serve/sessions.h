@@ -4,6 +4,7 @@
 // session, on the index the session began with. A session not used for its time to live is
 // dropped; there are at most a fixed number at once.
 
+#include <atomic>
 #include <chrono>
 #include <cstdint>
 #include <map>
@@ -25,7 +26,7 @@ struct Session {
 
   std::shared_ptr<const ServedIndex> index;  // kept while the session lives, across reloads
   RequestInputs inputs;                      // every frame's defaults
-  std::mutex busy;                           // one frame at a time
+  std::atomic<bool> busy{false};             // a frame is in flight: one at a time
   Tracker tracker;
 };
 

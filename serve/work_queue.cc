@@ -1,17 +1,20 @@
 #include "serve/work_queue.h"
 
 #include <algorithm>
+#include <future>
+#include <optional>
 
 namespace cwloc {
 
 struct WorkQueue::Task {
-  const std::function<void()>* work = nullptr;
-  enum class State { kWaiting, kRunning, kDone } state = State::kWaiting;
-  std::condition_variable done;
+  std::function<void()> work;
+  std::function<void(Outcome)> done;
+  Clock::time_point deadline;
 };
 
 WorkQueue::WorkQueue(int threads, size_t capacity) : capacity_(capacity) {
   for (int i = 0; i < threads; ++i) workers_.emplace_back([this] { Work(); });
+  timer_ = std::thread([this] { Expire(); });
 }
 
 WorkQueue::~WorkQueue() {
@@ -20,24 +23,31 @@ WorkQueue::~WorkQueue() {
     stopping_ = true;
   }
   work_ready_.notify_all();
+  deadlines_changed_.notify_all();
   for (std::thread& worker : workers_) worker.join();
+  timer_.join();
+}
+
+void WorkQueue::Post(std::function<void()> work, Clock::time_point deadline,
+                     std::function<void(Outcome)> done) {
+  auto task = std::make_shared<Task>(Task{std::move(work), std::move(done), deadline});
+  std::optional<Outcome> refused;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (stopping_ || queue_.size() >= capacity_)
+      refused = stopping_ ? Outcome::kStopped : Outcome::kQueueFull;
+    else
+      queue_.push_back(task);
+  }
+  if (refused) return task->done(*refused);
+  work_ready_.notify_one();
+  deadlines_changed_.notify_one();
 }
 
 WorkQueue::Outcome WorkQueue::Run(const std::function<void()>& work, Clock::time_point deadline) {
-  auto task = std::make_shared<Task>();
-  task->work = &work;
-  std::unique_lock<std::mutex> lock(mutex_);
-  if (stopping_) return Outcome::kStopped;
-  if (queue_.size() >= capacity_) return Outcome::kQueueFull;
-  queue_.push_back(task);
-  work_ready_.notify_one();
-  if (!task->done.wait_until(lock, deadline,
-                             [&] { return task->state != Task::State::kWaiting; })) {
-    queue_.erase(std::find(queue_.begin(), queue_.end(), task));
-    return Outcome::kExpired;
-  }
-  task->done.wait(lock, [&] { return task->state == Task::State::kDone; });
-  return Outcome::kDone;
+  std::promise<Outcome> outcome;
+  Post(work, deadline, [&](Outcome done) { outcome.set_value(done); });
+  return outcome.get_future().get();
 }
 
 size_t WorkQueue::queued() const {
@@ -57,15 +67,34 @@ void WorkQueue::Work() {
     if (queue_.empty()) return;  // stopping, nothing left
     std::shared_ptr<Task> task = std::move(queue_.front());
     queue_.pop_front();
-    task->state = Task::State::kRunning;
     ++busy_;
-    task->done.notify_one();
     lock.unlock();
-    (*task->work)();
+    task->work();
+    task->done(Outcome::kDone);
     lock.lock();
     --busy_;
-    task->state = Task::State::kDone;
-    task->done.notify_one();
+  }
+}
+
+void WorkQueue::Expire() {
+  std::unique_lock<std::mutex> lock(mutex_);
+  while (!stopping_) {
+    const auto earliest =
+        std::min_element(queue_.begin(), queue_.end(),
+                         [](const auto& a, const auto& b) { return a->deadline < b->deadline; });
+    if (earliest == queue_.end()) {
+      deadlines_changed_.wait(lock);
+      continue;
+    }
+    if (Clock::now() < (*earliest)->deadline) {
+      deadlines_changed_.wait_until(lock, (*earliest)->deadline);
+      continue;
+    }
+    std::shared_ptr<Task> expired = std::move(*earliest);
+    queue_.erase(earliest);
+    lock.unlock();
+    expired->done(Outcome::kExpired);
+    lock.lock();
   }
 }
 

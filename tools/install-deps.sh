@@ -16,9 +16,10 @@ packages=(
   # Video files (cwloc-localize --video; never in the device build), and ffmpeg to make the
   # tests' videos.
   libavformat-dev libavcodec-dev libavutil-dev libswscale-dev ffmpeg
-  # cwloc-serve (docs/serve.md): its HTTP library and the viewer's three.js; wrk for its load
+  # cwloc-serve (docs/serve.md): Boost.Beast (header-only) and the viewer's three.js; the
+  # tests' HTTP client (cpp-httplib), nginx and openssl for the proxy test, wrk for the load
   # benchmark.
-  libcpp-httplib-dev libjs-three wrk
+  libboost-dev libjs-three libcpp-httplib-dev nginx-light openssl wrk
   colmap hyperfine valgrind time python3 python3-jsonschema python3-matplotlib clang-format
   # universal-ctags: where each function ends, for tools/check_function_length.py.
   universal-ctags

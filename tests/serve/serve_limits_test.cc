@@ -133,7 +133,7 @@ TEST_F(ServeMalformedTest, ABodyOverMaxBodyMbGets413) {
            std::string(1100000, 'x'),
            {},
            413,
-           "the body is too large: over --max-body-mb (1048576 bytes)"},
+           "the body is too large: 1100000 bytes, over --max-body-mb (1048576 bytes)"},
       },
       1);
 }
