@@ -17,12 +17,6 @@
 namespace cwloc {
 namespace {
 
-// FreeImage's GREY(): Rec. 709 luma in single precision, rounded by truncating + 0.5.
-inline uint8_t Luma709(uint8_t r, uint8_t g, uint8_t b) {
-  const float luma = 0.2126F * float(r) + 0.7152F * float(g) + 0.0722F * float(b);
-  return static_cast<uint8_t>(luma + 0.5F);
-}
-
 void CheckSize(const std::filesystem::path& path, uint64_t width, uint64_t height,
                uint64_t max_pixels) {
   const std::string file = path.string();

@@ -4,12 +4,14 @@
 #include <Eigen/Geometry>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include "base/error.h"
 #include "io/camera_spec.h"
 #include "io/query_priors.h"
 #include "localizer/pose/refine_pose.h"
+#include "photo/grey_image.h"
 
 namespace cwloc {
 namespace {
@@ -35,6 +37,42 @@ uint32_t ImageSide(const Json& value, const std::string& where) {
   if (side < 1 || side > 100000 || side != std::floor(side))
     throw InputError("geopose: " + where + ": expected a whole number of pixels in 1..100000");
   return static_cast<uint32_t>(side);
+}
+
+// A JPEG or PNG by its signature, whatever `imageFormat` says (clients label encoded bytes
+// RGBA32); else raw pixels of the stated size: GRAY8 as they are, RGBA32 to grey as a photo's
+// colours are (COLMAP's luma, photo/grey_image.h).
+void ReadImageFormat(const std::string& format, const std::string& where, GeoPoseRequest* parsed) {
+  const std::string_view bytes = parsed->image;
+  const bool jpeg = bytes.substr(0, 3) == "\xff\xd8\xff";
+  const bool png = bytes.substr(0, 8) == "\x89PNG\r\n\x1a\n";
+  if (jpeg || png) return;
+  const uint64_t pixels = uint64_t{parsed->width} * parsed->height;
+  const auto check_bytes = [&](uint64_t per_pixel) {
+    if (bytes.size() != pixels * per_pixel) {
+      throw InputError("geopose: " + where + ": " + format + " of " +
+                       std::to_string(parsed->width) + " x " + std::to_string(parsed->height) +
+                       " needs " + std::to_string(pixels * per_pixel) + " bytes, got " +
+                       std::to_string(bytes.size()));
+    }
+  };
+  if (format == "GRAY8") {
+    check_bytes(1);
+  } else if (format == "RGBA32") {
+    check_bytes(4);
+    std::string grey(pixels, '\0');
+    const auto* rgba = reinterpret_cast<const uint8_t*>(bytes.data());
+    for (uint64_t i = 0; i < pixels; ++i)
+      grey[i] = static_cast<char>(Luma709(rgba[4 * i], rgba[4 * i + 1], rgba[4 * i + 2]));
+    parsed->image = std::move(grey);
+  } else if (format == "JPG" || format == "JPEG" || format == "PNG") {
+    throw InputError("geopose: " + where + ": 'imageBytes' are no JPEG or PNG (imageFormat " +
+                     format + ")");
+  } else {
+    throw InputError("geopose: " + where +
+                     ": 'imageFormat' must be JPG, PNG, RGBA32 or GRAY8 (cwloc reads no other)");
+  }
+  parsed->grey = true;
 }
 
 }  // namespace
@@ -98,12 +136,6 @@ GeoPoseRequest ParseGeoPoseRequest(std::string_view json_text, RequestInputs* in
 
   const Json& format = Field(camera, "imageFormat", where);
   const std::string image_format = format.is_string() ? format.get<std::string>() : "";
-  if (image_format == "GRAY8") {
-    parsed.grey = true;
-  } else if (image_format != "JPG" && image_format != "JPEG" && image_format != "PNG") {
-    throw InputError("geopose: " + where +
-                     ": 'imageFormat' must be JPG, PNG or GRAY8 (cwloc reads no other)");
-  }
   const Json& size = Field(camera, "size", where);
   if (!size.is_array() || size.size() != 2)
     throw InputError("geopose: " + where + ": 'size': expected [width, height]");
@@ -112,11 +144,7 @@ GeoPoseRequest ParseGeoPoseRequest(std::string_view json_text, RequestInputs* in
   const Json& image = Field(camera, "imageBytes", where);
   if (!image.is_string()) throw InputError("geopose: " + where + ": 'imageBytes': expected base64");
   parsed.image = DecodeBase64(image.get<std::string>(), "geopose: " + where + ".imageBytes");
-  if (parsed.grey && parsed.image.size() != uint64_t{parsed.width} * parsed.height) {
-    throw InputError("geopose: " + where + ": GRAY8 of " + std::to_string(parsed.width) + " x " +
-                     std::to_string(parsed.height) + " needs as many bytes, got " +
-                     std::to_string(parsed.image.size()));
-  }
+  ReadImageFormat(image_format, where, &parsed);
   if (const auto params = camera.find("params"); params != camera.end() && params->is_object()) {
     const auto model = params->find("model");
     if (model != params->end() && model->is_string() && *model != "UNKNOWN_CAMERA") {
@@ -141,9 +169,12 @@ GeoPoseRequest ParseGeoPoseRequest(std::string_view json_text, RequestInputs* in
         FiniteNumber(Field(fix, "latitude", fix_where), fix_where + ".latitude");
     const double longitude =
         FiniteNumber(Field(fix, "longitude", fix_where), fix_where + ".longitude");
+    // The protocol's clients send 0 for an accuracy they do not know.
     double radius = kDefaultExifGpsRadiusM;
-    if (const auto accuracy = fix.find("accuracy"); accuracy != fix.end() && !accuracy->is_null())
-      radius = FiniteNumber(*accuracy, fix_where + ".accuracy");
+    if (const auto accuracy = fix.find("accuracy"); accuracy != fix.end() && !accuracy->is_null()) {
+      const double given = FiniteNumber(*accuracy, fix_where + ".accuracy");
+      if (given > 0) radius = given;
+    }
     char text[96];
     std::snprintf(text, sizeof(text), "%.10f %.10f %.3f", latitude, longitude, radius);
     inputs->priors.position = ParsePositionPrior(text, "geopose: " + fix_where);
@@ -163,14 +194,16 @@ nlohmann::ordered_json GeoPoseResponse(const std::string& id, const Localization
   response["timestamp"] = std::chrono::duration_cast<std::chrono::milliseconds>(
                               std::chrono::system_clock::now().time_since_epoch())
                               .count();
+  // Always there (the protocol's clients read it); unknown is the largest double, as theirs.
+  double position = std::numeric_limits<double>::max();
+  double orientation = std::numeric_limits<double>::max();
   if (result.covariance && result.covariance->enu_position) {
     const std::array<double, 9>& enu = *result.covariance->enu_position;
-    const double position = std::sqrt((enu[0] + enu[4] + enu[8]) / 3);
-    const double orientation =
-        std::sqrt(PoseBlock(*result.covariance).topLeftCorner<3, 3>().trace() / 3) *
-        kDegreesPerRadian;
-    response["accuracy"] = {{"position", position}, {"orientation", orientation}};
+    position = std::sqrt((enu[0] + enu[4] + enu[8]) / 3);
+    orientation = std::sqrt(PoseBlock(*result.covariance).topLeftCorner<3, 3>().trace() / 3) *
+                  kDegreesPerRadian;
   }
+  response["accuracy"] = {{"position", position}, {"orientation", orientation}};
   response["type"] = "geopose";
   const GeoPose& geo = *result.geo;
   response["geopose"] = {

@@ -18,7 +18,7 @@ namespace cwloc {
 struct GeoPoseRequest {
   std::string id;
   std::string image;   // decoded bytes: JPEG or PNG, or width x height grey pixels
-  bool grey = false;   // imageFormat GRAY8
+  bool grey = false;   // raw pixels (GRAY8, or RGBA32 made grey)
   uint32_t width = 0;  // its `size`
   uint32_t height = 0;
 };

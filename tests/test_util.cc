@@ -184,6 +184,19 @@ std::string UnderMemoryLimit(uint64_t kib, const std::string& command) {
   return "ulimit -v " + std::to_string(kib) + " && " + command;
 }
 
+std::string Base64(const std::string& bytes) {
+  static const char kDigits[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string text;
+  for (size_t i = 0; i < bytes.size(); i += 3) {
+    uint32_t bits = static_cast<uint8_t>(bytes[i]) << 16;
+    if (i + 1 < bytes.size()) bits |= static_cast<uint8_t>(bytes[i + 1]) << 8;
+    if (i + 2 < bytes.size()) bits |= static_cast<uint8_t>(bytes[i + 2]);
+    const size_t chunk = std::min<size_t>(3, bytes.size() - i);
+    for (size_t d = 0; d < 4; ++d) text += d <= chunk ? kDigits[bits >> (18 - 6 * d) & 63] : '=';
+  }
+  return text;
+}
+
 std::string ReadFile(const std::filesystem::path& path) {
   const std::vector<uint8_t> bytes = ReadBytes(path);
   return {bytes.begin(), bytes.end()};

@@ -121,6 +121,9 @@ std::string UnderMemoryLimit(uint64_t kib, const std::string& command);
 std::string ReadFile(const std::filesystem::path& path);
 std::vector<std::filesystem::path> ListDir(const std::filesystem::path& dir);
 
+// RFC 4648 base64 with padding, as clients encode images in JSON.
+std::string Base64(const std::string& bytes);
+
 // Tools killed at random moments (docs/reliability.md, "Interrupted writers"): a child process
 // running `args` (args[0] the executable; no shell), its stdout and stderr into `output` when
 // one is given, waited for or killed.

@@ -29,11 +29,6 @@ std::string AvError(int code) {
   return text;
 }
 
-// COLMAP's grey from 8-bit RGB (image_decode.h): (uint8)(0.2126 R + 0.7152 G + 0.0722 B + 0.5).
-uint8_t Grey(uint8_t r, uint8_t g, uint8_t b) {
-  return static_cast<uint8_t>(0.2126f * r + 0.7152f * g + 0.0722f * b + 0.5f);
-}
-
 // The frame's layout when it is 8-bit Y'CbCr (planar or semi-planar, as phones and cameras
 // record), else nullptr.
 const AVPixFmtDescriptor* ByteYCbCr(const AVFrame& frame) {
@@ -185,7 +180,7 @@ class FfmpegVideo : public VideoDecoder {
     grey.height = height_;
     grey.pixels.resize(size_t{width_} * height_);
     for (size_t i = 0; i < grey.pixels.size(); ++i)
-      grey.pixels[i] = Grey(rgb[3 * i], rgb[3 * i + 1], rgb[3 * i + 2]);
+      grey.pixels[i] = Luma709(rgb[3 * i], rgb[3 * i + 1], rgb[3 * i + 2]);
     return grey;
   }
 

@@ -258,11 +258,11 @@ TEST_F(ServeMalformedTest, BadGeoPoseRequestsGet400) {
       {"POST",
        "/v1/geopose",
        "application/json",
-       geopose_head + R"("BMP"}]}})",
+       geopose_head + R"("BMP", "size": [4, 4], "imageBytes": "AAAA"}]}})",
        {},
        400,
-       "geopose: 'cameraReadings'[0]: 'imageFormat' must be JPG, PNG or GRAY8 (cwloc reads no "
-       "other)"},
+       "geopose: 'cameraReadings'[0]: 'imageFormat' must be JPG, PNG, RGBA32 or GRAY8 (cwloc "
+       "reads no other)"},
       {"POST",
        "/v1/geopose",
        "application/json",
@@ -277,7 +277,7 @@ TEST_F(ServeMalformedTest, BadGeoPoseRequestsGet400) {
        geopose_head + R"("GRAY8", "size": [4, 4], "imageBytes": "AAAA"}]}})",
        {},
        400,
-       "geopose: 'cameraReadings'[0]: GRAY8 of 4 x 4 needs as many bytes, got 3"},
+       "geopose: 'cameraReadings'[0]: GRAY8 of 4 x 4 needs 16 bytes, got 3"},
   });
 }
 

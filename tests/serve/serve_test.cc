@@ -11,6 +11,7 @@
 
 #include "indexer/index_builder.h"
 #include "io/photo_query.h"
+#include "io/query_priors.h"
 #include "tests/serve/serve_process.h"
 #include "tests/shared_data_index.h"
 
@@ -22,19 +23,6 @@ using test::ServeProcess;
 
 constexpr double kPi = 3.14159265358979323846;
 const Geodetic kOrigin{50.7753, 6.0839, 180.0};
-
-std::string Base64(const std::string& bytes) {
-  static const char kDigits[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-  std::string text;
-  for (size_t i = 0; i < bytes.size(); i += 3) {
-    uint32_t bits = static_cast<uint8_t>(bytes[i]) << 16;
-    if (i + 1 < bytes.size()) bits |= static_cast<uint8_t>(bytes[i + 1]) << 8;
-    if (i + 2 < bytes.size()) bits |= static_cast<uint8_t>(bytes[i + 2]);
-    const size_t chunk = std::min<size_t>(3, bytes.size() - i);
-    for (size_t d = 0; d < 4; ++d) text += d <= chunk ? kDigits[bits >> (18 - 6 * d) & 63] : '=';
-  }
-  return text;
-}
 
 class ServeTest : public testing::Test {
  protected:
@@ -236,6 +224,101 @@ TEST_F(ServeTest, ASessionTracksFramesAsTheCliSequenceDoes) {
   EXPECT_EQ(gone["error"], "no session '" + id + "' (ended, or unused for --session-ttl)");
 }
 
+// A request shaped as the OSCP GeoPose protocol's own Python demo client shapes it
+// (python/demo_client.py in github.com/OpenArCloud/oscp-geopose-protocol, written here from
+// what it sends): JPEG bytes labelled RGBA32, every reading with its privacy block, empty
+// readings of the other sensors, a geolocation with accuracy 0 ("unknown"), its Accept header.
+// It gets 200 and the pose /v1/localize gives the same photo with the same prior.
+TEST_F(ServeTest, TheProtocolsDemoClientIsAnsweredWithTheCliPose) {
+  const auto geo_index = GeoreferencedIndex();
+  ServeProcess server({"--index", "geo=" + geo_index.string()});
+  auto client = server.Client();
+  const std::string photo = test::ReadFile(Photo("0012.jpg"));
+  const std::string camera = CameraOf("0012.jpg");
+  std::istringstream fields(camera);
+  std::string model;
+  int width, height;
+  fields >> model >> width >> height;
+  std::vector<double> params;
+  for (double value; fields >> value;) params.push_back(value);
+  const double latitude = kOrigin.latitude_deg;
+  const double longitude = kOrigin.longitude_deg + 10 / (111320 * std::cos(latitude * kPi / 180));
+  const double now_ms = 1765000000123.456;
+  const json privacy = {{"dataRetention", json::array()},
+                        {"dataAcceptableUse", json::array()},
+                        {"dataSanitizationApplied", json::array()},
+                        {"dataSanitizationRequested", json::array()}};
+  const json no_rig = {{"rigIdentifier", ""},
+                       {"rigRotation", {{"x", 0.0}, {"y", 0.0}, {"z", 0.0}, {"w", 1.0}}},
+                       {"rigTranslation", {{"x", 0.0}, {"y", 0.0}, {"z", 0.0}}}};
+  json camera_sensor = {
+      {"type", "camera"}, {"id", "my_camera_sensor"}, {"name", ""}, {"model", ""}};
+  json gps_sensor = {{"type", "geolocation"}, {"id", "my_gps_sensor"}, {"name", ""}, {"model", ""}};
+  camera_sensor.update(no_rig);
+  gps_sensor.update(no_rig);
+  const json request = {{"type", "geopose"},
+                        {"id", "9b7cbd3e-4a52-4a8e-9d6e-2f1c0a5e7b11"},
+                        {"timestamp", now_ms},
+                        {"sensors", {camera_sensor, gps_sensor}},
+                        {"sensorReadings",
+                         {{"cameraReadings",
+                           {{{"timestamp", now_ms},
+                             {"sensorId", "my_camera_sensor"},
+                             {"privacy", privacy},
+                             {"sequenceNumber", 1},
+                             {"imageFormat", "RGBA32"},
+                             {"size", {width, height}},
+                             {"imageBytes", test::Base64(photo)},
+                             {"imageOrientation", {{"mirrored", false}, {"rotation", 0.0}}},
+                             {"params",
+                              {{"model", model},
+                               {"modelParams", params},
+                               {"minMaxDepth", json::array()},
+                               {"minMaxDisparity", json::array()}}}}}},
+                          {"geolocationReadings",
+                           {{{"timestamp", now_ms},
+                             {"sensorId", "my_gps_sensor"},
+                             {"privacy", privacy},
+                             {"latitude", latitude},
+                             {"longitude", longitude},
+                             {"altitude", 42.0},
+                             {"accuracy", 0.0},
+                             {"altitudeAccuracy", 0.0},
+                             {"heading", 0.0},
+                             {"speed", 0.0}}}},
+                          {"wifiReadings", json::array()},
+                          {"bluetoothReadings", json::array()},
+                          {"accelerometerReadings", json::array()},
+                          {"gyroscopeReadings", json::array()},
+                          {"magnetometerReadings", json::array()}}},
+                        {"priorPoses", json::array()}};
+  const httplib::Headers headers = {{"Accept", "application/vnd.oscp+json;version=2.0;"}};
+  const auto answered =
+      client.Post("/v1/geopose?index=geo", headers, request.dump(), "application/json");
+  ASSERT_TRUE(answered);
+  ASSERT_EQ(answered->status, 200) << answered->body;
+  // What the client reads back: type, id, timestamp, accuracy and geopose.
+  const json geopose = json::parse(answered->body);
+  EXPECT_EQ(geopose["type"], "geopose");
+  EXPECT_EQ(geopose["id"], "9b7cbd3e-4a52-4a8e-9d6e-2f1c0a5e7b11");
+  EXPECT_TRUE(geopose["timestamp"].is_number());
+  EXPECT_LT(geopose["accuracy"]["position"].get<double>(), 0.05);    // metres
+  EXPECT_LT(geopose["accuracy"]["orientation"].get<double>(), 1.0);  // degrees
+
+  char prior[96];
+  std::snprintf(prior, sizeof(prior), "%.10f %.10f %.3f", latitude, longitude,
+                kDefaultExifGpsRadiusM);
+  const json record =
+      Posted(client, "/v1/localize?index=geo",
+             {{"image", photo, "0012.jpg", "image/jpeg"},
+              {"options", json{{"camera", camera}, {"prior_position", prior}}.dump(), "",
+               "application/json"}});
+  ASSERT_TRUE(record["success"].get<bool>());
+  EXPECT_EQ(geopose["geopose"]["position"]["lat"], record["geo"]["latitude_deg"]);
+  EXPECT_EQ(geopose["geopose"]["position"]["lon"], record["geo"]["longitude_deg"]);
+  EXPECT_EQ(geopose["geopose"]["position"]["h"], record["geo"]["height_m"]);
+}
+
 // The GeoPose answer is the result record's pose on the globe: the same position, and a
 // quaternion that turns the camera's optical axis into the record's heading and pitch.
 TEST_F(ServeTest, GeoPoseAndCoverageOnAGeoreferencedIndex) {
@@ -265,7 +348,7 @@ TEST_F(ServeTest, GeoPoseAndCoverageOnAGeoreferencedIndex) {
          {{{"sensorId", "0"},
            {"imageFormat", "JPG"},
            {"size", {width, height}},
-           {"imageBytes", Base64(photo)},
+           {"imageBytes", test::Base64(photo)},
            {"params", {{"model", model}, {"modelParams", params}}}}}},
         {"geolocationReadings",
          {{{"sensorId", "1"},
