@@ -12,6 +12,7 @@
 #include "io/query_priors.h"
 #include "localizer/pose/refine_pose.h"
 #include "photo/grey_image.h"
+#include "serve/base64.h"
 
 namespace cwloc {
 namespace {
@@ -76,45 +77,6 @@ void ReadImageFormat(const std::string& format, const std::string& where, GeoPos
 }
 
 }  // namespace
-
-std::string DecodeBase64(std::string_view text, const std::string& what) {
-  while (!text.empty() && text.back() == '=') text.remove_suffix(1);
-  if (text.size() % 4 == 1) throw InputError(what + ": base64 of a length no encoding has");
-  std::string bytes;
-  bytes.reserve(text.size() / 4 * 3 + 2);
-  uint32_t bits = 0;
-  int count = 0;
-  for (const char c : text) {
-    int value;
-    if (c >= 'A' && c <= 'Z') {
-      value = c - 'A';
-    } else if (c >= 'a' && c <= 'z') {
-      value = c - 'a' + 26;
-    } else if (c >= '0' && c <= '9') {
-      value = c - '0' + 52;
-    } else if (c == '+' || c == '-') {
-      value = 62;
-    } else if (c == '/' || c == '_') {
-      value = 63;
-    } else {
-      throw InputError(what + ": not base64 (a character outside A-Z a-z 0-9 + /)");
-    }
-    bits = bits << 6 | static_cast<uint32_t>(value);
-    if (++count == 4) {
-      bytes.push_back(static_cast<char>(bits >> 16));
-      bytes.push_back(static_cast<char>(bits >> 8 & 0xff));
-      bytes.push_back(static_cast<char>(bits & 0xff));
-      bits = 0;
-      count = 0;
-    }
-  }
-  if (count == 2) bytes.push_back(static_cast<char>(bits >> 4));
-  if (count == 3) {
-    bytes.push_back(static_cast<char>(bits >> 10));
-    bytes.push_back(static_cast<char>(bits >> 2 & 0xff));
-  }
-  return bytes;
-}
 
 GeoPoseRequest ParseGeoPoseRequest(std::string_view json_text, RequestInputs* inputs) {
   const Json request = Json::parse(json_text, nullptr, /*allow_exceptions=*/false);

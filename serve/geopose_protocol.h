@@ -37,7 +37,4 @@ GeoPoseRequest ParseGeoPoseRequest(std::string_view json_text, RequestInputs* in
 nlohmann::ordered_json GeoPoseResponse(const std::string& id, const LocalizationResult& result,
                                        const GeoFrame& frame);
 
-// RFC 4648 base64 (padding optional, no line breaks); throws InputError naming `what`.
-std::string DecodeBase64(std::string_view text, const std::string& what);
-
 }  // namespace cwloc

@@ -10,6 +10,7 @@
 #include "io/query_priors.h"
 #include "io/result_json.h"
 #include "localizer/geo_priors.h"
+#include "serve/base64.h"
 #include "serve/geopose_protocol.h"
 #include "serve/query_body.h"
 #include "serve/server_impl.h"
@@ -214,10 +215,19 @@ void Server::Impl::GeoPose(const HttpRequest& req, HttpResponse& res) {
       /*photo=*/true, deadline);
 }
 
+// What opens a session again travels in its id (sessions.h), so it is kept small.
+constexpr size_t kMaxSessionOptionsBytes = 2048;
+
 void Server::Impl::StartSession(const HttpRequest& req, HttpResponse& res) {
   const std::shared_ptr<const ServedIndex> served = IndexOf(req);
+  if (req.body.size() > kMaxSessionOptionsBytes) {
+    throw InputError("session options: " + std::to_string(req.body.size()) + " bytes, over " +
+                     std::to_string(kMaxSessionOptionsBytes) +
+                     " (they travel in the session's id)");
+  }
   auto session = std::make_shared<Session>(served, InputsOf(req.body));
-  const std::string id = sessions.Add(session);
+  const std::string id =
+      sessions.Add(session, EncodeBase64Url(served->spec.name + '\n' + req.body));
   if (id.empty()) {
     throw HttpError{503, "too many open sessions (--max-sessions); end one or retry later",
                     "sessions_full"};
@@ -233,11 +243,7 @@ void Server::Impl::StartSession(const HttpRequest& req, HttpResponse& res) {
 void Server::Impl::SessionFrame(const HttpRequest& req, HttpResponse& res) {
   const Clock::time_point deadline = DeadlineFrom(Clock::now());
   const std::string id = req.matches[1];
-  const std::shared_ptr<Session> session = sessions.Find(id);
-  if (!session) {
-    throw HttpError{404, "no session '" + id + "' (ended, or unused for --session-ttl)",
-                    "not_found"};
-  }
+  const std::shared_ptr<Session> session = SessionOf(id, res);
   RequestInputs inputs = session->inputs;
   inputs.timestamp.reset();
   inputs.motion.reset();
@@ -258,7 +264,7 @@ void Server::Impl::SessionFrame(const HttpRequest& req, HttpResponse& res) {
                     "session_busy"};
   }
   // Frees the session for its next frame when the frame is answered or turned away.
-  const std::shared_ptr<void> one_frame(nullptr, [session](void*) { session->busy = false; });
+  std::shared_ptr<void> one_frame(nullptr, [session](void*) { session->busy = false; });
   const BodyKind kind = BodyKindOf(body.content_type, body.bytes);
   Defer(
       res,
@@ -272,6 +278,35 @@ void Server::Impl::SessionFrame(const HttpRequest& req, HttpResponse& res) {
         SetJson(answer, ResultToJson(result, session->inputs.options));
       },
       kind == BodyKind::kPhoto, deadline);
+}
+
+std::shared_ptr<Session> Server::Impl::SessionOf(const std::string& id, HttpResponse& res) {
+  bool ended = false;
+  if (std::shared_ptr<Session> session = sessions.Find(id, &ended)) return session;
+  const HttpError none{404, "no session '" + id + "' (ended, or unused for --session-ttl)",
+                       "not_found"};
+  const size_t dot = id.find('.');
+  if (ended || dot != 32) throw none;
+  // Never held here: opened again from what its id carries.
+  std::string opened_by;
+  try {
+    opened_by = DecodeBase64(std::string_view(id).substr(dot + 1), "session id");
+  } catch (const InputError&) {
+    throw none;
+  }
+  const size_t newline = opened_by.find('\n');
+  if (newline == std::string::npos) throw none;
+  const std::shared_ptr<const ServedIndex> served = registry.Find(opened_by.substr(0, newline));
+  if (!served) throw none;
+  auto session = std::make_shared<Session>(served, InputsOf(opened_by.substr(newline + 1)));
+  if (!sessions.Reopen(id, session)) {
+    throw HttpError{503, "too many open sessions (--max-sessions); end one or retry later",
+                    "sessions_full"};
+  }
+  res.SetHeader("X-Cwloc-Session", "reopened");
+  session = sessions.Find(id, &ended);  // the one that stayed, when two frames raced
+  if (!session) throw none;
+  return session;
 }
 
 void Server::Impl::EndSession(const HttpRequest& req, HttpResponse& res) {

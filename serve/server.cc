@@ -214,14 +214,17 @@ void Server::Impl::AdminReload(Server& server, HttpResponse& res) {
 
 namespace {
 
-// A session's id in /v1/sessions/ID[/frames]: hex digits; empty when the path is no such.
+// A session's id in /v1/sessions/ID[/frames]: hex digits, '.' and base64url (sessions.h);
+// empty when the path is no such.
 std::string SessionId(const std::string& path, bool frames) {
   const std::string prefix = "/v1/sessions/", suffix = frames ? "/frames" : "";
   if (path.rfind(prefix, 0) != 0 || path.size() <= prefix.size() + suffix.size() ||
       path.compare(path.size() - suffix.size(), suffix.size(), suffix) != 0)
     return "";
   const std::string id = path.substr(prefix.size(), path.size() - prefix.size() - suffix.size());
-  return id.find_first_not_of("0123456789abcdef") == std::string::npos ? id : "";
+  constexpr const char* kIdCharacters =
+      "0123456789abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ._-";
+  return id.find_first_not_of(kIdCharacters) == std::string::npos ? id : "";
 }
 
 }  // namespace

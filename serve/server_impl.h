@@ -72,6 +72,9 @@ struct Server::Impl {
   void StartSession(const HttpRequest& req, HttpResponse& res);
   void SessionFrame(const HttpRequest& req, HttpResponse& res);
   void EndSession(const HttpRequest& req, HttpResponse& res);
+  // The session of a frame, opened again from its id when this server never held it; throws
+  // HttpError 404 when there is none (or it ended here), 503 when the table is full.
+  std::shared_ptr<Session> SessionOf(const std::string& id, HttpResponse& res);
   void Coverage(const HttpRequest& req, HttpResponse& res);
   void Info(const HttpRequest& req, HttpResponse& res);
   void Map(const HttpRequest& req, HttpResponse& res);

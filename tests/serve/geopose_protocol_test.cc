@@ -11,6 +11,7 @@
 #include "base/error.h"
 #include "io/query_priors.h"
 #include "photo/grey_image.h"
+#include "serve/base64.h"
 #include "tests/test_util.h"
 
 namespace cwloc {
@@ -95,6 +96,20 @@ TEST(GeoPoseRequest, BuffersOfTheWrongSizeAndUnknownFormatsAreRefused) {
   EXPECT_EQ(message(Request("DEPTH", "abcd", 2, 2, nullptr)),
             "geopose: 'cameraReadings'[0]: 'imageFormat' must be JPG, PNG, RGBA32 or GRAY8 "
             "(cwloc reads no other)");
+}
+
+// A session's id carries what opened it in base64url (serve/sessions.h).
+TEST(Base64, UrlSafeEncodingRoundTripsEveryLength) {
+  EXPECT_EQ(EncodeBase64Url(""), "");
+  EXPECT_EQ(EncodeBase64Url("f"), "Zg");
+  EXPECT_EQ(EncodeBase64Url("fo"), "Zm8");
+  EXPECT_EQ(EncodeBase64Url("foo"), "Zm9v");
+  EXPECT_EQ(EncodeBase64Url("\xfb\xff"), "-_8");  // '-' and '_', never '+' or '/'
+  std::string bytes;
+  for (int i = 0; i < 300; ++i) {
+    bytes.push_back(static_cast<char>(i * 37));
+    EXPECT_EQ(DecodeBase64(EncodeBase64Url(bytes), "test"), bytes) << i;
+  }
 }
 
 }  // namespace

@@ -4,10 +4,13 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <chrono>
 #include <cmath>
 #include <fstream>
+#include <iostream>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <thread>
 
 #include "indexer/index_builder.h"
 #include "io/photo_query.h"
@@ -196,7 +199,7 @@ TEST_F(ServeTest, ASessionTracksFramesAsTheCliSequenceDoes) {
   ASSERT_TRUE(started);
   ASSERT_EQ(started->status, 201) << started->body;
   const std::string id = json::parse(started->body)["session"];
-  EXPECT_EQ(id.size(), 32u);
+  EXPECT_EQ(id.find('.'), 32u);  // 32 random hex digits, then what opened it
   for (size_t i = 0; i < frames.size(); ++i) {
     const json record =
         Posted(client, "/v1/sessions/" + id + "/frames",
@@ -222,6 +225,59 @@ TEST_F(ServeTest, ASessionTracksFramesAsTheCliSequenceDoes) {
       Posted(client, "/v1/sessions/" + id + "/frames",
              {{"image", test::ReadFile(Photo("0002.jpg")), "0002.jpg", "image/jpeg"}}, 404);
   EXPECT_EQ(gone["error"], "no session '" + id + "' (ended, or unused for --session-ttl)");
+}
+
+// A replica that restarts (or takes over from one that died) opens a session again from its
+// id: the next frame gets 200, localized from scratch as a new session's first frame is, and
+// the frames after it go as in that new session. A session that ended or expired on its
+// server stays ended.
+TEST_F(ServeTest, ASessionGoesOnOnAServerThatNeverHeldItAndEndsWhereItEnded) {
+  const std::vector<json> fresh = LocalizeWithTheCli(
+      "--index " + test::Quote(shared_->index) + " --sequence --max-image-size 800 --image " +
+      test::Quote(Photo("0012.jpg")) + " --image " + test::Quote(Photo("0017.jpg")));
+  ASSERT_EQ(fresh.size(), 2u);
+  const auto frame = [&](httplib::Client& client, const std::string& id, const std::string& name,
+                         int status = 200) {
+    return Posted(client, "/v1/sessions/" + id + "/frames",
+                  {{"image", test::ReadFile(Photo(name)), name, "image/jpeg"}}, status);
+  };
+  std::string id;
+  {
+    ServeProcess first({"--index", shared_->index.string()});
+    auto client = first.Client();
+    const auto started =
+        client.Post("/v1/sessions", R"({"max-image-size": 800})", "application/json");
+    ASSERT_TRUE(started);
+    ASSERT_EQ(started->status, 201) << started->body;
+    id = json::parse(started->body)["session"];
+    EXPECT_TRUE(frame(client, id, "0002.jpg")["success"].get<bool>());
+    EXPECT_TRUE(frame(client, id, "0007.jpg")["success"].get<bool>());
+  }  // the replica ends; another starts on the same index
+  ServeProcess second({"--index", shared_->index.string(), "--session-ttl", "3"});
+  auto client = second.Client();
+  const auto reopened =
+      client.Post("/v1/sessions/" + id + "/frames",
+                  httplib::MultipartFormDataItems{
+                      {"image", test::ReadFile(Photo("0012.jpg")), "0012.jpg", "image/jpeg"}});
+  ASSERT_TRUE(reopened);
+  ASSERT_EQ(reopened->status, 200) << reopened->body;
+  EXPECT_EQ(reopened->get_header_value("X-Cwloc-Session"), "reopened");
+  const json record = json::parse(reopened->body);
+  EXPECT_EQ(record["pose"], fresh[0]["pose"]);  // the session's options (max-image-size) hold
+  EXPECT_EQ(record["tracking"]["mode"], fresh[0]["tracking"]["mode"]);
+  // From there on it is a new session's stream.
+  const json next = frame(client, id, "0017.jpg");
+  EXPECT_EQ(next["pose"], fresh[1]["pose"]);
+  EXPECT_EQ(next["tracking"]["mode"], fresh[1]["tracking"]["mode"]);
+
+  // Unused for --session-ttl (3 s), it ends here, and is not opened again.
+  std::this_thread::sleep_for(std::chrono::milliseconds(3500));
+  const json expired = frame(client, id, "0022.jpg", 404);
+  EXPECT_EQ(expired["error"], "no session '" + id + "' (ended, or unused for --session-ttl)");
+  // An id that carries nothing a server can open is no session.
+  const json forged = frame(client, std::string(32, 'a') + ".bm9uZQ", "0022.jpg", 404);
+  EXPECT_EQ(forged["error"], "no session '" + std::string(32, 'a') +
+                                 ".bm9uZQ' (ended, or unused for --session-ttl)");
 }
 
 // A request shaped as the OSCP GeoPose protocol's own Python demo client shapes it
@@ -470,6 +526,30 @@ TEST_F(ServeTest, TheViewerShowsThePoseTheApiReturned) {
   if (code == 77) GTEST_SKIP() << output;
   EXPECT_EQ(code, 0) << output;
   EXPECT_TRUE(std::filesystem::exists(dir_ / "viewer.png"));
+}
+
+// nginx with TLS in front of two replicas, configured by deploy/nginx-cwloc.conf
+// (nginx_proxy_test.py): a photo's pose through the proxy is the CLI's, and neither a rolling
+// restart of the replicas nor a killed replica fails a request of clients sending without
+// pause; a session's frames go on. Skipped where nginx or openssl is missing (a skip fails CI).
+TEST_F(ServeTest, NginxWithTlsInFrontOfTwoReplicas) {
+  const std::vector<json> cli = LocalizeWithTheCli("--index " + test::Quote(shared_->index) +
+                                                   " --image " + test::Quote(Photo("0002.jpg")));
+  ASSERT_EQ(cli.size(), 1u);
+  ASSERT_TRUE(cli[0]["success"].get<bool>());
+  std::ofstream(dir_ / "expected.json") << cli[0].dump();
+  std::string output;
+  const int code = test::RunCommand(
+      "python3 " + test::Quote(test::SourceDir() / "tests" / "serve" / "nginx_proxy_test.py") +
+          " --serve " + test::Quote(test::ToolPath("cwloc-serve")) + " --index " +
+          test::Quote(shared_->index) + " --photo " + test::Quote(Photo("0002.jpg")) +
+          " --expected-json " + test::Quote(dir_ / "expected.json") + " --config " +
+          test::Quote(test::SourceDir() / "deploy" / "nginx-cwloc.conf") + " --work " +
+          test::Quote(dir_ / "nginx"),
+      &output);
+  if (code == 77) GTEST_SKIP() << output;
+  EXPECT_EQ(code, 0) << output;
+  std::cout << output;
 }
 
 }  // namespace
