@@ -4,9 +4,9 @@
 #include <string>
 
 #include "io/option_table.h"
-#include "localizer/pose/camera_pose.h"
 #include "results/localization_result.h"
 #include "results/rig_result.h"
+#include "solvers/camera_pose.h"
 
 namespace cwloc {
 

@@ -10,7 +10,7 @@
 
 #include "io/query_assembly.h"
 #include "io/query_list.h"
-#include "localizer/pose/camera_pose.h"
+#include "solvers/camera_pose.h"
 
 namespace cwloc {
 

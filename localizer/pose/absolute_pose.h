@@ -8,9 +8,9 @@
 #include <vector>
 
 #include "estimators/ransac.h"
-#include "localizer/pose/camera_pose.h"
 #include "localizer/pose/gravity_prior.h"
 #include "localizer/pose/refine_pose.h"
+#include "solvers/camera_pose.h"
 
 namespace cwloc {
 

@@ -5,8 +5,8 @@
 #include <optional>
 #include <span>
 
-#include "localizer/pose/camera_pose.h"
 #include "localizer/pose/gravity_prior.h"
+#include "solvers/camera_pose.h"
 
 namespace cwloc {
 

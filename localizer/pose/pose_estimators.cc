@@ -3,9 +3,9 @@
 #include <algorithm>
 #include <array>
 
-#include "localizer/pose/gravity_p2p.h"
-#include "localizer/pose/p3p.h"
-#include "localizer/pose/p4pf.h"
+#include "solvers/gravity_p2p.h"
+#include "solvers/p3p.h"
+#include "solvers/p4pf.h"
 
 namespace cwloc {
 namespace {

@@ -7,8 +7,8 @@
 #include <span>
 #include <vector>
 
-#include "localizer/pose/camera_pose.h"
 #include "localizer/pose/local_optimization.h"
+#include "solvers/camera_pose.h"
 
 namespace cwloc {
 

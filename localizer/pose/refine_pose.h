@@ -11,10 +11,10 @@
 
 #include "base/chi_square.h"
 #include "base/enum_names.h"
-#include "localizer/pose/camera_pose.h"
 #include "localizer/pose/gravity_prior.h"
 #include "results/camera.h"
 #include "results/pose.h"
+#include "solvers/camera_pose.h"
 
 namespace cwloc {
 

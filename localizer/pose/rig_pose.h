@@ -9,8 +9,8 @@
 
 #include "estimators/ransac.h"
 #include "localizer/pose/absolute_pose.h"
-#include "localizer/pose/camera_pose.h"
 #include "localizer/pose/refine_pose.h"
+#include "solvers/camera_pose.h"
 
 namespace cwloc {
 

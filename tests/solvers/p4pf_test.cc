@@ -1,4 +1,4 @@
-#include "localizer/pose/p4pf.h"
+#include "solvers/p4pf.h"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "localizer/pose/p3p.h"
+#include "solvers/p3p.h"
 
 #include <gtest/gtest.h>
 

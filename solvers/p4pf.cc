@@ -1,11 +1,11 @@
-#include "localizer/pose/p4pf.h"
+#include "solvers/p4pf.h"
 
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <numeric>
 
-#include "localizer/pose/three_quadrics.h"
+#include "solvers/three_quadrics.h"
 
 namespace cwloc {
 namespace {

@@ -1,11 +1,11 @@
-#include "localizer/pose/generalized_pose.h"
+#include "solvers/generalized_pose.h"
 
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 
-#include "localizer/pose/p3p.h"
-#include "localizer/pose/three_quadrics.h"
+#include "solvers/p3p.h"
+#include "solvers/three_quadrics.h"
 
 namespace cwloc {
 namespace {

@@ -4,7 +4,7 @@
 #include <array>
 #include <vector>
 
-#include "localizer/pose/camera_pose.h"
+#include "solvers/camera_pose.h"
 
 namespace cwloc {
 

@@ -1,4 +1,4 @@
-#include "localizer/pose/three_quadrics.h"
+#include "solvers/three_quadrics.h"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "localizer/pose/generalized_pose.h"
+#include "solvers/generalized_pose.h"
 
 #include <gtest/gtest.h>
 

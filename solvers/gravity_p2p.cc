@@ -1,4 +1,4 @@
-#include "localizer/pose/gravity_p2p.h"
+#include "solvers/gravity_p2p.h"
 
 #include <cmath>
 

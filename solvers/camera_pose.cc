@@ -1,4 +1,4 @@
-#include "localizer/pose/camera_pose.h"
+#include "solvers/camera_pose.h"
 
 #include <cmath>
 
