@@ -1,4 +1,4 @@
-#include "estimators/ransac.h"
+#include "robust/ransac.h"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "localizer/pose/pose_estimators.h"
+#include "robust/pose_estimators.h"
 
 #include <algorithm>
 #include <array>

@@ -7,12 +7,12 @@
 #include <span>
 #include <vector>
 
-#include "localizer/pose/local_optimization.h"
+#include "robust/local_optimization.h"
 #include "solvers/camera_pose.h"
 
 namespace cwloc {
 
-// RANSAC estimators (the RansacEstimator concept of estimators/ransac.h) for absolute pose from
+// RANSAC estimators (the RansacEstimator concept of robust/ransac.h) for absolute pose from
 // 2D-3D correspondences. All keep views of the caller's arrays, which must outlive them, and a
 // scratch buffer, so one estimator must not be used from several threads at once.
 

@@ -1,9 +1,9 @@
-#include "localizer/pose/local_optimization.h"
+#include "robust/local_optimization.h"
 
 #include <Eigen/Geometry>
 #include <cmath>
 
-#include "localizer/pose/cholesky.h"
+#include "robust/cholesky.h"
 
 namespace cwloc {
 namespace {

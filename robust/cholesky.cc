@@ -1,4 +1,4 @@
-#include "localizer/pose/cholesky.h"
+#include "robust/cholesky.h"
 
 #include <cmath>
 

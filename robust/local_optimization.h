@@ -5,7 +5,7 @@
 #include <optional>
 #include <span>
 
-#include "localizer/pose/gravity_prior.h"
+#include "robust/gravity_prior.h"
 #include "solvers/camera_pose.h"
 
 namespace cwloc {

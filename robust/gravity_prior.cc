@@ -1,4 +1,4 @@
-#include "localizer/pose/gravity_prior.h"
+#include "robust/gravity_prior.h"
 
 #include <Eigen/Geometry>
 #include <algorithm>

@@ -23,7 +23,7 @@ namespace cwloc {
 // far: k = log(1 - confidence) / log(1 - w^sample_size).
 //
 // Header-only and problem-agnostic, so that every layer above base/ uses this one
-// sampler: the pose stage (localizer/pose/pose_estimators.h) and the georeference fit
+// sampler: the pose stage (robust/pose_estimators.h) and the georeference fit
 // (geo/georeference_fit.cc, plain RANSAC with max_refinements = 0).
 
 // The sampler's settings.
