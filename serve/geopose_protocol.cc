@@ -6,9 +6,9 @@
 #include <cmath>
 #include <vector>
 
+#include "app/camera_spec.h"
+#include "app/query_priors.h"
 #include "base/error.h"
-#include "io/camera_spec.h"
-#include "io/query_priors.h"
 #include "localizer/pose/refine_pose.h"
 
 namespace cwloc {

@@ -9,8 +9,8 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "app/photo_query.h"
 #include "indexer/index_builder.h"
-#include "io/photo_query.h"
 #include "tests/serve/serve_process.h"
 #include "tests/shared_data_index.h"
 

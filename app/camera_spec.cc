@@ -1,4 +1,4 @@
-#include "io/camera_spec.h"
+#include "app/camera_spec.h"
 
 #include <cmath>
 #include <sstream>

@@ -1,4 +1,4 @@
-#include "io/rig_input.h"
+#include "app/rig_input.h"
 
 #include <fstream>
 #include <map>

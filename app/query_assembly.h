@@ -9,8 +9,8 @@
 #include <string>
 #include <unordered_map>
 
-#include "io/option_table.h"
-#include "io/query_priors.h"
+#include "app/option_table.h"
+#include "app/query_priors.h"
 #include "localizer/query.h"
 
 namespace cwloc {

@@ -1,5 +1,5 @@
 // --prior-position, --prior-gravity and --priors files: what they parse to and every bad input.
-#include "io/query_priors.h"
+#include "app/query_priors.h"
 
 #include <gtest/gtest.h>
 

@@ -1,12 +1,12 @@
-#include "io/query_assembly.h"
+#include "app/query_assembly.h"
 
 #include <cmath>
 #include <utility>
 
+#include "app/camera_spec.h"
+#include "app/feature_file.h"
+#include "app/photo_query.h"
 #include "base/error.h"
-#include "io/camera_spec.h"
-#include "io/feature_file.h"
-#include "io/photo_query.h"
 
 namespace cwloc {
 

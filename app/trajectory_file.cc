@@ -1,4 +1,4 @@
-#include "io/trajectory_file.h"
+#include "app/trajectory_file.h"
 
 #include <Eigen/Geometry>
 #include <cmath>

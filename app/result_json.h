@@ -3,7 +3,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "io/option_table.h"
+#include "app/option_table.h"
 #include "results/localization_result.h"
 #include "results/rig_result.h"
 #include "solvers/camera_pose.h"

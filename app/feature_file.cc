@@ -1,4 +1,4 @@
-#include "io/feature_file.h"
+#include "app/feature_file.h"
 
 #include <algorithm>
 #include <charconv>

@@ -1,4 +1,4 @@
-#include "io/option_table.h"
+#include "app/option_table.h"
 
 #include <stdexcept>
 #include <type_traits>
@@ -43,7 +43,7 @@ void Assign(const std::string& name, PoseRefiner* member) {
 // finds the table made.
 std::span<const OptionSpec> Specs() {
   static const OptionSpec specs[] = {
-#include "io/option_table.inc"
+#include "app/option_table.inc"
   };
   return specs;
 }

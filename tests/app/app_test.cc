@@ -2,14 +2,14 @@
 
 #include <fstream>
 
+#include "app/camera_spec.h"
+#include "app/feature_file.h"
+#include "app/option_table.h"
+#include "app/photo_query.h"
 #include "base/error.h"
-#include "io/camera_spec.h"
-#include "io/feature_file.h"
-#include "io/option_table.h"
-#include "io/photo_query.h"
 #ifdef CWLOC_WITH_COLMAP_DB
+#include "app/database/database_queries.h"
 #include "colmap/database.h"
-#include "io/database/database_queries.h"
 #endif
 #include "tests/test_util.h"
 

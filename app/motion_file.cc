@@ -1,4 +1,4 @@
-#include "io/motion_file.h"
+#include "app/motion_file.h"
 
 #include <fstream>
 #include <sstream>

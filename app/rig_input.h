@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "io/query_assembly.h"
-#include "io/query_list.h"
+#include "app/query_assembly.h"
+#include "app/query_list.h"
 #include "solvers/camera_pose.h"
 
 namespace cwloc {

@@ -1,11 +1,11 @@
-#include "io/result_json.h"
+#include "app/result_json.h"
 
 #include <cstdio>
 #include <filesystem>
 #include <type_traits>
 #include <variant>
 
-#include "io/record_json.h"
+#include "app/record_json.h"
 
 namespace cwloc {
 

@@ -1,4 +1,4 @@
-#include "io/photo_query.h"
+#include "app/photo_query.h"
 
 #include <stdexcept>
 

@@ -1,4 +1,4 @@
-#include "io/query_priors.h"
+#include "app/query_priors.h"
 
 #include <cmath>
 #include <fstream>

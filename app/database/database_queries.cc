@@ -1,4 +1,4 @@
-#include "io/database/database_queries.h"
+#include "app/database/database_queries.h"
 
 #include "base/error.h"
 

@@ -1,6 +1,6 @@
 // --rig (COLMAP 3.12's rig_config.json with an image list) and --frames: the frames they give
 // and every bad input refused with the file and the entry named.
-#include "io/rig_input.h"
+#include "app/rig_input.h"
 
 #include <gtest/gtest.h>
 

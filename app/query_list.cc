@@ -1,4 +1,4 @@
-#include "io/query_list.h"
+#include "app/query_list.h"
 
 #include <fstream>
 #include <sstream>

@@ -9,9 +9,9 @@
 #include <string>
 #include <string_view>
 
+#include "app/photo_query.h"
+#include "app/query_priors.h"
 #include "base/option_value.h"
-#include "io/photo_query.h"
-#include "io/query_priors.h"
 #include "localizer/localizer_options.h"
 #include "localizer/tracker.h"
 
