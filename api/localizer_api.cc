@@ -6,17 +6,17 @@
 #include <variant>
 #include <vector>
 
+#include "app/camera_spec.h"
+#include "app/feature_file.h"
+#include "app/option_table.h"
+#include "app/photo_query.h"
+#include "app/query_assembly.h"
+#include "app/result_json.h"
 #include "base/error.h"
 #include "cwloc/cwloc.hpp"
 #include "cwloc/version.h"
 #include "delta/apply_delta.h"
 #include "format/index.h"
-#include "io/camera_spec.h"
-#include "io/feature_file.h"
-#include "io/option_table.h"
-#include "io/photo_query.h"
-#include "io/query_assembly.h"
-#include "io/result_json.h"
 #include "localizer/localizer.h"
 #include "localizer/rig_localizer.h"
 #include "localizer/tracker.h"
@@ -58,7 +58,7 @@ auto Translated(Fn fn) -> decltype(fn()) {
 std::vector<OptionValue> FieldValues(const Options& o) {
   return {
 #define CWLOC_OPTION(field, type, ...) OptionValue(std::in_place_type<type>, o.field),
-#include "io/option_table.inc"
+#include "app/option_table.inc"
 #undef CWLOC_OPTION
   };
 }
@@ -87,7 +87,7 @@ void AssignField(size_t index, const OptionValue& value, Options* o) {
     o->field = std::get<type>(value);  \
     return;                            \
   }
-#include "io/option_table.inc"
+#include "app/option_table.inc"
 #undef CWLOC_OPTION
 }
 

@@ -1,7 +1,7 @@
 #pragma once
 
 // An option's value, what it accepts and how a value is refused, shared by both option tables
-// (io/option_table.inc for cwloc-localize and the library, indexer/build_option_table.inc for
+// (app/option_table.inc for cwloc-localize and the library, indexer/build_option_table.inc for
 // cwloc-index): every refusal is an InputError "--FLAG VALUE: expected ...", worded here once.
 
 #include <cstdint>

@@ -27,12 +27,12 @@
 #include <string>
 #include <vector>
 
+#include "app/database/database_queries.h"
 #include "base/comma_list.h"
 #include "base/parallel_for.h"
 #include "base/split_mix64.h"
 #include "exe/tool_main.h"
 #include "format/index.h"
-#include "io/database/database_queries.h"
 #include "kdtree/descriptor_distance.h"
 #include "kdtree/product_quantizer.h"
 

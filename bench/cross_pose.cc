@@ -25,11 +25,11 @@
 #include <tuple>
 #include <vector>
 
+#include "app/database/database_queries.h"
 #include "base/error.h"
 #include "colmap/reconstruction_io.h"
 #include "exe/tool_main.h"
 #include "format/index.h"
-#include "io/database/database_queries.h"
 #include "localizer/localizer.h"
 #include "localizer/query_pose.h"
 

@@ -11,10 +11,10 @@
 #include <vector>
 
 #include "localizer/pose/absolute_pose.h"
-#include "localizer/pose/gravity_p2p.h"
-#include "localizer/pose/p3p.h"
-#include "localizer/pose/p4pf.h"
 #include "localizer/pose/refine_pose.h"
+#include "solvers/gravity_p2p.h"
+#include "solvers/p3p.h"
+#include "solvers/p4pf.h"
 #include "tests/support/synthetic_pose.h"
 
 namespace cwloc {

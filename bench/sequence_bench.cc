@@ -13,11 +13,11 @@
 #include <string>
 #include <vector>
 
+#include "app/camera_spec.h"
+#include "app/database/database_queries.h"
+#include "app/query_list.h"
 #include "exe/tool_main.h"
 #include "format/index.h"
-#include "io/camera_spec.h"
-#include "io/database/database_queries.h"
-#include "io/query_list.h"
 #include "localizer/tracker.h"
 
 namespace cwloc {

@@ -26,6 +26,15 @@
 #include <unordered_set>
 #include <variant>
 
+#include "app/camera_spec.h"
+#include "app/motion_file.h"
+#include "app/option_table.h"
+#include "app/photo_query.h"
+#include "app/query_assembly.h"
+#include "app/query_list.h"
+#include "app/query_priors.h"
+#include "app/rig_input.h"
+#include "app/trajectory_file.h"
 #include "base/error.h"
 #include "base/option_value.h"
 #include "base/progress.h"
@@ -36,15 +45,6 @@
 #include "exe/localize/table_flags.h"
 #include "exe/tool_main.h"
 #include "format/index.h"
-#include "io/camera_spec.h"
-#include "io/motion_file.h"
-#include "io/option_table.h"
-#include "io/photo_query.h"
-#include "io/query_assembly.h"
-#include "io/query_list.h"
-#include "io/query_priors.h"
-#include "io/rig_input.h"
-#include "io/trajectory_file.h"
 #include "localizer/localizer.h"
 #include "localizer/tracker.h"
 #ifdef CWLOC_WITH_VIDEO
@@ -52,7 +52,7 @@
 #include "photo/video/video_frames.h"
 #endif
 #ifdef CWLOC_WITH_COLMAP_DB
-#include "io/database/database_queries.h"
+#include "app/database/database_queries.h"
 #endif
 
 namespace cwloc {

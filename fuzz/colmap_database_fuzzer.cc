@@ -3,10 +3,10 @@
 #include <algorithm>
 #include <cstdint>
 
+#include "app/database/database_queries.h"
 #include "base/error.h"
 #include "colmap/database.h"
 #include "fuzz/fuzz_file.h"
-#include "io/database/database_queries.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace cwloc;

@@ -1,9 +1,9 @@
 // A query's COLMAP text feature file (cwloc-localize --features / --query-list).
 #include <cstdint>
 
+#include "app/feature_file.h"
 #include "base/error.h"
 #include "fuzz/fuzz_file.h"
-#include "io/feature_file.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   cwloc::Query query;

@@ -2,12 +2,12 @@
 // (`NAME [MODEL W H PARAMS]`), and the same bytes as a --priors file and a --motion file.
 #include <cstdint>
 
+#include "app/camera_spec.h"
+#include "app/motion_file.h"
+#include "app/query_list.h"
+#include "app/query_priors.h"
 #include "base/error.h"
 #include "fuzz/fuzz_file.h"
-#include "io/camera_spec.h"
-#include "io/motion_file.h"
-#include "io/query_list.h"
-#include "io/query_priors.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace cwloc;

@@ -16,7 +16,7 @@
 #include "base/bounded_file.h"
 #include "base/error.h"
 #include "base/option_value.h"
-#include "estimators/ransac.h"
+#include "robust/ransac.h"
 
 namespace cwloc {
 namespace {
@@ -187,7 +187,7 @@ bool Plausible(const Similarity& model) {
          model.translation.allFinite();
 }
 
-// The fit as a RANSAC problem (estimators/ransac.h): a similarity from each non-degenerate
+// The fit as a RANSAC problem (robust/ransac.h): a similarity from each non-degenerate
 // 3-sample of camera centres and positions, scored by the MSAC cost of the residuals in sigmas.
 // No local optimisation inside RANSAC: the weighted least squares on the inliers follows it.
 class SimilarityEstimator {

@@ -49,7 +49,7 @@ inline std::optional<BackMatching> ParseBackMatching(std::string_view name) {
 inline constexpr uint32_t kMaxK = 63;
 
 // Every threshold and count of the pipeline; defaults are the paper's (section 4,
-// "Experimental details"). The option table (io/option_table.inc) names each knob's
+// "Experimental details"). The option table (app/option_table.inc) names each knob's
 // flag and range; ValidateQueryOptions checks them.
 struct LocalizerOptions {
   Matcher matcher = Matcher::kClusterWise;

@@ -7,8 +7,8 @@
 
 #include "camera/camera_models.h"
 #include "localizer/matching.h"
-#include "localizer/pose/camera_pose.h"
 #include "localizer/query.h"
+#include "solvers/camera_pose.h"
 
 namespace cwloc {
 

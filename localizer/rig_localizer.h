@@ -5,10 +5,10 @@
 #include <vector>
 
 #include "localizer/localizer.h"
-#include "localizer/pose/camera_pose.h"
 #include "localizer/pose/refine_pose.h"
 #include "localizer/query.h"
 #include "results/rig_result.h"
+#include "solvers/camera_pose.h"
 
 namespace cwloc {
 

@@ -7,8 +7,8 @@
 #include <vector>
 
 #include "localizer/localizer.h"
-#include "localizer/pose/camera_pose.h"
 #include "results/localization_result.h"
+#include "solvers/camera_pose.h"
 
 namespace cwloc {
 

@@ -1,5 +1,5 @@
 // How a result type lists its fields once for every surface: the JSON record
-// (io/record_json.h), C's accessors by path (api/result_paths.h), Python's properties and stubs
+// (app/record_json.h), C's accessors by path (api/result_paths.h), Python's properties and stubs
 // (python/src/described.h, tools/stubs/) and the schema test walk these descriptions.
 // docs/architecture.md, "Results", shows how a field is added.
 //

@@ -7,9 +7,9 @@
 #include <limits>
 #include <vector>
 
+#include "app/camera_spec.h"
+#include "app/query_priors.h"
 #include "base/error.h"
-#include "io/camera_spec.h"
-#include "io/query_priors.h"
 #include "localizer/pose/refine_pose.h"
 #include "photo/grey_image.h"
 #include "serve/base64.h"

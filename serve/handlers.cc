@@ -4,11 +4,11 @@
 #include <nlohmann/json.hpp>
 #include <span>
 
+#include "app/query_priors.h"
+#include "app/result_json.h"
 #include "base/error.h"
 #include "camera/camera_models.h"
 #include "geo/index_georeference.h"
-#include "io/query_priors.h"
-#include "io/result_json.h"
 #include "localizer/geo_priors.h"
 #include "serve/base64.h"
 #include "serve/geopose_protocol.h"

@@ -4,9 +4,9 @@
 #include <cstring>
 #include <span>
 
+#include "app/feature_file.h"
+#include "app/photo_query.h"
 #include "base/error.h"
-#include "io/feature_file.h"
-#include "io/photo_query.h"
 #include "photo/grey_image.h"
 
 namespace cwloc {

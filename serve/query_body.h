@@ -14,7 +14,7 @@ namespace cwloc {
 enum class BodyKind {
   kPhoto,          // JPEG or PNG: its bytes decide
   kFeatureText,    // COLMAP's text feature file (text/plain)
-  kFeatureBinary,  // the "CWLF" layout (io/feature_file.h)
+  kFeatureBinary,  // the "CWLF" layout (app/feature_file.h)
 };
 
 // By the part's or body's Content-Type: text/plain is text features; bytes that start with

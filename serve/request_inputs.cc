@@ -5,11 +5,11 @@
 #include <variant>
 #include <vector>
 
+#include "app/camera_spec.h"
+#include "app/motion_file.h"
+#include "app/query_priors.h"
 #include "base/error.h"
 #include "base/option_value.h"
-#include "io/camera_spec.h"
-#include "io/motion_file.h"
-#include "io/query_priors.h"
 
 namespace cwloc {
 namespace {

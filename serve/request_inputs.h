@@ -8,8 +8,8 @@
 #include <string>
 #include <string_view>
 
-#include "io/option_table.h"
-#include "io/query_assembly.h"
+#include "app/option_table.h"
+#include "app/query_assembly.h"
 #include "localizer/tracker.h"
 
 namespace cwloc {

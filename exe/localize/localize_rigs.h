@@ -4,9 +4,9 @@
 #include <functional>
 #include <vector>
 
+#include "app/rig_input.h"
 #include "exe/localize/localize_cli.h"
 #include "exe/localize/result_sink.h"
-#include "io/rig_input.h"
 #include "localizer/localizer.h"
 #include "localizer/query.h"
 

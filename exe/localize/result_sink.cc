@@ -3,7 +3,7 @@
 #include <cstdio>
 #include <iostream>
 
-#include "io/result_json.h"
+#include "app/result_json.h"
 
 namespace cwloc {
 namespace {

@@ -6,11 +6,11 @@
 #include <mutex>
 #include <string>
 
+#include "app/result_json.h"
+#include "app/trajectory_file.h"
 #include "base/checkpointed_file.h"
 #include "base/error.h"
 #include "exe/localize/localize_cli.h"
-#include "io/result_json.h"
-#include "io/trajectory_file.h"
 #include "localizer/rig_localizer.h"
 #include "results/localization_result.h"
 

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "io/option_table.h"
+#include "app/option_table.h"
 
 namespace cwloc {
 

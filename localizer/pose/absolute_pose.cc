@@ -6,8 +6,8 @@
 #include <sstream>
 
 #include "base/angles.h"
-#include "localizer/pose/pose_estimators.h"
 #include "localizer/pose/refine_pose.h"
+#include "robust/pose_estimators.h"
 
 namespace cwloc {
 namespace {

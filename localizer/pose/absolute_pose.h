@@ -7,10 +7,10 @@
 #include <string>
 #include <vector>
 
-#include "estimators/ransac.h"
-#include "localizer/pose/camera_pose.h"
-#include "localizer/pose/gravity_prior.h"
 #include "localizer/pose/refine_pose.h"
+#include "robust/gravity_prior.h"
+#include "robust/ransac.h"
+#include "solvers/camera_pose.h"
 
 namespace cwloc {
 
@@ -18,9 +18,9 @@ namespace cwloc {
 // solver and a focal length P4Pf solver ... an image is localized if the best pose has at least
 // 12 inlier correspondences with a reprojection error less than 6 pixels").
 //
-// Pipeline: LO-RANSAC (estimators/ransac.h) over minimal solutions (P3P with a known focal length
+// Pipeline: LO-RANSAC (robust/ransac.h) over minimal solutions (P3P with a known focal length
 // or a focal prior, P4Pf without), each new best hypothesis refined by Levenberg-Marquardt on its
-// inliers (local_optimization.h); then a final refinement on the inliers with a Cauchy loss
+// inliers (robust/local_optimization.h); then a final refinement on the inliers with a Cauchy loss
 // (refine_pose.h, Ceres or our own Levenberg-Marquardt); the inlier set and error are finally
 // recomputed with the reported camera.
 //
@@ -43,7 +43,7 @@ namespace cwloc {
 // The first round that fails stops the loop; the camera of the last kept round is reported
 // (RANSAC's own, with k = 0, when none was kept).
 //
-// A gravity prior (PoseContext::gravity, gravity_prior.h; docs/algorithm.md):
+// A gravity prior (PoseContext::gravity, robust/gravity_prior.h; docs/algorithm.md):
 //   - known focal length: RANSAC's minimal sample is 2 points and its solver GravityP2P
 //     (gravity_p2p.h), whose poses honour the prior's direction exactly; the adaptive iteration
 //     count uses the sample size 2, log(1 - confidence) / log(1 - w^2). Its local optimisation
@@ -71,7 +71,7 @@ struct AbsolutePoseOptions {
   double max_error_px = 6.0;
   // Success needs at least this many inliers (paper: 12).
   int min_inliers = 12;
-  // The sampler: iteration limits, confidence (estimators/ransac.h).
+  // The sampler: iteration limits, confidence (robust/ransac.h).
   RansacOptions ransac;
   // Levenberg-Marquardt iterations per local optimisation inside RANSAC.
   int lo_iterations = 10;

@@ -11,10 +11,10 @@
 
 #include "base/chi_square.h"
 #include "base/enum_names.h"
-#include "localizer/pose/camera_pose.h"
-#include "localizer/pose/gravity_prior.h"
 #include "results/camera.h"
 #include "results/pose.h"
+#include "robust/gravity_prior.h"
+#include "solvers/camera_pose.h"
 
 namespace cwloc {
 
@@ -56,7 +56,7 @@ struct PoseRefinementOptions {
   // does not have throws cwloc::InputError.
   PoseRefiner refiner = PoseRefiner::kBuiltin;
   // A gravity prior as one more residual block, weight (R in_world - in_camera) with the weight
-  // in pixels per radian (gravity_prior.h); none when absent.
+  // in pixels per radian (robust/gravity_prior.h); none when absent.
   std::optional<GravityConstraint> gravity;
 };
 

@@ -21,9 +21,9 @@
 #include <cmath>
 #include <limits>
 
-#include "localizer/pose/cholesky.h"
 #include "localizer/pose/refine_pose_solver.h"
 #include "localizer/pose/reprojection_residual.h"
+#include "robust/cholesky.h"
 
 namespace cwloc {
 namespace {

@@ -5,8 +5,8 @@
 #include <optional>
 #include <span>
 
-#include "localizer/pose/gravity_prior.h"
 #include "localizer/pose/refine_pose.h"
+#include "robust/gravity_prior.h"
 
 namespace cwloc {
 

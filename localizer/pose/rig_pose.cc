@@ -6,10 +6,10 @@
 #include <cmath>
 #include <limits>
 
-#include "localizer/pose/generalized_pose.h"
-#include "localizer/pose/p3p.h"
-#include "localizer/pose/pose_estimators.h"
 #include "localizer/pose/refine_pose_solver.h"
+#include "robust/pose_estimators.h"
+#include "solvers/generalized_pose.h"
+#include "solvers/p3p.h"
 
 namespace cwloc {
 

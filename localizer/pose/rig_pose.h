@@ -7,10 +7,10 @@
 #include <string>
 #include <vector>
 
-#include "estimators/ransac.h"
 #include "localizer/pose/absolute_pose.h"
-#include "localizer/pose/camera_pose.h"
 #include "localizer/pose/refine_pose.h"
+#include "robust/ransac.h"
+#include "solvers/camera_pose.h"
 
 namespace cwloc {
 

@@ -1,6 +1,6 @@
 // The option table on every surface: for each option, cwloc-localize, the C API and the C++ API
 // accept its default and refuse a value outside its range with the same message.
-#include "io/option_table.h"
+#include "app/option_table.h"
 
 #include <gtest/gtest.h>
 
@@ -95,7 +95,7 @@ TEST_F(OptionTableTest, EverySurfaceAcceptsTheDefaults) {
   EXPECT_EQ(OptionValue(std::in_place_type<type>, api_defaults.field), \
             FindOption(flag).get(defaults))                            \
       << flag;
-#include "io/option_table.inc"
+#include "app/option_table.inc"
 #undef CWLOC_OPTION
 }
 
@@ -228,7 +228,7 @@ TEST(OptionTable, DocsAndHeadersNameOnlyFlagsThatExist) {
   const std::filesystem::path source = test::SourceDir();
   std::vector<std::pair<std::string, std::string>> texts;  // file, text
   for (const char* file : {"api/include/cwloc/cwloc.hpp", "api/include/cwloc/cwloc.h",
-                           "io/option_table.inc", "docs/api.md"})
+                           "app/option_table.inc", "docs/api.md"})
     texts.emplace_back(file, test::ReadFile(source / file));
   const std::string cli = test::ReadFile(source / "docs/cli.md");
   const size_t section = cli.find("\n## cwloc-localize");

@@ -10,9 +10,9 @@
 #include <string>
 #include <vector>
 
-#include "io/option_table.h"
-#include "io/record_json.h"
-#include "io/result_json.h"
+#include "app/option_table.h"
+#include "app/record_json.h"
+#include "app/result_json.h"
 #include "results/localization_result.h"
 #include "results/result_paths.h"
 #include "results/rig_result.h"

@@ -5,8 +5,8 @@
 #include <cstring>
 #include <fstream>
 
+#include "app/database/database_queries.h"
 #include "format/index.h"
-#include "io/database/database_queries.h"
 #include "localizer/localizer.h"
 #include "tests/test_util.h"
 

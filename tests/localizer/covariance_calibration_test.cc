@@ -7,11 +7,11 @@
 #include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
 
+#include "app/camera_spec.h"
+#include "app/database/database_queries.h"
 #include "base/chi_square.h"
 #include "camera/camera_models.h"
 #include "format/index.h"
-#include "io/camera_spec.h"
-#include "io/database/database_queries.h"
 #include "localizer/localizer.h"
 #include "tests/localization_check.h"
 #include "tests/shared_data_index.h"

@@ -6,10 +6,10 @@
 #include <fstream>
 #include <sstream>
 
+#include "app/camera_spec.h"
+#include "app/database/database_queries.h"
 #include "format/index.h"
 #include "geo/georeference.h"
-#include "io/camera_spec.h"
-#include "io/database/database_queries.h"
 #include "localizer/localizer.h"
 #include "localizer/query_pose.h"
 #include "tests/shared_data_index.h"

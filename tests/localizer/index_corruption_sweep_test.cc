@@ -19,10 +19,10 @@
 #include <span>
 #include <stdexcept>
 
+#include "app/camera_spec.h"
+#include "app/feature_file.h"
 #include "format/index.h"
 #include "format/xxhash64.h"
-#include "io/camera_spec.h"
-#include "io/feature_file.h"
 #include "localizer/localizer.h"
 #include "tests/localization_check.h"
 #include "tests/test_util.h"

@@ -11,9 +11,9 @@
 #include <iomanip>
 #include <iostream>
 
+#include "app/camera_spec.h"
+#include "app/database/database_queries.h"
 #include "format/index.h"
-#include "io/camera_spec.h"
-#include "io/database/database_queries.h"
 #include "localizer/localizer.h"
 #include "tests/localization_check.h"
 #include "tests/shared_data_index.h"

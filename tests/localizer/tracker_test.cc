@@ -13,9 +13,9 @@
 #include <sstream>
 #include <vector>
 
+#include "app/camera_spec.h"
+#include "app/database/database_queries.h"
 #include "base/angles.h"
-#include "io/camera_spec.h"
-#include "io/database/database_queries.h"
 #include "tests/localization_check.h"
 #include "tests/shared_data_index.h"
 #include "tests/test_util.h"

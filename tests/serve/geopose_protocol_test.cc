@@ -8,8 +8,8 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "app/query_priors.h"
 #include "base/error.h"
-#include "io/query_priors.h"
 #include "photo/grey_image.h"
 #include "serve/base64.h"
 #include "tests/test_util.h"

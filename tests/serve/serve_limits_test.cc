@@ -11,7 +11,7 @@
 #include <set>
 #include <thread>
 
-#include "io/photo_query.h"
+#include "app/photo_query.h"
 #include "tests/serve/serve_process.h"
 #include "tests/shared_data_index.h"
 

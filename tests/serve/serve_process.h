@@ -18,7 +18,7 @@
 
 namespace cwloc::test {
 
-// A query's features in cwloc-serve's binary layout (io/feature_file.h: "CWLF", version 1, N,
+// A query's features in cwloc-serve's binary layout (app/feature_file.h: "CWLF", version 1, N,
 // N x (x, y) float32, N x 128 descriptors; little-endian).
 inline std::string BinaryFeatureBody(const Query& query) {
   std::string binary = "CWLF";

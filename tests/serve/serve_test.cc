@@ -12,9 +12,9 @@
 #include <sstream>
 #include <thread>
 
+#include "app/photo_query.h"
+#include "app/query_priors.h"
 #include "indexer/index_builder.h"
-#include "io/photo_query.h"
-#include "io/query_priors.h"
 #include "tests/serve/serve_process.h"
 #include "tests/shared_data_index.h"
 

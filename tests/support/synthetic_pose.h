@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "base/split_mix64.h"
-#include "localizer/pose/camera_pose.h"
+#include "solvers/camera_pose.h"
 
 namespace cwloc::test {
 

@@ -9,7 +9,7 @@
 #include <optional>
 
 #include "base/angles.h"
-#include "localizer/pose/local_optimization.h"
+#include "robust/local_optimization.h"
 #include "tests/support/synthetic_pose.h"
 #include "tests/test_util.h"
 
