@@ -5,20 +5,28 @@ Two workloads from a data set of ../shared/data's layout: its query photos, sent
 body (`curl --data-binary`), and their SIFT features from database.db in the binary layout with
 the query's camera (multipart, docs/serve.md), as a device that extracts on board sends them.
 
+  pinning      on a machine of 2 cores or more the server and the peer run on core 0
+               (taskset), this script and its load generators on core 1: the client never
+               takes the server's core (--no-pin to share them)
   peer         cwloc-localize --threads N on the same queries repeated (the photos by
                --image-list, the features from the database by --query-list with their
                cameras): queries per second, hyperfine's median of 3 runs
-  throughput   wrk -c 2N for --seconds against cwloc-serve --threads N: requests per second
-               (and its ratio to the peer's), median and p99 latency
+  throughput   wrk -c 2N for --seconds against cwloc-serve --threads N: requests per second,
+               median and p99 latency; twice, alternating with the peer, and the ratio of the
+               medians (the rate the 80 % and 200 % loads and the soak take, in this run)
   80 %         an open-loop client (requests at fixed times, whatever the answers' latency) at
                80 % of that throughput: median and p99 latency, their ratio
   overload     the same at 200 %, with --budget-ms: answers by status, answers later than the
                budget plus 0.5 s, localized queries per second against the throughput
   soak         80 % for --soak-seconds (features; photos with --soak-photos): errors, and
                cwloc-serve's RSS 30 s in and at the end
+  limits       a request announcing a 1 GB body: time to its 413 (median of 5), and a features
+               query's time right after; fast clients (2 connections sending features without
+               pause) alone and beside 300 slow clients that send their bodies a byte a second:
+               the fast clients' rate with them over the rate without
 
-    bench/serve_benchmark.py WORKDIR [--data herz_jesu_p25] [--threads 2] [--seconds 20]
-                             [--soak-seconds 600]
+    bench/serve_benchmark.py WORKDIR [--data herz_jesu_p25] [--threads 1] [--seconds 20]
+                             [--soak-seconds 600] [--no-pin]
 Localhost only. Needs wrk and hyperfine (tools/install-deps.sh).
 """
 import argparse
@@ -104,9 +112,13 @@ def workloads(data, work, repeats):
     ], len(names) * repeats
 
 
+SERVER_CORE = []  # ["taskset", "-c", "0"] when pinned (main)
+
+
 def peer_rate(index, workload, count, threads):
-    command = " ".join([os.path.join(BIN, "cwloc-localize"), "--index", index, "--threads",
-                        str(threads), "-q", "-o", "/dev/null"] + workload.cli_args)
+    command = " ".join(SERVER_CORE + [os.path.join(BIN, "cwloc-localize"), "--index", index,
+                                      "--threads", str(threads), "-q", "-o", "/dev/null"] +
+                       workload.cli_args)
     report = os.path.join(tempfile.mkdtemp(), "hyperfine.json")
     run(["hyperfine", "--runs", "3", "--warmup", "1", "-i", "--export-json", report, command])
     seconds = statistics.median(json.load(open(report))["results"][0]["times"])
@@ -116,7 +128,7 @@ def peer_rate(index, workload, count, threads):
 class Server:
     def __init__(self, index, threads, extra=()):
         self.process = subprocess.Popen(
-            [os.path.join(BIN, "cwloc-serve"), "--index", index, "--listen", "127.0.0.1:0",
+            SERVER_CORE + [os.path.join(BIN, "cwloc-serve"), "--index", index, "--listen", "127.0.0.1:0",
              "--threads", str(threads), "-q", *extra], stderr=subprocess.PIPE, text=True)
         line = self.process.stderr.readline()
         match = re.search(r"127\.0\.0\.1:(\d+)/", line)
@@ -204,6 +216,119 @@ def open_loop(port, workload, rate, seconds, deadline_s=None):
     return results
 
 
+def announced_gigabyte(port):
+    """Milliseconds from sending a request that announces a 1 GB body (and its first 64 KiB) to
+    reading its answer's status line; the status."""
+    sock = socket.create_connection(("127.0.0.1", port))
+    head = (b"POST /v1/localize HTTP/1.1\r\nHost: bench\r\nContent-Type: image/jpeg\r\n"
+            b"Content-Length: 1000000000\r\n\r\n")
+    start = time.monotonic()
+    sock.sendall(head + b"\0" * 65536)
+    answer = b""
+    while b"\r\n" not in answer:
+        chunk = sock.recv(4096)
+        if not chunk:
+            break
+        answer += chunk
+    elapsed = (time.monotonic() - start) * 1e3
+    sock.close()
+    return elapsed, int(answer.split()[1]) if answer else 0
+
+
+def closed_loop(port, workload, seconds, connections=2):
+    """Clients sending without pause over keep-alive: answers 200 per second."""
+    stop = time.monotonic() + seconds
+    counts = []
+
+    def client():
+        connection, done, n = None, 0, 0
+        while time.monotonic() < stop:
+            headers, body = workload.bodies[n % len(workload.bodies)]
+            n += 1
+            try:
+                if connection is None:
+                    connection = http.client.HTTPConnection("127.0.0.1", port, timeout=60)
+                connection.request("POST", "/v1/localize", body, headers)
+                response = connection.getresponse()
+                response.read()
+                done += response.status == 200
+            except (http.client.HTTPException, OSError):
+                connection = None
+        counts.append(done)
+
+    threads = [threading.Thread(target=client) for _ in range(connections)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    return sum(counts) / seconds
+
+
+class SlowClients:
+    """`count` connections that each announce a 100 kB body and send it a byte a second; one
+    the server ends (408) is opened again."""
+
+    def __init__(self, port, count):
+        self.port, self.count = port, count
+        self.stop = threading.Event()
+        self.ended = 0
+        self.thread = threading.Thread(target=self.run)
+
+    def open(self):
+        sock = socket.create_connection(("127.0.0.1", self.port))
+        sock.setblocking(False)
+        sock.send(b"POST /v1/localize HTTP/1.1\r\nHost: slow\r\nContent-Type: image/jpeg\r\n"
+                  b"Content-Length: 100000\r\n\r\n")
+        return sock
+
+    def run(self):
+        sockets = [self.open() for _ in range(self.count)]
+        while not self.stop.wait(1.0):
+            for i, sock in enumerate(sockets):
+                try:
+                    sock.send(b"x")
+                    if sock.recv(4096, socket.MSG_PEEK):  # answered (408): ended
+                        raise OSError
+                except BlockingIOError:
+                    pass
+                except OSError:
+                    sock.close()
+                    self.ended += 1
+                    sockets[i] = self.open()
+        for sock in sockets:
+            sock.close()
+
+    def __enter__(self):
+        self.thread.start()
+        time.sleep(2)
+        return self
+
+    def __exit__(self, *exc):
+        self.stop.set()
+        self.thread.join()
+
+
+def limits_rows(index, threads, features, seconds):
+    rows = []
+    server = Server(index, threads)
+    closed_loop(server.port, features, 2)  # warm
+    answers = [announced_gigabyte(server.port) for _ in range(5)]
+    after = time.monotonic()
+    alone_status = closed_loop(server.port, features, 1, connections=1)
+    ms = statistics.median(a for a, _ in answers)
+    rows.append(("limits", "1 GB announced", f"{', '.join(str(s) for _, s in answers)}",
+                 f"413 in {ms:.1f} ms (median of 5)",
+                 f"then {alone_status:.1f} features/s at once", ""))
+    alone = closed_loop(server.port, features, seconds)
+    with SlowClients(server.port, 300) as slow:
+        beside = closed_loop(server.port, features, seconds)
+    server.stop()
+    rows.append(("limits", "300 slow clients", f"{alone:.1f}/s alone",
+                 f"{beside:.1f}/s beside them", f"{beside / alone:.2f} of the rate alone",
+                 f"{slow.ended} slow connections ended (408) and reopened"))
+    return rows
+
+
 def statuses_text(results):
     """"200: N 503: M ..." (0: no answer: the connection failed)."""
     counts = {}
@@ -221,7 +346,9 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("work")
     parser.add_argument("--data", default="herz_jesu_p25")
-    parser.add_argument("--threads", type=int, default=2)
+    parser.add_argument("--threads", type=int, default=1)
+    parser.add_argument("--no-pin", action="store_true",
+                        help="let the server, the peer and the clients share every core")
     parser.add_argument("--seconds", type=int, default=20)
     parser.add_argument("--soak-seconds", type=int, default=600)
     parser.add_argument("--soak-photos", action="store_true")
@@ -236,19 +363,33 @@ def main():
              os.path.join(data, "database.db"), "-o", index])
     cpu = next((l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo")
                 if l.startswith("model name")), "?")
-    print(f"cwloc-serve benchmark: {data}, {os.cpu_count()} cores ({cpu}), --threads {args.threads}")
+    pinned = not args.no_pin and os.cpu_count() >= 2
+    if pinned:  # the server and the peer on core 0, this script and what it starts on core 1
+        SERVER_CORE.extend(["taskset", "-c", "0"])
+        os.sched_setaffinity(0, {1})
+    print(f"cwloc-serve benchmark: {data}, {os.cpu_count()} cores ({cpu}), --threads {args.threads}"
+          f", {'server and peer on core 0, clients on core 1' if pinned else 'cores shared'}")
     loads, count = workloads(data, args.work, args.repeats)
     rows = []
     soak_load = None
     for load in loads:
-        peer = peer_rate(index, load, count, args.threads)
-        server = Server(index, args.threads)
-        wrk(server.port, load, 3, 2 * args.threads, args.work)  # warm the page cache
-        rate, p50, p99, errors = wrk(server.port, load, args.seconds, 2 * args.threads, args.work)
-        server.stop()
-        rows.append((load.name, "throughput", f"{rate:.1f}/s", f"{rate / peer:.2f} of "
-                     f"cwloc-localize's {peer:.1f}/s", f"p50 {p50:.1f} ms, p99 {p99:.1f} ms",
-                     f"{errors} errors"))
+        peers, rates = [], []
+        for _ in range(2):  # alternating, so that a drift of the machine touches both
+            peers.append(peer_rate(index, load, count, args.threads))
+            server = Server(index, args.threads)
+            wrk(server.port, load, 3, 2 * args.threads, args.work)  # warm the page cache
+            measured = wrk(server.port, load, args.seconds, 2 * args.threads, args.work)
+            server.stop()
+            rates.append(measured)
+        peer = statistics.median(peers)
+        rate = statistics.median(r[0] for r in rates)
+        p50 = statistics.median(r[1] for r in rates)
+        p99 = statistics.median(r[2] for r in rates)
+        errors = sum(r[3] for r in rates)
+        rows.append((load.name, "throughput", f"{rate:.1f}/s ({', '.join(f'{r[0]:.1f}' for r in rates)})",
+                     f"{rate / peer:.2f} of cwloc-localize's {peer:.1f}/s "
+                     f"({', '.join(f'{p:.1f}' for p in peers)})",
+                     f"p50 {p50:.1f} ms, p99 {p99:.1f} ms", f"{errors} errors"))
 
         server = Server(index, args.threads)
         steady = open_loop(server.port, load, 0.8 * rate, args.seconds)
@@ -271,6 +412,8 @@ def main():
                      f"{localized:.1f} localized/s ({localized / rate:.2f} of throughput)"))
         if (load.name == "photos") == args.soak_photos:
             soak_load, soak_rate = load, 0.8 * rate
+
+    rows += limits_rows(index, args.threads, loads[1], args.seconds)
 
     if args.soak_seconds > 0:
         server = Server(index, args.threads)

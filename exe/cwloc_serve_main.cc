@@ -1,11 +1,13 @@
 // cwloc-serve: answers localization requests over HTTP from memory-mapped cwloc indexes
 // (docs/serve.md).
 #include <signal.h>
+#include <sys/resource.h>
 #ifdef __GLIBC__
 #include <malloc.h>
 #endif
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cstdio>
 #include <string>
 #include <thread>
@@ -60,6 +62,21 @@ void HandleSignals(Server* server, const sigset_t& signals) {
   }
 }
 
+// Each connection is a descriptor; the index files, the workers and the 503 answers' sockets
+// need some more. The soft limit rises to what that needs, up to the hard one.
+void RaiseOpenFileLimit(size_t max_connections) {
+  const rlim_t needed = static_cast<rlim_t>(max_connections) + 256;
+  rlimit limit{};
+  if (getrlimit(RLIMIT_NOFILE, &limit) != 0 || limit.rlim_cur >= needed) return;
+  limit.rlim_cur = limit.rlim_max == RLIM_INFINITY ? needed : std::min(needed, limit.rlim_max);
+  setrlimit(RLIMIT_NOFILE, &limit);
+  if (limit.rlim_cur < needed) {
+    throw InputError("--max-connections " + std::to_string(max_connections) + " needs " +
+                     std::to_string(needed) + " open files; the limit is " +
+                     std::to_string(limit.rlim_cur) + " (ulimit -n)");
+  }
+}
+
 int Run(const ServeCli& cli, ServeOptions options) {
   for (const std::string& index : cli.indexes) options.indexes.push_back(ParseIndexSpec(index));
   ParseListen(cli.listen, &options);
@@ -67,6 +84,7 @@ int Run(const ServeCli& cli, ServeOptions options) {
     throw InputError("--max-body-mb must be more than 0 and at most 4096");
   options.http.max_body_bytes = static_cast<size_t>(cli.max_body_mb * (1 << 20));
   if (!cli.token_file.empty()) options.token = ReadTokenFile(cli.token_file);
+  RaiseOpenFileLimit(options.http.max_connections);
 
 #ifdef __GLIBC__
   // A request's body and features are megabytes, freed when it ends. glibc's threshold for

@@ -20,7 +20,8 @@
 namespace cwloc {
 
 struct HttpLimits {
-  size_t max_connections = 64;         // served at once; one more is answered 503 and closed
+  // A connection costs a socket and a few KiB (no thread): room for many slow clients.
+  size_t max_connections = 1000;       // served at once; one more is answered 503 and closed
   size_t max_body_bytes = 32 << 20;    // larger: 413 (on Content-Length, or as chunks arrive)
   size_t max_header_bytes = 16 << 10;  // request line and headers: 431 beyond
   // A request's headers arrive within this of its connection's last answer (or of its
