@@ -394,6 +394,10 @@ TEST_F(ServeLimitsTest, AFullQueueAnswers503AtOnce) {
 // Two clients keep sending features while the index file is replaced and reloaded three times
 // (SIGHUP twice, then POST /v1/admin/reload): every request is answered 200 with the same pose.
 TEST_F(ServeLimitsTest, AReloadUnderLoadFailsNoRequest) {
+  // Reloads alternate between two indexes of the scene that answer the query differently:
+  // the full descriptors and 32-byte codes.
+  const auto compact = test::BuildSharedDataIndex("herz_jesu_p25", 32);
+  ASSERT_TRUE(compact);
   const auto served = dir_ / "served.cwl";
   std::filesystem::copy_file(shared_->index, served);
   std::ofstream(dir_ / "token") << "secret-token\n";
@@ -401,6 +405,22 @@ TEST_F(ServeLimitsTest, AReloadUnderLoadFailsNoRequest) {
       {"--index", served.string(), "--threads", "2", "--token-file", (dir_ / "token").string()});
   const std::string features = BinaryFeatures();
   const httplib::Headers authorized = {{"Authorization", "Bearer secret-token"}};
+  const auto pose_from = [&](const ServeProcess& from) {
+    const auto response =
+        from.Client().Post("/v1/localize", authorized,
+                           httplib::MultipartFormDataItems{{"features", features, "f.bin", ""},
+                                                           {"options", kCamera, "", ""}});
+    if (!response || response->status != 200) return std::string("no answer");
+    return json::parse(response->body)["pose"].dump();
+  };
+  std::string compact_pose;
+  {
+    ServeProcess compact_server(
+        {"--index", compact->index.string(), "--token-file", (dir_ / "token").string()});
+    compact_pose = pose_from(compact_server);
+  }
+  const std::string full_pose = pose_from(server);
+  ASSERT_NE(compact_pose, full_pose);  // else the test could not tell the indexes apart
   std::atomic<bool> stop{false};
   std::atomic<int> answered{0};
   std::mutex mutex;
@@ -437,8 +457,9 @@ TEST_F(ServeLimitsTest, AReloadUnderLoadFailsNoRequest) {
   for (int round = 1; round <= 3; ++round) {
     const int before = answered;
     while (answered < before + 5) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    const bool to_compact = round % 2 == 1;
     const auto next = dir_ / "next.cwl";
-    std::filesystem::copy_file(shared_->index, next);
+    std::filesystem::copy_file(to_compact ? compact->index : shared_->index, next);
     std::filesystem::rename(next, served);  // as a deployment replaces the file
     if (round < 3) {
       ::kill(server.pid(), SIGHUP);
@@ -452,6 +473,8 @@ TEST_F(ServeLimitsTest, AReloadUnderLoadFailsNoRequest) {
       EXPECT_EQ(reloaded->status, 200) << reloaded->body;
       EXPECT_EQ(generation(), 3);
     }
+    // A request after the reload is answered from the new index.
+    EXPECT_EQ(pose_from(server), to_compact ? compact_pose : full_pose) << "round " << round;
   }
   const int before = answered;
   while (answered < before + 5) std::this_thread::sleep_for(std::chrono::milliseconds(5));
@@ -459,7 +482,7 @@ TEST_F(ServeLimitsTest, AReloadUnderLoadFailsNoRequest) {
   for (std::thread& c : clients) c.join();
   EXPECT_TRUE(failures.empty()) << failures.size() << " failed, the first: " << failures[0];
   EXPECT_GE(answered, 20);
-  EXPECT_EQ(poses.size(), 1u);  // the same file each time: the same pose
+  EXPECT_EQ(poses, (std::set<std::string>{full_pose, compact_pose}));  // each index's own
   // A file that fails to open leaves the old index serving. (It is renamed into place: a file
   // written over in place would change the pages the server has mapped, docs/serve.md.)
   std::ofstream(dir_ / "broken.cwl") << "not an index";
