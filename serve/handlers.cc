@@ -268,12 +268,13 @@ void Server::Impl::SessionFrame(const HttpRequest& req, HttpResponse& res) {
   const BodyKind kind = BodyKindOf(body.content_type, body.bytes);
   Defer(
       res,
-      [this, session, inputs, body, kind, one_frame](HttpResponse& answer) mutable {
+      [this, id, session, inputs, body, kind, one_frame](HttpResponse& answer) mutable {
         // Released as the frame's answer is made, before the client can send the next.
         const std::shared_ptr<void> frame = std::move(one_frame);
         const Query query = QueryFromBody(body.bytes, kind, inputs, body.what);
         const LocalizationResult result =
             session->tracker.Track(query, inputs.timestamp, inputs.motion);
+        sessions.Touch(id);  // its time to live from this answer, not from the request
         metrics.CountResult(result.success, result.times);
         SetJson(answer, ResultToJson(result, session->inputs.options));
       },

@@ -46,6 +46,12 @@ std::shared_ptr<Session> SessionTable::Find(const std::string& id, bool* ended) 
   return found->second.session;
 }
 
+void SessionTable::Touch(const std::string& id) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (const auto found = sessions_.find(id); found != sessions_.end())
+    found->second.expires = Clock::now() + time_to_live_;
+}
+
 bool SessionTable::Remove(const std::string& id) {
   std::lock_guard<std::mutex> lock(mutex_);
   if (sessions_.erase(id) == 0) return false;
@@ -61,7 +67,8 @@ size_t SessionTable::size() {
 
 void SessionTable::DropExpired(Clock::time_point now) {
   for (auto it = sessions_.begin(); it != sessions_.end();) {
-    if (it->second.expires > now) {
+    // A session whose frame is running is in use however long the frame takes.
+    if (it->second.expires > now || it->second.session->busy) {
       ++it;
       continue;
     }

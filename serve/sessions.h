@@ -56,6 +56,8 @@ class SessionTable {
   // `ended` says whether it was here and ended (deleted or expired).
   std::shared_ptr<Session> Find(const std::string& id, bool* ended);
   bool Remove(const std::string& id);
+  // Its time to live counted again from now: a frame's answer is made.
+  void Touch(const std::string& id);
   size_t size();
   std::chrono::milliseconds time_to_live() const { return time_to_live_; }
 

@@ -6,11 +6,14 @@
 #                                    own tests (CWLOC_BUILD_TOOL_TESTS)
 #   tools/check_sanitizers.sh fuzz   each libFuzzer target of build-asan for FUZZ_SECONDS
 #                                    (default 20), two at a time, from fuzz/corpus
-#   tools/check_sanitizers.sh tsan   ThreadSanitizer in build-tsan (the device configuration):
-#                                    a batch of queries on one index with 4 threads through
-#                                    cwloc-localize, the library's concurrent-use tests, and
-#                                    SIFT on several threads inside one photo; and what the
-#                                    device build links (ldd, on x86-64 only here)
+#   tools/check_sanitizers.sh tsan   ThreadSanitizer in build-tsan (the device configuration,
+#                                    and cwloc-serve): a batch of queries on one index with 4
+#                                    threads through cwloc-localize, the library's
+#                                    concurrent-use tests, SIFT on several threads inside one
+#                                    photo, cwloc-serve's HTTP layer and work queue, and the
+#                                    serve tests of concurrency against a ThreadSanitizer
+#                                    cwloc-serve (after the native build in build/); and what
+#                                    the device build links (ldd, on x86-64 only here)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 mode="${1:-}"
@@ -92,10 +95,12 @@ case "$mode" in
     fuzz/run.sh build-asan --seconds "${FUZZ_SECONDS:-20}" --jobs "$jobs"
     ;;
   tsan)
+    # The server too (never on a device; it links nothing the device check looks at).
     cmake -S . -B build-tsan -G Ninja "${clang[@]}" -DCWLOC_SANITIZE=thread "${device_options[@]}" \
-      -DCWLOC_BUILD_BENCHMARKS=OFF >/dev/null
+      -DCWLOC_WITH_SERVE=ON -DCWLOC_BUILD_BENCHMARKS=OFF >/dev/null
     cmake --build build-tsan -j "$jobs" --target cwloc_localize_exe api_tests sift_tests base_tests \
-      >build-tsan/build.log 2>&1 || { tail -50 build-tsan/build.log; exit 1; }
+      cwloc_serve_exe serve_unit_tests >build-tsan/build.log 2>&1 ||
+      { tail -50 build-tsan/build.log; exit 1; }
     export TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1"
     # The golden index's queries, each 8 times, with their cameras from the ground truth.
     golden=tests/data/golden/index-1.1-queries
@@ -117,6 +122,27 @@ case "$mode" in
         { cat build-tsan/"$binary".log; exit 1; }
       grep -E '^\[  PASSED  \]' build-tsan/"$binary".log | sed "s/^/ThreadSanitizer: $binary /"
     done
+    build-tsan/tests/serve_unit_tests >build-tsan/serve_unit_tests.log 2>&1 ||
+      { cat build-tsan/serve_unit_tests.log; exit 1; }
+    grep -E '^\[  PASSED  \]' build-tsan/serve_unit_tests.log | sed 's/^/ThreadSanitizer: serve_unit_tests /'
+    # The native build's serve tests of concurrency against this cwloc-serve: its reports go to
+    # files (a race ends the server, and its test fails).
+    if [ -x build/tests/serve_tests ]; then
+      mixed=build-tsan/serve-bin
+      rm -rf "$mixed" build-tsan/serve-tsan.*
+      mkdir -p "$mixed"
+      for tool in build/bin/*; do ln -sf "$PWD/$tool" "$mixed/"; done
+      ln -sf "$PWD/build-tsan/bin/cwloc-serve" "$mixed/cwloc-serve"
+      filter='ServeTest.APhotoGetsTheCliPoseBitForBit:ServeTest.ASessionTracks*'
+      filter+=':ServeTest.ASessionGoesOn*:ServeLimitsTest.AFullQueueAnswers503AtOnce'
+      filter+=':ServeLimitsTest.AReloadUnderLoadFailsNoRequest:ServeLimitsTest.Sigterm*'
+      TSAN_OPTIONS="$TSAN_OPTIONS log_path=$PWD/build-tsan/serve-tsan" CWLOC_BIN_DIR="$PWD/$mixed" \
+        build/tests/serve_tests --gtest_filter="$filter" >build-tsan/serve_tests.log 2>&1 ||
+        { cat build-tsan/serve_tests.log build-tsan/serve-tsan.* 2>/dev/null; exit 1; }
+      if ls build-tsan/serve-tsan.* >/dev/null 2>&1; then cat build-tsan/serve-tsan.*; exit 1; fi
+      grep -E '^\[  PASSED  \]' build-tsan/serve_tests.log |
+        sed 's/^/ThreadSanitizer: cwloc-serve under serve_tests /'
+    fi
     # The device configuration links nothing beyond the C/C++ runtime and small C libraries
     # (clang links the sanitizer's runtime statically, so ldd shows what a device build needs).
     forbidden='sqlite|libvl\.|ceres|glog|gflags|lapack|blas|atlas|gfortran|cholmod|spqr|metis|gomp'
