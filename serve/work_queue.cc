@@ -70,9 +70,11 @@ void WorkQueue::Work() {
     ++busy_;
     lock.unlock();
     task->work();
+    lock.lock();
+    --busy_;  // before done(): whoever it wakes finds the worker free
+    lock.unlock();
     task->done(Outcome::kDone);
     lock.lock();
-    --busy_;
   }
 }
 
