@@ -195,6 +195,10 @@ void Connection::ReadBody() {
   const double bytes = static_cast<double>(
       length ? *length : (parser_->chunked() ? server_->limits.max_body_bytes : 0));
   ExpireAfter(Seconds(server_->limits.request_timeout_s + bytes / server_->limits.min_body_rate));
+  // Beast reads as much as the buffer has room for, at least 512 bytes: without room a 1.5 MB
+  // body took ~3,000 reads, a third of a core at 100 requests a second. Up to 64 KiB a read.
+  const size_t room = static_cast<size_t>(std::min(bytes, 65536.0));
+  if (buffer_.capacity() < room) buffer_.reserve(room);
   const auto read = [self = shared_from_this()] {
     http::async_read(self->socket_, self->buffer_, *self->parser_,
                      [self](beast::error_code error, size_t) { self->OnBody(error); });
