@@ -232,10 +232,12 @@ cwloc_status cwloc_options_set_position_prior(cwloc_options* options,
   if (prior == nullptr) {
     options->options.position_prior.reset();
   } else {
-    options->options.position_prior = cwloc::api::PositionPrior{
-        prior->latitude_deg, prior->longitude_deg,
-        std::isnan(prior->height_m) ? std::nullopt : std::optional<double>(prior->height_m),
-        prior->radius_m};
+    cwloc::api::PositionPrior position;
+    position.latitude_deg = prior->latitude_deg;
+    position.longitude_deg = prior->longitude_deg;
+    if (!std::isnan(prior->height_m)) position.height_m = prior->height_m;
+    position.radius_m = prior->radius_m;
+    options->options.position_prior = position;
   }
   last_error.clear();
   return CWLOC_OK;

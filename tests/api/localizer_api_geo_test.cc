@@ -243,13 +243,13 @@ TEST_F(LocalizerApiGeoTest, BadPriorsAreInvalidArgumentsWithThePipelinesMessage)
   expect(options,
          "features: position prior 91.000000, 8.540300 is not a latitude in [-90, 90] "
          "and a longitude");
-  options.position_prior = api::PositionPrior{47.3779, 8.5403, NAN, 50.0};
+  options.position_prior = api::PositionPrior{{47.3779, 8.5403, NAN, 50.0}};
   expect(options,
          "features: position prior 47.377900, 8.540300 is not a latitude in [-90, 90] "
          "and a longitude");
-  options.position_prior = api::PositionPrior{47.3779, 8.5403, 455.0, 0.0};
+  options.position_prior = api::PositionPrior{{47.3779, 8.5403, 455.0, 0.0}};
   expect(options, "features: position prior radius must be a positive number of metres");
-  options.position_prior = api::PositionPrior{47.3779, 8.5403, 455.0, -5.0};
+  options.position_prior = api::PositionPrior{{47.3779, 8.5403, 455.0, -5.0}};
   expect(options, "features: position prior radius must be a positive number of metres");
 
   options = api::Options();

@@ -336,9 +336,9 @@ class LocalizerApiGeoToolsTest : public testing::Test {
       for (std::string value; fields >> value;) v.push_back(value);
       if (kind == "position") {
         options[name].position_prior = api::PositionPrior{
-            number(v.at(0)), number(v.at(1)),
-            v.at(2) == "-" ? std::nullopt : std::optional<double>(number(v.at(2))),
-            number(v.at(3))};
+            {number(v.at(0)), number(v.at(1)),
+             v.at(2) == "-" ? std::nullopt : std::optional<double>(number(v.at(2))),
+             number(v.at(3))}};
       } else {
         options[name].gravity =
             std::array<double, 3>{number(v.at(0)), number(v.at(1)), number(v.at(2))};
@@ -564,7 +564,7 @@ TEST_F(LocalizerApiGeoToolsTest, GeoPosesWithoutPriorsAreCwlocLocalizes) {
 TEST_F(LocalizerApiGeoToolsTest, APositionPriorFarFromTheModelFailsSayingSo) {
   const colmap::DatabaseReader db(City() / "database.db");
   api::Options options;
-  options.position_prior = api::PositionPrior{47.3779, 8.6403, std::nullopt, 100.0};  // 7.5 km E
+  options.position_prior = api::PositionPrior{{47.3779, 8.6403, std::nullopt, 100.0}};  // 7.5 km E
   for (const auto& [name, camera] : Queries()) {
     SCOPED_TRACE(name);
     const api::Result result = localizer_->Localize(DatabaseFeatures(db, name), camera, options);
@@ -615,7 +615,7 @@ TEST_F(LocalizerApiGeoToolsTest, ExifGpsIsThePositionPriorUnlessOneIsGiven) {
   EXPECT_EQ(cli["priors"]["position"]["longitude_deg"].get<double>(), exif->longitude_deg);
 
   // A given prior (around the whole city) wins over the EXIF GPS, as --prior-position does.
-  options.position_prior = api::PositionPrior{47.3779, 8.5403, std::nullopt, 1000.0};
+  options.position_prior = api::PositionPrior{{47.3779, 8.5403, std::nullopt, 1000.0}};
   const api::Result given = localizer_->LocalizePhoto(photo.string(), std::nullopt, options);
   ASSERT_TRUE(given.priors.position);
   EXPECT_EQ(given.priors.position->latitude_deg, 47.3779);
