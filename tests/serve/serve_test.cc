@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <thread>
+#include <tuple>
 
 #include "app/photo_query.h"
 #include "app/query_priors.h"
@@ -47,6 +48,18 @@ class ServeTest : public testing::Test {
     }
     ADD_FAILURE() << name << " is not in queries_with_intrinsics.txt";
     return "";
+  }
+
+  // A camera line's parts, as GeoPose requests give them: model, width, height, parameters.
+  static std::tuple<std::string, int, int, std::vector<double>> CameraParts(
+      const std::string& camera) {
+    std::istringstream fields(camera);
+    std::string model;
+    int width = 0, height = 0;
+    fields >> model >> width >> height;
+    std::vector<double> params;
+    for (double value; fields >> value;) params.push_back(value);
+    return {model, width, height, params};
   }
 
   // cwloc-localize's JSON lines with these arguments.
@@ -291,12 +304,7 @@ TEST_F(ServeTest, TheProtocolsDemoClientIsAnsweredWithTheCliPose) {
   auto client = server.Client();
   const std::string photo = test::ReadFile(Photo("0012.jpg"));
   const std::string camera = CameraOf("0012.jpg");
-  std::istringstream fields(camera);
-  std::string model;
-  int width, height;
-  fields >> model >> width >> height;
-  std::vector<double> params;
-  for (double value; fields >> value;) params.push_back(value);
+  const auto [model, width, height, params] = CameraParts(camera);
   const double latitude = kOrigin.latitude_deg;
   const double longitude = kOrigin.longitude_deg + 10 / (111320 * std::cos(latitude * kPi / 180));
   const double now_ms = 1765000000123.456;
@@ -384,12 +392,7 @@ TEST_F(ServeTest, GeoPoseAndCoverageOnAGeoreferencedIndex) {
   auto client = server.Client();
   const std::string photo = test::ReadFile(Photo("0002.jpg"));
   const std::string camera = CameraOf("0002.jpg");
-  std::istringstream fields(camera);
-  std::string model;
-  int width, height;
-  fields >> model >> width >> height;
-  std::vector<double> params;
-  for (double value; fields >> value;) params.push_back(value);
+  const auto [model, width, height, params] = CameraParts(camera);
 
   // A phone's fix 20 m east of the origin, 100 m accurate: the scene is within it.
   const double latitude = kOrigin.latitude_deg;
