@@ -139,7 +139,17 @@ TEST_F(ServeMalformedTest, ABodyOverMaxBodyMbGets413) {
 }
 
 TEST_F(ServeMalformedTest, BadOptionsGet400NamingTheOption) {
+  // A session's options travel in its id (serve/sessions.h): at most 2 KiB.
+  const std::string long_options = R"({"name": ")" + std::string(2100, 'a') + R"("})";
   ExpectEachRefused({
+      {"POST",
+       "/v1/sessions",
+       "application/json",
+       long_options,
+       {},
+       400,
+       "session options: " + std::to_string(long_options.size()) +
+           " bytes, over 2048 (they travel in the session's id)"},
       {"POST",
        "/v1/localize",
        "",
