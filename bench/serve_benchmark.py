@@ -8,14 +8,16 @@ the query's camera (multipart, docs/serve.md), as a device that extracts on boar
   pinning      on a machine of 2 cores or more the server and the peer run on core 0
                (taskset), this script and its load generators on core 1: the client never
                takes the server's core (--no-pin to share them)
-  peer         cwloc-localize --threads N on the same queries repeated (the photos by
-               --image-list, the features from the database by --query-list with their
-               cameras): queries per second, hyperfine's median of 3 runs
-  throughput   wrk -c 2N for --seconds against cwloc-serve --threads N: requests per second,
-               median and p99 latency; twice, alternating with the peer, and the ratio of the
-               medians (the rate the 80 % and 200 % loads and the soak take, in this run)
-  80 %         an open-loop client (requests at fixed times, whatever the answers' latency) at
-               80 % of that throughput: median and p99 latency, their ratio
+  peer         cwloc-localize --threads N on the same queries repeated, about 20 s of them (the
+               photos by --image-list, the features from the database by --query-list with
+               their cameras): queries per second
+  throughput   wrk -c 2N for --seconds against cwloc-serve --threads N (warmed by 3 s of the
+               same): requests per second, median and p99 latency; --rounds times, alternating
+               with the peer, and the ratio of the medians (the rate the 80 % and 200 % loads
+               and the soak take, in this run)
+  80 %         an open-loop client (cwloc-load-bench: requests at fixed times whatever the
+               answers' latency, latency from each one's time) at 80 % of that throughput,
+               against a warmed server: median and p99 latency, their ratio
   overload     the same at 200 %, with --budget-ms: answers by status, answers later than the
                budget plus 0.5 s, localized queries per second against the throughput
   soak         80 % for --soak-seconds (features; photos with --soak-photos): errors, and
@@ -25,15 +27,14 @@ the query's camera (multipart, docs/serve.md), as a device that extracts on boar
                pause) alone and beside 300 slow clients that send their bodies a byte a second:
                the fast clients' rate with them over the rate without
 
-    bench/serve_benchmark.py WORKDIR [--data herz_jesu_p25] [--threads 1] [--seconds 20]
+    bench/serve_benchmark.py WORKDIR [--data herz_jesu_p25] [--threads 1] [--seconds 20] [--rounds 4]
                              [--soak-seconds 600] [--no-pin]
-Localhost only. Needs wrk and hyperfine (tools/install-deps.sh).
+Localhost only. Needs wrk and hyperfine (tools/install-deps.sh) and build/bin/cwloc-load-bench.
 """
 import argparse
 import http.client
 import json
 import os
-import queue
 import re
 import socket
 import statistics
@@ -68,8 +69,9 @@ def run(args):
 class Workload:
     """The bodies one kind of query sends, and the cwloc-localize command for the same queries."""
 
-    def __init__(self, name, bodies, cli_args):
+    def __init__(self, name, bodies, cli_args, count):
         self.name, self.bodies, self.cli_args = name, bodies, cli_args  # bodies: (headers, bytes)
+        self.count = count  # the queries cwloc-localize runs
 
 
 def multipart(parts):
@@ -81,7 +83,7 @@ def multipart(parts):
     return {"Content-Type": f"multipart/form-data; boundary={boundary}"}, out + f"--{boundary}--\r\n".encode()
 
 
-def workloads(data, work, repeats):
+def workloads(data, work, photo_repeats, feature_repeats):
     rig = load_rig_benchmark()
     import sqlite3
     names = [line.split()[0] for line in open(os.path.join(data, "queries_with_intrinsics.txt"))
@@ -90,7 +92,7 @@ def workloads(data, work, repeats):
                for line in open(os.path.join(data, "queries_with_intrinsics.txt")) if line.strip()}
     photos = [open(os.path.join(data, "query_images", n), "rb").read() for n in names]
     with open(os.path.join(work, "photos.txt"), "w") as out:
-        out.write("".join(n + "\n" for n in names) * repeats)
+        out.write("".join(n + "\n" for n in names) * photo_repeats)
     db = sqlite3.connect(os.path.join(data, "database.db"))
     features = []
     for name in names:
@@ -100,29 +102,29 @@ def workloads(data, work, repeats):
         features.append(multipart([("features", "application/octet-stream", binary),
                                    ("options", "application/json", options)]))
     with open(os.path.join(work, "features.txt"), "w") as out:
-        out.write("".join(f"{n} {cameras[n]}\n" for n in names) * repeats)
+        out.write("".join(f"{n} {cameras[n]}\n" for n in names) * feature_repeats)
     photo_bodies = [({"Content-Type": "image/jpeg"}, p) for p in photos]
     return [
         Workload("photos", photo_bodies,
                  ["--image-list", os.path.join(work, "photos.txt"),
-                  "--image-dir", os.path.join(data, "query_images")]),
+                  "--image-dir", os.path.join(data, "query_images")], len(names) * photo_repeats),
         Workload("features", features,
                  ["--database", os.path.join(data, "database.db"),
-                  "--query-list", os.path.join(work, "features.txt")]),
-    ], len(names) * repeats
+                  "--query-list", os.path.join(work, "features.txt")], len(names) * feature_repeats),
+    ]
 
 
 SERVER_CORE = []  # ["taskset", "-c", "0"] when pinned (main)
 
 
-def peer_rate(index, workload, count, threads):
+def peer_rate(index, workload, threads):
     command = " ".join(SERVER_CORE + [os.path.join(BIN, "cwloc-localize"), "--index", index,
                                       "--threads", str(threads), "-q", "-o", "/dev/null"] +
                        workload.cli_args)
     report = os.path.join(tempfile.mkdtemp(), "hyperfine.json")
-    run(["hyperfine", "--runs", "3", "--warmup", "1", "-i", "--export-json", report, command])
+    run(["hyperfine", "--runs", "1", "-i", "--export-json", report, command])
     seconds = statistics.median(json.load(open(report))["results"][0]["times"])
-    return count / seconds
+    return workload.count / seconds
 
 
 class Server:
@@ -147,15 +149,29 @@ class Server:
         self.process.wait()
 
 
+def body_files(workload, work):
+    """The workload's bodies written to files, their paths in turn."""
+    paths = [os.path.join(work, f"{workload.name}-{i}.body") for i in range(len(workload.bodies))]
+    for path, (_, body) in zip(paths, workload.bodies):
+        open(path, "wb").write(body)
+    return paths
+
+
+def warm_server(index, threads, workload, work, extra=()):
+    """A server that has answered 3 s of the workload: its first answers fault in the index's
+    pages and the allocator's arenas, tens of ms that would queue the loads behind them."""
+    server = Server(index, threads, extra)
+    wrk(server.port, workload, 3, 2 * threads, work)
+    return server
+
+
 def wrk(port, workload, seconds, connections, work):
     """wrk's requests per second and latency percentiles (ms), the bodies sent in turn."""
-    for i, (headers, body) in enumerate(workload.bodies):
-        open(os.path.join(work, f"{workload.name}-{i}.body"), "wb").write(body)
+    paths = body_files(workload, work)
     script = os.path.join(work, f"{workload.name}.lua")
     with open(script, "w") as out:
         out.write("local bodies, headers, n = {}, {}, 0\n")
-        for i, (headers, _) in enumerate(workload.bodies):
-            path = os.path.join(work, f"{workload.name}-{i}.body")
+        for i, ((headers, _), path) in enumerate(zip(workload.bodies, paths)):
             out.write(f"do local f = io.open('{path}', 'rb'); bodies[{i + 1}] = f:read('*all'); "
                       f"f:close() end\n")
             out.write(f"headers[{i + 1}] = {{['Content-Type'] = '{headers['Content-Type']}'}}\n")
@@ -172,48 +188,19 @@ def wrk(port, workload, seconds, connections, work):
     return requests / (duration_us / 1e6), p50 / 1e3, p99 / 1e3, errors
 
 
-def open_loop(port, workload, rate, seconds, deadline_s=None):
-    """Requests at fixed times (rate per second) whatever the answers' latency; per answer its
-    status, latency from its scheduled time (s), whether it localized, and when it came (s from
-    the first request's time)."""
-    jobs = queue.Queue()
-    results, lock = [], threading.Lock()
-    start = time.monotonic() + 0.2
-
-    def client():
-        connection = None
-        while True:
-            job = jobs.get()
-            if job is None:
-                return
-            when, (headers, body) = job
-            time.sleep(max(0.0, when - time.monotonic()))
-            for attempt in range(2):  # a keep-alive connection the server closed: reconnect once
-                try:
-                    if connection is None:
-                        connection = http.client.HTTPConnection("127.0.0.1", port, timeout=60)
-                    connection.request("POST", "/v1/localize", body, headers)
-                    response = connection.getresponse()
-                    answer = response.read()
-                    status = response.status
-                    localized = status == 200 and b'"success":true' in answer
-                    break
-                except (http.client.HTTPException, OSError):
-                    connection, status, localized = None, 0, False
-            with lock:
-                results.append((status, time.monotonic() - when, localized, time.monotonic() - start))
-
-    total = int(rate * seconds)
-    threads = [threading.Thread(target=client) for _ in range(min(64, max(4, int(rate) * 2)))]
-    for thread in threads:
-        thread.start()
-    for i in range(total):
-        jobs.put((start + i / rate, workload.bodies[i % len(workload.bodies)]))
-    for _ in threads:
-        jobs.put(None)
-    for thread in threads:
-        thread.join()
-    return results
+def open_loop(port, workload, rate, seconds, work):
+    """Requests at fixed times (rate per second) whatever the answers' latency (cwloc-load-bench,
+    compiled: this script's own pauses would show as the server's); per answer its status,
+    latency from its scheduled time (s), whether it localized, and when it came (s from the
+    first request's time)."""
+    bodies = []
+    for (headers, _), path in zip(workload.bodies, body_files(workload, work)):
+        bodies += ["--body", f"{path}:{headers['Content-Type']}"]
+    out = run([os.path.join(BIN, "cwloc-load-bench"), "--port", str(port), "--rate", str(rate),
+               "--seconds", str(seconds), "--connections", str(min(64, max(4, int(rate) * 2))),
+               *bodies])
+    return [(int(s), float(l), l_ok == "1", float(t))
+            for s, l, l_ok, t in (line.split() for line in out.splitlines())]
 
 
 def announced_gigabyte(port):
@@ -313,7 +300,6 @@ def limits_rows(index, threads, features, seconds):
     server = Server(index, threads)
     closed_loop(server.port, features, 2)  # warm
     answers = [announced_gigabyte(server.port) for _ in range(5)]
-    after = time.monotonic()
     alone_status = closed_loop(server.port, features, 1, connections=1)
     ms = statistics.median(a for a, _ in answers)
     rows.append(("limits", "1 GB announced", f"{', '.join(str(s) for _, s in answers)}",
@@ -352,7 +338,12 @@ def main():
     parser.add_argument("--seconds", type=int, default=20)
     parser.add_argument("--soak-seconds", type=int, default=600)
     parser.add_argument("--soak-photos", action="store_true")
-    parser.add_argument("--repeats", type=int, default=8, help="the peer's passes over the queries")
+    parser.add_argument("--rounds", type=int, default=4,
+                        help="throughput measurements, alternating the server and the peer")
+    parser.add_argument("--photo-repeats", type=int, default=8,
+                        help="the peer's passes over the photos (about 20 s)")
+    parser.add_argument("--feature-repeats", type=int, default=400,
+                        help="the peer's passes over the features (about 20 s)")
     args = parser.parse_args()
     data = args.data if os.path.isdir(args.data) else os.path.join(SHARED, args.data)
     os.makedirs(args.work, exist_ok=True)
@@ -369,15 +360,15 @@ def main():
         os.sched_setaffinity(0, {1})
     print(f"cwloc-serve benchmark: {data}, {os.cpu_count()} cores ({cpu}), --threads {args.threads}"
           f", {'server and peer on core 0, clients on core 1' if pinned else 'cores shared'}")
-    loads, count = workloads(data, args.work, args.repeats)
+    loads = workloads(data, args.work, args.photo_repeats, args.feature_repeats)
     rows = []
     soak_load = None
     for load in loads:
         peers, rates = [], []
-        for _ in range(2):  # alternating, so that a drift of the machine touches both
-            peers.append(peer_rate(index, load, count, args.threads))
-            server = Server(index, args.threads)
-            wrk(server.port, load, 3, 2 * args.threads, args.work)  # warm the page cache
+        peer_rate(index, load, args.threads)  # the page cache
+        for _ in range(args.rounds):  # alternating, so that a drift of the machine touches both
+            peers.append(peer_rate(index, load, args.threads))
+            server = warm_server(index, args.threads, load, args.work)
             measured = wrk(server.port, load, args.seconds, 2 * args.threads, args.work)
             server.stop()
             rates.append(measured)
@@ -391,8 +382,8 @@ def main():
                      f"({', '.join(f'{p:.1f}' for p in peers)})",
                      f"p50 {p50:.1f} ms, p99 {p99:.1f} ms", f"{errors} errors"))
 
-        server = Server(index, args.threads)
-        steady = open_loop(server.port, load, 0.8 * rate, args.seconds)
+        server = warm_server(index, args.threads, load, args.work)
+        steady = open_loop(server.port, load, 0.8 * rate, args.seconds, args.work)
         server.stop()
         latencies = [l for s, l, _, _ in steady if s == 200]
         p50, p99 = percentile(latencies, 50), percentile(latencies, 99)
@@ -401,8 +392,8 @@ def main():
                      f"p99/p50 {p99 / p50:.2f}"))
 
         budget_ms = max(200, int(4 * 1e3 * args.threads / rate))
-        server = Server(index, args.threads, ["--budget-ms", str(budget_ms)])
-        over = open_loop(server.port, load, 2 * rate, args.seconds)
+        server = warm_server(index, args.threads, load, args.work, ["--budget-ms", str(budget_ms)])
+        over = open_loop(server.port, load, 2 * rate, args.seconds, args.work)
         server.stop()
         late = sum(1 for s, l, _, _ in over if l > budget_ms / 1e3 + 0.5)
         localized = sum(1 for _, _, ok, _ in over if ok) / max(t for _, _, _, t in over)
@@ -416,7 +407,7 @@ def main():
     rows += limits_rows(index, args.threads, loads[1], args.seconds)
 
     if args.soak_seconds > 0:
-        server = Server(index, args.threads)
+        server = warm_server(index, args.threads, soak_load, args.work)
         rss, stop = [], threading.Event()
 
         def sample():  # every 30 s: the first after the warm-up, the trend after
@@ -425,7 +416,7 @@ def main():
 
         sampler = threading.Thread(target=sample)
         sampler.start()
-        soak = open_loop(server.port, soak_load, soak_rate, args.soak_seconds)
+        soak = open_loop(server.port, soak_load, soak_rate, args.soak_seconds, args.work)
         stop.set()
         sampler.join()
         rss = {"start": rss[0] if rss else server.rss_kib(), "end": server.rss_kib(), "all": rss}

@@ -14,12 +14,17 @@
 
 namespace cwloc {
 
+// Queries that may wait per worker when --queue is 0: a burst or a second of the machine's
+// slowdown at 80 % load (fast queries, ~10 ms) waits instead of being refused; --budget-ms
+// bounds the wait where answers must be quick.
+constexpr size_t kQueuedQueriesPerWorker = 16;
+
 struct ServeOptions {
   std::vector<IndexSpec> indexes;  // the first is the default
   std::string host = "127.0.0.1";
   int port = 8080;             // 0: a free port (Bind returns it)
   int threads = 0;             // query workers; 0: the cores
-  size_t queue = 0;            // queries waiting for a worker; 0: 4 per worker
+  size_t queue = 0;            // queries waiting for a worker; 0: kQueuedQueriesPerWorker each
   HttpLimits http;             // connections, body and header sizes, deadlines
   double session_ttl_s = 300;  // a session unused for this long ends
   size_t max_sessions = 1024;
