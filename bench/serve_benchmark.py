@@ -192,12 +192,13 @@ def open_loop(port, workload, rate, seconds, work):
     """Requests at fixed times (rate per second) whatever the answers' latency (cwloc-load-bench,
     compiled: this script's own pauses would show as the server's); per answer its status,
     latency from its scheduled time (s), whether it localized, and when it came (s from the
-    first request's time)."""
+    first request's time). A connection per 0.25 s of requests: at 200 % with a budget of
+    seconds, the answers in flight never wait for a free connection on the client's side."""
     bodies = []
     for (headers, _), path in zip(workload.bodies, body_files(workload, work)):
         bodies += ["--body", f"{path}:{headers['Content-Type']}"]
     out = run([os.path.join(BIN, "cwloc-load-bench"), "--port", str(port), "--rate", str(rate),
-               "--seconds", str(seconds), "--connections", str(min(64, max(4, int(rate) * 2))),
+               "--seconds", str(seconds), "--connections", str(min(256, max(16, int(rate * 4)))),
                *bodies])
     return [(int(s), float(l), l_ok == "1", float(t))
             for s, l, l_ok, t in (line.split() for line in out.splitlines())]
