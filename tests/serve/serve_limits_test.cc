@@ -331,6 +331,15 @@ bool AwaitGauge(ServeProcess& server, const std::string& name, double value) {
   return false;
 }
 
+// Without --queue, 16 queries may wait per worker (kQueuedQueriesPerWorker; docs/benchmarks.md,
+// "Service, round three"): the info and the metrics say the capacity.
+TEST_F(ServeLimitsTest, TheDefaultQueueHolds16QueriesPerWorker) {
+  ServeProcess server({"--index", shared_->index.string(), "--threads", "2"});
+  auto client = server.Client();
+  EXPECT_EQ(json::parse(client.Get("/v1/info")->body)["queue"], 32);
+  EXPECT_EQ(Gauge(server, "cwloc_queue_capacity"), 32);
+}
+
 TEST_F(ServeLimitsTest, AFullQueueAnswers503AtOnce) {
   ServeProcess server({"--index", shared_->index.string(), "--threads", "1", "--queue", "1"});
   std::vector<int> statuses(6, 0);
