@@ -109,8 +109,8 @@ int Run(const std::string& host, int port, const std::string& target, double rat
     threads.emplace_back([&, c] {
       Connection connection(endpoints);
       for (size_t i = next++; i < total; i = next++) {
-        const Clock::time_point due =
-            start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(i / rate));
+        const Clock::time_point due = start + std::chrono::duration_cast<Clock::duration>(
+                                                  std::chrono::duration<double>(i / rate));
         std::this_thread::sleep_until(due);
         const auto [status, text] = connection.Post(target, bodies[i % bodies.size()]);
         const Clock::time_point now = Clock::now();

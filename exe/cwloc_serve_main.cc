@@ -132,7 +132,8 @@ int main(int argc, char** argv) {
                  "Query workers (0: one per core); each runs one query at a time")
       ->capture_default_str();
   app.add_option("--queue", options.queue,
-                 "Queries that may wait for a worker (0: " + std::to_string(cwloc::kQueuedQueriesPerWorker) +
+                 "Queries that may wait for a worker (0: " +
+                     std::to_string(cwloc::kQueuedQueriesPerWorker) +
                      " per worker); more get 503 at once")
       ->capture_default_str();
   app.add_option("--max-connections", options.http.max_connections,

@@ -75,7 +75,8 @@ ServeOptions Checked(ServeOptions options) {
   if (options.threads == 0) options.threads = std::max(1u, std::thread::hardware_concurrency());
   if (options.threads < 1 || options.threads > 1024)
     throw InputError("--threads must be between 1 and 1024");
-  if (options.queue == 0) options.queue = kQueuedQueriesPerWorker * static_cast<size_t>(options.threads);
+  if (options.queue == 0)
+    options.queue = kQueuedQueriesPerWorker * static_cast<size_t>(options.threads);
   const HttpLimits& http = options.http;
   if (http.max_connections < 1 || http.max_connections > 10000)
     throw InputError("--max-connections must be between 1 and 10000");
