@@ -20,7 +20,7 @@ double BackMatchingRatio(const LocalizerOptions& options, const QueryCamera& cam
 
 uint32_t BackMatchingTarget(const LocalizerOptions& options, const QueryCamera& camera) {
   return camera.calibration == Calibration::kUnknown
-             ? std::max(options.back_matches, options.max_back_matches)
+             ? std::max(options.back_matches, options.unknown_focal_back_matches)
              : options.back_matches;
 }
 

@@ -37,7 +37,7 @@ struct BackMatchingResult {
 
 // Back-matching's ratio test and N_B for this query: `ratio` and `back_matches`, or for a query
 // whose focal length is unknown LocalizerOptions::unknown_focal_back_ratio and
-// max_back_matches.
+// unknown_focal_back_matches.
 double BackMatchingRatio(const LocalizerOptions& options, const QueryCamera& camera);
 uint32_t BackMatchingTarget(const LocalizerOptions& options, const QueryCamera& camera);
 

@@ -50,7 +50,7 @@ struct MatcherOutput {
   bool guided = false;
   bool back_stopped_by_deadline = false;
   BackStop back_stop = BackStop::kNotRun;
-  // The cluster-wise matcher's back-matching, to continue it (ConstrainFocalLength).
+  // The cluster-wise matcher's back-matching, to continue it (PinPose).
   std::unique_ptr<PoseGuide> guide;
   std::unique_ptr<BackMatcher> back_matcher;
 };
@@ -246,18 +246,34 @@ MatcherOutput MatchClusterExhaustive(const Index& index, const ClusterMembers& c
   return out;
 }
 
-// An estimated focal length that leaves the pose weakly constrained (refine_pose.h): the
-// back-matching continues where N_B stopped it, to twice the back-matches it has (at most
-// options.max_back_matches), and the pose is estimated again on the larger set, until it is
-// well constrained. A pose estimate that fails keeps the last one that localized and its
-// correspondences (the back-match counts and image votes then include the larger set).
-void ConstrainFocalLength(const Index& index, const Query& query, const LocalizerOptions& options,
-                          const PoseContext& context, MatcherOutput* matched, QueryPose* fit) {
-  while (matched->back_matcher != nullptr && fit->pose.success &&
-         fit->pose.focal_depth.has_value() &&
-         WeaklyConstrained(*fit->pose.focal_depth, fit->pose.focal_length_px)) {
+// How far the camera's position is known: the covariance's 95 % radius, else the depth's
+// standard deviation along the optical axis; 0 when the refinement gave neither.
+double PositionUncertainty(const AbsolutePoseResult& pose) {
+  if (pose.covariance) return pose.covariance->position_radius95;
+  return pose.focal_depth ? pose.focal_depth->depth_std : 0.0;
+}
+
+// Back-matching until the pose is pinned. An estimated focal length trades off against the
+// camera's depth, and the first N_B back-matches can leave that trade open (the model images
+// back-matched first see the scene from one side). For an unknown focal length, or a prior the
+// correspondences leave weakly constrained (refine_pose.h), the back-matching continues where
+// it stopped, to twice its matches (at most options.max_back_matches), and the pose is
+// estimated again on the larger set, while each step shrinks the position's uncertainty by at
+// least options.pinned_shrink. A pose estimate that fails keeps the last one that localized and
+// its correspondences (the back-match counts and image votes then include the larger set).
+void PinPose(const Index& index, const Query& query, const LocalizerOptions& options,
+             const PoseContext& context, MatcherOutput* matched, QueryPose* fit) {
+  if (matched->back_matcher == nullptr || !fit->pose.success || !fit->pose.focal_depth) return;
+  if (query.camera.calibration != Calibration::kUnknown &&
+      !WeaklyConstrained(*fit->pose.focal_depth, fit->pose.focal_length_px))
+    return;
+  double uncertainty = PositionUncertainty(fit->pose);
+  while (matched->back_stop == BackStop::kTarget && uncertainty > 0) {
     const size_t before = matched->back_matcher->result().matches.size();
-    if (before >= options.max_back_matches) break;
+    if (before >= options.max_back_matches) {
+      matched->back_stop = BackStop::kBound;
+      break;
+    }
     matched->back_matcher->Run(static_cast<uint32_t>(
         std::min<size_t>(options.max_back_matches, std::max<size_t>(2 * before, 1))));
     if (matched->back_matcher->result().matches.size() == before) break;  // nothing left to see
@@ -268,7 +284,13 @@ void ConstrainFocalLength(const Index& index, const Query& query, const Localize
       matched->correspondences = std::move(previous);
       break;
     }
+    const double now = PositionUncertainty(more.pose);
     *fit = std::move(more);
+    if (!(now < (1.0 - options.pinned_shrink) * uncertainty)) {
+      if (matched->back_stop == BackStop::kTarget) matched->back_stop = BackStop::kPinned;
+      break;
+    }
+    uncertainty = now;
   }
 }
 
@@ -545,7 +567,7 @@ LocalizationResult Localizer::Localize(const Query& query, const LocalizerOption
     fit.pose.failure_reason = "matched only: the pose stage was not run";
   } else if (matched.failure_reason.empty()) {
     fit = EstimateQueryPose(index_, query, matched.correspondences, options, pose_context);
-    ConstrainFocalLength(index_, query, options, pose_context, &matched, &fit);
+    PinPose(index_, query, options, pose_context, &matched, &fit);
   } else {
     fit.pose.failure_reason = matched.failure_reason;
   }

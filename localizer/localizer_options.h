@@ -64,17 +64,24 @@ struct LocalizerOptions {
   uint32_t forward_matches = 200;
   // Back-matching (Algorithm 3).
   uint32_t back_matches = 200;  // N_B: stop once this many back-matches are found
-  // ... but while an estimated focal length leaves the pose weakly constrained, N_B doubles up
-  // to this and the pose is estimated again (localizer.cc, ConstrainFocalLength).
-  uint32_t max_back_matches = 1600;
   // A query whose focal length is unknown (no prior) is fit with its focal length and
   // distortion, which trade off against its depth, so it needs the correspondences over as much
-  // of the image as the model gives: its back-matching goes on to max_back_matches from the
-  // start, and a view's nearest query feature passes at this ratio instead of `ratio` (0.8:
-  // COLMAP's SiftMatching.max_ratio). On internet photos the correspondences COLMAP's
-  // registrator fit and cwloc's did not were mostly views of other model images and views at
-  // ratios 0.7-0.8 (docs/benchmarks.md, "Internet photos": matching or estimation?).
+  // of the image as the model gives: its back-matching starts with this N_B, and a view's
+  // nearest query feature passes at this ratio instead of `ratio` (0.8: COLMAP's
+  // SiftMatching.max_ratio). On internet photos the correspondences COLMAP's registrator fit
+  // and cwloc's did not were mostly views of other model images and views at ratios 0.7-0.8
+  // (docs/benchmarks.md, "Internet photos": matching or estimation?).
+  uint32_t unknown_focal_back_matches = 1600;
   double unknown_focal_back_ratio = 0.8;
+  // Until the pose is pinned: with an estimated focal length (unknown, or a prior the
+  // correspondences leave weakly constrained) the back-matching goes on where N_B stopped it, to
+  // twice its matches, and the pose is estimated again, while each such step shrinks the
+  // camera position's uncertainty by at least `pinned_shrink`, up to max_back_matches
+  // (localizer.cc, PinPose). Twice the independent evidence would shrink it by 29 %: 25 % asks
+  // for nearly that, since a covariance from the keypoints alone counts more views of a
+  // well-seen area as new evidence (docs/benchmarks.md, "Until the pose is pinned").
+  double pinned_shrink = 0.25;
+  uint32_t max_back_matches = 6400;
   uint32_t max_back_clusters = 20;    // ... or this many clusters were back-matched
   uint32_t min_matches_to_vote = 12;  // a back-matched cluster votes for co-visible ones
   uint32_t query_tree_checks = 64;    // distance computations per search of the query's forest

@@ -53,16 +53,19 @@ struct Budget {
 
 // Why back-matching stopped (LocalizerOptions::back_matches and its neighbours).
 enum class BackStop : int {
-  kTarget,    // it had N_B back-matches (more for an estimated focal length: --nb-max)
+  kTarget,    // it had N_B back-matches (--nb-unknown-focal for an unknown focal length)
   kImages,    // it had back-matched --max-back-images clusters
   kNoVotes,   // no cluster it had not matched had votes left
   kDeadline,  // a latency budget ended it
   kNotRun,    // it did not run: another matcher, or nothing to start from
+  kPinned,    // continued for an estimated focal length until a step shrank the position's
+              // uncertainty by less than --pinned-shrink
+  kBound,     // continued so, it reached --nb-max still shrinking
 };
 template <>
 struct EnumNames<BackStop> {
-  static constexpr std::array<std::string_view, 5> names = {"target", "images", "no-votes",
-                                                            "deadline", "not-run"};
+  static constexpr std::array<std::string_view, 7> names = {
+      "target", "images", "no-votes", "deadline", "not-run", "pinned", "bound"};
 };
 
 // A RANSAC inlier of the reported pose: which query feature saw which 3D point of the index.

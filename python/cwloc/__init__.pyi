@@ -131,7 +131,7 @@ class Result:
     back_matches: int  # 2D-3D matches of back-matching
     correspondences: int  # Unique 2D-3D pairs given to RANSAC
     back_matched_clusters: int  # Clusters back-matched (one model image each unless the index was built with --clusters)
-    back_stop: Literal['target', 'images', 'no-votes', 'deadline', 'not-run']  # Why back-matching stopped
+    back_stop: Literal['target', 'images', 'no-votes', 'deadline', 'not-run', 'pinned', 'bound']  # Why back-matching stopped
     guided: bool  # Whether a pose hypothesis guided back-matching
     ransac_iterations: int  # RANSAC hypotheses drawn
     ranked_images: list[RankedImage]  # By votes
