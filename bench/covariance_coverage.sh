@@ -12,7 +12,9 @@
 #   bench/covariance_coverage.sh WORKDIR DATASET_DIR...
 #   (DATASET_DIR: a folder of ../shared/data's layout, or its name there)
 #
-# Prints one table row per data set and query source, and the pooled coverage per data set;
+# Prints one table row per data set and query source (the share of truths inside, and the
+# median of the position error over the 95 % radius: 0.55 for a calibrated 3D normal), and
+# the pooled figures per data set;
 # writes WORKDIR/NAME/{calibrated,uncalibrated}.cwl and WORKDIR/NAME/INDEX-RUN.{jsonl,eval.json}.
 set -euo pipefail
 top="$(cd "$(dirname "$0")/.." && pwd)"
@@ -55,17 +57,42 @@ for arg in "$@"; do
   done
 done
 
-/usr/bin/env python3 - "$bin" "$work" "$@" <<'PY'
-import glob, json, os, subprocess, sys
-bin_dir, work = sys.argv[1:3]
-print("| data set, queries from | queries | calibrated: inside 95 % | uncalibrated |")
-print("|---|---|---|---|")
+/usr/bin/env python3 - "$bin" "$work" "$top/../shared/data" "$@" <<'PY'
+import glob, json, os, statistics, subprocess, sys
+bin_dir, work, shared = sys.argv[1:4]
+
+
+def scale_of(arg):
+    data = arg if os.path.isdir(arg) else os.path.join(shared, arg)
+    for line in open(os.path.join(data, "scale_to_metres.txt")):
+        if line.startswith("scale "):
+            return float(line.split()[1])
+    return 1.0
+
+
+def ratios(records, run, scale):
+    """Each localized query's position error over its 95 % radius (a calibrated 3D normal's
+    median: 0.55)."""
+    radius = {}
+    for line in open(records):
+        r = json.loads(line) if line.strip() else {}
+        if (r.get("covariance") or {}).get("position_radius95"):
+            radius[r["name"]] = r["covariance"]["position_radius95"] * scale
+    return [q["position_error"] / radius[q["name"]] for q in run["per_query"]
+            if q.get("position_error") is not None and q["name"] in radius]
+
+
+print("| data set, queries from | queries | calibrated: inside 95 % | error / radius, median |"
+      " uncalibrated |")
+print("|---|---|---|---|---|")
 share = lambda t: f"{t[0]}/{t[1]} ({100.0 * t[0] / t[1]:.0f} %)" if t[1] else "-"
 scales = []
 overall = {"calibrated": [0, 0], "uncalibrated": [0, 0]}
-for arg in sys.argv[3:]:
+all_ratios = []
+for arg in sys.argv[4:]:
     name = os.path.basename(arg.rstrip("/"))
     totals = {"calibrated": [0, 0], "uncalibrated": [0, 0]}
+    scale, pooled_ratios = scale_of(arg), []
     for f in sorted(glob.glob(f"{work}/{name}/calibrated-*.eval.json")):
         label = os.path.basename(f)[len("calibrated-"):-len(".eval.json")]
         cells = []
@@ -77,8 +104,15 @@ for arg in sys.argv[3:]:
             overall[index][0] += c["inside"]
             overall[index][1] += c["with_covariance"]
             cells.append(f"{c['inside']}/{c['with_covariance']}")
-        print(f"| {name}, {label} | {run['queries']} | {cells[0]} | {cells[1]} |")
-    print(f"| **{name}, pooled** | | **{share(totals['calibrated'])}** | {share(totals['uncalibrated'])} |")
+            if index == "calibrated":
+                found = ratios(f"{work}/{name}/{index}-{label}.jsonl", run, scale)
+                pooled_ratios += found
+                cells.append(f"{statistics.median(found):.2f}" if found else "-")
+        print(f"| {name}, {label} | {run['queries']} | {' | '.join(cells)} |")
+    median = f"{statistics.median(pooled_ratios):.2f}" if pooled_ratios else "-"
+    all_ratios.extend(pooled_ratios)
+    print(f"| **{name}, pooled** | | **{share(totals['calibrated'])}** | **{median}** | "
+          f"{share(totals['uncalibrated'])} |")
     info = json.loads(subprocess.run([f"{bin_dir}/cwloc-index", "info", "--json",
                                       f"{work}/{name}/calibrated.cwl"],
                                      capture_output=True, check=True).stdout)
@@ -86,7 +120,9 @@ for arg in sys.argv[3:]:
     scales.append(f"{name}: " + ", ".join(
         f"{m} {v.get('rotation_scale', '-')!s:.4} / {v.get('position_scale', '-')!s:.4} "
         f"({v['localized']} localized)" for m, v in modes.items()))
-print(f"| **all, pooled** | | **{share(overall['calibrated'])}** | {share(overall['uncalibrated'])} |")
+median = f"{statistics.median(all_ratios):.2f}" if all_ratios else "-"
+print(f"| **all, pooled** | | **{share(overall['calibrated'])}** | **{median}** | "
+      f"{share(overall['uncalibrated'])} |")
 print("\nThe indexes' calibration (rotation / position scale):")
 print("\n".join(scales))
 PY
