@@ -246,11 +246,9 @@ MatcherOutput MatchClusterExhaustive(const Index& index, const ClusterMembers& c
   return out;
 }
 
-// How far the camera's position is known: the covariance's 95 % radius, else the depth's
-// standard deviation along the optical axis; 0 when the refinement gave neither.
+// How far the camera's position is known: the covariance's 95 % radius; 0 without one.
 double PositionUncertainty(const AbsolutePoseResult& pose) {
-  if (pose.covariance) return pose.covariance->position_radius95;
-  return pose.focal_depth ? pose.focal_depth->depth_std : 0.0;
+  return pose.covariance ? pose.covariance->position_radius95 : 0.0;
 }
 
 // Back-matching until the pose is pinned. An estimated focal length trades off against the
@@ -286,7 +284,7 @@ void PinPose(const Index& index, const Query& query, const LocalizerOptions& opt
     }
     const double now = PositionUncertainty(more.pose);
     *fit = std::move(more);
-    if (!(now < (1.0 - options.pinned_shrink) * uncertainty)) {
+    if (!(now > 0 && now < (1.0 - options.pinned_shrink) * uncertainty)) {
       if (matched->back_stop == BackStop::kTarget) matched->back_stop = BackStop::kPinned;
       break;
     }

@@ -244,10 +244,9 @@ TEST_F(HerzJesuTest, ZoomedQueriesWithAnUnknownFocalLengthBackMatchPastNb) {
 
 // Back-matching until the pose is pinned (localizer.cc, PinPose): started from the paper's
 // N_B = 200, each zoomed query's back-matching doubles and its pose is estimated again; the
-// step shrinks the position's uncertainty by less than --pinned-shrink (25 %) here (the first image
-// back-matched holds most of what the model gives a third of the frame), so it stops, pinned, and
-// says so.
-// --nb-max bounds the growth.
+// step shrinks the position's uncertainty by less than --pinned-shrink (25 %) here (the first
+// image back-matched holds most of what the model gives a third of the frame), so it stops,
+// pinned, and says so. --nb-max bounds the growth.
 TEST_F(HerzJesuTest, AnUnknownFocalLengthBackMatchesUntilThePoseIsPinned) {
   const DatabaseQueries queries(data_ / "database.db");
   const Localizer localizer(*index_);
