@@ -23,6 +23,8 @@ import numpy as np
 
 TOP = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 BIN = os.environ.get("CWLOC_BIN", os.path.join(TOP, "build", "bin"))
+sys.path.insert(0, os.path.join(TOP, "bench"))
+from rig_benchmark import centre, quaternion_matrix  # noqa: E402
 
 
 def centres(model_bin):
@@ -34,12 +36,8 @@ def centres(model_bin):
     out = {}
     for line in lines[0::2]:  # a pose line, then a points line
         f = line.split()
-        w, x, y, z = map(float, f[1:5])
-        t = np.array(list(map(float, f[5:8])))
-        r = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-                      [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-                      [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
-        out[f[9]] = -r.T @ t
+        out[f[9]] = centre(quaternion_matrix(np.array([float(v) for v in f[1:5]])),
+                           np.array([float(v) for v in f[5:8]]))
     return out
 
 
