@@ -69,9 +69,13 @@ def run(args):
 class Workload:
     """The bodies one kind of query sends, and the cwloc-localize command for the same queries."""
 
-    def __init__(self, name, bodies, cli_args, count):
+    def __init__(self, name, bodies, cli_args, count, work):
         self.name, self.bodies, self.cli_args = name, bodies, cli_args  # bodies: (headers, bytes)
         self.count = count  # the queries cwloc-localize runs
+        # The bodies as files, for wrk and cwloc-load-bench, written once.
+        self.body_paths = [os.path.join(work, f"{name}-{i}.body") for i in range(len(bodies))]
+        for path, (_, body) in zip(self.body_paths, bodies):
+            open(path, "wb").write(body)
 
 
 def multipart(parts):
@@ -107,10 +111,12 @@ def workloads(data, work, photo_repeats, feature_repeats):
     return [
         Workload("photos", photo_bodies,
                  ["--image-list", os.path.join(work, "photos.txt"),
-                  "--image-dir", os.path.join(data, "query_images")], len(names) * photo_repeats),
+                  "--image-dir", os.path.join(data, "query_images")], len(names) * photo_repeats,
+                 work),
         Workload("features", features,
                  ["--database", os.path.join(data, "database.db"),
-                  "--query-list", os.path.join(work, "features.txt")], len(names) * feature_repeats),
+                  "--query-list", os.path.join(work, "features.txt")], len(names) * feature_repeats,
+                 work),
     ]
 
 
@@ -149,14 +155,6 @@ class Server:
         self.process.wait()
 
 
-def body_files(workload, work):
-    """The workload's bodies written to files, their paths in turn."""
-    paths = [os.path.join(work, f"{workload.name}-{i}.body") for i in range(len(workload.bodies))]
-    for path, (_, body) in zip(paths, workload.bodies):
-        open(path, "wb").write(body)
-    return paths
-
-
 def warm_server(index, threads, workload, work, extra=()):
     """A server that has answered 3 s of the workload: its first answers fault in the index's
     pages and the allocator's arenas, tens of ms that would queue the loads behind them."""
@@ -167,11 +165,10 @@ def warm_server(index, threads, workload, work, extra=()):
 
 def wrk(port, workload, seconds, connections, work):
     """wrk's requests per second and latency percentiles (ms), the bodies sent in turn."""
-    paths = body_files(workload, work)
     script = os.path.join(work, f"{workload.name}.lua")
     with open(script, "w") as out:
         out.write("local bodies, headers, n = {}, {}, 0\n")
-        for i, ((headers, _), path) in enumerate(zip(workload.bodies, paths)):
+        for i, ((headers, _), path) in enumerate(zip(workload.bodies, workload.body_paths)):
             out.write(f"do local f = io.open('{path}', 'rb'); bodies[{i + 1}] = f:read('*all'); "
                       f"f:close() end\n")
             out.write(f"headers[{i + 1}] = {{['Content-Type'] = '{headers['Content-Type']}'}}\n")
@@ -188,14 +185,14 @@ def wrk(port, workload, seconds, connections, work):
     return requests / (duration_us / 1e6), p50 / 1e3, p99 / 1e3, errors
 
 
-def open_loop(port, workload, rate, seconds, work):
+def open_loop(port, workload, rate, seconds):
     """Requests at fixed times (rate per second) whatever the answers' latency (cwloc-load-bench,
     compiled: this script's own pauses would show as the server's); per answer its status,
     latency from its scheduled time (s), whether it localized, and when it came (s from the
     first request's time). A connection per 0.25 s of requests: at 200 % with a budget of
     seconds, the answers in flight never wait for a free connection on the client's side."""
     bodies = []
-    for (headers, _), path in zip(workload.bodies, body_files(workload, work)):
+    for (headers, _), path in zip(workload.bodies, workload.body_paths):
         bodies += ["--body", f"{path}:{headers['Content-Type']}"]
     out = run([os.path.join(BIN, "cwloc-load-bench"), "--port", str(port), "--rate", str(rate),
                "--seconds", str(seconds), "--connections", str(min(256, max(16, int(rate * 4)))),
@@ -384,7 +381,7 @@ def main():
                      f"p50 {p50:.1f} ms, p99 {p99:.1f} ms", f"{errors} errors"))
 
         server = warm_server(index, args.threads, load, args.work)
-        steady = open_loop(server.port, load, 0.8 * rate, args.seconds, args.work)
+        steady = open_loop(server.port, load, 0.8 * rate, args.seconds)
         server.stop()
         latencies = [l for s, l, _, _ in steady if s == 200]
         p50, p99 = percentile(latencies, 50), percentile(latencies, 99)
@@ -394,7 +391,7 @@ def main():
 
         budget_ms = max(200, int(4 * 1e3 * args.threads / rate))
         server = warm_server(index, args.threads, load, args.work, ["--budget-ms", str(budget_ms)])
-        over = open_loop(server.port, load, 2 * rate, args.seconds, args.work)
+        over = open_loop(server.port, load, 2 * rate, args.seconds)
         server.stop()
         late = sum(1 for s, l, _, _ in over if l > budget_ms / 1e3 + 0.5)
         localized = sum(1 for _, _, ok, _ in over if ok) / max(t for _, _, _, t in over)
@@ -417,7 +414,7 @@ def main():
 
         sampler = threading.Thread(target=sample)
         sampler.start()
-        soak = open_loop(server.port, soak_load, soak_rate, args.soak_seconds, args.work)
+        soak = open_loop(server.port, soak_load, soak_rate, args.soak_seconds)
         stop.set()
         sampler.join()
         rss = {"start": rss[0] if rss else server.rss_kib(), "end": server.rss_kib(), "all": rss}
